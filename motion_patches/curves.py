@@ -1,0 +1,178 @@
+"""Space curves: cubic Hermite curves between nodes, constant-curvature arcs, arc length.
+
+Hermite curves are evaluated for many candidates at once ((C, M) arrays) because the bake
+fits thousands of them; tangent magnitudes are ``scale * chord`` so one scalar per curve
+controls its length (the paper's "scale the tangent vectors").
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def unit(angle):
+    angle = np.asarray(angle, float)
+    return np.stack((np.cos(angle), np.sin(angle)), axis=-1)
+
+
+def hermite(p0, d0, p1, d1, scale, u):
+    """Positions, first and second derivatives (C, M, 2) of Hermite curves at params u (M,).
+
+    ``p0, p1`` (C, 2) end points, ``d0, d1`` (C, 2) unit end directions, ``scale`` (C,).
+    """
+    p0, d0, p1, d1 = (np.asarray(a, float)[:, None, :] for a in (p0, d0, p1, d1))
+    chord = np.linalg.norm(p1 - p0, axis=-1, keepdims=True)
+    m = np.asarray(scale, float)[:, None, None] * chord
+    m0, m1 = d0 * m, d1 * m
+    u = np.asarray(u, float)[None, :, None]
+    u2, u3 = u * u, u * u * u
+    pos = ((2 * u3 - 3 * u2 + 1) * p0 + (u3 - 2 * u2 + u) * m0
+           + (-2 * u3 + 3 * u2) * p1 + (u3 - u2) * m1)
+    vel = ((6 * u2 - 6 * u) * p0 + (3 * u2 - 4 * u + 1) * m0
+           + (-6 * u2 + 6 * u) * p1 + (3 * u2 - 2 * u) * m1)
+    acc = ((12 * u - 6) * p0 + (6 * u - 4) * m0 + (-12 * u + 6) * p1 + (6 * u - 2) * m1)
+    return pos, vel, acc
+
+
+def curvature(vel, acc):
+    """Signed curvature (1/m) from derivatives (..., 2); positive turns left."""
+    cross = vel[..., 0] * acc[..., 1] - vel[..., 1] * acc[..., 0]
+    speed = np.linalg.norm(vel, axis=-1)
+    return cross / np.maximum(speed, 1e-9) ** 3
+
+
+def arc_lengths(pos):
+    """Cumulative chord length along sampled curves (..., M, 2) -> (..., M)."""
+    seg = np.linalg.norm(np.diff(pos, axis=-2), axis=-1)
+    return np.concatenate((np.zeros(seg.shape[:-1] + (1,)), np.cumsum(seg, axis=-1)), axis=-1)
+
+
+@dataclass
+class Curve:
+    """One space curve sampled densely and indexed by arc length."""
+    s: np.ndarray        # (M,) cumulative arc length
+    pos: np.ndarray      # (M, 2)
+    heading: np.ndarray  # (M,) unwrapped tangent angle
+    kappa: np.ndarray    # (M,) signed curvature
+
+    @property
+    def length(self):
+        return float(self.s[-1])
+
+    def at(self, s):
+        """(x, y, heading, curvature) arrays at arc lengths ``s``."""
+        s = np.clip(np.asarray(s, float), 0.0, self.length)
+        x = np.interp(s, self.s, self.pos[:, 0])
+        y = np.interp(s, self.s, self.pos[:, 1])
+        h = np.interp(s, self.s, self.heading)
+        k = np.interp(s, self.s, self.kappa)
+        return x, y, h, k
+
+    def total_turn(self):
+        return float(np.sum(np.abs(np.diff(self.heading))))
+
+
+def hermite_curve(p0, d0, p1, d1, scale, samples=257):
+    u = np.linspace(0.0, 1.0, samples)
+    pos, vel, acc = hermite(np.atleast_2d(p0), np.atleast_2d(d0), np.atleast_2d(p1),
+                            np.atleast_2d(d1), np.atleast_1d(scale), u)
+    pos, vel, acc = pos[0], vel[0], acc[0]
+    heading = np.unwrap(np.arctan2(vel[:, 1], vel[:, 0]))
+    return Curve(arc_lengths(pos), pos, heading, curvature(vel, acc))
+
+
+def curve_length(pos, vel, acc):
+    return arc_lengths(pos)[..., -1]
+
+
+DEFAULT_SCALES = np.linspace(0.25, 4.0, 76)  # below ~0.25 a Hermite curve folds into a corner
+
+
+def tabulate(p0, d0, p1, d1, measure=curve_length, scales=DEFAULT_SCALES, samples=96):
+    """``measure`` and largest |curvature| of curves (C,) at every scale of a grid (C, S)."""
+    c = p0.shape[0]
+    u = np.linspace(0.0, 1.0, samples)
+    values = np.empty((c, scales.size))
+    bend = np.empty((c, scales.size))
+    for i, sc in enumerate(scales):
+        pos, vel, acc = hermite(p0, d0, p1, d1, np.full(c, sc), u)
+        values[:, i] = measure(pos, vel, acc)
+        bend[:, i] = np.abs(curvature(vel, acc)).max(axis=1)
+    return values, bend
+
+
+def fit_scale(p0, d0, p1, d1, target, measure=curve_length, scales=DEFAULT_SCALES,
+              samples=96, table=None):
+    """Tangent scale per curve whose ``measure`` equals ``target`` (C,), NaN where none does.
+
+    ``measure(pos, vel, acc)`` maps sampled curves (C, M, 2) to (C,) (arc length by
+    default; gait cycles for the bake). It is tabulated over a grid of scales (or taken
+    from ``table``, see :func:`tabulate`); of the crossings of the target, the one whose
+    curves bend least is refined by regula falsi.
+    """
+    p0, d0, p1, d1 = (np.atleast_2d(np.asarray(a, float)) for a in (p0, d0, p1, d1))
+    c = p0.shape[0]
+    target = np.broadcast_to(np.asarray(target, float), (c,))
+    u = np.linspace(0.0, 1.0, samples)
+
+    def evaluate(idx, sc):
+        return measure(*hermite(p0[idx], d0[idx], p1[idx], d1[idx], sc, u))
+
+    values, bend = table if table is not None else tabulate(p0, d0, p1, d1, measure, scales, samples)
+    tol = 1e-6 * np.maximum(np.abs(target), 1.0)
+    out = np.full(c, np.nan)
+    # A straight curve keeps its chord length over a range of scales: take scale 1, where
+    # the parameter runs at uniform speed.
+    flat = np.abs(values[:, 0] - target) <= tol
+    if flat.any():
+        idx = np.flatnonzero(flat)
+        flat[idx] = np.abs(evaluate(idx, np.ones(idx.size)) - target[idx]) <= tol[idx]
+    out[flat] = 1.0
+    diff = values - target[:, None]
+    cross = (diff[:, :-1] < 0) & (diff[:, 1:] >= -tol[:, None])
+    pair_bend = np.where(cross, np.maximum(bend[:, :-1], bend[:, 1:]), np.inf)
+    first = np.argmin(pair_bend, axis=1) + 1
+    ok = cross.any(axis=1) & ~flat
+    idx = np.flatnonzero(ok)
+    if idx.size == 0:
+        return out
+    f = first[idx]
+    lo_s, hi_s = scales[f - 1].copy(), scales[f].copy()
+    lo_v, hi_v = values[idx, f - 1].copy(), values[idx, f].copy()
+    tg = target[idx]
+    for _ in range(4):  # regula falsi, keeping the crossing bracketed
+        sc = lo_s + (tg - lo_v) / np.maximum(hi_v - lo_v, 1e-12) * (hi_s - lo_s)
+        v = evaluate(idx, sc)
+        below = v < tg
+        lo_s, lo_v = np.where(below, sc, lo_s), np.where(below, v, lo_v)
+        hi_s, hi_v = np.where(below, hi_s, sc), np.where(below, hi_v, v)
+    out[idx] = lo_s + (tg - lo_v) / np.maximum(hi_v - lo_v, 1e-12) * (hi_s - lo_s)
+    return out
+
+
+def arc_frame(p0, heading0, kappa, s):
+    """Position (..., 2) and heading on a constant-curvature arc after arc length ``s``."""
+    s = np.asarray(s, float)
+    h = heading0 + kappa * s
+    if abs(kappa) < 1e-9:
+        pos = np.asarray(p0)[None] + s[:, None] * unit(heading0)[None]
+    else:
+        r = 1.0 / kappa
+        cx = p0[0] - r * np.sin(heading0)
+        cy = p0[1] + r * np.cos(heading0)
+        pos = np.stack((cx + r * np.sin(h), cy - r * np.cos(h)), axis=-1)
+    return pos, h
+
+
+def arc_project(p0, heading0, kappa, points):
+    """Arc length of the closest point on the arc for each point (N, 2)."""
+    points = np.asarray(points, float)
+    if abs(kappa) < 1e-9:
+        return (points - p0) @ unit(heading0)
+    r = 1.0 / kappa
+    c = np.array([p0[0] - r * np.sin(heading0), p0[1] + r * np.cos(heading0)])
+    d = points - c
+    ang = np.arctan2(d[:, 1], d[:, 0])
+    start = np.arctan2(p0[1] - c[1], p0[0] - c[0])
+    dang = np.unwrap(np.concatenate(([start], ang)))[1:] - start
+    return dang / kappa

@@ -1,0 +1,156 @@
+"""Environment: obstacles on the ground, the tile grid of a layer, and cell occlusion.
+
+Tiles are instances of a locomotion patch laid on a fixed grid (tile (i, j) has its corner
+at (i * side, j * side)). A tile owns only the list of obstacles overlapping it, updated
+when an obstacle is added or moved, and a free-cell bitfield ``B_t`` computed lazily the
+first time the planner asks (Eq. 8). The character's radius is applied to the footprints
+(a cell is occluded when it comes within the radius of a footprint), so segment masks
+stay one 64-bit word per tile.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+FULL = np.uint64(0xFFFFFFFFFFFFFFFF)
+
+
+@dataclass
+class Obstacle:
+    name: str
+    polygon: np.ndarray  # (P, 2) convex footprint, counter-clockwise, world metres
+
+    def bounds(self):
+        return self.polygon.min(axis=0), self.polygon.max(axis=0)
+
+
+def convex_hull(points):
+    """Counter-clockwise convex hull (monotone chain) of points (N, 2)."""
+    pts = np.unique(np.asarray(points, float).round(9), axis=0)
+    if pts.shape[0] < 3:
+        return pts
+    pts = pts[np.lexsort((pts[:, 1], pts[:, 0]))]
+
+    def half(seq):
+        out = []
+        for p in seq:
+            while len(out) >= 2 and np.cross(out[-1] - out[-2], p - out[-2]) <= 0:
+                out.pop()
+            out.append(p)
+        return out
+    lower, upper = half(pts), half(pts[::-1])
+    return np.array(lower[:-1] + upper[:-1])
+
+
+def _segment_distance(points, a, b):
+    """Distance of points (N, 2) to segments a (E, 2) -> b (E, 2): (N, E)."""
+    ab = b - a
+    t = np.clip(np.einsum("nek,ek->ne", points[:, None] - a[None], ab)
+                / np.maximum((ab * ab).sum(-1), 1e-12)[None], 0.0, 1.0)
+    proj = a[None] + t[..., None] * ab[None]
+    return np.linalg.norm(points[:, None] - proj, axis=-1)
+
+
+def inside_convex(points, polygon):
+    """(N,) True where points lie inside a counter-clockwise convex polygon."""
+    a = polygon
+    b = np.roll(polygon, -1, axis=0)
+    cross = ((b - a)[None, :, 0] * (points[:, None, 1] - a[None, :, 1])
+             - (b - a)[None, :, 1] * (points[:, None, 0] - a[None, :, 0]))
+    return np.all(cross >= 0, axis=1)
+
+
+def distance_to_polygon(points, polygon):
+    """(N,) distance from points to a convex polygon (0 inside)."""
+    points = np.atleast_2d(np.asarray(points, float))
+    d = _segment_distance(points, polygon, np.roll(polygon, -1, axis=0)).min(axis=1)
+    return np.where(inside_convex(points, polygon), 0.0, d)
+
+
+def polygons_within(poly_a, poly_b, radius):
+    """True when two convex polygons come within ``radius`` of each other."""
+    if np.any(inside_convex(poly_a, poly_b)) or np.any(inside_convex(poly_b, poly_a)):
+        return True
+    da = _segment_distance(poly_a, poly_b, np.roll(poly_b, -1, axis=0)).min()
+    db = _segment_distance(poly_b, poly_a, np.roll(poly_a, -1, axis=0)).min()
+    return min(da, db) < radius
+
+
+class Environment:
+    """Obstacles and the lazily occluded tile grid of one locomotion patch size."""
+
+    def __init__(self, side, cells, radius):
+        self.side = float(side)
+        self.cells = int(cells)
+        self.radius = float(radius)
+        self.obstacles = {}
+        self._tiles_of = {}     # obstacle name -> set of tiles
+        self._members = {}      # tile -> set of obstacle names
+        self._free = {}         # tile -> uint64 free-cell bitfield (lazy)
+        self.occlusion_computations = 0
+
+    def tile_of(self, xy):
+        return (int(np.floor(xy[0] / self.side)), int(np.floor(xy[1] / self.side)))
+
+    def _tiles_overlapping(self, obstacle):
+        lo, hi = obstacle.bounds()
+        lo, hi = lo - self.radius, hi + self.radius
+        i0, j0 = self.tile_of(lo)
+        i1, j1 = self.tile_of(hi)
+        return {(i, j) for i in range(i0, i1 + 1) for j in range(j0, j1 + 1)}
+
+    def place(self, obstacle):
+        """Add or move an obstacle: only tile membership changes (no occlusion work)."""
+        self.remove(obstacle.name)
+        self.obstacles[obstacle.name] = obstacle
+        tiles = self._tiles_overlapping(obstacle)
+        self._tiles_of[obstacle.name] = tiles
+        for t in tiles:
+            self._members.setdefault(t, set()).add(obstacle.name)
+            self._free.pop(t, None)
+
+    def remove(self, name):
+        for t in self._tiles_of.pop(name, ()):
+            self._members[t].discard(name)
+            self._free.pop(t, None)
+        self.obstacles.pop(name, None)
+
+    def members(self, tile):
+        return self._members.get(tile, set())
+
+    def free_cells(self, tile):
+        """``B_t``: bit c set when cell c of the tile is not occluded (computed lazily)."""
+        f = self._free.get(tile)
+        if f is None:
+            f = self._occlude(tile)
+            self._free[tile] = f
+        return f
+
+    def _occlude(self, tile):
+        self.occlusion_computations += 1
+        names = self.members(tile)
+        if not names:
+            return FULL
+        c = self.side / self.cells
+        x0, y0 = tile[0] * self.side, tile[1] * self.side
+        free = FULL
+        for iy in range(self.cells):
+            for ix in range(self.cells):
+                cell = np.array([[x0 + ix * c, y0 + iy * c], [x0 + (ix + 1) * c, y0 + iy * c],
+                                 [x0 + (ix + 1) * c, y0 + (iy + 1) * c], [x0 + ix * c, y0 + (iy + 1) * c]])
+                for n in names:
+                    if polygons_within(cell, self.obstacles[n].polygon, self.radius):
+                        free &= ~np.uint64(1 << (iy * self.cells + ix))
+                        break
+        return free
+
+    def blocked(self, points):
+        """(N,) True where world points come within the radius of any obstacle."""
+        points = np.atleast_2d(np.asarray(points, float))
+        out = np.zeros(points.shape[0], bool)
+        near = set()
+        for t in {self.tile_of(p) for p in points}:
+            near |= self.members(t)
+        for n in near:
+            out |= distance_to_polygon(points, self.obstacles[n].polygon) < self.radius
+        return out

@@ -1,0 +1,169 @@
+"""Gait: the loops of one layer and parametric blending between them by curvature.
+
+A straight loop and turn loops (slow / fast, left / right; a missing side is mirrored) are
+ordered by their curvature. A curvature between two loops blends those two (pose slerp,
+root and stride lerp), so a character following a space curve takes on the nuanced
+posture and shorter stride of a real turn as the curve bends (paper Sec. 6).
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import quat
+from .clip import mirror, resample
+from .cycle import Loop, best_cycle, cycle_turns, detect_cycles, extract_loop
+from .skeleton import Skeleton
+
+
+@dataclass
+class Gait:
+    layer: str
+    fps: float
+    skeleton: Skeleton
+    loops: list                 # Loop, sorted by curvature; exactly one is straight
+    notes: list = field(default_factory=list)  # provenance, e.g. "right turn mirrored from 16_18"
+
+    @property
+    def frames(self):
+        return self.loops[0].frames
+
+    @property
+    def straight(self):
+        return self.loops[int(np.argmin(np.abs([lp.curvature for lp in self.loops])))]
+
+    @property
+    def curvatures(self):
+        """Blend parameter of each loop: its curvature, the straight loop's taken as 0."""
+        k = np.array([lp.curvature for lp in self.loops])
+        k[np.argmin(np.abs(k))] = 0.0
+        return k
+
+    @property
+    def cycle_distance(self):
+        return self.straight.cycle_distance
+
+    @property
+    def kappa_limits(self):
+        """Most negative and most positive curvature the loops show (culling range)."""
+        k = self.curvatures
+        return float(min(k.min(), 0.0)), float(max(k.max(), 0.0))
+
+    def weights(self, kappa):
+        """(K, L) blend weights of the loops for curvatures (K,): two neighbours lerped."""
+        k = self.curvatures
+        if len(k) == 1:
+            return np.ones(np.shape(kappa) + (1,))
+        kap = np.clip(np.asarray(kappa, float), k[0], k[-1])
+        hi = np.clip(np.searchsorted(k, kap, side="right"), 1, len(k) - 1)
+        lo = hi - 1
+        t = (kap - k[lo]) / np.maximum(k[hi] - k[lo], 1e-12)
+        w = np.zeros(kap.shape + (len(k),))
+        np.put_along_axis(w, lo[..., None], (1 - t)[..., None], axis=-1)
+        np.put_along_axis(w, hi[..., None], t[..., None], axis=-1)
+        return w
+
+    def blended_distance(self, kappa):
+        """Cycle distance at curvatures ``kappa``; equals ``weights(kappa) @ distances``."""
+        return np.interp(kappa, self.curvatures, self.cycle_distances())
+
+    def straight_weights(self, n):
+        w = np.zeros((n, len(self.loops)))
+        w[:, int(np.argmin(np.abs(self.curvatures)))] = 1.0
+        return w
+
+    def cycle_distances(self):
+        return np.array([lp.cycle_distance for lp in self.loops])
+
+    def steps(self, phase, weights):
+        """Distance travelled from frame ``phase`` to the next, blended (K,)."""
+        st = np.stack([np.diff(lp.distance) for lp in self.loops], axis=1)  # (N, L)
+        return np.sum(st[np.asarray(phase) % self.frames] * weights, axis=-1)
+
+    def pose(self, phase, weights):
+        """Blended root_local (K, 3), rotations (K, J, 4), contacts (K, 4) at frame phases."""
+        ph = np.asarray(phase) % self.frames
+        root = np.zeros((ph.size, 3))
+        for i, lp in enumerate(self.loops):
+            root += lp.root_local[ph] * weights[:, i:i + 1]
+        # Blend rotations pairwise: accumulate a running slerp in order of weight.
+        order = np.argsort(-weights, axis=1)
+        rot = np.empty((ph.size,) + self.loops[0].rotations.shape[1:])
+        contacts = np.empty((ph.size, 4), bool)
+        acc = np.zeros(ph.size)
+        stacked = np.stack([lp.rotations[ph] for lp in self.loops], axis=1)  # (K, L, J, 4)
+        cstack = np.stack([lp.contacts[ph] for lp in self.loops], axis=1)
+        rows = np.arange(ph.size)
+        first = order[:, 0]
+        rot[:] = stacked[rows, first]
+        # Planted only where every loop that contributes noticeably has the joint planted.
+        contacts[:] = np.all(cstack | (weights < 0.1)[..., None], axis=1)
+        acc[:] = weights[rows, first]
+        for r in range(1, len(self.loops)):
+            idx = order[:, r]
+            w = weights[rows, idx]
+            t = np.where(acc + w > 0, w / np.maximum(acc + w, 1e-12), 0.0)
+            rot = quat.slerp(rot, stacked[rows, idx], np.repeat(t[:, None], rot.shape[1], 1))
+            acc = acc + w
+        return root, quat.make_continuous(rot), contacts
+
+    def to_dict(self):
+        d = {"gait_layer": np.array(self.layer), "gait_fps": np.array(self.fps),
+             "gait_count": np.array(len(self.loops)), "gait_notes": np.array(self.notes, dtype=str)}
+        d.update({"skel_" + k: v for k, v in self.skeleton.to_dict().items()})
+        for i, lp in enumerate(self.loops):
+            d.update(lp.to_dict(f"loop{i}_"))
+        return d
+
+    @classmethod
+    def from_dict(cls, d):
+        skel = Skeleton.from_dict({k[5:]: d[k] for k in d if k.startswith("skel_")})
+        loops = [Loop.from_dict(d, f"loop{i}_") for i in range(int(d["gait_count"]))]
+        return cls(str(d["gait_layer"]), float(d["gait_fps"]), skel, loops,
+                   [str(n) for n in d["gait_notes"]])
+
+
+MIN_TURN = np.radians(10.0)  # a cycle turning less than this counts as straight
+
+
+def build_gait(layer, straight, turns=(), fps=30.0, mirror_turns=True):
+    """Gait of a layer from a straight clip and turn clips (all one skeleton).
+
+    Every cycle of a turn clip that turns by at least ``MIN_TURN`` becomes a loop; when
+    only one turning direction is present and ``mirror_turns`` is set, the mirror images are
+    added and named as such. Raises ValueError on clips that are not locomotion.
+    """
+    notes = []
+    for c in (straight,) + tuple(turns):
+        c.validate()
+        if c.skeleton.names != straight.skeleton.names:
+            raise ValueError(f"clip '{c.name}' has a different skeleton from '{straight.name}'; "
+                             f"one locomotion patch takes clips of one skeleton")
+    info = detect_cycles(straight)
+    a, b = best_cycle(straight, info, "seam")
+    frames = int(round((b - a) / straight.fps * fps))
+    loops = [extract_loop(straight, a, b, frames, name=f"{straight.name} straight")]
+    notes.append(f"straight: {straight.name} frames {a}-{b}")
+    def turning_cycles(c, label=""):
+        ci = detect_cycles(c)
+        out = []
+        for (s, e), t in zip(zip(ci.strikes[:-1], ci.strikes[1:]), cycle_turns(c, ci)):
+            if abs(t) >= MIN_TURN:
+                side = "left" if t > 0 else "right"
+                out.append((c, s, e, f"{c.tags.get('mirrored_from', c.name)} {side} turn "
+                                     f"{np.degrees(abs(t)):.0f} deg{label}"))
+        return out
+
+    turn_loops = [tc for c in turns for tc in turning_cycles(c)]
+    has_left = any(lp[3].split(" ")[1] == "left" for lp in turn_loops)
+    has_right = any(lp[3].split(" ")[1] == "right" for lp in turn_loops)
+    if mirror_turns and turn_loops and has_left != has_right:
+        # A mirrored clip's left strikes are the original's right strikes: detect them
+        # again so every loop starts on a left-foot strike and phases line up.
+        for c in turns:
+            turn_loops += turning_cycles(mirror(c), " (mirrored)")
+    for c, s, e, nm in turn_loops:
+        loops.append(extract_loop(c, s, e, frames, name=nm))
+        notes.append(f"turn: {nm}, frames {s}-{e}")
+    loops.sort(key=lambda lp: lp.curvature)
+    return Gait(layer, float(fps), straight.skeleton, loops, notes)

@@ -1,0 +1,44 @@
+"""Motion: synthesised animation as a ground trajectory plus in-place body channels."""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .inplace import to_world
+from .skeleton import forward_kinematics
+
+
+@dataclass
+class Motion:
+    ground: np.ndarray      # (F, 3) x, y, heading of the ground frame (the armature object)
+    root_local: np.ndarray  # (F, 3) root position in ground coordinates
+    rotations: np.ndarray   # (F, J, 4) in-place rotation channels
+    contacts: np.ndarray    # (F, 4) planted flags from the source loops
+
+    @property
+    def frames(self):
+        return self.ground.shape[0]
+
+    def transformed(self, dx, dy, dheading=0.0):
+        """The same motion with its ground frame moved by a rigid transform of the plane."""
+        c, s = np.cos(dheading), np.sin(dheading)
+        g = self.ground.copy()
+        g[:, 0] = c * self.ground[:, 0] - s * self.ground[:, 1] + dx
+        g[:, 1] = s * self.ground[:, 0] + c * self.ground[:, 1] + dy
+        g[:, 2] = self.ground[:, 2] + dheading
+        return Motion(g, self.root_local, self.rotations, self.contacts)
+
+    def world_matrices(self, skel):
+        pos, rot = to_world(skel, self.ground, self.root_local, self.rotations)
+        return forward_kinematics(skel, pos, rot)
+
+
+def concatenate(parts):
+    """Join motions end to start; each part's first frame repeats the previous last frame."""
+    keep = [parts[0]] + [Motion(p.ground[1:], p.root_local[1:], p.rotations[1:], p.contacts[1:])
+                         for p in parts[1:]]
+    g = np.concatenate([p.ground for p in keep])
+    g[:, 2] = np.unwrap(g[:, 2])
+    return Motion(g, np.concatenate([p.root_local for p in keep]),
+                  np.concatenate([p.rotations for p in keep]),
+                  np.concatenate([p.contacts for p in keep]))

@@ -1,0 +1,279 @@
+"""Segment-level path planning across tiles (paper Sec. 4.2, Eq. 5, 7, 8).
+
+Nodes are tile entry states packed into one integer: tile (i, j) and the local entry id
+(edge, slot, heading) of the locomotion patch. Expanding a node looks up the segments of
+that entry state, drops those whose cell mask is occluded in the tile (Eq. 8), and maps
+each exit to the entry state of the neighbouring tile. The character's start and goal are
+joined to the node graph by connectors: Hermite curves fitted on the fly, the start ones
+to a whole number of cycles (so they end on the node pose), the goal ones to the exact
+goal position and heading.
+"""
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import astar, curves
+from .locomotion_patch import (DIRECTIONS, EDGES, INWARD, node_id, node_position,
+                               split_node_id)
+from .synthesis import cycles_along, follow
+
+BIAS = 1 << 15
+LOCAL = 256  # local entry ids per tile (EDGES * nodes * DIRECTIONS for 8 nodes)
+HEADING_SLACK = 0.02  # radians, for sampling error in precomputed turn sums
+NEXT_EDGE = np.array([2, 3, 0, 1])  # the neighbour's edge facing an exit edge
+TILE_STEP = np.array([[0, -1], [1, 0], [0, 1], [-1, 0]])
+
+
+class PlanError(ValueError):
+    """The goal cannot be reached, or the request is malformed; the message says why."""
+
+
+@dataclass
+class Piece:
+    kind: str                 # "segment", "start", "goal" or "direct"
+    segment: int = -1         # patch segment index (kind "segment")
+    tile: tuple = (0, 0)
+    curve: object = None      # curves.Curve in world coordinates (connectors)
+    cycles: int = 0           # whole cycles (segments and start connectors)
+    cost: float = 0.0
+
+    @property
+    def label(self):
+        if self.kind == "segment":
+            return f"seg{self.segment:04d}"
+        return self.kind
+
+
+@dataclass
+class Plan:
+    pieces: list
+    cost: float
+    expansions: int
+    seconds: float
+    start: tuple
+    goal: tuple
+    stats: dict = field(default_factory=dict)
+
+
+def pack(i, j, local):
+    return ((np.asarray(i, np.int64) + BIAS) * (2 * BIAS) + (np.asarray(j, np.int64) + BIAS)) * LOCAL + local
+
+
+def unpack(key):
+    local = key % LOCAL
+    rest = key // LOCAL
+    return rest // (2 * BIAS) - BIAS, rest % (2 * BIAS) - BIAS, local
+
+
+class SegmentPlanner:
+    """Plans one character's path on an environment with a baked locomotion patch."""
+
+    def __init__(self, patch, env, alpha=1.0, beta=0.5, gamma=0.2):
+        if patch.nodes * DIRECTIONS * EDGES > LOCAL:
+            raise PlanError("the patch has more nodes per edge than the planner packs (8)")
+        self.patch, self.env = patch, env
+        self.alpha, self.beta, self.gamma = float(alpha), float(beta), float(gamma)
+        self.costs = patch.costs(alpha, beta, gamma)
+        self.order, self.first = patch.by_entry()
+        e1, k1, h1 = split_node_id(patch.seg_exit, patch.nodes)
+        self.step = TILE_STEP[e1]
+        self.next_local = node_id(NEXT_EDGE[e1], k1, h1, patch.nodes)
+        e, k, h = split_node_id(np.arange(LOCAL), patch.nodes)
+        self.local_pos = node_position(e % EDGES, k, patch.side, patch.nodes)
+        self.local_heading = h * np.pi / 4
+        loops = patch.gait.loops
+        self.max_speed = max(lp.cycle_distance for lp in loops) * patch.gait.fps / patch.gait.frames
+        self.kmin, self.kmax = patch.stats.get("curvature_limits", patch.gait.kappa_limits)
+
+    # -- graph -------------------------------------------------------------------------
+    def node_pose(self, keys):
+        i, j, local = unpack(np.asarray(keys, np.int64))
+        p = self.local_pos[local] + np.stack((i, j), -1) * self.patch.side
+        return p, self.local_heading[local]
+
+    def heuristic(self, keys):
+        """Eq. 7 plus an effort bound: alpha |G| + beta angle-to-goal + gamma T_min."""
+        p, h = self.node_pose(keys)
+        d = self.goal[:2] - p
+        dist = np.linalg.norm(d, axis=-1)
+        cosang = (d[:, 0] * np.cos(h) + d[:, 1] * np.sin(h)) / np.maximum(dist, 1e-9)
+        ang = np.maximum(np.arccos(np.clip(cosang, -1, 1)) - HEADING_SLACK, 0.0)
+        effort = self.patch.effort_rate * dist / self.max_speed
+        return self.alpha * dist + self.beta * ang + self.gamma * effort
+
+    def expand(self, key):
+        i, j, local = unpack(key)
+        segs = self.order[self.first[local]:self.first[local + 1]]
+        if segs.size == 0 or not self.in_region(i, j):
+            return segs, segs, segs
+        free = self.env.free_cells((int(i), int(j)))
+        mask = self.patch.seg_mask[segs]
+        segs = segs[(mask & free) == mask]  # Eq. 8
+        st = self.step[segs]
+        keys = pack(i + st[:, 0], j + st[:, 1], self.next_local[segs])
+        return keys, self.costs[segs], segs
+
+    def in_region(self, i, j):
+        return self.region[0] <= i <= self.region[2] and self.region[1] <= j <= self.region[3]
+
+    # -- connectors ----------------------------------------------------------------------
+    def _entries(self, tiles_edges):
+        """Keys, positions and headings of the entry states on given (tile, edges)."""
+        n = self.patch.nodes
+        keys = []
+        for tile, edges in tiles_edges:
+            e, k, dd = np.meshgrid(edges, np.arange(n), (-1, 0, 1), indexing="ij")
+            e, k, dd = e.ravel(), k.ravel(), dd.ravel()
+            keys.append(pack(tile[0], tile[1], node_id(e, k, (INWARD[e] + dd) % DIRECTIONS, n)))
+        keys = np.concatenate(keys)
+        p, h = self.node_pose(keys)
+        return keys, p, h
+
+    def _exits_of(self, tile):
+        """Entry states of the neighbours across the edges of ``tile`` (leaving it)."""
+        i, j = tile
+        return [((i, j - 1), [2]), ((i + 1, j), [3]), ((i, j + 1), [0]), ((i - 1, j), [1])]
+
+    def _block(self, tile):
+        every = list(range(EDGES))
+        return [((tile[0] + di, tile[1] + dj), every) for di in (-1, 0, 1) for dj in (-1, 0, 1)]
+
+    def _curve_cost(self, curve, cycles_count):
+        frames = cycles_count * self.patch.gait.frames
+        effort = self.patch.effort_rate * frames / self.patch.gait.fps
+        return self.alpha * curve.length + self.beta * curve.total_turn() + self.gamma * effort
+
+    def _valid(self, curve):
+        if curve.kappa.min() < self.kmin or curve.kappa.max() > self.kmax:
+            return False
+        return not self.env.blocked(curve.pos[::4]).any()
+
+    def _measure(self, pos, vel, acc):
+        return cycles_along(self.patch.gait, pos, vel, acc)
+
+    def start_connectors(self, start):
+        """Connectors from the start to the nodes leaving its tile (else the 3x3 block)."""
+        tile = self.env.tile_of(start[:2])
+        out = self._start_connectors(start, self._exits_of(tile))
+        return out or self._start_connectors(start, self._block(tile))
+
+    def goal_connectors(self, goal):
+        """Connectors into the goal from the nodes entering its tile (else the 3x3 block)."""
+        tile = self.env.tile_of(goal[:2])
+        out = self._goal_connectors(goal, [(tile, list(range(EDGES)))])
+        return out or self._goal_connectors(goal, self._block(tile))
+
+    def _start_connectors(self, start, where):
+        keys, p, h = self._entries(where)
+        m = keys.size
+        p0 = np.tile(start[:2], (m, 1))
+        d0 = np.tile(curves.unit(start[2]), (m, 1))
+        d1 = curves.unit(h)
+        table = curves.tabulate(p0, d0, p, d1, self._measure, samples=48)
+        out = []
+        for n in range(1, 4):
+            sc = curves.fit_scale(p0, d0, p, d1, float(n), self._measure, table=table, samples=48)
+            for idx in np.flatnonzero(~np.isnan(sc)):
+                c = curves.hermite_curve(p0[idx], d0[idx], p[idx], d1[idx], sc[idx])
+                if self._valid(c):
+                    out.append((int(keys[idx]), self._curve_cost(c, n),
+                                Piece("start", curve=c, cycles=n)))
+        return out
+
+    def _goal_connectors(self, goal, where):
+        keys, p, h = self._entries(where)
+        m = keys.size
+        p1 = np.tile(goal[:2], (m, 1))
+        d1 = np.tile(curves.unit(goal[2]), (m, 1))
+        d0 = curves.unit(h)
+        _, bend = curves.tabulate(p, d0, p1, d1, samples=48)
+        best = curves.DEFAULT_SCALES[np.argmin(bend, axis=1)]
+        out = {}
+        for idx in range(m):
+            if np.linalg.norm(p[idx] - goal[:2]) < 0.2 * self.patch.gait.cycle_distance:
+                continue
+            c = curves.hermite_curve(p[idx], d0[idx], p1[idx], d1[idx], best[idx])
+            if self._valid(c):
+                cyc = float(cycles_along(self.patch.gait, c.pos[None], *_derivs(c))[0])
+                cost = self._curve_cost(c, cyc)
+                out[int(keys[idx])] = (cost, Piece("goal", curve=c, cost=cost))
+        return out
+
+    # -- search ---------------------------------------------------------------------------
+    def plan(self, start, goal, margin_tiles=3, max_expansions=400_000):
+        """Cheapest path from ``start`` to ``goal`` (x, y, heading); raises PlanError."""
+        t0 = time.perf_counter()
+        start, goal = np.asarray(start, float), np.asarray(goal, float)
+        self.goal = goal
+        for what, pt in (("start", start), ("goal", goal)):
+            if self.env.blocked(pt[None, :2])[0]:
+                raise PlanError(f"the {what} ({pt[0]:.2f}, {pt[1]:.2f}) is inside or within "
+                                f"{self.env.radius:.2f} m of an obstacle")
+        ts, tg = self.env.tile_of(start[:2]), self.env.tile_of(goal[:2])
+        self.region = (min(ts[0], tg[0]) - margin_tiles, min(ts[1], tg[1]) - margin_tiles,
+                       max(ts[0], tg[0]) + margin_tiles, max(ts[1], tg[1]) + margin_tiles)
+        starts = self.start_connectors(start)
+        goals = self.goal_connectors(goal)
+        if not starts:
+            raise PlanError("no walkable way out of the start: every connector to the node "
+                            "graph bends too sharply or meets an obstacle")
+        if not goals:
+            raise PlanError("no walkable way into the goal: every connector from the node "
+                            "graph bends too sharply or meets an obstacle")
+        payloads = {}
+
+        def expand(key):
+            keys, costs, segs = self.expand(key)
+            return keys, costs, segs
+
+        def goal_cost(key):
+            link = goals.get(key)
+            if link is None:
+                return None
+            payloads[key] = link[1]
+            return link[0], -1
+
+        result = astar.search([(k, c, -1) for k, c, _ in starts], expand, self.heuristic,
+                              goal_cost, max_expansions)
+        if not result.found:
+            raise PlanError(f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is unreachable: obstacles "
+                            f"close every path within {margin_tiles} tiles of start and goal "
+                            f"({result.expansions} nodes searched)")
+        start_piece = {k: p for k, _, p in sorted(starts, key=lambda s: -s[1])}
+        pieces = []
+        keys = [k for k, _ in result.path]
+        first = keys[0]
+        pieces.append(start_piece[first])
+        pieces[0].cost = min(c for k, c, _ in starts if k == first)
+        for (k, payload), prev in zip(result.path[1:], keys[:-1]):
+            if k == astar.GOAL:
+                pieces.append(payloads[prev])
+            else:
+                i, j, _ = unpack(prev)
+                pieces.append(Piece("segment", segment=int(payload), tile=(int(i), int(j)),
+                                    cycles=int(self.patch.seg_cycles[payload]),
+                                    cost=float(self.costs[payload])))
+        seconds = time.perf_counter() - t0
+        return Plan(pieces, float(result.cost), result.expansions, seconds,
+                    tuple(start), tuple(goal),
+                    {"start_connectors": len(starts), "goal_connectors": len(goals),
+                     "occlusion_computations": self.env.occlusion_computations})
+
+
+def _derivs(curve):
+    """Finite-difference derivatives of a dense curve in its own sampling (for measures)."""
+    vel = np.gradient(curve.pos, axis=0)
+    acc = np.gradient(vel, axis=0)
+    return vel[None], acc[None]
+
+
+def piece_motion(patch, piece):
+    """World-space motion of one planned piece."""
+    if piece.kind == "segment":
+        m = patch.motion(piece.segment)
+        return m.transformed(piece.tile[0] * patch.side, piece.tile[1] * patch.side)
+    if piece.kind == "start":
+        return follow(patch.gait, piece.curve, cycles=piece.cycles)
+    return follow(patch.gait, piece.curve, cycles=None, eased=(True, False))

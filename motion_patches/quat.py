@@ -1,0 +1,144 @@
+"""Quaternion helpers on numpy arrays (w, x, y, z order, as Blender stores them).
+
+Every function is vectorised over leading axes so per-frame, per-joint data stays in
+arrays; no per-frame Python objects.
+"""
+
+import numpy as np
+
+
+def normalize(q):
+    q = np.asarray(q, dtype=float)
+    return q / np.linalg.norm(q, axis=-1, keepdims=True)
+
+
+def mul(a, b):
+    aw, ax, ay, az = np.moveaxis(np.asarray(a, float), -1, 0)
+    bw, bx, by, bz = np.moveaxis(np.asarray(b, float), -1, 0)
+    return np.stack((
+        aw * bw - ax * bx - ay * by - az * bz,
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+    ), axis=-1)
+
+
+def conj(q):
+    q = np.asarray(q, float)
+    return q * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def to_matrix(q):
+    """Rotation matrices (..., 3, 3) of unit quaternions (..., 4)."""
+    w, x, y, z = np.moveaxis(normalize(q), -1, 0)
+    m = np.empty(np.shape(w) + (3, 3))
+    m[..., 0, 0] = 1 - 2 * (y * y + z * z)
+    m[..., 0, 1] = 2 * (x * y - w * z)
+    m[..., 0, 2] = 2 * (x * z + w * y)
+    m[..., 1, 0] = 2 * (x * y + w * z)
+    m[..., 1, 1] = 1 - 2 * (x * x + z * z)
+    m[..., 1, 2] = 2 * (y * z - w * x)
+    m[..., 2, 0] = 2 * (x * z - w * y)
+    m[..., 2, 1] = 2 * (y * z + w * x)
+    m[..., 2, 2] = 1 - 2 * (x * x + y * y)
+    return m
+
+
+def from_matrix(m):
+    """Unit quaternions (..., 4) with w >= 0 from rotation matrices (..., 3, 3)."""
+    m = np.asarray(m, float)
+    shape = m.shape[:-2]
+    m = m.reshape(-1, 3, 3)
+    q = np.empty((m.shape[0], 4))
+    tr = m[:, 0, 0] + m[:, 1, 1] + m[:, 2, 2]
+    # Choose the numerically largest of w, x, y, z per matrix.
+    cand = np.stack((tr, m[:, 0, 0], m[:, 1, 1], m[:, 2, 2]), axis=1)
+    k = np.argmax(cand, axis=1)
+    for case in range(4):
+        sel = k == case
+        if not np.any(sel):
+            continue
+        r = m[sel]
+        if case == 0:
+            s = np.sqrt(1.0 + tr[sel]) * 2
+            q[sel] = np.stack((0.25 * s, (r[:, 2, 1] - r[:, 1, 2]) / s,
+                               (r[:, 0, 2] - r[:, 2, 0]) / s, (r[:, 1, 0] - r[:, 0, 1]) / s), 1)
+        elif case == 1:
+            s = np.sqrt(1.0 + r[:, 0, 0] - r[:, 1, 1] - r[:, 2, 2]) * 2
+            q[sel] = np.stack(((r[:, 2, 1] - r[:, 1, 2]) / s, 0.25 * s,
+                               (r[:, 0, 1] + r[:, 1, 0]) / s, (r[:, 0, 2] + r[:, 2, 0]) / s), 1)
+        elif case == 2:
+            s = np.sqrt(1.0 + r[:, 1, 1] - r[:, 0, 0] - r[:, 2, 2]) * 2
+            q[sel] = np.stack(((r[:, 0, 2] - r[:, 2, 0]) / s, (r[:, 0, 1] + r[:, 1, 0]) / s,
+                               0.25 * s, (r[:, 1, 2] + r[:, 2, 1]) / s), 1)
+        else:
+            s = np.sqrt(1.0 + r[:, 2, 2] - r[:, 0, 0] - r[:, 1, 1]) * 2
+            q[sel] = np.stack(((r[:, 1, 0] - r[:, 0, 1]) / s, (r[:, 0, 2] + r[:, 2, 0]) / s,
+                               (r[:, 1, 2] + r[:, 2, 1]) / s, 0.25 * s), 1)
+    q = normalize(q)
+    q[q[:, 0] < 0] *= -1
+    return q.reshape(shape + (4,))
+
+
+def about_z(angle):
+    """Quaternions of rotations by ``angle`` (radians) about +Z."""
+    a = np.asarray(angle, float) * 0.5
+    z = np.zeros_like(a)
+    return np.stack((np.cos(a), z, z, np.sin(a)), axis=-1)
+
+
+def make_continuous(q, axis=0):
+    """Flip signs along ``axis`` so consecutive quaternions lie in one hemisphere.
+
+    Blender interpolates quaternion channels component-wise, so a sign flip between keys
+    would swing the bone through a wrong pose; this keeps keyed curves smooth.
+    """
+    q = np.array(q, float)
+    q = np.moveaxis(q, axis, 0)
+    for i in range(1, q.shape[0]):
+        d = np.sum(q[i] * q[i - 1], axis=-1)
+        q[i][d < 0] *= -1
+    return np.moveaxis(q, 0, axis)
+
+
+def slerp(a, b, t):
+    """Spherical interpolation, t broadcast over leading axes (shortest arc)."""
+    a = normalize(a)
+    b = normalize(b)
+    t = np.asarray(t, float)[..., None]
+    d = np.sum(a * b, axis=-1, keepdims=True)
+    b = np.where(d < 0, -b, b)
+    d = np.abs(d)
+    close = d > 0.9995
+    theta = np.arccos(np.clip(d, -1.0, 1.0))
+    s = np.sin(theta)
+    s = np.where(close, 1.0, s)
+    wa = np.where(close, 1.0 - t, np.sin((1.0 - t) * theta) / s)
+    wb = np.where(close, t, np.sin(t * theta) / s)
+    return normalize(wa * a + wb * b)
+
+
+def log(q):
+    """Rotation vectors (..., 3) (axis * angle) of unit quaternions."""
+    q = normalize(q)
+    q = np.where(q[..., :1] < 0, -q, q)
+    v = q[..., 1:]
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    ang = 2.0 * np.arctan2(n, q[..., :1])
+    scale = np.where(n > 1e-12, ang / np.maximum(n, 1e-12), 2.0)
+    return v * scale
+
+
+def exp(r):
+    """Unit quaternions of rotation vectors (..., 3)."""
+    r = np.asarray(r, float)
+    ang = np.linalg.norm(r, axis=-1, keepdims=True)
+    half = 0.5 * ang
+    k = np.where(ang > 1e-12, np.sin(half) / np.maximum(ang, 1e-12), 0.5)
+    return np.concatenate((np.cos(half), r * k), axis=-1)
+
+
+def angle_between(a, b):
+    """Rotation angle (radians) taking a to b, shortest arc."""
+    d = np.abs(np.sum(normalize(a) * normalize(b), axis=-1))
+    return 2.0 * np.arccos(np.clip(d, 0.0, 1.0))

@@ -1,0 +1,134 @@
+"""Skeleton: bone hierarchy and rest matrices, and forward kinematics that match Blender.
+
+Blender poses a bone as ``A_j = A_parent @ inv(rest_parent) @ rest_j @ basis_j`` where
+``rest`` is the bone's armature-space rest matrix (``bone.matrix_local``) and ``basis`` the
+pose channels. Reproducing that exactly lets the core compute foot positions, in-place
+transforms and mirrors without Blender, and lets a test compare against the depsgraph.
+"""
+
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import quat
+
+
+@dataclass
+class Skeleton:
+    names: list          # bone names, parents before children
+    parents: np.ndarray  # (J,) int, -1 for the root
+    rest: np.ndarray     # (J, 4, 4) armature-space rest matrices
+
+    def index(self, name):
+        return self.names.index(name)
+
+    @property
+    def root(self):
+        return int(np.flatnonzero(self.parents < 0)[0])
+
+    def find(self, *candidates):
+        """Index of the first bone whose name is one of ``candidates`` (case-insensitive)."""
+        lower = [n.lower() for n in self.names]
+        for c in candidates:
+            if c.lower() in lower:
+                return lower.index(c.lower())
+        raise KeyError(f"none of the bones {candidates} is in the skeleton")
+
+    def local_rest(self):
+        """(J, 4, 4) rest matrix of each bone relative to its parent's rest matrix."""
+        out = self.rest.copy()
+        for j, p in enumerate(self.parents):
+            if p >= 0:
+                out[j] = np.linalg.inv(self.rest[p]) @ self.rest[j]
+        return out
+
+    def mirror_map(self):
+        """Index of each bone's left/right counterpart (itself when it has none)."""
+        def swap(name):
+            for a, b in (("Left", "Right"), ("left", "right"), ("LEFT", "RIGHT")):
+                if a in name:
+                    return name.replace(a, b)
+                if b in name:
+                    return name.replace(b, a)
+            m = re.match(r"^([LR])([A-Z_.].*)$", name)
+            if m:
+                return ("R" if m.group(1) == "L" else "L") + m.group(2)
+            m = re.match(r"^(.*[._])([LRlr])$", name)
+            if m:
+                other = {"L": "R", "R": "L", "l": "r", "r": "l"}[m.group(2)]
+                return m.group(1) + other
+            return name
+        idx = {n: i for i, n in enumerate(self.names)}
+        return np.array([idx.get(swap(n), i) for i, n in enumerate(self.names)])
+
+    def to_dict(self):
+        return {"names": np.array(self.names), "parents": self.parents, "rest": self.rest}
+
+    @classmethod
+    def from_dict(cls, d):
+        return cls([str(n) for n in d["names"]], np.asarray(d["parents"], int),
+                   np.asarray(d["rest"], float))
+
+
+def compose(rot, pos):
+    """4x4 matrices from rotation quaternions (..., 4) and positions (..., 3)."""
+    m = np.zeros(np.shape(pos)[:-1] + (4, 4))
+    m[..., :3, :3] = quat.to_matrix(rot)
+    m[..., :3, 3] = pos
+    m[..., 3, 3] = 1.0
+    return m
+
+
+def forward_kinematics(skel, root_pos, rotations):
+    """Armature-space bone matrices (F, J, 4, 4).
+
+    ``root_pos`` (F, 3) is the root bone's armature-space head position and
+    ``rotations`` (F, J, 4) the pose rotation channels (``rotation_quaternion``) of every
+    bone; non-root bones carry no translation channels (true of BVH skeletons).
+    """
+    rotations = np.asarray(rotations, float)
+    nf, nj = rotations.shape[:2]
+    local_rest = skel.local_rest()
+    basis = quat.to_matrix(rotations)
+    out = np.zeros((nf, nj, 4, 4))
+    out[..., 3, 3] = 1.0
+    r = skel.root
+    out[:, r, :3, :3] = skel.rest[r, :3, :3] @ basis[:, r]
+    out[:, r, :3, 3] = root_pos
+    for j, p in enumerate(skel.parents):
+        if p < 0:
+            continue
+        lr = local_rest[j]
+        m = np.zeros((nf, 4, 4))
+        m[:, :3, :3] = lr[:3, :3] @ basis[:, j]
+        m[:, :3, 3] = lr[:3, 3]
+        m[:, 3, 3] = 1.0
+        out[:, j] = out[:, p] @ m
+    return out
+
+
+def root_location_to_position(skel, location):
+    """Root bone ``location`` channels (F, 3) -> armature-space head positions."""
+    r = skel.rest[skel.root]
+    return np.asarray(location, float) @ r[:3, :3].T + r[:3, 3]
+
+
+def root_position_to_location(skel, pos):
+    """Inverse of :func:`root_location_to_position`."""
+    r = skel.rest[skel.root]
+    return (np.asarray(pos, float) - r[:3, 3]) @ r[:3, :3]
+
+
+def local_rotations_from_global(skel, global_rot):
+    """Pose rotation channels (F, J, 4) that give armature-space rotations (F, J, 3, 3)."""
+    local_rest = skel.local_rest()
+    nf, nj = global_rot.shape[:2]
+    basis = np.empty((nf, nj, 3, 3))
+    for j, p in enumerate(skel.parents):
+        if p < 0:
+            basis[:, j] = skel.rest[j, :3, :3].T @ global_rot[:, j]
+        else:
+            parent_and_rest = global_rot[:, p] @ local_rest[j, :3, :3]
+            basis[:, j] = np.swapaxes(parent_and_rest, -1, -2) @ global_rot[:, j]
+    return quat.make_continuous(quat.from_matrix(basis), axis=0)

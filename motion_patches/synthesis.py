@@ -1,0 +1,71 @@
+"""Space-curve following: a gait's loops played along a curve, turns blended by curvature.
+
+The root is bound to the curve by the loops' own travelled distance and faces the curve's
+tangent (paper Sec. 6). Near both ends of a segment the blend eases back to the straight
+loop, so every node carries the same pose and segments join without a pop.
+"""
+
+import numpy as np
+
+from .curves import arc_lengths, curvature
+from .motion import Motion
+
+RAMP = 0.25  # of a straight cycle's distance: blend easing length at segment ends
+
+
+
+def cycles_along(gait, pos, vel, acc, eased=(True, True)):
+    """Gait cycles needed to follow sampled curves (..., M, 2) -> (...).
+
+    The phase advances by ds / D(w(s)) with D the blended cycle distance at the eased
+    curvature, so a curve's "whole number of cycles" accounts for shorter turning strides.
+    """
+    s = arc_lengths(pos)
+    kap = curvature(vel, acc)
+    length = s[..., -1:]
+    ease = _ease(s, length, gait.cycle_distance * RAMP, eased)
+    d = gait.blended_distance(kap * ease)
+    dmid = 0.5 * (d[..., 1:] + d[..., :-1])
+    return np.sum(np.diff(s, axis=-1) / dmid, axis=-1)
+
+
+def _ease(s, length, ramp_len, eased):
+    e = np.ones_like(s)
+    d = np.clip(s / max(ramp_len, 1e-9), 0, 1)
+    if eased[0]:
+        e = e * np.where(d < 1, d * d * (3 - 2 * d), 1.0)
+    d = np.clip((length - s) / max(ramp_len, 1e-9), 0, 1)
+    if eased[1]:
+        e = e * np.where(d < 1, d * d * (3 - 2 * d), 1.0)
+    return e
+
+
+def follow(gait, curve, cycles=None, start_phase=0, eased=(True, True)):
+    """Motion of the gait along ``curve``.
+
+    With ``cycles`` the motion lasts exactly ``cycles`` loops (the curve was fitted to it)
+    and ends on the node pose; without, it stops where the curve ends, mid-cycle if need be.
+    """
+    n = gait.frames
+    ease = _ease(curve.s, curve.length, gait.cycle_distance * RAMP, eased)
+    dist = gait.blended_distance(curve.kappa * ease)
+    dmid = 0.5 * (dist[1:] + dist[:-1])
+    phase_at = np.concatenate(([0.0], np.cumsum(np.diff(curve.s) / dmid)))  # cycles along curve
+    straight = gait.straight
+    profile = straight.distance / straight.cycle_distance  # (n + 1,) within-cycle fraction
+    if cycles is not None:
+        phase_at *= cycles / phase_at[-1]
+        total = cycles * n
+    else:
+        total = int(np.ceil((phase_at[-1] - 0) * n - 1e-9))
+    k = np.arange(total + 1) + start_phase
+    c = k // n
+    target = c + profile[k % n] - (start_phase // n + profile[start_phase % n])
+    target = np.clip(target, 0.0, phase_at[-1])
+    target[-1] = phase_at[-1]
+    s = np.interp(target, phase_at, curve.s)
+    x, y, h, kap = curve.at(s)
+    e = np.interp(s, curve.s, ease)
+    weights = gait.weights(kap * e)
+    root, rot, contacts = gait.pose(k, weights)
+    return Motion(np.column_stack((x, y, h)), root, rot, contacts)

@@ -1,0 +1,84 @@
+import numpy as np
+
+from motion_patches import curves
+from motion_patches.environment import FULL, Environment, Obstacle, convex_hull
+from motion_patches.locomotion_patch import cell_mask
+
+
+def test_hermite_starts_and_ends_on_its_nodes_along_their_headings():
+    c = curves.hermite_curve((0, 0), curves.unit(0), (2, 1), curves.unit(np.pi / 2), 1.0)
+    assert np.allclose(c.pos[0], (0, 0)) and np.allclose(c.pos[-1], (2, 1))
+    assert np.isclose(c.heading[0], 0.0, atol=1e-6)
+    assert np.isclose(c.heading[-1], np.pi / 2, atol=1e-6)
+
+
+def test_fit_scale_reaches_the_requested_length():
+    p0, p1 = np.array([[0.0, 0.0]]), np.array([[2.0, 1.0]])
+    d0, d1 = curves.unit(np.array([0.0])), curves.unit(np.array([np.pi / 2]))
+    for target in (2.6, 3.0, 3.5):
+        sc = curves.fit_scale(p0, d0, p1, d1, target)
+        c = curves.hermite_curve(p0[0], d0[0], p1[0], d1[0], sc[0])
+        assert abs(c.length - target) < 5e-3
+
+
+def test_fit_scale_reports_impossible_lengths_as_nan():
+    sc = curves.fit_scale([[0, 0]], [[1, 0]], [[2, 0]], [[1, 0]], 1.0)  # shorter than the chord
+    assert np.isnan(sc[0])
+
+
+def test_curvature_of_a_quarter_circle_is_one_over_radius():
+    # A Hermite quarter circle of radius 2 (tangent scale 0.5523 * chord / sqrt2 ~ standard).
+    r = 2.0
+    k = 4 / 3 * (np.sqrt(2) - 1) * r / (r * np.sqrt(2))
+    c = curves.hermite_curve((r, 0), curves.unit(np.pi / 2), (0, r), curves.unit(np.pi), 3 * k)
+    assert np.allclose(c.kappa, 1 / r, rtol=0.03)
+
+
+def test_arc_projection_inverts_arc_frame():
+    s = np.linspace(0, 2, 9)
+    pos, _ = curves.arc_frame(np.array([1.0, 2.0]), 0.3, 0.7, s)
+    assert np.allclose(curves.arc_project(np.array([1.0, 2.0]), 0.3, 0.7, pos), s)
+
+
+def test_cell_mask_of_a_line_along_the_bottom_row():
+    pts = np.column_stack((np.linspace(0.01, 7.99, 50), np.full(50, 0.5)))[None]
+    assert int(cell_mask(pts, 8.0, 8)[0]) == 0xFF
+
+
+def test_tile_occlusion_bitfield_and_eq8():
+    env = Environment(side=8.0, cells=8, radius=0.0)
+    env.place(Obstacle("box", np.array([[3.2, 3.2], [3.8, 3.2], [3.8, 3.8], [3.2, 3.8]])))
+    free = env.free_cells((0, 0))
+    cell = 3 * 8 + 3
+    assert int(free) == int(FULL) & ~(1 << cell)
+    through = np.uint64(1 << cell) | np.uint64(1 << (cell + 1))
+    beside = np.uint64(1 << (cell + 8))
+    assert (through & free) != through  # occluded (Eq. 8)
+    assert (beside & free) == beside
+
+
+def test_radius_grows_occlusion_into_neighbouring_cells_and_tiles():
+    env = Environment(side=8.0, cells=8, radius=0.5)
+    env.place(Obstacle("post", np.array([[7.7, 3.2], [7.9, 3.2], [7.9, 3.4], [7.7, 3.4]])))
+    assert (1, 0) in {t for t in [(1, 0)] if env.members(t)}
+    assert int(env.free_cells((1, 0))) != int(FULL)  # within 0.5 m of the next tile
+    assert int(env.free_cells((0, 1))) == int(FULL)
+
+
+def test_moving_an_obstacle_only_updates_membership_until_asked():
+    env = Environment(side=2.0, cells=8, radius=0.2)
+    sq = np.array([[0.2, 0.2], [0.6, 0.2], [0.6, 0.6], [0.2, 0.6]])
+    env.place(Obstacle("a", sq))
+    before = env.occlusion_computations
+    env.place(Obstacle("a", sq + 4.0))
+    assert env.occlusion_computations == before
+    assert env.members((0, 0)) == set() and "a" in env.members((2, 2))
+    assert int(env.free_cells((0, 0))) == int(FULL)
+
+
+def test_convex_hull_of_a_square_with_inner_points():
+    pts = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0.5, 0.5], [0.2, 0.7]])
+    hull = convex_hull(pts)
+    assert len(hull) == 4
+    area = 0.5 * np.sum(hull[:, 0] * np.roll(hull[:, 1], -1) - np.roll(hull[:, 0], -1) * hull[:, 1])
+    assert np.isclose(area, 1.0)

@@ -1,0 +1,79 @@
+import numpy as np
+import pytest
+
+from motion_patches import contacts, metrics
+from motion_patches.environment import Environment, Obstacle
+from motion_patches.motion import concatenate
+from motion_patches.planner import PlanError, SegmentPlanner, piece_motion
+
+
+def pillar(name, x, y, r=0.25):
+    a = np.linspace(0, 2 * np.pi, 13)[:-1]
+    return Obstacle(name, np.column_stack((x + r * np.cos(a), y + r * np.sin(a))))
+
+
+def planned_motion(patch, plan):
+    return concatenate([piece_motion(patch, p) for p in plan.pieces])
+
+
+@pytest.fixture
+def open_ground(walk_patch):
+    return Environment(walk_patch.side, walk_patch.cells, radius=0.25)
+
+
+def test_plan_on_open_ground_ends_exactly_on_the_goal(walk_patch, open_ground):
+    plan = SegmentPlanner(walk_patch, open_ground).plan((0.5, 0.5, 0.0), (9.0, 3.0, 0.8))
+    m = planned_motion(walk_patch, plan)
+    assert np.allclose(m.ground[-1, :2], (9.0, 3.0), atol=1e-6)
+    assert np.isclose(m.ground[-1, 2] % (2 * np.pi), 0.8, atol=1e-6)
+    assert np.allclose(m.ground[0], (0.5, 0.5, 0.0), atol=1e-6)
+    assert [p.kind for p in plan.pieces][0] == "start" and plan.pieces[-1].kind == "goal"
+    assert any(p.kind == "segment" for p in plan.pieces)
+
+
+def test_planned_ground_path_is_continuous(walk_patch, open_ground):
+    plan = SegmentPlanner(walk_patch, open_ground).plan((0.5, 0.5, 1.0), (-4.0, 6.0, 2.0))
+    m = planned_motion(walk_patch, plan)
+    step = np.linalg.norm(np.diff(m.ground[:, :2], axis=0), axis=1)
+    assert step.max() < 0.08  # metres per frame: no jump between pieces
+    assert np.abs(np.diff(m.ground[:, 2])).max() < 0.1
+
+
+def test_plan_avoids_pillars_with_the_character_radius(walk_patch):
+    env = Environment(walk_patch.side, walk_patch.cells, radius=0.25)
+    for n, (x, y) in enumerate([(3, 0.6), (4.5, 1.5), (3.5, 2.8), (6, 0.2), (6.5, 2.5)]):
+        env.place(pillar(f"p{n}", x, y))
+    plan = SegmentPlanner(walk_patch, env).plan((0.5, 1.3, 0.0), (9.0, 1.3, 0.0))
+    m = planned_motion(walk_patch, plan)
+    assert not env.blocked(m.ground[:, :2]).any()
+
+
+def test_planned_walk_keeps_foot_skate_low(walk_patch, open_ground, walk_gait):
+    plan = SegmentPlanner(walk_patch, open_ground).plan((0.5, 0.5, 0.0), (9.0, 5.0, 1.0))
+    m = planned_motion(walk_patch, plan)
+    fj = contacts.foot_joints(walk_gait.skeleton)
+    fp = m.world_matrices(walk_gait.skeleton)[:, fj][..., :3, 3]
+    skate = metrics.foot_skate(fp, walk_gait.fps, m.contacts)
+    assert skate["mean_cm_per_frame"] < 1.0
+
+
+def test_weights_change_the_plan_cost_consistently(walk_patch, open_ground):
+    a = SegmentPlanner(walk_patch, open_ground, 1.0, 0.5, 0.2).plan((0.5, 0.5, 0), (8, 4, 0))
+    b = SegmentPlanner(walk_patch, open_ground, 2.0, 1.0, 0.4).plan((0.5, 0.5, 0), (8, 4, 0))
+    assert np.isclose(b.cost, 2 * a.cost, rtol=1e-6)
+
+
+def test_enclosed_goal_is_unreachable_with_a_clear_message(walk_patch):
+    env = Environment(walk_patch.side, walk_patch.cells, radius=0.25)
+    ring = [(6 + 1.6 * np.cos(a), 6 + 1.6 * np.sin(a)) for a in np.linspace(0, 2 * np.pi, 25)[:-1]]
+    for n, (x, y) in enumerate(ring):
+        env.place(pillar(f"r{n}", x, y, 0.3))
+    with pytest.raises(PlanError, match="unreachable|no walkable way"):
+        SegmentPlanner(walk_patch, env).plan((0.5, 0.5, 0), (6.0, 6.0, 0.0))
+
+
+def test_goal_inside_an_obstacle_is_refused(walk_patch):
+    env = Environment(walk_patch.side, walk_patch.cells, radius=0.25)
+    env.place(pillar("p", 5, 5, 0.5))
+    with pytest.raises(PlanError, match="goal .* inside"):
+        SegmentPlanner(walk_patch, env).plan((0.5, 0.5, 0), (5.0, 5.0, 0.0))
