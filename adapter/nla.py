@@ -1,0 +1,172 @@
+"""Plans -> NLA: one strip per motion segment on shared in-place actions, one root track.
+
+Tracks the add-on makes are named with ``TRACK_PREFIX`` and listed on the object, so a
+re-plan removes exactly those; user tracks and actions are never touched. Segment actions
+are shared between strips and characters (keyed by patch and segment); connector actions
+belong to one character and are replaced with its plan. The armature object carries the
+ground trajectory; its bones carry in-place motion facing the rig's rest facing.
+"""
+
+import json
+
+import numpy as np
+
+from ..motion_patches import quat
+from ..motion_patches.clip import Clip
+from ..motion_patches.inplace import rest_facing, to_inplace, to_world
+from ..motion_patches.skeleton import root_position_to_location
+from . import actions as act_io
+from . import compat
+
+TRACK_PREFIX = "MP "
+TRACK_MOTION = TRACK_PREFIX + "motion"
+TRACK_ROOT = TRACK_PREFIX + "root"
+TRACKS_KEY = "motion_patches_tracks"
+SEGMENT_KEY = "motion_patches_segment"
+CHARACTER_KEY = "motion_patches_character"
+STASH_PREFIX = TRACK_PREFIX + "stash: "
+
+
+def facing_angle(skel):
+    f = rest_facing(skel)
+    return float(np.arctan2(f[1], f[0]))
+
+
+def inplace_channels(skel, motion):
+    """Root location channels (F, 3) and rotations (F, J, 4) for an object whose Z rotation
+    is the ground heading minus the rig's rest facing."""
+    pos, rot = to_world(skel, motion.ground, motion.root_local, motion.rotations)
+    obj_ground = motion.ground.copy()
+    obj_ground[:, 2] -= facing_angle(skel)
+    clip = Clip("tmp", skel, 1.0, pos, rot)
+    local, rot_ip = to_inplace(clip, obj_ground)
+    # to_inplace expresses the root in a frame whose +X is the ground heading; the object's
+    # frame is that turned by -facing, which to_inplace already applied through obj_ground.
+    return root_position_to_location(skel, local), rot_ip
+
+
+def check_rig(obj, skel):
+    if obj is None or obj.type != "ARMATURE":
+        raise ValueError("the character must be an armature object")
+    names = {b.name for b in obj.data.bones}
+    missing = [n for n in skel.names if n not in names]
+    if missing:
+        raise ValueError(f"armature '{obj.name}' lacks bones of the patch skeleton: "
+                         f"{', '.join(missing[:6])}")
+    if not np.allclose(np.array(obj.scale), 1.0, atol=1e-4):
+        raise ValueError(f"armature '{obj.name}' is scaled {tuple(round(s, 3) for s in obj.scale)}; "
+                         f"apply its scale first (the patch is in metres)")
+    if obj.rotation_mode == "AXIS_ANGLE":
+        raise ValueError(f"armature '{obj.name}' uses axis-angle rotation; use Euler or quaternion")
+
+
+def remove_owned(obj):
+    """Remove the NLA tracks this add-on made on ``obj`` (and nothing else)."""
+    ad = obj.animation_data
+    names = json.loads(obj.get(TRACKS_KEY, "[]"))
+    if ad is None:
+        return
+    for tr in list(ad.nla_tracks):
+        if tr.name in names and tr.name.startswith(TRACK_PREFIX):
+            ad.nla_tracks.remove(tr)
+
+
+def _orphan_connectors(bpy, character_name):
+    for a in list(bpy.data.actions):
+        if a.get(CHARACTER_KEY) == character_name and a.users == 0:
+            bpy.data.actions.remove(a)
+
+
+def stash_active_action(obj):
+    """Move an active action into a muted track so it stops overriding the NLA (kept intact)."""
+    ad = obj.animation_data
+    if ad is None or ad.action is None:
+        return None
+    action, slot = ad.action, ad.action_slot
+    tr = ad.nla_tracks.new()
+    tr.name = STASH_PREFIX + action.name
+    start = int(action.frame_range[0])
+    strip = tr.strips.new(action.name, start, action)
+    if slot is not None:
+        compat.set_strip_slot(strip, slot)
+    tr.mute = True
+    ad.action = None
+    return tr.name
+
+
+def segment_action(bpy, patch, patch_key, seg, skel):
+    """The shared in-place action of a patch segment (created on first use)."""
+    key = f"{patch_key}:{seg}"
+    for a in bpy.data.actions:
+        if a.get(SEGMENT_KEY) == key:
+            return a, compat.action_slot(a)
+    motion = patch.motion(seg)
+    name = f"MP {patch.layer} seg{seg:04d}"
+    return _inplace_action(name, skel, motion, {SEGMENT_KEY: key})
+
+
+def _inplace_action(name, skel, motion, tags):
+    loc, rot = inplace_channels(skel, motion)
+    action, slot = compat.new_action(name)
+    for k, v in tags.items():
+        action[k] = v
+    frames = np.arange(motion.frames, dtype=float)
+    act_io.key_pose(action, slot, skel, frames, loc, quat.make_continuous(rot, axis=0))
+    return action, slot
+
+
+def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start):
+    """Write a plan's strips and root trajectory on ``obj``; returns strip records."""
+    skel = patch.gait.skeleton
+    check_rig(obj, skel)
+    ad = obj.animation_data or obj.animation_data_create()
+    stashed = stash_active_action(obj)
+    remove_owned(obj)
+    _orphan_connectors(bpy, obj.name)
+
+    motion_track = ad.nla_tracks.new()
+    motion_track.name = TRACK_MOTION
+    strips, frame = [], int(frame_start)
+    for n, (piece, m) in enumerate(zip(plan.pieces, motions)):
+        if piece.kind == "segment":
+            action, slot = segment_action(bpy, patch, patch_key, piece.segment, skel)
+        else:
+            action, slot = _inplace_action(f"MP {obj.name} {piece.kind}", skel, m,
+                                           {CHARACTER_KEY: obj.name})
+        strip = motion_track.strips.new(f"{n:02d} {piece.label}", frame, action)
+        compat.set_strip_slot(strip, slot)
+        strip.extrapolation = "HOLD" if n == 0 else (
+            "HOLD_FORWARD" if n == len(plan.pieces) - 1 else "NOTHING")
+        strip.blend_in = strip.blend_out = 0.0
+        strips.append({"name": strip.name, "start": frame, "end": frame + m.frames - 1,
+                       "action": action.name, "kind": piece.kind})
+        frame += m.frames - 1
+
+    root_action, root_slot = compat.new_action(f"MP {obj.name} root")
+    root_action[CHARACTER_KEY] = obj.name
+    heading = np.unwrap(world.ground[:, 2]) - facing_angle(skel)
+    frames = np.arange(world.frames, dtype=float)
+    z0 = float(obj.location[2])
+    for i, v in enumerate((world.ground[:, 0], world.ground[:, 1], np.full(world.frames, z0))):
+        act_io.key_curve(root_action, root_slot, "location", i, frames, v, group="Object Transforms")
+    if obj.rotation_mode == "QUATERNION":
+        q = quat.make_continuous(quat.about_z(heading), axis=0)
+        for i in range(4):
+            act_io.key_curve(root_action, root_slot, "rotation_quaternion", i, frames, q[:, i],
+                             group="Object Transforms")
+    else:
+        rx, ry = float(obj.rotation_euler[0]), float(obj.rotation_euler[1])
+        if abs(rx) > 1e-6 or abs(ry) > 1e-6:
+            raise ValueError(f"armature '{obj.name}' is tilted (X/Y rotation); the planned "
+                             f"root turns about Z only")
+        for i, v in enumerate((np.zeros(world.frames), np.zeros(world.frames), heading)):
+            act_io.key_curve(root_action, root_slot, "rotation_euler", i, frames, v,
+                             group="Object Transforms")
+    root_track = ad.nla_tracks.new()
+    root_track.name = TRACK_ROOT
+    rs = root_track.strips.new(f"{obj.name} root", int(frame_start), root_action)
+    compat.set_strip_slot(rs, root_slot)
+    rs.extrapolation = "HOLD"
+    rs.blend_in = rs.blend_out = 0.0
+    obj[TRACKS_KEY] = json.dumps([TRACK_MOTION, TRACK_ROOT])
+    return strips, stashed

@@ -1,0 +1,125 @@
+"""Bake -> save -> reload -> plan -> evaluate, on real CMU mocap inside Blender."""
+
+import json
+
+import bpy
+import numpy as np
+import pytest
+
+
+def pillar(name, x, y, r=0.25, h=2.0):
+    bpy.ops.mesh.primitive_cylinder_add(radius=r, depth=h, location=(x, y, h / 2))
+    bpy.context.object.name = name
+    return bpy.context.object
+
+
+def goal_empty(x, y, heading):
+    ob = bpy.data.objects.new("Goal", None)
+    bpy.context.scene.collection.objects.link(ob)
+    ob.location = (x, y, 0)
+    ob.rotation_euler = (0, 0, heading + np.pi / 2)  # -Y axis points along ``heading``
+    return ob
+
+
+@pytest.fixture(scope="module")
+def baked_blend(addon_module, mocap_dir, tmp_path_factory):
+    """A saved .blend with the walk patch baked from 16_15 + 16_18 through the operators."""
+    api = addon_module.api
+    bpy.ops.wm.read_homefile(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.fps = 30
+    arm, acts = api.import_mocap([mocap_dir / "cmu" / "16_15.bvh", mocap_dir / "cmu" / "16_18.bvh"],
+                                 name="Source")
+    s = scene.motion_patches
+    s.source_armature = arm
+    s.straight_action = acts[0]
+    s.turn_actions.add().action = acts[1]
+    assert bpy.ops.motion_patches.bake_locomotion_patch(layer="walk") == {'FINISHED'}
+    path = tmp_path_factory.mktemp("blend") / "baked.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    return path
+
+
+def test_import_puts_every_clip_on_one_armature(addon_module, mocap_dir, clean_scene):
+    clean_scene.render.fps = 30
+    arm, acts = addon_module.api.import_mocap(
+        [mocap_dir / "cmu" / "16_15.bvh", mocap_dir / "cmu" / "16_18.bvh"])
+    assert [o.type for o in bpy.data.objects] == ["ARMATURE"]
+    assert [a.name for a in acts] == ["16_15", "16_18"]
+    clip = addon_module.adapter.actions.clip_from_action(acts[0], arm, 30.0)
+    assert abs(clip.fps - 120) < 0.5 and clip.frames == 469
+
+
+def test_bake_survives_save_and_reload(baked_blend, addon_module):
+    bpy.ops.wm.open_mainfile(filepath=str(baked_blend))
+    scene = bpy.context.scene
+    item = scene.motion_patches.patches["walk"]
+    stats = json.loads(item.stats)
+    patch = addon_module.adapter.storage.load_patch(scene, "walk")
+    assert patch.segment_count == stats["kept"] > 300
+    assert stats["kept"] + stats["culled"] == stats["candidates"]
+
+
+def test_plan_writes_nla_and_evaluates_onto_the_goal(baked_blend, addon_module):
+    bpy.ops.wm.open_mainfile(filepath=str(baked_blend))
+    scene = bpy.context.scene
+    src = scene.motion_patches.source_armature
+    char = src.copy()
+    char.name = "Walker"
+    char.animation_data_clear()
+    scene.collection.objects.link(char)
+    char.location = (0.4, 0.3, 0)
+    for n, (x, y) in enumerate([(3.0, 1.0), (4.5, 3.0), (2.5, 4.0), (6.0, 1.5)]):
+        pillar(f"Pillar{n}", x, y)
+    scene.motion_patches.goal = goal_empty(7.5, 5.0, 0.6)
+    bpy.context.view_layer.objects.active = char
+    assert bpy.ops.motion_patches.plan_path() == {'FINISHED'}
+    tracks = [t.name for t in char.animation_data.nla_tracks]
+    assert tracks == ["MP motion", "MP root"]
+    strips = char.animation_data.nla_tracks["MP motion"].strips
+    assert len(strips) >= 3 and all(s.action_slot is not None for s in strips)
+
+    figures = addon_module.api.analyse(bpy.context, char)
+    assert figures["goal_position_error_cm"] < 10
+    assert figures["goal_heading_error_deg"] < 10
+    assert figures["frames_root_inside_obstacle"] == 0
+    assert figures["root_from_plan_cm"]["max"] < 5
+    assert figures["foot_skate"]["mean_cm_per_frame"] < 1.0
+    pop = figures["boundary_pop"]
+    assert pop["max_boundary_jump_deg"] <= max(pop["p99_step_deg"], 1.0) * 1.5
+
+
+def test_replanning_replaces_only_the_addon_tracks(baked_blend, addon_module):
+    bpy.ops.wm.open_mainfile(filepath=str(baked_blend))
+    scene = bpy.context.scene
+    char = scene.motion_patches.source_armature
+    user_action = char.animation_data.action
+    user_track = char.animation_data.nla_tracks.new()
+    user_track.name = "My layout notes"
+    scene.motion_patches.goal = goal_empty(5.0, 2.0, 0.0)
+    bpy.context.view_layer.objects.active = char
+    assert bpy.ops.motion_patches.plan_path() == {'FINISHED'}
+    scene.motion_patches.goal.location = (4.0, -3.0, 0)
+    assert bpy.ops.motion_patches.plan_path() == {'FINISHED'}
+    names = [t.name for t in char.animation_data.nla_tracks]
+    assert "My layout notes" in names
+    assert names.count("MP motion") == 1 and names.count("MP root") == 1
+    assert user_action.name in bpy.data.actions  # stashed, never deleted
+    assert any(t.name.startswith("MP stash") and t.mute for t in char.animation_data.nla_tracks)
+
+
+def test_unreachable_goal_reports_and_leaves_the_scene_untouched(baked_blend, addon_module):
+    bpy.ops.wm.open_mainfile(filepath=str(baked_blend))
+    scene = bpy.context.scene
+    char = scene.motion_patches.source_armature
+    for n, a in enumerate(np.linspace(0, 2 * np.pi, 25)[:-1]):
+        pillar(f"Ring{n}", 6 + 1.6 * np.cos(a), 6 + 1.6 * np.sin(a), r=0.3)
+    scene.motion_patches.goal = goal_empty(6.0, 6.0, 0.0)
+    bpy.context.view_layer.objects.active = char
+    tracks_before = [t.name for t in char.animation_data.nla_tracks]
+    actions_before = sorted(a.name for a in bpy.data.actions)
+    with pytest.raises(RuntimeError, match="unreachable|no walkable way"):
+        bpy.ops.motion_patches.plan_path()
+    assert [t.name for t in char.animation_data.nla_tracks] == tracks_before
+    assert sorted(a.name for a in bpy.data.actions) == actions_before
+    assert char.animation_data.action is not None
