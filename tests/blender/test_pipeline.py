@@ -81,6 +81,7 @@ def test_plan_writes_nla_and_evaluates_onto_the_goal(baked_blend, addon_module):
 
     figures = addon_module.api.analyse(bpy.context, char)
     assert figures["goal_position_error_cm"] < 10
+    assert figures["goal_root_position_error_cm"] < 10  # the hips, not only the root motion
     assert figures["goal_heading_error_deg"] < 10
     assert figures["frames_root_inside_obstacle"] == 0
     assert figures["root_from_plan_cm"]["max"] < 5
