@@ -13,6 +13,7 @@ import numpy as np
 from . import quat
 from .clip import mirror, resample
 from .cycle import Loop, best_cycle, cycle_turns, detect_cycles, extract_loop
+from .inplace import facing_yaw
 from .skeleton import Skeleton
 
 
@@ -23,6 +24,7 @@ class Gait:
     skeleton: Skeleton
     loops: list                 # Loop, sorted by curvature; exactly one is straight
     notes: list = field(default_factory=list)  # provenance, e.g. "right turn mirrored from 16_18"
+    turn_range: tuple = None    # sharpest (right, left) curvature over any one-cycle window
 
     @property
     def frames(self):
@@ -45,9 +47,12 @@ class Gait:
 
     @property
     def kappa_limits(self):
-        """Most negative and most positive curvature the loops show (culling range)."""
-        k = self.curvatures
-        return float(min(k.min(), 0.0)), float(max(k.max(), 0.0))
+        """Curvature range the turn clips show over a cycle (the bake's culling range)."""
+        k = np.array([lp.curvature for lp in self.loops])
+        lo, hi = float(min(k.min(), 0.0)), float(max(k.max(), 0.0))
+        if self.turn_range is not None:
+            lo, hi = min(lo, self.turn_range[0]), max(hi, self.turn_range[1])
+        return lo, hi
 
     def weights(self, kappa):
         """(K, L) blend weights of the loops for curvatures (K,): two neighbours lerped."""
@@ -109,6 +114,7 @@ class Gait:
 
     def to_dict(self):
         d = {"gait_layer": np.array(self.layer), "gait_fps": np.array(self.fps),
+             "gait_turn_range": np.array(self.turn_range if self.turn_range else (0.0, 0.0)),
              "gait_count": np.array(len(self.loops)), "gait_notes": np.array(self.notes, dtype=str)}
         d.update({"skel_" + k: v for k, v in self.skeleton.to_dict().items()})
         for i, lp in enumerate(self.loops):
@@ -119,11 +125,23 @@ class Gait:
     def from_dict(cls, d):
         skel = Skeleton.from_dict({k[5:]: d[k] for k in d if k.startswith("skel_")})
         loops = [Loop.from_dict(d, f"loop{i}_") for i in range(int(d["gait_count"]))]
+        tr = tuple(float(v) for v in d["gait_turn_range"]) if "gait_turn_range" in d else None
         return cls(str(d["gait_layer"]), float(d["gait_fps"]), skel, loops,
-                   [str(n) for n in d["gait_notes"]])
+                   [str(n) for n in d["gait_notes"]], tr if tr and any(tr) else None)
 
 
 MIN_TURN = np.radians(10.0)  # a cycle turning less than this counts as straight
+
+
+def sharpest_turn(clip, cycle_frames):
+    """(most negative, most positive) heading change per metre over any window of one
+    cycle: the curvature a turn clip really reaches, not only at strike-aligned cycles."""
+    yaw = facing_yaw(clip)
+    p = clip.root_pos[:, :2]
+    dist = np.concatenate(([0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))))
+    n = max(1, min(int(round(cycle_frames)), clip.frames - 1))
+    k = (yaw[n:] - yaw[:-n]) / np.maximum(dist[n:] - dist[:-n], 1e-6)
+    return float(min(k.min(), 0.0)), float(max(k.max(), 0.0))
 
 
 def build_gait(layer, straight, turns=(), fps=30.0, mirror_turns=True):
@@ -155,6 +173,10 @@ def build_gait(layer, straight, turns=(), fps=30.0, mirror_turns=True):
         return out
 
     turn_loops = [tc for c in turns for tc in turning_cycles(c)]
+    lo, hi = 0.0, 0.0
+    for c in turns:
+        a, b = sharpest_turn(c, detect_cycles(c).period * c.fps)
+        lo, hi = min(lo, a), max(hi, b)
     has_left = any(lp[3].split(" ")[1] == "left" for lp in turn_loops)
     has_right = any(lp[3].split(" ")[1] == "right" for lp in turn_loops)
     if mirror_turns and turn_loops and has_left != has_right:
@@ -162,8 +184,9 @@ def build_gait(layer, straight, turns=(), fps=30.0, mirror_turns=True):
         # again so every loop starts on a left-foot strike and phases line up.
         for c in turns:
             turn_loops += turning_cycles(mirror(c), " (mirrored)")
+        lo, hi = min(lo, -hi), max(hi, -lo)
     for c, s, e, nm in turn_loops:
         loops.append(extract_loop(c, s, e, frames, name=nm))
         notes.append(f"turn: {nm}, frames {s}-{e}")
     loops.sort(key=lambda lp: lp.curvature)
-    return Gait(layer, float(fps), straight.skeleton, loops, notes)
+    return Gait(layer, float(fps), straight.skeleton, loops, notes, (lo, hi) if turns else None)
