@@ -217,8 +217,8 @@ def test_installed_addon_registers_its_operators(install_report):
     assert r["missing_operators"] == [], r["output"]
     if r["operator_idnames"]:
         assert r["ops_namespace"], "operators declared but bpy.ops.motion_patches is missing"
-    # >>> OPERATOR ASSERTION: enable once operators/ defines motion_patches.bake_locomotion_patch
-    # assert r["has_bake_locomotion_patch"], r["output"]
+    assert r["has_bake_locomotion_patch"], r["output"]
+    assert {"motion_patches.plan_path", "motion_patches.bake_locomotion_patch"} <= set(r["operator_idnames"])
 
 
 def test_installed_addon_can_be_disabled_and_enabled_again(install_report):
