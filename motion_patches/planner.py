@@ -15,12 +15,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import astar, curves
+from .high_level import TilePlanner
 from .locomotion_patch import (DIRECTIONS, EDGES, INWARD, node_id, node_position,
                                split_node_id)
 from .synthesis import cycles_along, follow
 
 BIAS = 1 << 15
 LOCAL = 256  # local entry ids per tile (EDGES * nodes * DIRECTIONS for 8 nodes)
+CONNECTOR_SCALES = np.linspace(0.25, 4.0, 40)  # coarser than the bake: fitted at plan time
 HEADING_SLACK = 0.02  # radians, for sampling error in precomputed turn sums
 NEXT_EDGE = np.array([2, 3, 0, 1])  # the neighbour's edge facing an exit edge
 TILE_STEP = np.array([[0, -1], [1, 0], [0, 1], [-1, 0]])
@@ -86,6 +88,7 @@ class SegmentPlanner:
         loops = patch.gait.loops
         self.max_speed = max(lp.cycle_distance for lp in loops) * patch.gait.fps / patch.gait.frames
         self.kmin, self.kmax = patch.stats.get("curvature_limits", patch.gait.kappa_limits)
+        self.corridor = None
 
     # -- graph -------------------------------------------------------------------------
     def node_pose(self, keys):
@@ -116,6 +119,8 @@ class SegmentPlanner:
         return keys, self.costs[segs], segs
 
     def in_region(self, i, j):
+        if self.corridor is not None:
+            return (int(i), int(j)) in self.corridor
         return self.region[0] <= i <= self.region[2] and self.region[1] <= j <= self.region[3]
 
     # -- connectors ----------------------------------------------------------------------
@@ -171,10 +176,11 @@ class SegmentPlanner:
         p0 = np.tile(start[:2], (m, 1))
         d0 = np.tile(curves.unit(start[2]), (m, 1))
         d1 = curves.unit(h)
-        table = curves.tabulate(p0, d0, p, d1, self._measure, samples=48)
+        table = curves.tabulate(p0, d0, p, d1, self._measure, CONNECTOR_SCALES, samples=48)
         out = []
-        for n in range(1, 4):
-            sc = curves.fit_scale(p0, d0, p, d1, float(n), self._measure, table=table, samples=48)
+        for n in range(1, 5):
+            sc = curves.fit_scale(p0, d0, p, d1, float(n), self._measure, CONNECTOR_SCALES,
+                                  samples=48, table=table)
             for idx in np.flatnonzero(~np.isnan(sc)):
                 c = curves.hermite_curve(p0[idx], d0[idx], p[idx], d1[idx], sc[idx])
                 if self._valid(c):
@@ -188,8 +194,8 @@ class SegmentPlanner:
         p1 = np.tile(goal[:2], (m, 1))
         d1 = np.tile(curves.unit(goal[2]), (m, 1))
         d0 = curves.unit(h)
-        _, bend = curves.tabulate(p, d0, p1, d1, samples=48)
-        best = curves.DEFAULT_SCALES[np.argmin(bend, axis=1)]
+        _, bend = curves.tabulate(p, d0, p1, d1, scales=CONNECTOR_SCALES, samples=48)
+        best = CONNECTOR_SCALES[np.argmin(bend, axis=1)]
         out = {}
         for idx in range(m):
             if np.linalg.norm(p[idx] - goal[:2]) < 0.2 * self.patch.gait.cycle_distance:
@@ -202,8 +208,15 @@ class SegmentPlanner:
         return out
 
     # -- search ---------------------------------------------------------------------------
-    def plan(self, start, goal, margin_tiles=3, max_expansions=400_000):
-        """Cheapest path from ``start`` to ``goal`` (x, y, heading); raises PlanError."""
+    def plan(self, start, goal, margin_tiles=3, max_expansions=400_000, use_corridor=False):
+        """Cheapest path from ``start`` to ``goal`` (x, y, heading); raises PlanError.
+
+        With ``use_corridor`` the segment search runs inside the corridor of the
+        high-level tile path (its tiles and their edge neighbours) and falls back to the
+        whole region when the corridor holds no path (tile probabilities are estimates).
+        It is off by default: on random pillar fields it found paths about 3 % costlier
+        (up to 24 %) without saving time, because connectors dominate plan time.
+        """
         t0 = time.perf_counter()
         start, goal = np.asarray(start, float), np.asarray(goal, float)
         self.goal = goal
@@ -223,6 +236,13 @@ class SegmentPlanner:
             raise PlanError("no walkable way into the goal: every connector from the node "
                             "graph bends too sharply or meets an obstacle")
         payloads = {}
+        self.corridor = None
+        tiles = None
+        if use_corridor:
+            tiles = TilePlanner(self.patch, self.env).plan(start[:2], goal[:2], self.region)
+            if tiles is not None:
+                self.corridor = {(t[0] + di, t[1] + dj) for t in tiles
+                                 for di, dj in ((0, 0), (1, 0), (-1, 0), (0, 1), (0, -1))}
 
         def expand(key):
             keys, costs, segs = self.expand(key)
@@ -237,6 +257,11 @@ class SegmentPlanner:
 
         result = astar.search([(k, c, -1) for k, c, _ in starts], expand, self.heuristic,
                               goal_cost, max_expansions)
+        corridor_fallback = False
+        if not result.found and self.corridor is not None:
+            self.corridor, corridor_fallback = None, True
+            result = astar.search([(k, c, -1) for k, c, _ in starts], expand, self.heuristic,
+                                  goal_cost, max_expansions)
         if not result.found:
             raise PlanError(f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is unreachable: obstacles "
                             f"close every path within {margin_tiles} tiles of start and goal "
@@ -259,7 +284,9 @@ class SegmentPlanner:
         return Plan(pieces, float(result.cost), result.expansions, seconds,
                     tuple(start), tuple(goal),
                     {"start_connectors": len(starts), "goal_connectors": len(goals),
-                     "occlusion_computations": self.env.occlusion_computations})
+                     "occlusion_computations": self.env.occlusion_computations,
+                     "high_level_tiles": len(tiles) if tiles else 0,
+                     "corridor_fallback": corridor_fallback})
 
 
 def _derivs(curve):
