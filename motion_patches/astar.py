@@ -23,11 +23,15 @@ class SearchResult:
     expansions: int
 
 
-def search(starts, expand, heuristic, goal_cost, max_expansions=500_000):
+def search(starts, expand, heuristic, goal_cost, max_expansions=500_000, observer=None):
     """Cheapest path from any of ``starts`` [(key, cost, payload)] to the virtual goal.
 
     ``expand(key) -> (keys, costs, payloads)``; ``heuristic(keys) -> h`` (admissible);
     ``goal_cost(key) -> (cost, payload) or None`` links a node to the goal.
+    ``observer(f) -> [(from_key, to_key, cost, payload)]`` is called with the f of every
+    popped node and may add edges (lazy stitching). It must add an edge before any node
+    on a path through it could be popped, i.e. once ``f`` reaches a lower bound of such
+    paths; edges out of nodes already expanded are relaxed at once.
     """
     g = {}
     parent = {}
@@ -45,11 +49,24 @@ def search(starts, expand, heuristic, goal_cost, max_expansions=500_000):
     closed = set()
     expansions = 0
     best_goal = np.inf
+    extra = {}
     while heap:
         f, _, key = heapq.heappop(heap)
-        if key == GOAL:
+        added = observer(f) if observer is not None else ()
+        if added and key == GOAL:  # new edges may still beat the goal found so far
+            heapq.heappush(heap, (f, tie, GOAL))
+            tie += 1
+        for a, b, c, p in added:
+            if a not in closed:
+                extra.setdefault(a, []).append((b, c, p))
+            elif g[a] + c < g.get(b, np.inf) and b not in closed:
+                g[b] = g[a] + c
+                parent[b] = (a, p)
+                heapq.heappush(heap, (g[b] + float(heuristic(np.array([b]))[0]), tie, b))
+                tie += 1
+        if key == GOAL and not added:
             break
-        if key in closed:
+        if key == GOAL or key in closed:
             continue
         closed.add(key)
         expansions += 1
@@ -64,6 +81,11 @@ def search(starts, expand, heuristic, goal_cost, max_expansions=500_000):
             heapq.heappush(heap, (best_goal, tie, GOAL))
             tie += 1
         nkeys, ncosts, payloads = expand(key)
+        if key in extra:
+            more = extra.pop(key)
+            nkeys = np.concatenate((nkeys, np.array([m[0] for m in more], np.int64)))
+            ncosts = np.concatenate((ncosts, np.array([m[1] for m in more], float)))
+            payloads = np.concatenate((payloads, np.array([m[2] for m in more], np.int64)))
         if len(nkeys) == 0:
             continue
         ng = gk + ncosts
@@ -73,7 +95,7 @@ def search(starts, expand, heuristic, goal_cost, max_expansions=500_000):
         nkeys, ng, payloads = nkeys[better], ng[better], payloads[better]
         hs = heuristic(nkeys)
         for k, c, h, p in zip(nkeys.tolist(), ng.tolist(), hs.tolist(), payloads.tolist()):
-            if k in closed:
+            if k in closed or c >= g.get(k, np.inf):  # parallel edges: keep the cheapest
                 continue
             g[k] = c
             parent[k] = (key, p)

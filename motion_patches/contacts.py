@@ -70,13 +70,18 @@ def heights_above_floor(foot_pos, coef):
     return foot_pos[..., 2] - (coef[0] + coef[1] * foot_pos[..., 0] + coef[2] * foot_pos[..., 1])
 
 
-def foot_contacts(clip):
+def foot_contacts(clip, level_floor=False):
     """Contacts (F, 4), planted heights (4,) above the fitted floor, and heights (F, 4).
 
-    Positions are armature space; heights are above the clip's fitted capture floor.
+    Positions are armature space; heights are above the clip's fitted capture floor (a
+    level one with ``level_floor``, for clips that are not walking: a jump's few planted
+    frames do not pin a tilt down).
     """
     pos = clip.joint_positions()[:, foot_joints(clip.skeleton)]
-    h = heights_above_floor(pos, floor_plane(pos))
+    coef = floor_plane(pos)
+    if level_floor:
+        coef = np.array([np.percentile(pos[..., 2].min(axis=1), 10), 0.0, 0.0])
+    h = heights_above_floor(pos, coef)
     planted = planted_heights(h)
     return detect(h, horizontal_speeds(pos, clip.fps), planted), planted, h
 

@@ -20,8 +20,20 @@ class Obstacle:
     name: str
     polygon: np.ndarray  # (P, 2) convex footprint, counter-clockwise, world metres
 
+    def __post_init__(self):
+        self.polygon = np.asarray(self.polygon, float)
+        self.lo, self.hi = self.polygon.min(axis=0), self.polygon.max(axis=0)
+
     def bounds(self):
-        return self.polygon.min(axis=0), self.polygon.max(axis=0)
+        return self.lo, self.hi
+
+    def within(self, points, radius):
+        """(N,) True where points come within ``radius`` of the footprint."""
+        out = np.zeros(points.shape[0], bool)
+        near = np.all((points > self.lo - radius) & (points < self.hi + radius), axis=1)
+        if near.any():
+            out[near] = distance_to_polygon(points[near], self.polygon) < radius
+        return out
 
 
 def convex_hull(points):
@@ -87,6 +99,7 @@ class Environment:
         self._tiles_of = {}     # obstacle name -> set of tiles
         self._members = {}      # tile -> set of obstacle names
         self._free = {}         # tile -> uint64 free-cell bitfield (lazy)
+        self._free_excl = {}    # (tile, obstacle) -> bitfield without that obstacle (lazy)
         self.occlusion_computations = 0
 
     def tile_of(self, xy):
@@ -107,13 +120,18 @@ class Environment:
         self._tiles_of[obstacle.name] = tiles
         for t in tiles:
             self._members.setdefault(t, set()).add(obstacle.name)
-            self._free.pop(t, None)
+            self._forget(t)
 
     def remove(self, name):
         for t in self._tiles_of.pop(name, ()):
             self._members[t].discard(name)
-            self._free.pop(t, None)
+            self._forget(t)
         self.obstacles.pop(name, None)
+
+    def _forget(self, tile):
+        self._free.pop(tile, None)
+        for key in [k for k in self._free_excl if k[0] == tile]:
+            del self._free_excl[key]
 
     def members(self, tile):
         return self._members.get(tile, set())
@@ -126,9 +144,17 @@ class Environment:
             self._free[tile] = f
         return f
 
-    def _occlude(self, tile):
+    def free_cells_excluding(self, tile, name):
+        """``B_t`` as if obstacle ``name`` were absent: for segments stitched to one of that
+        prop's traversal clips, which handle the prop themselves."""
+        key = (tile, name)
+        if key not in self._free_excl:
+            self._free_excl[key] = self._occlude(tile, exclude=name)
+        return self._free_excl[key]
+
+    def _occlude(self, tile, exclude=None):
         self.occlusion_computations += 1
-        names = self.members(tile)
+        names = self.members(tile) - {exclude}
         if not names:
             return FULL
         c = self.side / self.cells
@@ -144,13 +170,13 @@ class Environment:
                         break
         return free
 
-    def blocked(self, points):
+    def blocked(self, points, exclude=()):
         """(N,) True where world points come within the radius of any obstacle."""
         points = np.atleast_2d(np.asarray(points, float))
         out = np.zeros(points.shape[0], bool)
         near = set()
-        for t in {self.tile_of(p) for p in points}:
+        for t in set(map(tuple, np.floor(points / self.side).astype(int).tolist())):
             near |= self.members(t)
-        for n in near:
-            out |= distance_to_polygon(points, self.obstacles[n].polygon) < self.radius
+        for n in near - set(exclude):
+            out |= self.obstacles[n].within(points, self.radius)
         return out

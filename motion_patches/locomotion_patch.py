@@ -14,7 +14,7 @@ import numpy as np
 
 from . import curves, poses
 from .gait import Gait
-from .synthesis import cycles_along, follow
+from .synthesis import cycles_along, follow, frame_arclengths
 
 EDGES = 4  # 0 south (y = 0), 1 east (x = side), 2 north (y = side), 3 west (x = 0)
 DIRECTIONS = 8  # headings in 45 degree steps, direction d has heading d * 45 degrees
@@ -82,6 +82,30 @@ class LocomotionPatch:
     def motion(self, seg):
         """Synthesised in-place motion of one segment, in patch coordinates."""
         return follow(self.gait, self.curve(seg), cycles=int(self.seg_cycles[seg]))
+
+    def all_ground(self):
+        """Every segment's ground frames stacked (T, 3), arc lengths (T,), and each
+        segment's first row (S + 1,): one array to search when stitching (cached)."""
+        cache = self.__dict__.get("_all_ground")
+        if cache is None:
+            parts = [self.ground(s) for s in range(self.segment_count)]
+            start = np.concatenate(([0], np.cumsum([p[0].shape[0] for p in parts])))
+            cache = (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
+                     start)
+            self.__dict__["_all_ground"] = cache
+        return cache
+
+    def ground(self, seg):
+        """(F, 3) ground frames of a segment (patch coordinates) and (F,) arc lengths,
+        without synthesising poses; cached, as stitching looks at many segments."""
+        cache = self.__dict__.setdefault("_ground_cache", {})
+        g = cache.get(seg)
+        if g is None:
+            c = self.curve(seg)
+            _, s, _ = frame_arclengths(self.gait, c, int(self.seg_cycles[seg]))
+            x, y, h, _ = c.at(s)
+            g = cache[seg] = (np.column_stack((x, y, h)), s)
+        return g
 
     def costs(self, alpha, beta, gamma):
         """Eq. 5 cost of every segment for the weights of one character."""

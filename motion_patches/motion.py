@@ -33,6 +33,40 @@ class Motion:
         return forward_kinematics(skel, pos, rot)
 
 
+def sliced(m, start, stop):
+    """Frames ``start`` to ``stop`` (inclusive) of a motion."""
+    sl = slice(start, stop + 1)
+    return Motion(m.ground[sl], m.root_local[sl], m.rotations[sl], m.contacts[sl])
+
+
+def ease_to(m, target, frames, at_end=True):
+    """The motion with its last (or first) ``frames`` frames eased onto ``target``'s first
+    (or last) frame: ground offset and body channels, smoothstep weights, so a stitch
+    between two clips lands without a jump."""
+    from . import quat
+    n = min(frames, m.frames - 1)
+    w = np.zeros(m.frames)
+    t = np.linspace(0.0, 1.0, n + 1)
+    ramp = t * t * (3 - 2 * t)
+    if at_end:
+        w[-(n + 1):] = ramp
+        src = m.frames - 1
+        tgt = 0
+    else:
+        w[:n + 1] = ramp[::-1]
+        src = 0
+        tgt = target.frames - 1
+    g = m.ground.copy()
+    dg = target.ground[tgt] - m.ground[src]
+    dg[2] = (dg[2] + np.pi) % (2 * np.pi) - np.pi
+    g += w[:, None] * dg[None]
+    root = m.root_local + w[:, None] * (target.root_local[tgt] - m.root_local[src])[None]
+    tq = np.broadcast_to(target.rotations[tgt], m.rotations.shape)
+    rot = quat.slerp(m.rotations, tq, np.repeat(w[:, None], m.rotations.shape[1], 1))
+    con = m.contacts & (w[:, None] < 0.5) | target.contacts[tgt][None] & (w[:, None] >= 0.5)
+    return Motion(g, root, quat.make_continuous(rot, axis=0), con)
+
+
 def concatenate(parts):
     """Join motions end to start; each part's first frame repeats the previous last frame."""
     keep = [parts[0]] + [Motion(p.ground[1:], p.root_local[1:], p.rotations[1:], p.contacts[1:])

@@ -9,6 +9,7 @@ to a whole number of cycles (so they end on the node pose), the goal ones to the
 goal position and heading.
 """
 
+import heapq
 import time
 from dataclasses import dataclass, field
 
@@ -16,35 +17,45 @@ import numpy as np
 
 from . import astar, curves
 from .high_level import TilePlanner
+from .node_keys import LOCAL, NEXT_EDGE, TILE_STEP, pack, unpack
 from .locomotion_patch import (DIRECTIONS, EDGES, INWARD, node_id, node_position,
                                split_node_id)
+from .motion import ease_to, sliced
+from .stitching import BLEND_FRAMES, stitch
 from .synthesis import cycles_along, follow
 
-BIAS = 1 << 15
-LOCAL = 256  # local entry ids per tile (EDGES * nodes * DIRECTIONS for 8 nodes)
 CONNECTOR_SCALES = np.linspace(0.25, 4.0, 40)  # coarser than the bake: fitted at plan time
 HEADING_SLACK = 0.02  # radians, for sampling error in precomputed turn sums
-NEXT_EDGE = np.array([2, 3, 0, 1])  # the neighbour's edge facing an exit edge
-TILE_STEP = np.array([[0, -1], [1, 0], [0, 1], [-1, 0]])
 
 
 class PlanError(ValueError):
     """The goal cannot be reached, or the request is malformed; the message says why."""
 
 
+STITCH_PAYLOAD = -10  # payloads at or below this are stitched edges: -10 - index
+
+
 @dataclass
 class Piece:
-    kind: str                 # "segment", "start", "goal" or "direct"
-    segment: int = -1         # patch segment index (kind "segment")
+    kind: str                 # "segment", "part", "traversal", "start" or "goal"
+    segment: int = -1         # patch segment index (kinds "segment" and "part")
     tile: tuple = (0, 0)
     curve: object = None      # curves.Curve in world coordinates (connectors)
     cycles: int = 0           # whole cycles (segments and start connectors)
     cost: float = 0.0
+    frames: tuple = None      # (first, last) frame of a segment used in part ("part")
+    prop: object = None       # ObjectPatch of a traversal
+    clip_index: int = -1
 
     @property
     def label(self):
         if self.kind == "segment":
             return f"seg{self.segment:04d}"
+        if self.kind == "part":
+            return f"seg{self.segment:04d}[{self.frames[0]}-{self.frames[1]}]"
+        if self.kind == "traversal":
+            c = self.prop.clips[self.clip_index]
+            return f"{self.prop.name} {c.name} {np.degrees(c.angle):.0f}deg"
         return self.kind
 
 
@@ -59,20 +70,13 @@ class Plan:
     stats: dict = field(default_factory=dict)
 
 
-def pack(i, j, local):
-    return ((np.asarray(i, np.int64) + BIAS) * (2 * BIAS) + (np.asarray(j, np.int64) + BIAS)) * LOCAL + local
-
-
-def unpack(key):
-    local = key % LOCAL
-    rest = key // LOCAL
-    return rest // (2 * BIAS) - BIAS, rest % (2 * BIAS) - BIAS, local
-
-
 class SegmentPlanner:
     """Plans one character's path on an environment with a baked locomotion patch."""
 
-    def __init__(self, patch, env, alpha=1.0, beta=0.5, gamma=0.2):
+    def __init__(self, patch, env, alpha=1.0, beta=0.5, gamma=0.2, props=(), mode="dynamic"):
+        if mode not in ("dynamic", "static"):
+            raise PlanError(f"unknown stitching mode '{mode}' (dynamic or static)")
+        self.props, self.mode = list(props), mode
         if patch.nodes * DIRECTIONS * EDGES > LOCAL:
             raise PlanError("the patch has more nodes per edge than the planner packs (8)")
         self.patch, self.env = patch, env
@@ -99,6 +103,9 @@ class SegmentPlanner:
     def heuristic(self, keys):
         """Eq. 7 plus an effort bound: alpha |G| + beta angle-to-goal + gamma T_min."""
         p, h = self.node_pose(keys)
+        return self.state_heuristic(p, h)
+
+    def state_heuristic(self, p, h):
         d = self.goal[:2] - p
         dist = np.linalg.norm(d, axis=-1)
         cosang = (d[:, 0] * np.cos(h) + d[:, 1] * np.sin(h)) / np.maximum(dist, 1e-9)
@@ -248,6 +255,27 @@ class SegmentPlanner:
             keys, costs, segs = self.expand(key)
             return keys, costs, segs
 
+        stitches, pending = [], self._traversal_estimates(start)
+        counters = {"copies_stitched": 0, "stitch_seconds": 0.0}
+
+        def stitch_until(f):
+            added = []
+            while pending and pending[0][0] <= f:
+                _, pi, ci = heapq.heappop(pending)
+                t_s = time.perf_counter()
+                for st in stitch(self.patch, self.env, self.props[pi], ci,
+                                 self.alpha, self.beta, self.gamma):
+                    added.append((st.from_key, st.to_key, st.cost, STITCH_PAYLOAD - len(stitches)))
+                    stitches.append(st)
+                counters["copies_stitched"] += 1
+                counters["stitch_seconds"] += time.perf_counter() - t_s
+            return added
+
+        observer = stitch_until if pending else None
+        static_edges = stitch_until(np.inf) if self.mode == "static" else []
+        if static_edges:
+            observer = lambda f, first=[static_edges]: first.pop() if first else []  # noqa: E731
+
         def goal_cost(key):
             link = goals.get(key)
             if link is None:
@@ -256,12 +284,14 @@ class SegmentPlanner:
             return link[0], -1
 
         result = astar.search([(k, c, -1) for k, c, _ in starts], expand, self.heuristic,
-                              goal_cost, max_expansions)
+                              goal_cost, max_expansions, observer)
         corridor_fallback = False
         if not result.found and self.corridor is not None:
             self.corridor, corridor_fallback = None, True
+            stitches.clear()
+            pending[:] = self._traversal_estimates(start)
             result = astar.search([(k, c, -1) for k, c, _ in starts], expand, self.heuristic,
-                                  goal_cost, max_expansions)
+                                  goal_cost, max_expansions, stitch_until if pending else None)
         if not result.found:
             raise PlanError(f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is unreachable: obstacles "
                             f"close every path within {margin_tiles} tiles of start and goal "
@@ -275,6 +305,17 @@ class SegmentPlanner:
         for (k, payload), prev in zip(result.path[1:], keys[:-1]):
             if k == astar.GOAL:
                 pieces.append(payloads[prev])
+            elif payload <= STITCH_PAYLOAD:
+                st = stitches[STITCH_PAYLOAD - payload]
+                prop = next(p for p in self.props if p.name == st.prop)
+                a, b = st.entry, st.exit
+                pieces += [
+                    Piece("part", segment=a.segment, tile=a.tile, frames=(0, a.frame), cost=a.cost),
+                    Piece("traversal", prop=prop, clip_index=st.clip_index,
+                          cost=st.cost - a.cost - b.cost),
+                    Piece("part", segment=b.segment, tile=b.tile,
+                          frames=(b.frame, int(self.patch.seg_cycles[b.segment]) * self.patch.gait.frames),
+                          cost=b.cost)]
             else:
                 i, j, _ = unpack(prev)
                 pieces.append(Piece("segment", segment=int(payload), tile=(int(i), int(j)),
@@ -286,7 +327,42 @@ class SegmentPlanner:
                     {"start_connectors": len(starts), "goal_connectors": len(goals),
                      "occlusion_computations": self.env.occlusion_computations,
                      "high_level_tiles": len(tiles) if tiles else 0,
-                     "corridor_fallback": corridor_fallback})
+                     "corridor_fallback": corridor_fallback,
+                     "mode": self.mode,
+                     "copies_stitched": counters["copies_stitched"],
+                     "copies_culled_by_bins": self.bin_culled,
+                     "stitch_edges": len(stitches),
+                     "stitch_seconds": counters["stitch_seconds"],
+                     "traversals_used": sum(p.kind == "traversal" for p in pieces)})
+
+    def _traversal_estimates(self, start):
+        """Heap of (f lower bound, prop, clip copy) of every traversal copy in the region:
+        alpha |start - entry| (+ effort bound) + clip cost + heuristic from the exit."""
+        out = []
+        self.bin_culled = 0
+        for pi, prop in enumerate(self.props):
+            x, y = prop.pose[0], prop.pose[1]
+            if not self.in_region(*self.env.tile_of((x, y))):
+                continue
+            occluded = prop.occluded_bins(self.env.obstacles.values())
+            _, clip_bins = prop.density_bins()
+            for ci, clip in enumerate(prop.clips):
+                if clip.kind != "traversal":
+                    continue
+                if occluded[clip_bins[ci]].any():  # density bins: another prop is there
+                    self.bin_culled += 1
+                    continue
+                w = prop.world_clip(clip)
+                e, xg = w.ground[0], w.ground[-1]
+                d = float(np.linalg.norm(e[:2] - start[:2]))
+                approach = (self.alpha * d
+                            + self.gamma * self.patch.effort_rate * d / self.max_speed)
+                cost = (self.alpha * clip.length() + self.beta * clip.turn()
+                        + self.gamma * clip.effort)
+                h = float(self.state_heuristic(xg[None, :2], np.array([xg[2]]))[0])
+                out.append((approach + cost + h, pi, ci))
+        heapq.heapify(out)
+        return out
 
 
 def _derivs(curve):
@@ -296,11 +372,28 @@ def _derivs(curve):
     return vel[None], acc[None]
 
 
+def plan_motions(patch, plan):
+    """World-space motion of every piece, eased across stitches into and out of clips."""
+    ms = [piece_motion(patch, p) for p in plan.pieces]
+    for i, p in enumerate(plan.pieces):
+        if p.kind != "part":
+            continue
+        if i + 1 < len(ms) and plan.pieces[i + 1].kind == "traversal":
+            ms[i] = ease_to(ms[i], ms[i + 1], BLEND_FRAMES, at_end=True)
+        if i > 0 and plan.pieces[i - 1].kind == "traversal":
+            ms[i] = ease_to(ms[i], ms[i - 1], BLEND_FRAMES, at_end=False)
+    return ms
+
+
 def piece_motion(patch, piece):
-    """World-space motion of one planned piece."""
-    if piece.kind == "segment":
+    """World-space motion of one planned piece (not eased; see :func:`plan_motions`)."""
+    if piece.kind in ("segment", "part"):
         m = patch.motion(piece.segment)
+        if piece.kind == "part":
+            m = sliced(m, *piece.frames)
         return m.transformed(piece.tile[0] * patch.side, piece.tile[1] * patch.side)
+    if piece.kind == "traversal":
+        return piece.prop.world_clip(piece.prop.clips[piece.clip_index])
     if piece.kind == "start":
         return follow(patch.gait, piece.curve, cycles=piece.cycles)
     return follow(patch.gait, piece.curve, cycles=None, eased=(True, False))

@@ -40,12 +40,9 @@ def _ease(s, length, ramp_len, eased):
     return e
 
 
-def follow(gait, curve, cycles=None, start_phase=0, eased=(True, True)):
-    """Motion of the gait along ``curve``.
-
-    With ``cycles`` the motion lasts exactly ``cycles`` loops (the curve was fitted to it)
-    and ends on the node pose; without, it stops where the curve ends, mid-cycle if need be.
-    """
+def frame_arclengths(gait, curve, cycles=None, start_phase=0, eased=(True, True)):
+    """Frame phases (K,), arc length of the root on the curve per frame (K,), and the
+    curve's easing weights: the timing of :func:`follow` without building any pose."""
     n = gait.frames
     ease = _ease(curve.s, curve.length, gait.cycle_distance * RAMP, eased)
     dist = gait.blended_distance(curve.kappa * ease)
@@ -57,13 +54,22 @@ def follow(gait, curve, cycles=None, start_phase=0, eased=(True, True)):
         phase_at *= cycles / phase_at[-1]
         total = cycles * n
     else:
-        total = int(np.ceil((phase_at[-1] - 0) * n - 1e-9))
+        total = int(np.ceil(phase_at[-1] * n - 1e-9))
     k = np.arange(total + 1) + start_phase
     c = k // n
     target = c + profile[k % n] - (start_phase // n + profile[start_phase % n])
     target = np.clip(target, 0.0, phase_at[-1])
     target[-1] = phase_at[-1]
-    s = np.interp(target, phase_at, curve.s)
+    return k, np.interp(target, phase_at, curve.s), ease
+
+
+def follow(gait, curve, cycles=None, start_phase=0, eased=(True, True)):
+    """Motion of the gait along ``curve``.
+
+    With ``cycles`` the motion lasts exactly ``cycles`` loops (the curve was fitted to it)
+    and ends on the node pose; without, it stops where the curve ends, mid-cycle if need be.
+    """
+    k, s, ease = frame_arclengths(gait, curve, cycles, start_phase, eased)
     x, y, h, kap = curve.at(s)
     e = np.interp(s, curve.s, ease)
     weights = gait.weights(kap * e)

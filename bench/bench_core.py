@@ -1,0 +1,391 @@
+"""Benchmark of the pure-numpy core: bake, plan through random pillar fields, placement.
+
+Prints numbers, asserts nothing about timing. Run from the repository root:
+
+    .venv/blender-4.5/bin/python bench/bench_core.py [--layouts 20] [--seed 0] [--json out.json]
+
+1. Bakes the walk patch from CMU 16_15 (straight) and 16_18 (left turn, mirrored for right).
+2. For ``--layouts`` random layouts: a square field of random 12-sided pillars and one
+   start/goal pair 8-20 m apart (both clear of every pillar by the character's radius),
+   plans with :class:`SegmentPlanner`, synthesises the motion of every piece, and measures
+   plan time, nodes expanded, path length, occlusion computations and foot skate.
+3. The source clip's own foot skate (the floor a synthesised motion is compared against).
+4. Placement: placing and moving obstacles in a scene of 10 and of 1,000 obstacles.
+
+A Markdown table of the figures is printed at the end (see bench/README.md for what each
+number means); ``--json PATH`` also writes every figure and per-plan record as JSON.
+"""
+
+import argparse
+import cProfile
+import io
+import json
+import os
+import platform
+import pstats
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+if str(REPO) not in sys.path:
+    sys.path.insert(0, str(REPO))
+
+from motion_patches import bvh, clip as clip_mod, contacts, gait as gait_mod  # noqa: E402
+from motion_patches import locomotion_patch, metrics  # noqa: E402
+from motion_patches.environment import Environment, Obstacle  # noqa: E402
+from motion_patches.motion import concatenate  # noqa: E402
+from motion_patches.planner import PlanError, SegmentPlanner, piece_motion  # noqa: E402
+
+PILLAR_SIDES = 12
+
+
+def parse_args(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--layouts", type=int, default=20, help="random layouts to plan (default 20)")
+    p.add_argument("--seed", type=int, default=0, help="random seed of the layouts (default 0)")
+    p.add_argument("--density", type=float, default=0.1,
+                   help="pillars per square metre of the field (default 0.1)")
+    p.add_argument("--field", type=float, default=30.0,
+                   help="side of the square pillar field in metres (default 30)")
+    p.add_argument("--radius", type=float, default=0.25, help="character radius (default 0.25 m)")
+    p.add_argument("--weights", type=float, nargs=3, default=(1.0, 0.5, 0.2),
+                   metavar=("ALPHA", "BETA", "GAMMA"), help="Eq. 5 weights (default 1 0.5 0.2)")
+    p.add_argument("--mocap", default=os.environ.get("MOTION_PATCHES_MOCAP",
+                                                     str(REPO.parent / "shared" / "mocap")),
+                   help="folder holding cmu/16_15.bvh and cmu/16_18.bvh")
+    p.add_argument("--json", metavar="PATH", help="also write all figures as JSON")
+    p.add_argument("--profile", type=int, default=0, metavar="N",
+                   help="run cProfile over the first N plans and print the top functions")
+    return p.parse_args(argv)
+
+
+# -- helpers ------------------------------------------------------------------------------
+
+def pillar(name, x, y, r, sides=PILLAR_SIDES):
+    a = np.linspace(0.0, 2.0 * np.pi, sides + 1)[:-1]
+    return Obstacle(name, np.column_stack((x + r * np.cos(a), y + r * np.sin(a))))
+
+
+def pillar_field(env, rng, count, lo, hi, prefix="p"):
+    for n in range(count):
+        x, y = rng.uniform(lo, hi, 2)
+        env.place(pillar(f"{prefix}{n}", x, y, rng.uniform(0.2, 0.4)))
+
+
+def start_goal(env, rng, field, dmin=8.0, dmax=20.0, inset=1.0, tries=10_000):
+    """A start and goal (x, y, heading) dmin..dmax apart, inside the field, both clear."""
+    for _ in range(tries):
+        s = rng.uniform(inset, field - inset, 2)
+        ang, d = rng.uniform(-np.pi, np.pi), rng.uniform(dmin, dmax)
+        g = s + d * np.array([np.cos(ang), np.sin(ang)])
+        if np.any(g < inset) or np.any(g > field - inset):
+            continue
+        if env.blocked(np.stack((s, g))).any():
+            continue
+        return (np.r_[s, rng.uniform(-np.pi, np.pi)], np.r_[g, rng.uniform(-np.pi, np.pi)])
+    raise RuntimeError("no clear start/goal pair found; lower --density")
+
+
+def stats(values):
+    v = np.asarray(values, float)
+    if v.size == 0:
+        return {"mean": float("nan"), "median": float("nan"), "p95": float("nan"),
+                "max": float("nan"), "n": 0}
+    return {"mean": float(v.mean()), "median": float(np.median(v)),
+            "p95": float(np.percentile(v, 95)), "max": float(v.max()), "n": int(v.size)}
+
+
+def foot_positions(motion, skel):
+    return motion.world_matrices(skel)[:, contacts.foot_joints(skel)][..., :3, 3]
+
+
+def pooled_skate(records):
+    """Skate over every scored step of every path (weighted by planted steps)."""
+    steps = np.array([r["skate"]["planted_steps"] for r in records], float)
+    if steps.sum() == 0:
+        return {"mean_cm_per_frame": float("nan"), "mean_cm_per_s": float("nan"),
+                "worst_path_mean_cm_per_s": float("nan"), "planted_steps": 0}
+    per_frame = np.array([r["skate"]["mean_cm_per_frame"] for r in records])
+    per_s = np.array([r["skate"]["mean_cm_per_s"] for r in records])
+    ok = steps > 0
+    return {"mean_cm_per_frame": float(np.sum(per_frame[ok] * steps[ok]) / steps.sum()),
+            "mean_cm_per_s": float(np.sum(per_s[ok] * steps[ok]) / steps.sum()),
+            "worst_path_mean_cm_per_s": float(per_s[ok].max()),
+            "planted_steps": int(steps.sum())}
+
+
+# -- sections -----------------------------------------------------------------------------
+
+def bench_bake(mocap):
+    straight = bvh.read(mocap / "cmu" / "16_15.bvh")
+    turn = bvh.read(mocap / "cmu" / "16_18.bvh")
+    t0 = time.perf_counter()
+    gait = gait_mod.build_gait("walk", straight, (turn,))
+    t1 = time.perf_counter()
+    patch = locomotion_patch.bake(gait)
+    t2 = time.perf_counter()
+    st = patch.stats
+    return patch, straight, {
+        "gait_seconds": t1 - t0, "bake_seconds": t2 - t1, "candidates": st["candidates"],
+        "kept": st["kept"], "culled": st["culled"], "culled_by": st["culled_by"],
+        "side_m": patch.side, "cells": patch.cells, "nodes": patch.nodes, "fps": gait.fps,
+        "cycle_frames": gait.frames, "cycle_distance_m": gait.cycle_distance,
+        "loops": len(gait.loops)}
+
+
+def bench_source_skate(straight, fps):
+    src = clip_mod.resample(straight, fps)
+    con, _, _ = contacts.foot_contacts(src)
+    fj = contacts.foot_joints(src.skeleton)
+    return metrics.foot_skate(src.joint_positions()[:, fj], fps, con)
+
+
+def bench_plans(patch, args, profiler=None):
+    rng = np.random.default_rng(args.seed)
+    count = int(round(args.density * args.field ** 2))
+    alpha, beta, gamma = args.weights
+    skel, fps = patch.gait.skeleton, patch.gait.fps
+    records, failures = [], []
+    for layout in range(args.layouts):
+        env = Environment(patch.side, patch.cells, args.radius)
+        pillar_field(env, rng, count, 0.0, args.field)
+        start, goal = start_goal(env, rng, args.field)
+        planner = SegmentPlanner(patch, env, alpha, beta, gamma)
+        prof = profiler if profiler is not None and layout < args.profile else None
+        if prof:
+            prof.enable()
+        t0 = time.perf_counter()
+        try:
+            plan = planner.plan(start, goal)
+        except PlanError as e:
+            dt = time.perf_counter() - t0
+            if prof:
+                prof.disable()
+            failures.append({"layout": layout, "seconds": dt, "start": start.tolist(),
+                             "goal": goal.tolist(), "message": str(e),
+                             "occlusion_computations": env.occlusion_computations})
+            print(f"  layout {layout:3d}: FAILED after {dt * 1000:7.1f} ms: {e}")
+            continue
+        dt = time.perf_counter() - t0
+        if prof:
+            prof.disable()
+        t1 = time.perf_counter()
+        motions = [piece_motion(patch, p) for p in plan.pieces]
+        m = concatenate(motions)
+        synth = time.perf_counter() - t1
+        ground = m.ground[:, :2]
+        skate = metrics.foot_skate(foot_positions(m, skel), fps, m.contacts)
+        rec = {
+            "layout": layout, "seconds": dt, "synthesis_seconds": synth,
+            "expansions": plan.expansions, "pieces": len(plan.pieces),
+            "segments": sum(p.kind == "segment" for p in plan.pieces),
+            "frames": m.frames, "motion_seconds": (m.frames - 1) / fps,
+            "metres": float(np.linalg.norm(np.diff(ground, axis=0), axis=1).sum()),
+            "straight_line_m": float(np.linalg.norm(goal[:2] - start[:2])),
+            "occlusion_computations": env.occlusion_computations,
+            "frames_inside_obstacle": int(env.blocked(ground).sum()),
+            "cost": plan.cost, "start": start.tolist(), "goal": goal.tolist(),
+            "start_connectors": plan.stats.get("start_connectors"),
+            "goal_connectors": plan.stats.get("goal_connectors"),
+            "skate": skate}
+        records.append(rec)
+        print(f"  layout {layout:3d}: {dt * 1000:7.1f} ms, {plan.expansions:6d} nodes, "
+              f"{rec['pieces']:3d} pieces, {rec['motion_seconds']:5.1f} s / {rec['metres']:5.1f} m "
+              f"of motion ({rec['straight_line_m']:4.1f} m apart), "
+              f"{env.occlusion_computations:4d} tiles occluded, skate "
+              f"{skate['mean_cm_per_frame']:.2f} cm/frame")
+    return records, failures, count
+
+
+def bench_placement(density, sizes=(10, 1000), seed=1, min_ops=2000, reocc_moves=40):
+    """Per-obstacle cost of place / move / lazy re-occlusion in scenes of ``sizes`` obstacles.
+
+    The scene area grows with the obstacle count (constant ``density``), so every tile
+    holds about as many obstacles in both scenes and only the scene size differs. Placing
+    and moving every obstacle once is repeated (at least 5 times, and until ``min_ops``
+    operations are timed); the fastest repetition is reported (as timeit does), the
+    least disturbed by other load on the machine.
+    Re-occlusion: ``reocc_moves`` single moves, each of an obstacle whose old and new tiles
+    were occluded beforehand (as if a plan had used them), timing the occlusion of those
+    tiles again afterwards - the work a move leaves for the next plan.
+    """
+    out = {}
+    rng = np.random.default_rng(seed)
+    side, cells, radius = 2.6, 8, 0.25  # about the walk patch's tile size
+
+    def random_pillar(name, field):
+        return pillar(name, *rng.uniform(0, field, 2), rng.uniform(0.2, 0.4))
+
+    for n in sizes:
+        field = float(np.sqrt(n / density))
+        reps = max(5, -(-min_ops // n))
+        place, move = [], []
+        for _ in range(reps):
+            env = Environment(side, cells, radius)
+            obs = [random_pillar(f"o{k}", field) for k in range(n)]
+            new = [random_pillar(f"o{k}", field) for k in range(n)]
+            t0 = time.perf_counter()
+            for ob in obs:
+                env.place(ob)
+            t1 = time.perf_counter()
+            for ob in new:  # same names: every obstacle moves once
+                env.place(ob)
+            t2 = time.perf_counter()
+            place.append(t1 - t0)
+            move.append(t2 - t1)
+        place, move = float(np.min(place)), float(np.min(move))
+        # One move at a time, its tiles occluded beforehand as if a plan had used them.
+        reocc, tiles, members = 0.0, 0, 0
+        for m in range(reocc_moves):
+            name = f"o{m % n}"
+            new = random_pillar(name, field)
+            touched = env._tiles_overlapping(env.obstacles[name]) | env._tiles_overlapping(new)
+            for t in touched:
+                env.free_cells(t)
+            env.place(new)
+            t0 = time.perf_counter()
+            for t in touched:
+                env.free_cells(t)
+            reocc += time.perf_counter() - t0
+            tiles += len(touched)
+            members += sum(len(env.members(t)) for t in touched)
+        out[n] = {"field_m": field, "repeats": reps, "tiles_with_obstacles": len(env._members),
+                  "place_scene_ms": place * 1e3,
+                  "place_us_per_obstacle": place / n * 1e6,
+                  "move_us_per_obstacle": move / n * 1e6,
+                  "reoccluded_tiles_per_moved_obstacle": tiles / reocc_moves,
+                  "reocclude_ms_per_moved_obstacle": reocc / reocc_moves * 1e3,
+                  "reocclude_ms_per_tile": reocc / max(tiles, 1) * 1e3,
+                  "obstacles_per_reoccluded_tile": members / max(tiles, 1)}
+    return out
+
+
+# -- report -------------------------------------------------------------------------------
+
+def fmt_ms(s):
+    return f"{s * 1000:.0f} ms"
+
+
+def markdown(res):
+    b, pl = res["bake"], res["plans"]
+    a = res["args"]
+    t, ex, oc = pl["seconds"], pl["expansions"], pl["occlusion_computations"]
+    rows = [
+        ("machine", f"{res['machine']}"),
+        ("bake (walk patch, {:,} candidate curves)".format(b["candidates"]),
+         f"{b['bake_seconds']:.1f} s; {b['kept']:,} segments kept, {b['culled']:,} culled ("
+         + ", ".join(f"{k} {v:,}" for k, v in b["culled_by"].items()) + ")"),
+        ("layouts", f"{a['layouts']} on a {a['field']:.0f} × {a['field']:.0f} m field, "
+                    f"{pl['pillars']} pillars each ({a['density']:g}/m², 12-sided, "
+                    f"r 0.2–0.4 m), "
+                    f"start–goal 8–20 m apart, radius {a['radius']:g} m, seed {a['seed']}"),
+        ("paths found", f"{pl['found']} / {a['layouts']} ({pl['failed']} PlanError"
+                        + (f": {pl['failure_kinds']}" if pl["failed"] else "") + ")"),
+        ("plan time", f"mean {fmt_ms(t['mean'])}, median {fmt_ms(t['median'])}, "
+                      f"p95 {fmt_ms(t['p95'])}, max {fmt_ms(t['max'])}"),
+        ("nodes expanded", f"mean {ex['mean']:,.0f}, median {ex['median']:,.0f}, "
+                           f"p95 {ex['p95']:,.0f}, max {ex['max']:,.0f}"),
+        ("tile occlusions computed per plan", f"mean {oc['mean']:.0f}, max {oc['max']:.0f}"),
+        ("path length", f"mean {pl['motion_seconds']['mean']:.1f} s of motion "
+                        f"(max {pl['motion_seconds']['max']:.1f} s), "
+                        f"{pl['metres']['mean']:.1f} m (straight line "
+                        f"{pl['straight_line_m']['mean']:.1f} m)"),
+        ("pieces per path", f"mean {pl['pieces']['mean']:.1f} (start + segments + goal)"),
+        ("motion synthesis per path", f"mean {fmt_ms(pl['synthesis_seconds']['mean'])}"),
+        ("frames within the radius of a pillar", f"{pl['frames_inside_obstacle']}"),
+        ("foot skate while planted", f"{pl['skate']['mean_cm_per_frame']:.2f} cm/frame, "
+                                     f"{pl['skate']['mean_cm_per_s']:.1f} cm/s (worst path "
+                                     f"{pl['skate']['worst_path_mean_cm_per_s']:.1f} cm/s); "
+                                     f"source clip 16_15: "
+                                     f"{res['source_skate']['mean_cm_per_frame']:.2f} cm/frame, "
+                                     f"{res['source_skate']['mean_cm_per_s']:.1f} cm/s"),
+    ]
+    for n, p in res["placement"].items():
+        rows.append((f"placement, scene of {int(n):,} obstacles",
+                     f"place {p['place_us_per_obstacle']:.0f} µs, move "
+                     f"{p['move_us_per_obstacle']:.0f} µs per obstacle (whole scene "
+                     f"{p['place_scene_ms']:.2f} ms); lazy re-occlusion by the next plan "
+                     f"{p['reocclude_ms_per_moved_obstacle']:.1f} ms per moved obstacle "
+                     f"({p['reoccluded_tiles_per_moved_obstacle']:.1f} tiles of "
+                     f"{p['obstacles_per_reoccluded_tile']:.1f} obstacles, "
+                     f"{p['reocclude_ms_per_tile']:.1f} ms each)"))
+    out = ["| figure | value |", "|---|---|"]
+    out += [f"| {k} | {v} |" for k, v in rows]
+    return "\n".join(out)
+
+
+def main(argv=None):
+    args = parse_args(argv)
+    mocap = Path(args.mocap)
+    for name in ("16_15", "16_18"):
+        if not (mocap / "cmu" / f"{name}.bvh").is_file():
+            print(f"bench: {mocap / 'cmu' / (name + '.bvh')} not found "
+                  f"(use --mocap or MOTION_PATCHES_MOCAP)", file=sys.stderr)
+            return 2
+    t_all = time.perf_counter()
+    print("bake ...", flush=True)
+    patch, straight, bake = bench_bake(mocap)
+    print(f"  {bake['bake_seconds']:.1f} s: {bake['kept']} segments kept, "
+          f"{bake['culled']} culled {bake['culled_by']}")
+    print(f"plans on {args.layouts} random layouts ...", flush=True)
+    profiler = cProfile.Profile() if args.profile else None
+    records, failures, pillars = bench_plans(patch, args, profiler)
+    print("source clip skate ...", flush=True)
+    floor = bench_source_skate(straight, patch.gait.fps)
+    print("placement ...", flush=True)
+    placement = bench_placement(args.density)
+
+    kinds = {}
+    for f in failures:
+        k = ("unreachable" if "unreachable" in f["message"] else
+             "no way out of the start" if "out of the start" in f["message"] else
+             "no way into the goal" if "into the goal" in f["message"] else "other")
+        kinds[k] = kinds.get(k, 0) + 1
+    plans = {
+        "pillars": pillars, "found": len(records), "failed": len(failures),
+        "failure_kinds": ", ".join(f"{k} {v}" for k, v in kinds.items()),
+        "failure_seconds": stats([f["seconds"] for f in failures]),
+        "seconds": stats([r["seconds"] for r in records]),
+        "expansions": stats([r["expansions"] for r in records]),
+        "occlusion_computations": stats([r["occlusion_computations"] for r in records]),
+        "motion_seconds": stats([r["motion_seconds"] for r in records]),
+        "metres": stats([r["metres"] for r in records]),
+        "straight_line_m": stats([r["straight_line_m"] for r in records]),
+        "pieces": stats([r["pieces"] for r in records]),
+        "synthesis_seconds": stats([r["synthesis_seconds"] for r in records]),
+        "frames_inside_obstacle": int(sum(r["frames_inside_obstacle"] for r in records)),
+        "skate": pooled_skate(records),
+    }
+    res = {
+        "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+                   f"Python {platform.python_version()}, numpy {np.__version__}",
+        "args": {"layouts": args.layouts, "seed": args.seed, "density": args.density,
+                 "field": args.field, "radius": args.radius, "weights": list(args.weights)},
+        "bake": bake, "plans": plans, "source_skate": floor,
+        "placement": {str(k): v for k, v in placement.items()},
+        "records": records, "failures": failures,
+        "total_seconds": time.perf_counter() - t_all,
+    }
+    if profiler is not None:
+        for key in ("tottime", "cumulative"):
+            s = io.StringIO()
+            pstats.Stats(profiler, stream=s).strip_dirs().sort_stats(key).print_stats(15)
+            print(f"\ncProfile of the first {min(args.profile, args.layouts)} plans, by {key}:")
+            print("\n".join(ln for ln in s.getvalue().splitlines() if ln.strip())[:6000])
+
+    print()
+    print(markdown(res))
+    print(f"\n(total {res['total_seconds']:.0f} s)")
+    if args.json:
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        with open(args.json, "w") as fh:
+            json.dump(res, fh, indent=1)
+        print(f"wrote {args.json}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,124 @@
+import numpy as np
+import pytest
+
+from motion_patches import object_patch as op
+from motion_patches.environment import Environment, Obstacle
+from motion_patches.motion import concatenate
+from motion_patches.planner import PlanError, SegmentPlanner, plan_motions
+
+from conftest import cmu
+
+CHAIR = np.array([[-0.2, -0.22], [0.2, -0.22], [0.2, 0.22], [-0.2, 0.22]])
+
+
+@pytest.fixture(scope="module")
+def hurdle_clip(walk_gait):
+    # CMU 16_06, a real standing forward jump (the closest recorded hurdle), effort T = 8.
+    return op.patch_clip_from(cmu("16_06"), op.TRAVERSAL, walk_gait.fps, effort=8.0)
+
+
+def chair_line(patch, clip, n=11, x=5.0, half=2.5):
+    env = Environment(patch.side, patch.cells, 0.25)
+    props = []
+    for k, y in enumerate(np.linspace(-half, half, n)):
+        o = op.ObjectPatch(f"chair{k}", CHAIR, pose=(x, y, 0.0))
+        o.add_traversal_copies(clip)
+        env.place(Obstacle(o.name, o.world_footprint()))
+        props.append(o)
+    return env, props
+
+
+def test_jump_clip_is_anchored_at_its_apex_and_faces_along_x(hurdle_clip):
+    e, x = hurdle_clip.entry, hurdle_clip.exit
+    assert e[0] < -0.4 and x[0] > 0.4 and abs(e[1]) < 1e-6 and abs(x[1]) < 1e-6
+    assert 1.1 < hurdle_clip.length() < 1.4  # SOURCES: 1.26 m
+    assert abs(e[2]) < 1e-6
+
+
+def test_a_clip_without_root_motion_is_refused(walk16):
+    from motion_patches.clip import Clip
+    still = Clip("still", walk16.skeleton, walk16.fps, np.repeat(walk16.root_pos[:1], 40, 0),
+                 np.repeat(walk16.rotations[:1], 40, 0))
+    with pytest.raises(ValueError, match="no root motion"):
+        op.patch_clip_from(still, op.TRAVERSAL, 30.0)
+
+
+def test_copies_every_ten_degrees_skip_those_landing_on_the_prop(hurdle_clip):
+    long_wall = op.ObjectPatch("wall", np.array([[-0.1, -1.0], [0.1, -1.0], [0.1, 1.0], [-0.1, 1.0]]))
+    chair = op.ObjectPatch("chair", CHAIR)
+    assert chair.add_traversal_copies(hurdle_clip) == 36
+    kept = long_wall.add_traversal_copies(hurdle_clip)
+    assert 0 < kept < 36  # jumping along the wall would land on it
+    for c in long_wall.clips:
+        ends = np.array([c.entry[:2], c.exit[:2]])
+        assert np.all(np.abs(ends[:, 1]) > 1.0) or np.all(np.abs(ends[:, 0]) > 0.1)
+
+
+def test_density_bins_sort_every_copy_by_its_ends(hurdle_clip):
+    chair = op.ObjectPatch("chair", CHAIR)
+    chair.add_traversal_copies(hurdle_clip)
+    rects, bins = chair.density_bins()
+    assert rects.shape == (op.BINS * op.BINS, 4) and bins.shape == (36, 2)
+    for c, (b_in, b_out) in zip(chair.clips, bins):
+        x0, y0, x1, y1 = rects[b_in]
+        assert x0 - 1e-9 <= c.entry[0] <= x1 + 1e-9 and y0 - 1e-9 <= c.entry[1] <= y1 + 1e-9
+
+
+def test_hurried_character_hurdles_the_chair_line_unhurried_walks_around(walk_patch, hurdle_clip):
+    start, goal = (1.0, 0.3, 0.0), (9.0, 0.3, 0.0)
+    env, props = chair_line(walk_patch, hurdle_clip)
+    hurried = SegmentPlanner(walk_patch, env, 4.0, 0.5, 0.1, props=props).plan(start, goal)
+    env, props = chair_line(walk_patch, hurdle_clip)
+    calm = SegmentPlanner(walk_patch, env, 0.3, 0.1, 3.0, props=props).plan(start, goal)
+    assert hurried.stats["traversals_used"] == 1
+    assert calm.stats["traversals_used"] == 0
+    # Outside the traversal clip the root never enters a footprint (grown by the radius).
+    for plan in (hurried, calm):
+        ms = plan_motions(walk_patch, plan)
+        for piece, m in zip(plan.pieces, ms):
+            if piece.kind != "traversal":
+                assert not env.blocked(m.ground[:, :2]).any(), piece.label
+        whole = concatenate(ms)
+        assert np.allclose(whole.ground[-1, :2], goal[:2], atol=1e-6)
+        assert np.linalg.norm(np.diff(whole.ground[:, :2], axis=0), axis=1).max() < 0.1
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_dynamic_and_static_stitching_find_paths_of_equal_cost(walk_patch, hurdle_clip, seed):
+    rng = np.random.default_rng(seed)
+    def layout():
+        env = Environment(walk_patch.side, walk_patch.cells, 0.25)
+        props = []
+        r = np.random.default_rng(seed)
+        for k in range(8):
+            o = op.ObjectPatch(f"c{k}", CHAIR, pose=(r.uniform(2, 8), r.uniform(-2, 3), r.uniform(0, np.pi)))
+            o.add_traversal_copies(hurdle_clip, step_deg=30)
+            env.place(Obstacle(o.name, o.world_footprint()))
+            props.append(o)
+        return env, props
+    start = (0.5, 0.5, 0.0)
+    goal = (10.0, float(rng.uniform(-1, 2)), 0.0)
+    costs = []
+    for mode in ("dynamic", "static"):
+        env, props = layout()
+        try:
+            costs.append(SegmentPlanner(walk_patch, env, 3.0, 0.5, 0.1, props=props, mode=mode)
+                         .plan(start, goal).cost)
+        except PlanError as exc:
+            costs.append(str(exc))
+    if isinstance(costs[0], str):
+        assert isinstance(costs[1], str)
+    else:
+        assert np.isclose(costs[0], costs[1])
+
+
+def test_moving_a_prop_changes_the_path(walk_patch, hurdle_clip):
+    env = Environment(walk_patch.side, walk_patch.cells, 0.25)
+    y = 0.5 * walk_patch.side  # the middle of a tile row
+    wall = Obstacle("wall", np.array([[4.8, y - 1.5], [5.2, y - 1.5], [5.2, y + 1.5], [4.8, y + 1.5]]))
+    env.place(wall)
+    a = SegmentPlanner(walk_patch, env).plan((1.0, y, 0.0), (9.0, y, 0.0))
+    env.place(Obstacle("wall", wall.polygon + [0.0, 4.0]))  # moved out of the way, same name
+    b = SegmentPlanner(walk_patch, env).plan((1.0, y, 0.0), (9.0, y, 0.0))
+    assert [p.label for p in a.pieces] != [p.label for p in b.pieces]
+    assert b.cost < a.cost
