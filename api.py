@@ -116,6 +116,8 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
         raise MotionPatchesError(f"the patch was baked at {patch.gait.fps:g} fps but the scene "
                                  f"runs at {scene_fps(scene):g} fps; re-bake or change the scene rate")
     skel = patch.gait.skeleton
+    # Objects moved by a script have stale matrix_world until the view layer updates.
+    (context or bpy.context).view_layer.update()
     try:
         nla.check_rig(character, skel)
     except ValueError as exc:

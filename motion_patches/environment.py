@@ -79,9 +79,26 @@ def distance_to_polygon(points, polygon):
     return np.where(inside_convex(points, polygon), 0.0, d)
 
 
+def _edges_cross(poly_a, poly_b):
+    """True when any edge of one polygon properly crosses an edge of the other."""
+    a0, a1 = poly_a, np.roll(poly_a, -1, axis=0)
+    b0, b1 = poly_b, np.roll(poly_b, -1, axis=0)
+
+    def orient(p, q, r):
+        return ((q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1])
+                - (q[..., 1] - p[..., 1]) * (r[..., 0] - p[..., 0]))
+    A0, A1 = a0[:, None], a1[:, None]
+    B0, B1 = b0[None], b1[None]
+    d1, d2 = orient(A0, A1, B0), orient(A0, A1, B1)
+    d3, d4 = orient(B0, B1, A0), orient(B0, B1, A1)
+    return bool(np.any((d1 * d2 < 0) & (d3 * d4 < 0)))
+
+
 def polygons_within(poly_a, poly_b, radius):
     """True when two convex polygons come within ``radius`` of each other."""
     if np.any(inside_convex(poly_a, poly_b)) or np.any(inside_convex(poly_b, poly_a)):
+        return True
+    if _edges_cross(poly_a, poly_b):  # a thin fence across a cell has no vertex inside it
         return True
     da = _segment_distance(poly_a, poly_b, np.roll(poly_b, -1, axis=0)).min()
     db = _segment_distance(poly_b, poly_a, np.roll(poly_a, -1, axis=0)).min()

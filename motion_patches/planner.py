@@ -172,10 +172,10 @@ class SegmentPlanner:
         return out or self._start_connectors(start, self._block(tile))
 
     def goal_connectors(self, goal):
-        """Connectors into the goal from the nodes entering its tile (else the 3x3 block)."""
-        tile = self.env.tile_of(goal[:2])
-        out = self._goal_connectors(goal, [(tile, list(range(EDGES)))])
-        return out or self._goal_connectors(goal, self._block(tile))
+        """Connectors into the goal from the nodes of the 3x3 tiles around it, at most
+        1.5 tiles long: from its own tile only, a goal facing away from the way in forces
+        the walk past the goal and back."""
+        return self._goal_connectors(goal, self._block(self.env.tile_of(goal[:2])))
 
     def _start_connectors(self, start, where):
         keys, p, h = self._entries(where)
@@ -208,7 +208,7 @@ class SegmentPlanner:
             if np.linalg.norm(p[idx] - goal[:2]) < 0.2 * self.patch.gait.cycle_distance:
                 continue
             c = curves.hermite_curve(p[idx], d0[idx], p1[idx], d1[idx], best[idx])
-            if self._valid(c):
+            if c.length <= 1.5 * self.patch.side and self._valid(c):
                 cyc = float(cycles_along(self.patch.gait, c.pos[None], *_derivs(c))[0])
                 cost = self._curve_cost(c, cyc)
                 out[int(keys[idx])] = (cost, Piece("goal", curve=c, cost=cost))

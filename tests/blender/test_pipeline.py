@@ -80,6 +80,13 @@ def test_plan_writes_nla_and_evaluates_onto_the_goal(baked_blend, addon_module):
     assert len(strips) >= 3 and all(s.action_slot is not None for s in strips)
 
     figures = addon_module.api.analyse(bpy.context, char)
+    meta, _ = addon_module.api.load_plan_record(char)
+    # The plan aimed at where the goal and character really are (objects moved by script).
+    assert np.allclose(meta["goal"][:2], (7.5, 5.0), atol=1e-6)
+    assert np.isclose(meta["goal"][2], 0.6, atol=1e-6)
+    scene.frame_set(meta["frame_start"])
+    root = char.matrix_world @ char.pose.bones["Hips"].head
+    assert np.hypot(root.x - 0.4, root.y - 0.3) < 0.1
     assert figures["goal_position_error_cm"] < 10
     assert figures["goal_root_position_error_cm"] < 10  # the hips, not only the root motion
     assert figures["goal_heading_error_deg"] < 10

@@ -82,3 +82,11 @@ def test_convex_hull_of_a_square_with_inner_points():
     assert len(hull) == 4
     area = 0.5 * np.sum(hull[:, 0] * np.roll(hull[:, 1], -1) - np.roll(hull[:, 0], -1) * hull[:, 1])
     assert np.isclose(area, 1.0)
+
+
+def test_a_thin_fence_across_a_cell_occludes_it_even_with_a_tiny_radius():
+    env = Environment(side=8.0, cells=8, radius=0.05)
+    env.place(Obstacle("fence", np.array([[2.1, 3.49], [5.9, 3.49], [5.9, 3.51], [2.1, 3.51]])))
+    free = int(env.free_cells((0, 0)))
+    for ix in range(2, 6):
+        assert not free >> (3 * 8 + ix) & 1
