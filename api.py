@@ -15,12 +15,12 @@ import bpy
 import numpy as np
 
 from .adapter import actions as act_io
-from .adapter import evaluate, mocap, nla, scene as scene_io, storage
-from .motion_patches import contacts, metrics
+from .adapter import evaluate, mocap, nla, props_io, scene as scene_io, storage
+from .motion_patches import contacts, metrics, object_patch
 from .motion_patches.gait import build_gait
 from .motion_patches.locomotion_patch import bake
 from .motion_patches.motion import concatenate
-from .motion_patches.planner import PlanError, SegmentPlanner, piece_motion
+from .motion_patches.planner import PlanError, SegmentPlanner, plan_motions
 
 PLAN_KEY = "motion_patches_plan"
 
@@ -87,6 +87,53 @@ def bake_locomotion_patch(scene, armature, straight, turns=(), layer="walk", nam
     return BakeResult(name, layer, patch.stats, time.perf_counter() - t0, list(gait.notes))
 
 
+def tag_object_patch(obj, clips, patch_name=None, scene=None, context=None):
+    """Make ``obj`` an object patch carrying ``clips``: [(action, kind, effort, copy_step)]
+    with kind 'TRAVERSAL' or 'INTERACTION'. Everything is validated first (footprint, root
+    motion of each clip on the patch's skeleton); on error nothing is changed."""
+    scene = scene or bpy.context.scene
+    context = context or bpy.context
+    try:
+        patch = storage.load_patch(scene, patch_name)
+    except ValueError as exc:
+        raise MotionPatchesError(f"bake a locomotion patch before tagging props ({exc})") from None
+    if obj is None:
+        raise MotionPatchesError("choose a mesh object to tag")
+    context.view_layer.update()
+    depsgraph = context.evaluated_depsgraph_get()
+    for action, kind, effort, step in clips:
+        if kind not in props_io.KINDS:
+            raise MotionPatchesError(f"clip kind must be TRAVERSAL or INTERACTION, not {kind}")
+    try:
+        props_io.footprint(obj, depsgraph)
+        for action, kind, effort, step in clips:
+            if action is None:
+                raise ValueError("a clip has no action")
+            clip = act_io.clip_from_action(action, None, scene_fps(scene),
+                                           skeleton=patch.gait.skeleton)
+            object_patch.patch_clip_from(clip, props_io.KINDS[kind], scene_fps(scene), effort)
+    except ValueError as exc:
+        raise MotionPatchesError(f"cannot tag '{obj.name}': {exc}") from None
+    mp = obj.motion_patch
+    mp.enabled = True
+    mp.clips.clear()
+    for action, kind, effort, step in clips:
+        item = mp.clips.add()
+        item.action, item.kind, item.effort, item.copy_step = action, kind, effort, step
+    return obj
+
+
+def object_patches(scene, depsgraph, patch):
+    """Core object patches of every tagged prop in the scene."""
+    out = []
+    for obj in props_io.tagged(scene):
+        try:
+            out.append(props_io.object_patch(obj, depsgraph, patch.gait.skeleton, patch.gait.fps))
+        except ValueError as exc:
+            raise MotionPatchesError(str(exc)) from None
+    return out
+
+
 def _plan_store(obj, data):
     buf = io.BytesIO()
     np.savez_compressed(buf, **{k: v for k, v in data.items() if isinstance(v, np.ndarray)})
@@ -106,8 +153,11 @@ def load_plan_record(obj):
 
 
 def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2,
-              radius=0.25, frame_start=None, context=None):
-    """Plan ``character`` to ``goal`` (an object or (x, y, heading)) and write it as NLA."""
+              radius=0.25, frame_start=None, context=None, stitching="dynamic"):
+    """Plan ``character`` to ``goal`` (an object or (x, y, heading)) and write it as NLA.
+
+    Tagged props (object patches) offer their traversal clips; ``stitching`` is
+    "dynamic" (lazy, the paper's method) or "static" (everything stitched first)."""
     try:
         patch = storage.load_patch(scene, patch_name)
     except ValueError as exc:
@@ -133,11 +183,16 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
     depsgraph = (context or bpy.context).evaluated_depsgraph_get()
     env = scene_io.environment(scene, depsgraph, patch, radius, exclude)
     start_state = scene_io.character_state(character, skel)
+    props = object_patches(scene, depsgraph, patch)
+    if isinstance(goal, bpy.types.Object) and goal in props_io.tagged(scene):
+        raise MotionPatchesError(f"the goal '{goal.name}' is a prop; ending a path in an "
+                                 f"interaction clip is not supported yet")
     try:
-        plan = SegmentPlanner(patch, env, alpha, beta, gamma).plan(start_state, goal_state)
+        plan = SegmentPlanner(patch, env, alpha, beta, gamma, props=props,
+                              mode=stitching).plan(start_state, goal_state)
     except PlanError as exc:
         raise MotionPatchesError(str(exc)) from None
-    motions = [piece_motion(patch, p) for p in plan.pieces]
+    motions = plan_motions(patch, plan)
     world = concatenate(motions)
     frame_start = scene.frame_current if frame_start is None else int(frame_start)
     patch_key = storage.patch_key(scene, patch_name)
@@ -152,6 +207,7 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
         "frame_start": frame_start, "frame_end": frame_end, "goal": goal_state.tolist(),
         "boundaries": [s["start"] for s in strips[1:]], "radius": radius,
         "facing": nla.facing_angle(skel),
+        "traversals": [[s["start"], s["end"]] for s in strips if s["kind"] == "traversal"],
         "obstacles": {o.name: o.polygon.tolist() for o in env.obstacles.values()},
     })
     return PlanResult(character.name, frame_start, frame_end, [p.label for p in plan.pieces],
@@ -175,7 +231,11 @@ def analyse(context, character):
     env = Environment(1.0, 8, 0.0)
     for name, poly in meta["obstacles"].items():
         env.place(Obstacle(name, np.array(poly)))
-    inside = int(env.blocked(root[:, :2]).sum()) if meta["obstacles"] else 0
+    inside_mask = env.blocked(root[:, :2]) if meta["obstacles"] else np.zeros(frames.size, bool)
+    during = np.zeros(frames.size, bool)
+    for a, b in meta.get("traversals", []):
+        during[(frames >= a) & (frames <= b)] = True
+    inside = int((inside_mask & ~during).sum())
     boundaries = [b - meta["frame_start"] for b in meta["boundaries"]]
     pops = metrics.boundary_pops(rot, boundaries, fps)
     end_heading = ground[-1, 2] + meta["facing"]
@@ -189,5 +249,7 @@ def analyse(context, character):
         "goal_root_position_error_cm": float(np.linalg.norm(root[-1, :2] - goal[:2]) * 100),
         "goal_heading_error_deg": float(abs(np.degrees(metrics.angle_difference(end_heading, goal[2])))),
         "frames_root_inside_obstacle": inside,
+        "frames_root_over_prop_in_traversal": int((inside_mask & during).sum()),
+        "traversals": len(meta.get("traversals", [])),
         "boundary_pop": pops,
     }

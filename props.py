@@ -1,8 +1,8 @@
 """Properties the add-on stores in the .blend: baked patches and planning settings."""
 
 import bpy
-from bpy.props import (CollectionProperty, FloatProperty, IntProperty, PointerProperty,
-                       StringProperty)
+from bpy.props import (BoolProperty, CollectionProperty, EnumProperty, FloatProperty,
+                       IntProperty, PointerProperty, StringProperty)
 
 
 class MOTION_PATCHES_PG_patch(bpy.types.PropertyGroup):
@@ -15,6 +15,28 @@ class MOTION_PATCHES_PG_patch(bpy.types.PropertyGroup):
 
 class MOTION_PATCHES_PG_action_ref(bpy.types.PropertyGroup):
     action: PointerProperty(type=bpy.types.Action, name="Action")
+
+
+class MOTION_PATCHES_PG_patch_clip(bpy.types.PropertyGroup):
+    action: PointerProperty(type=bpy.types.Action, name="Action",
+                            description="Clip recorded on the patch's skeleton")
+    kind: EnumProperty(name="Kind", items=(
+        ('TRAVERSAL', "Traversal", "Passes the prop (hurdle, vault): used by the planner"),
+        ('INTERACTION', "Interaction", "Starts or ends a path at the prop (sit, stand)")))
+    effort: FloatProperty(name="Effort (T)", default=8.0, min=0.0,
+                          description="Effort of the whole clip, in walking seconds")
+    layer_in: StringProperty(name="Layer In", default="walk")
+    layer_out: StringProperty(name="Layer Out", default="walk")
+    copy_step: FloatProperty(name="Copies Every", default=10.0, min=0.0, max=180.0,
+                             description="Copy the clip around the prop every so many "
+                                         "degrees (0: no copies)")
+
+
+class MOTION_PATCHES_PG_object(bpy.types.PropertyGroup):
+    enabled: BoolProperty(name="Object Patch", default=False,
+                          description="This prop carries clips the planner may use")
+    clips: CollectionProperty(type=MOTION_PATCHES_PG_patch_clip)
+    active_clip_index: IntProperty(default=0)
 
 
 class MOTION_PATCHES_PG_scene(bpy.types.PropertyGroup):
@@ -37,17 +59,23 @@ class MOTION_PATCHES_PG_scene(bpy.types.PropertyGroup):
                          description="Cost per unit of effort")
     radius: FloatProperty(name="Character Radius", default=0.25, min=0.05, max=2.0,
                           unit='LENGTH', description="Clearance kept between the root and props")
+    stitching: EnumProperty(name="Stitching", default='DYNAMIC', items=(
+        ('DYNAMIC', "Dynamic", "Stitch traversal clips lazily, when the search needs them"),
+        ('STATIC', "Static", "Stitch every traversal clip before searching (Lee 2006 baseline)")))
 
 
-classes = (MOTION_PATCHES_PG_patch, MOTION_PATCHES_PG_action_ref, MOTION_PATCHES_PG_scene)
+classes = (MOTION_PATCHES_PG_patch, MOTION_PATCHES_PG_action_ref, MOTION_PATCHES_PG_patch_clip,
+           MOTION_PATCHES_PG_object, MOTION_PATCHES_PG_scene)
 _register, _unregister = bpy.utils.register_classes_factory(classes)
 
 
 def register():
     _register()
     bpy.types.Scene.motion_patches = PointerProperty(type=MOTION_PATCHES_PG_scene)
+    bpy.types.Object.motion_patch = PointerProperty(type=MOTION_PATCHES_PG_object)
 
 
 def unregister():
+    del bpy.types.Object.motion_patch
     del bpy.types.Scene.motion_patches
     _unregister()

@@ -53,9 +53,10 @@ def _curves(action):
     return out
 
 
-def clip_from_action(action, armature_obj, scene_fps):
-    """Clip of an action on an armature; ValueError with a readable message if unusable."""
-    skel = skeleton_of(armature_obj)
+def clip_from_action(action, armature_obj, scene_fps, skeleton=None):
+    """Clip of an action on an armature (or on a stored ``skeleton``, all bones in
+    quaternion mode); ValueError with a readable message if unusable."""
+    skel = skeleton or skeleton_of(armature_obj)
     curves = _curves(action)
     if not curves:
         raise ValueError(f"action '{action.name}' has no pose bone curves")
@@ -80,7 +81,7 @@ def clip_from_action(action, armature_obj, scene_fps):
 
     loc = np.column_stack([sample(root, "location", i, 0.0) for i in range(3)])
     rot = np.empty((frames.size, len(skel.names), 4))
-    modes = {pb.name: pb.rotation_mode for pb in armature_obj.pose.bones}
+    modes = {pb.name: pb.rotation_mode for pb in armature_obj.pose.bones} if armature_obj else {}
     for j, name in enumerate(skel.names):
         mode = modes.get(name, "QUATERNION")
         if (name, "rotation_quaternion", 0) in curves or mode == "QUATERNION":

@@ -21,7 +21,8 @@ class MOTION_PATCHES_OT_plan_path(bpy.types.Operator):
         try:
             res = api.plan_path(context.scene, context.active_object, s.goal,
                                 patch_name=self.patch or None, alpha=s.alpha, beta=s.beta,
-                                gamma=s.gamma, radius=s.radius, context=context)
+                                gamma=s.gamma, radius=s.radius, context=context,
+                                stitching=s.stitching.lower())
         except api.MotionPatchesError as exc:
             self.report({'ERROR'}, str(exc))
             return {'CANCELLED'}

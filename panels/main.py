@@ -23,6 +23,19 @@ class MOTION_PATCHES_PT_main(bpy.types.Panel):
             st = json.loads(item.stats or "{}")
             box.label(text=f"{item.name} ({item.layer}): {st.get('kept', '?')} segments, "
                            f"{item.fps:g} fps")
+        ob = context.active_object
+        if ob is not None and ob.type == 'MESH':
+            box = layout.box()
+            box.label(text=f"Object Patch: {ob.name}", icon='MESH_CUBE')
+            mp = ob.motion_patch
+            box.prop(mp, "enabled")
+            for c in mp.clips:
+                row = box.row()
+                row.prop(c, "action", text="")
+                row.prop(c, "kind", text="")
+                row.prop(c, "effort")
+                row.prop(c, "copy_step", text="Step")
+            box.operator("motion_patches.tag_object_patch", icon='ADD')
         box = layout.box()
         box.label(text="Planning", icon='TRACKING')
         box.prop(s, "goal")
@@ -31,6 +44,7 @@ class MOTION_PATCHES_PT_main(bpy.types.Panel):
         col.prop(s, "beta")
         col.prop(s, "gamma")
         box.prop(s, "radius")
+        box.prop(s, "stitching")
         box.operator("motion_patches.plan_path", icon='PLAY')
         box.operator("motion_patches.analyse_motion", icon='GRAPH')
 

@@ -1,0 +1,70 @@
+"""Tagged props -> core object patches.
+
+A tagged mesh object's footprint is the convex hull of its evaluated vertices in its own
+ground coordinates (scale applied, Z rotation factored out); its clips are read from their
+actions on the patch's skeleton and placed relative to the prop.
+"""
+
+import numpy as np
+
+from ..motion_patches import object_patch as op
+from ..motion_patches.environment import convex_hull
+from . import actions as act_io
+
+KINDS = {"TRAVERSAL": op.TRAVERSAL, "INTERACTION": op.INTERACTION}
+
+
+def prop_pose(obj):
+    m = np.array(obj.matrix_world)
+    return (float(m[0, 3]), float(m[1, 3]), float(np.arctan2(m[1, 0], m[0, 0])))
+
+
+def footprint(obj, depsgraph):
+    """Convex footprint in the prop's ground coordinates; ValueError if it has none."""
+    ev = obj.evaluated_get(depsgraph)
+    if obj.type != "MESH":
+        raise ValueError(f"'{obj.name}' is not a mesh object: an object patch needs geometry "
+                         f"for its footprint")
+    mesh = ev.to_mesh()
+    try:
+        n = len(mesh.vertices)
+        co = np.empty(n * 3)
+        mesh.vertices.foreach_get("co", co)
+    finally:
+        ev.to_mesh_clear()
+    if n < 3:
+        raise ValueError(f"'{obj.name}' has no footprint: its mesh has {n} vertices")
+    m = np.array(ev.matrix_world)
+    world = co.reshape(n, 3) @ m[:3, :3].T + m[:3, 3]
+    x, y, h = prop_pose(obj)
+    c, s = np.cos(-h), np.sin(-h)
+    d = world[:, :2] - (x, y)
+    local = np.column_stack((c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]))
+    hull = convex_hull(local)
+    if len(hull) < 3:
+        raise ValueError(f"'{obj.name}' has no footprint: its geometry is flat in plan view")
+    return hull
+
+
+def object_patch(obj, depsgraph, skeleton, fps):
+    """The core ObjectPatch of a tagged object (clips read and copied around it)."""
+    patch = op.ObjectPatch(obj.name, footprint(obj, depsgraph), pose=prop_pose(obj))
+    for item in obj.motion_patch.clips:
+        if item.action is None:
+            raise ValueError(f"object patch '{obj.name}' has a clip without an action")
+        clip = act_io.clip_from_action(item.action, None, fps, skeleton=skeleton)
+        pc = op.patch_clip_from(clip, KINDS[item.kind], fps, effort=item.effort,
+                                name=item.action.name)
+        pc.layer_in, pc.layer_out = item.layer_in, item.layer_out
+        if pc.kind == op.TRAVERSAL and item.copy_step > 0:
+            if patch.add_traversal_copies(pc, item.copy_step) == 0:
+                raise ValueError(f"every copy of '{item.action.name}' around '{obj.name}' "
+                                 f"takes off or lands on the prop: the prop is too large for it")
+        else:
+            patch.clips.append(pc)
+    return patch
+
+
+def tagged(scene):
+    return [o for o in scene.objects if o.type == "MESH" and o.motion_patch.enabled
+            and o.visible_get()]

@@ -1,0 +1,112 @@
+"""Object patches inside Blender: tag chairs with the real CMU jump, hurdle or walk around."""
+
+import bpy
+import numpy as np
+import pytest
+
+
+def chair(name, x, y):
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(x, y, 0.25))
+    ob = bpy.context.object
+    ob.name = name
+    ob.scale = (0.4, 0.44, 0.5)
+    return ob
+
+
+def empty(name, x, y, heading):
+    ob = bpy.data.objects.new(name, None)
+    bpy.context.scene.collection.objects.link(ob)
+    ob.location = (x, y, 0)
+    ob.rotation_euler = (0, 0, heading + np.pi / 2)  # -Y axis along ``heading``
+    return ob
+
+
+@pytest.fixture(scope="module")
+def chairs_blend(addon_module, mocap_dir, tmp_path_factory):
+    api = addon_module.api
+    bpy.ops.wm.read_homefile(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.fps = 30
+    cmu = mocap_dir / "cmu"
+    arm, acts = api.import_mocap([cmu / "16_15.bvh", cmu / "16_18.bvh", cmu / "16_06.bvh"],
+                                 name="Source")
+    api.bake_locomotion_patch(scene, arm, acts[0], [acts[1]], layer="walk")
+    for k, y in enumerate(np.linspace(-2.5, 2.5, 11)):
+        ob = chair(f"Chair.{k:02d}", 5.0, y)
+        bpy.context.view_layer.objects.active = ob
+        assert bpy.ops.motion_patches.tag_object_patch(action="16_06", kind='TRAVERSAL',
+                                                       effort=8.0) == {'FINISHED'}
+    walker = arm.copy()
+    walker.name = "Walker"
+    walker.animation_data_clear()
+    scene.collection.objects.link(walker)
+    walker.location = (1.0, 0.3, 0)
+    walker.rotation_euler = (0, 0, np.pi / 2)  # the rig's rest faces -Y: face +X
+    scene.motion_patches.goal = empty("Goal", 9.0, 0.3, 0.0)
+    path = tmp_path_factory.mktemp("chairs") / "chairs.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    return path
+
+
+def plan(alpha, beta, gamma, stitching='DYNAMIC'):
+    scene = bpy.context.scene
+    s = scene.motion_patches
+    s.alpha, s.beta, s.gamma, s.stitching = alpha, beta, gamma, stitching
+    walker = bpy.data.objects["Walker"]
+    bpy.context.view_layer.objects.active = walker
+    assert bpy.ops.motion_patches.plan_path() == {'FINISHED'}
+    return walker
+
+
+def strip_names(walker):
+    return [s.name for s in walker.animation_data.nla_tracks["MP motion"].strips]
+
+
+def test_hurried_character_hurdles_a_chair(chairs_blend, addon_module):
+    bpy.ops.wm.open_mainfile(filepath=str(chairs_blend))
+    walker = plan(4.0, 0.5, 0.1)
+    names = strip_names(walker)
+    assert any("16_06" in n for n in names), names
+    f = addon_module.api.analyse(bpy.context, walker)
+    assert f["traversals"] == 1
+    assert f["frames_root_inside_obstacle"] == 0  # outside the jump, never inside a chair
+    assert f["goal_root_position_error_cm"] < 10 and f["goal_heading_error_deg"] < 10
+    assert f["root_from_plan_cm"]["max"] < 5
+
+
+def test_unhurried_character_walks_around(chairs_blend, addon_module):
+    bpy.ops.wm.open_mainfile(filepath=str(chairs_blend))
+    walker = plan(0.3, 0.1, 3.0)
+    assert not any("16_06" in n for n in strip_names(walker))
+    f = addon_module.api.analyse(bpy.context, walker)
+    assert f["traversals"] == 0 and f["frames_root_inside_obstacle"] == 0
+
+
+def test_static_stitching_finds_the_same_plan(chairs_blend, addon_module):
+    bpy.ops.wm.open_mainfile(filepath=str(chairs_blend))
+    dynamic = strip_names(plan(4.0, 0.5, 0.1, 'DYNAMIC'))
+    static = strip_names(plan(4.0, 0.5, 0.1, 'STATIC'))
+    assert dynamic == static
+
+
+def test_tagging_bad_input_reports_and_changes_nothing(chairs_blend, addon_module):
+    bpy.ops.wm.open_mainfile(filepath=str(chairs_blend))
+    api = addon_module.api
+    # A clip whose root never moves (only a rotation key) cannot be a traversal.
+    still = bpy.data.actions.new("still")
+    slot = still.slots.new(id_type='OBJECT', name="still")
+    bag = still.layers.new("L").strips.new(type='KEYFRAME').channelbag(slot, ensure=True)
+    fc = bag.fcurves.new('pose.bones["Hips"].location', index=0)
+    fc.keyframe_points.insert(1, 0.0)
+    fc.keyframe_points.insert(30, 0.0)
+    target = chair("Extra", 12.0, 0.0)
+    with pytest.raises(api.MotionPatchesError, match="root"):
+        api.tag_object_patch(target, [(still, 'TRAVERSAL', 8.0, 10.0)])
+    assert not target.motion_patch.enabled and len(target.motion_patch.clips) == 0
+    # A mesh without geometry has no footprint.
+    me = bpy.data.meshes.new("nothing")
+    hollow = bpy.data.objects.new("Hollow", me)
+    bpy.context.scene.collection.objects.link(hollow)
+    with pytest.raises(api.MotionPatchesError, match="footprint"):
+        api.tag_object_patch(hollow, [(bpy.data.actions["16_06"], 'TRAVERSAL', 8.0, 10.0)])
+    assert not hollow.motion_patch.enabled
