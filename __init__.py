@@ -4,16 +4,18 @@ The extension entry point only registers classes; all logic lives in the pure-nu
 core (``motion_patches``), the Blender adapter (``adapter``) and the thin ``operators``.
 """
 
-from . import operators, panels, props
+from . import cli, operators, panels, props
 
 
 def register():
     props.register()
     operators.register()
     panels.register()
+    cli.register()
 
 
 def unregister():
+    cli.unregister()
     panels.unregister()
     operators.unregister()
     props.unregister()

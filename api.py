@@ -172,14 +172,15 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
         nla.check_rig(character, skel)
     except ValueError as exc:
         raise MotionPatchesError(str(exc)) from None
+    # The character's own meshes (children of the rig) never block it.
+    exclude = (character,) + tuple(character.children_recursive)
     if isinstance(goal, bpy.types.Object):
         goal_state = scene_io.ground_state(goal)
-        exclude = (character, goal)
+        exclude += (goal,) + tuple(goal.children_recursive)
     else:
         if goal is None or len(goal) != 3:
             raise MotionPatchesError("choose a goal object (its location and facing)")
         goal_state = np.asarray(goal, float)
-        exclude = (character,)
     depsgraph = (context or bpy.context).evaluated_depsgraph_get()
     env = scene_io.environment(scene, depsgraph, patch, radius, exclude)
     start_state = scene_io.character_state(character, skel)

@@ -58,6 +58,10 @@ def check_rig(obj, skel):
                          f"apply its scale first (the patch is in metres)")
     if obj.rotation_mode == "AXIS_ANGLE":
         raise ValueError(f"armature '{obj.name}' uses axis-angle rotation; use Euler or quaternion")
+    m = np.array(obj.matrix_world)
+    if abs(m[2, 2] - 1.0) > 1e-6:
+        raise ValueError(f"armature '{obj.name}' is tilted (X/Y rotation); the planned root "
+                         f"turns about Z only")
 
 
 def remove_owned(obj):
@@ -155,10 +159,6 @@ def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start):
             act_io.key_curve(root_action, root_slot, "rotation_quaternion", i, frames, q[:, i],
                              group="Object Transforms")
     else:
-        rx, ry = float(obj.rotation_euler[0]), float(obj.rotation_euler[1])
-        if abs(rx) > 1e-6 or abs(ry) > 1e-6:
-            raise ValueError(f"armature '{obj.name}' is tilted (X/Y rotation); the planned "
-                             f"root turns about Z only")
         for i, v in enumerate((np.zeros(world.frames), np.zeros(world.frames), heading)):
             act_io.key_curve(root_action, root_slot, "rotation_euler", i, frames, v,
                              group="Object Transforms")

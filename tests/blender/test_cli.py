@@ -1,0 +1,462 @@
+"""The ``blender -c motion_patches ...`` command: its handler called with argv, as Blender does.
+
+There is no Blender binary here, so the handler registered with
+``bpy.utils.register_cli_command`` is called directly with the extension enabled. The patch
+is baked once per module through the CLI itself (real CMU mocap) and saved; a layout is
+built on it and saved; each test reopens a file.
+"""
+
+import contextlib
+import io
+import json
+import sys
+
+import addon_utils
+import bpy
+import numpy as np
+import pytest
+
+from conftest import enable_addon, raise_error
+
+
+@pytest.fixture
+def cli(addon_module_name):
+    # Looked up per test: switching the add-on off and on may reload its modules.
+    return sys.modules[addon_module_name].cli
+
+
+def call(cli, capsys, *argv):
+    code = cli.main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def call_json(cli, capsys, *argv):
+    code, out, err = call(cli, capsys, *argv, "--json")
+    doc = json.loads(out)  # the whole of stdout is one JSON document
+    assert doc["exit_code"] == code
+    return code, doc, err
+
+
+def one_line(err):
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1, err
+    assert "Traceback" not in err
+    return lines[0]
+
+
+def pillar(name, x, y, r=0.25, h=2.0):
+    bpy.ops.mesh.primitive_cylinder_add(radius=r, depth=h, location=(x, y, h / 2))
+    bpy.context.object.name = name
+    return bpy.context.object
+
+
+def empty(name, x, y, heading):
+    ob = bpy.data.objects.new(name, None)
+    bpy.context.scene.collection.objects.link(ob)
+    ob.location = (x, y, 0)
+    ob.rotation_euler = (0, 0, heading + np.pi / 2)  # -Y axis points along ``heading``
+    return ob
+
+
+def scene_state(name="Walker"):
+    ob = bpy.data.objects.get(name)
+    ad = ob.animation_data if ob else None
+    return (sorted(o.name for o in bpy.data.objects), sorted(a.name for a in bpy.data.actions),
+            [t.name for t in ad.nla_tracks] if ad else None,
+            ad.action.name if ad and ad.action else None)
+
+
+CAGE = (3.0, -6.0)
+
+
+@pytest.fixture(scope="module")
+def baked(addon_module_name, mocap_dir, tmp_path_factory):
+    """(path, exit code, JSON) of a bake run through the CLI on an empty scene."""
+    cli = sys.modules[addon_module_name].cli
+    bpy.ops.wm.read_homefile(use_empty=True)
+    path = tmp_path_factory.mktemp("cli") / "baked.blend"
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        code = cli.main(["bake", "--import-bvh", str(mocap_dir / "cmu" / "16_15.bvh"),
+                         "--import-bvh", str(mocap_dir / "cmu" / "16_18.bvh"),
+                         "--armature", "Source", "--straight", "16_15", "--turn", "16_18",
+                         "--fps", "30", "--save", str(path), "--json"])
+    return path, code, json.loads(out.getvalue())
+
+
+@pytest.fixture(scope="module")
+def layout(baked, tmp_path_factory):
+    """The baked file plus a walker, pillars, a goal, and a goal caged in a ring of pillars."""
+    bpy.ops.wm.open_mainfile(filepath=str(baked[0]))
+    scene = bpy.context.scene
+    walker = scene.motion_patches.source_armature.copy()
+    walker.name = "Walker"
+    walker.animation_data_clear()
+    scene.collection.objects.link(walker)
+    walker.location = (0.4, 0.3, 0)
+    for n, (x, y) in enumerate([(3.0, 1.0), (4.5, 3.0), (2.5, 4.0), (6.0, 1.5)]):
+        pillar(f"Pillar{n}", x, y)
+    for n, a in enumerate(np.linspace(0, 2 * np.pi, 25)[:-1]):
+        pillar(f"Ring{n:02d}", CAGE[0] + 1.6 * np.cos(a), CAGE[1] + 1.6 * np.sin(a), r=0.3)
+    empty("Goal", 7.5, 5.0, 0.6)
+    empty("CageGoal", CAGE[0], CAGE[1], 0.0)
+    empty("Near", 4.0, -1.0, 0.0)
+    path = tmp_path_factory.mktemp("cli") / "layout.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    return path
+
+
+def open_blend(path):
+    bpy.ops.wm.open_mainfile(filepath=str(path))
+    return bpy.context.scene
+
+
+# --- registration, help, usage ----------------------------------------------------------------
+
+
+def test_command_is_registered_and_released_with_the_addon(addon_module_name, capfd):
+    assert sys.modules[addon_module_name].cli._handle is not None
+    addon_utils.disable(addon_module_name, default_set=True, handle_error=raise_error)
+    try:
+        assert sys.modules[addon_module_name].cli._handle is None
+        capfd.readouterr()
+        # The id is free again: registering it does not warn about a duplicate.
+        h = bpy.utils.register_cli_command("motion_patches", lambda argv: 0)
+        bpy.utils.unregister_cli_command(h)
+        assert "duplicate" not in capfd.readouterr().err
+    finally:
+        enable_addon(addon_module_name)
+    assert sys.modules[addon_module_name].cli._handle is not None
+
+
+@pytest.mark.parametrize("command", [None, "bake", "plan", "analyse", "check", "crowd"])
+def test_help_exits_0(cli, capsys, command):
+    code, out, err = call(cli, capsys, *([command] if command else []), "--help")
+    assert code == 0
+    assert out.startswith("usage: blender -c motion_patches")
+    assert "exit codes" in out or command == "crowd"
+
+
+@pytest.mark.parametrize("argv, needle", [
+    ([], "required"),
+    (["frobnicate"], "invalid choice"),
+    (["plan", "--goal", "Goal"], "--character"),
+    (["plan", "--character", "W", "--alpha", "fast"], "invalid float"),
+    (["bake", "--armature", "A", "--straight", "s", "--cells", "12"], "--cells"),
+])
+def test_usage_errors_exit_2_with_one_line(cli, capsys, argv, needle):
+    code, out, err = call(cli, capsys, *argv)
+    assert code == 2 and out == ""
+    assert needle in one_line(err)
+
+
+def test_usage_error_with_json_still_prints_one_document(cli, capsys):
+    code, doc, err = call_json(cli, capsys, "plan")
+    assert code == 2 and doc["ok"] is False and "--character" in doc["error"]
+    one_line(err)
+
+
+def test_crowd_is_explicitly_not_implemented(cli, capsys):
+    code, out, err = call(cli, capsys, "crowd")
+    assert code == 2 and "not implemented yet" in one_line(err)
+
+
+# --- bake -----------------------------------------------------------------------------------
+
+
+def test_bake_imports_bakes_and_saves(baked):
+    path, code, doc = baked
+    assert code == 0 and doc["ok"] and doc["command"] == "bake"
+    assert doc["patch"] == "walk" and doc["armature"] == "Source"
+    assert doc["imported"] == ["16_15", "16_18"] and doc["fps"] == 30
+    assert doc["stats"]["kept"] > 300
+    assert doc["stats"]["kept"] + doc["stats"]["culled"] == doc["stats"]["candidates"]
+    assert doc["saved"] == str(path) and path.is_file()
+    scene = open_blend(path)
+    assert scene.motion_patches.patches["walk"].fps == 30
+    assert scene.motion_patches.source_armature.name == "Source"
+    assert scene.motion_patches.straight_action.name == "16_15"
+
+
+def test_bake_bad_input_exits_2_and_writes_nothing(cli, capsys, clean_scene, mocap_dir, tmp_path):
+    out = tmp_path / "out.blend"
+    walk = mocap_dir / "cmu" / "16_15.bvh"
+    cases = [
+        (["--import-bvh", tmp_path / "missing.bvh", "--armature", "A", "--straight", "missing"],
+         "BVH file not found"),
+        (["--armature", "Nobody", "--straight", "16_15"], "no armature object named 'Nobody'"),
+        (["--import-bvh", walk, "--armature", "A", "--straight", "16_99"],
+         "no action named '16_99'"),
+        (["--import-bvh", walk, "--armature", "A", "--straight", "16_15", "--turn", "nope"],
+         "no action named 'nope'"),
+        (["--import-bvh", walk, "--armature", "A", "--straight", "16_15",
+          "--save", tmp_path / "no" / "such" / "dir.blend"], "does not exist"),
+    ]
+    for argv, needle in cases:
+        if "--save" not in argv:
+            argv = argv + ["--save", out]
+        code, stdout, err = call(cli, capsys, "bake", *argv)
+        assert code == 2, (argv, err)
+        assert needle in one_line(err) and stdout == ""
+        assert not out.exists()
+        assert len(bpy.data.objects) == 0 and len(bpy.data.actions) == 0
+        assert len(clean_scene.motion_patches.patches) == 0
+
+
+def test_failed_bake_rolls_back_the_import(cli, capsys, clean_scene, mocap_dir, tmp_path,
+                                           monkeypatch):
+    def refuse(*a, **k):
+        raise cli.api.MotionPatchesError("every candidate segment was culled")
+    monkeypatch.setattr(cli.api, "bake_locomotion_patch", refuse)
+    fps = clean_scene.render.fps
+    out = tmp_path / "out.blend"
+    code, doc, err = call_json(cli, capsys, "bake", "--import-bvh", mocap_dir / "cmu" / "16_15.bvh",
+                               "--armature", "A", "--straight", "16_15", "--fps", "30",
+                               "--save", out)
+    assert code == 2 and doc["ok"] is False and "culled" in one_line(err)
+    assert not out.exists()
+    assert len(bpy.data.objects) == 0 and len(bpy.data.actions) == 0
+    assert len(bpy.data.armatures) == 0 and clean_scene.render.fps == fps
+
+
+def test_progress_bar_on_a_terminal_and_plain_lines_otherwise(cli):
+    class Stream(io.StringIO):
+        def __init__(self, tty):
+            super().__init__()
+            self.tty = tty
+
+        def isatty(self):
+            return self.tty
+
+    tty, plain, quiet = Stream(True), Stream(False), Stream(True)
+    for stream, enabled in ((tty, True), (plain, True), (quiet, False)):
+        p = cli.Progress("bake", stream=stream, enabled=enabled)
+        for f in np.linspace(0, 1, 101):
+            p(f)
+        p.close()
+    assert tty.getvalue().startswith("\rbake [") and tty.getvalue().endswith("100%\n")
+    assert plain.getvalue().splitlines() == [f"bake: {p}%" for p in range(0, 101, 10)]
+    assert quiet.getvalue() == ""
+
+
+# --- plan and analyse -----------------------------------------------------------------------
+
+
+def test_plan_saves_nla_and_analyse_reports_figures(cli, capsys, layout, tmp_path):
+    out = tmp_path / "planned.blend"
+    code, doc, err = call_json(cli, capsys, "plan", "--blend", layout, "--character", "Walker",
+                               "--goal", "Goal", "--frame-start", "1", "--save", out)
+    assert code == 0 and doc["ok"], err
+    assert doc["character"] == "Walker" and doc["goal"]["object"] == "Goal"
+    assert doc["goal"]["x"] == pytest.approx(7.5) and doc["goal"]["heading_deg"] == pytest.approx(
+        np.degrees(0.6))
+    assert doc["frame_start"] == 1 and doc["frames"] == doc["frame_end"]
+    assert doc["pieces"][0] == "start" and doc["pieces"][-1] == "goal"
+    assert doc["length_m"] > np.hypot(7.1, 4.7) and doc["seconds_of_motion"] > 5
+    assert doc["saved"] == str(out) and out.is_file()
+
+    # analyse on the plan in memory, and the saved file holds the same NLA
+    code, doc, err = call_json(cli, capsys, "analyse", "--character", "Walker")
+    assert code == 0, err
+    f = doc["figures"]
+    assert f["goal_position_error_cm"] < 10 and f["frames_root_inside_obstacle"] == 0
+    open_blend(out)
+    tracks = [t.name for t in bpy.data.objects["Walker"].animation_data.nla_tracks]
+    assert tracks == ["MP motion", "MP root"]
+
+
+def test_plan_to_coordinates_prints_a_summary(cli, capsys, layout):
+    code, out, err = call(cli, capsys, "plan", "--blend", layout, "--character", "Walker",
+                          "--goal-xyh", "4", "-1", "0", "--alpha", "1", "--gamma", "0.1")
+    assert code == 0, err
+    assert out.startswith("planned 'Walker':") and "cost" in out
+    assert bpy.data.filepath == str(layout)  # nothing saved: the file is as it was
+    assert "Traceback" not in err
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["--character", "Nobody", "--goal", "Goal"], "no armature object named 'Nobody'"),
+    (["--character", "Pillar0", "--goal", "Goal"], "'Pillar0' is a mesh"),
+    (["--character", "Walker", "--goal", "Nowhere"], "no object named 'Nowhere'"),
+    (["--character", "Walker", "--goal", "Goal", "--patch", "run"], "no locomotion patch named"),
+    (["--character", "Walker", "--goal", "Goal", "--radius", "-1"], "--radius"),
+])
+def test_plan_bad_input_exits_2_and_changes_nothing(cli, capsys, layout, tmp_path, argv, needle):
+    out = tmp_path / "out.blend"
+    open_blend(layout)
+    before = scene_state()
+    code, stdout, err = call(cli, capsys, "plan", *argv, "--save", out)
+    assert code == 2 and stdout == ""
+    assert needle in one_line(err)
+    assert not out.exists() and scene_state() == before
+
+
+def test_plan_without_a_baked_patch_exits_2(cli, capsys, clean_scene, tmp_path):
+    arm = bpy.data.objects.new("Rig", bpy.data.armatures.new("Rig"))
+    clean_scene.collection.objects.link(arm)
+    empty("Goal", 3, 0, 0)
+    out = tmp_path / "out.blend"
+    code, doc, err = call_json(cli, capsys, "plan", "--character", "Rig", "--goal", "Goal",
+                               "--save", out)
+    assert code == 2 and "no locomotion patch is baked" in one_line(err)
+    assert doc["ok"] is False and not out.exists()
+
+
+def test_analyse_without_a_plan_exits_2(cli, capsys, layout):
+    code, out, err = call(cli, capsys, "analyse", "--blend", layout, "--character", "Walker")
+    assert code == 2 and "no planned motion" in one_line(err)
+
+
+def test_unreachable_plan_exits_1_and_changes_nothing(cli, capsys, layout, tmp_path):
+    open_blend(layout)
+    before = scene_state()
+    out = tmp_path / "out.blend"
+    code, doc, err = call_json(cli, capsys, "plan", "--character", "Walker", "--goal",
+                               "CageGoal", "--save", out)
+    assert code == 1 and doc["ok"] is False
+    assert "no path for 'Walker'" in one_line(err)
+    assert not out.exists() and scene_state() == before
+
+
+def test_json_stdout_is_only_the_document_at_the_fd_level(cli, capfd, layout, tmp_path):
+    """Blender prints reports (file saved, ...) to stdout itself; they must not mix in."""
+    out = tmp_path / "planned.blend"
+    code = cli.main(["plan", "--blend", str(layout), "--character", "Walker", "--goal", "Goal",
+                     "--save", str(out), "--json"])
+    stdout, _ = capfd.readouterr()
+    assert code == 0 and json.loads(stdout)["saved"] == str(out)
+
+
+# --- check ----------------------------------------------------------------------------------
+
+
+def test_check_spec_reports_every_pair_and_writes_nothing(cli, capsys, layout, tmp_path):
+    spec = tmp_path / "layout.json"
+    spec.write_text(json.dumps({
+        "radius": 0.25,
+        "limits": {"max_seconds": 60},
+        "pairs": [{"name": "walker to goal", "character": "Walker", "goal": "Goal"},
+                  {"start": [0, 0, 90], "goal": "Near", "max_length": 50}]}))
+    open_blend(layout)
+    before = scene_state()
+    code, doc, err = call_json(cli, capsys, "check", "--spec", spec)
+    assert code == 0 and doc["ok"] and doc["passed"] == 2, err
+    a, b = doc["pairs"]
+    assert a["name"] == "walker to goal" and a["reachable"] and a["passed"]
+    assert a["start"]["object"] == "Walker" and a["goal"]["object"] == "Goal"
+    assert a["length_m"] > np.hypot(7.1, 4.7) and 5 < a["seconds"] < 60 and a["cost"] > 0
+    assert a["blocked_by"] == [] and a["limits"]["max_seconds"] == 60
+    assert b["name"] == "(0, 0, 90 deg) -> Near" and b["reachable"]
+    assert b["limits"]["max_length"] == 50 and b["limits"]["max_seconds"] == 60
+    assert scene_state() == before  # no NLA, no actions, no objects: nothing written
+    assert bpy.data.objects["Walker"].animation_data is None
+
+
+def test_failing_check_exits_1_and_names_the_blocking_props(cli, capsys, layout, tmp_path):
+    spec = tmp_path / "layout.toml"
+    spec.write_text(
+        '[[pairs]]\nname = "into the cage"\ncharacter = "Walker"\ngoal = "CageGoal"\n\n'
+        '[[pairs]]\nname = "too slow"\ncharacter = "Walker"\ngoal = "Goal"\nmax_seconds = 2\n\n'
+        '[[pairs]]\nname = "optional"\nstart = [0.0, -3.0, 0.0]\ngoal = "CageGoal"\n'
+        'must_reach = false\n')
+    code, doc, err = call_json(cli, capsys, "check", "--blend", layout, "--spec", spec)
+    assert code == 1 and doc["ok"] is False and doc["failed"] == 2
+    cage, slow, optional = doc["pairs"]
+    assert cage["reachable"] is False and cage["passed"] is False
+    assert cage["blocked_reason"] == "separated"
+    assert cage["blocked_by"] and all(n.startswith("Ring") for n in cage["blocked_by"])
+    assert len(cage["blocked_by"]) >= 12  # the ring, not the pillars on the other path
+    assert "blocked by Ring" in cage["failures"][0]
+    assert slow["reachable"] and not slow["passed"] and "max_seconds 2" in slow["failures"][0]
+    assert optional["reachable"] is False and optional["passed"] is True
+
+    code, out, err = call(cli, capsys, "check", "--spec", spec)  # the human summary
+    assert code == 1
+    assert "FAIL  into the cage: UNREACHABLE, blocked by Ring" in out
+    assert "max_seconds 2" in out and "PASS  optional" in out
+
+
+def test_check_without_spec_rechecks_planned_characters(cli, capsys, layout, tmp_path):
+    open_blend(layout)
+    assert call(cli, capsys, "plan", "--character", "Walker", "--goal", "Goal")[0] == 0
+    code, doc, err = call_json(cli, capsys, "check")
+    assert code == 0, err
+    (pair,) = doc["pairs"]
+    assert pair["name"] == "Walker" and pair["reachable"]
+    assert pair["goal"]["x"] == pytest.approx(7.5) and pair["goal"]["y"] == pytest.approx(5.0)
+    # A crate dropped on the goal after planning: the check catches it and names it.
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(7.5, 5.0, 0.5))
+    bpy.context.object.name = "Crate"
+    code, doc, err = call_json(cli, capsys, "check", "--max-seconds", "60")
+    assert code == 1
+    (pair,) = doc["pairs"]
+    assert pair["blocked_by"] == ["Crate"] and pair["blocked_reason"] == "goal"
+    # explicit pairs; the character's own body mesh (a child) is not an obstacle
+    bpy.ops.mesh.primitive_cube_add(size=0.5, location=(0.4, 0.3, 1.0))
+    body = bpy.context.object
+    body.name = "WalkerBody"
+    body.parent = bpy.data.objects["Walker"]
+    body.matrix_parent_inverse = bpy.data.objects["Walker"].matrix_world.inverted()
+    code, doc, err = call_json(cli, capsys, "check", "--character", "Walker", "--goal", "Near")
+    assert code == 0 and doc["pairs"][0]["goal"]["object"] == "Near", err
+    # a spec can say which props are not obstacles (the crate will be moved)
+    spec = tmp_path / "spec.json"
+    spec.write_text(json.dumps({"exclude": ["Crate"], "pairs": [
+        {"start": [0.4, 0.3, -90], "goal": "Goal", "exclude": ["WalkerBody"]}]}))
+    code, doc, err = call_json(cli, capsys, "check", "--spec", spec)
+    assert code == 0 and doc["pairs"][0]["reachable"], err
+
+
+@pytest.mark.parametrize("content, needle", [
+    (None, "layout spec not found"),
+    ("{not json", "cannot read layout spec"),
+    ('{"pairs": [{"character": "Walker", "goal": "Nowhere"}]}', "no object named 'Nowhere'"),
+    ('{"pairs": [{"character": "Walker", "goal": "Goal", "max_secs": 3}]}',
+     "unknown key(s) max_secs"),
+    ('{"pairs": [{"start": [0, 0], "goal": "Goal"}]}', "[x, y, heading_deg]"),
+    ('{"pairs": []}', "non-empty list"),
+])
+def test_check_bad_spec_exits_2(cli, capsys, layout, tmp_path, content, needle):
+    spec = tmp_path / "spec.json"
+    if content is not None:
+        spec.write_text(content)
+    code, out, err = call(cli, capsys, "check", "--blend", layout, "--spec", spec)
+    assert code == 2 and out == ""
+    assert needle in one_line(err)
+
+
+def test_check_with_nothing_to_check_exits_2(cli, capsys, layout):
+    code, out, err = call(cli, capsys, "check", "--blend", layout)
+    assert code == 2 and "nothing to check" in one_line(err)
+
+
+def test_missing_blend_exits_2(cli, capsys, tmp_path):
+    code, out, err = call(cli, capsys, "check", "--blend", tmp_path / "nope.blend")
+    assert code == 2 and ".blend file not found" in one_line(err)
+
+
+def test_blocking_props_are_read_from_the_occluded_cells(cli):
+    """The answers of ``blocking_obstacles`` on a synthetic environment (no planning)."""
+    Environment, Obstacle = cli.scene_io.Environment, cli.scene_io.Obstacle
+
+    def rect(name, x0, y0, x1, y1):
+        return Obstacle(name, np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]], float))
+
+    def env(*obstacles):
+        e = Environment(2.4, 8, 0.25)
+        for ob in obstacles:
+            e.place(ob)
+        return e
+
+    start, goal = np.array([0.0, 0.0, 0.0]), np.array([4.0, 0.0, 0.0])
+    far = rect("FarCrate", 20, 20, 21, 21)
+    wall = env(rect("Wall", 2.0, -30, 2.3, 30), far)
+    assert cli.blocking_obstacles(wall, start, goal) == (["Wall"], "separated")
+    slot = env(rect("WallS", 2.0, -30, 2.3, -0.6), rect("WallN", 2.0, 0.6, 2.3, 30), far)
+    assert cli.blocking_obstacles(slot, start, goal) == (["WallN", "WallS"], "narrow")
+    cage = env(rect("N", 3, 1, 5, 1.3), rect("S", 3, -1.3, 5, -1), rect("E", 5, -1.3, 5.3, 1.3),
+               rect("W", 2.7, -1.3, 3, 1.3), rect("Outside", 0.5, 2, 1, 2.5), far)
+    assert cli.blocking_obstacles(cage, start, goal) == (["E", "N", "S", "W"], "separated")
+    assert cli.blocking_obstacles(wall, np.array([1.9, 5.0, 0.0]), goal) == (["Wall"], "start")
+    assert cli.blocking_obstacles(env(), start, goal) == ([], "unknown")
