@@ -105,6 +105,31 @@ def polygons_within(poly_a, poly_b, radius):
     return min(da, db) < radius
 
 
+def cells_within(x0, y0, size, polygon, radius):
+    """(K,) True for the square cells (corner x0, y0; side ``size``) that come within
+    ``radius`` of a convex polygon: the exact distance between two convex shapes, for all
+    cells of a tile at once."""
+    x1, y1 = x0 + size, y0 + size
+    px, py = polygon[:, 0][None], polygon[:, 1][None]
+    # Polygon vertices to the cells (axis-aligned boxes): zero when a vertex is inside.
+    dx = np.maximum(np.maximum(x0[:, None] - px, 0.0), px - x1[:, None])
+    dy = np.maximum(np.maximum(y0[:, None] - py, 0.0), py - y1[:, None])
+    d = np.hypot(dx, dy).min(axis=1)
+    # Cell corners to the polygon (zero when a corner is inside it).
+    corners = np.stack((np.column_stack((x0, y0)), np.column_stack((x1, y0)),
+                        np.column_stack((x1, y1)), np.column_stack((x0, y1))), axis=1)
+    flat = corners.reshape(-1, 2)
+    dc = distance_to_polygon(flat, polygon).reshape(-1, 4).min(axis=1)
+    d = np.minimum(d, dc)
+    # A polygon edge crossing a cell with no vertex of either inside it (a thin fence).
+    lo, hi = polygon.min(axis=0), polygon.max(axis=0)
+    boxed = (d > 0) & (x0 <= hi[0]) & (x1 >= lo[0]) & (y0 <= hi[1]) & (y1 >= lo[1])
+    for k in np.flatnonzero(boxed):
+        if _edges_cross(corners[k], polygon):
+            d[k] = 0.0
+    return d < max(radius, 1e-12) if radius > 0 else d <= 0.0
+
+
 class Environment:
     """Obstacles and the lazily occluded tile grid of one locomotion patch size."""
 
@@ -175,17 +200,14 @@ class Environment:
         if not names:
             return FULL
         c = self.side / self.cells
-        x0, y0 = tile[0] * self.side, tile[1] * self.side
-        free = FULL
-        for iy in range(self.cells):
-            for ix in range(self.cells):
-                cell = np.array([[x0 + ix * c, y0 + iy * c], [x0 + (ix + 1) * c, y0 + iy * c],
-                                 [x0 + (ix + 1) * c, y0 + (iy + 1) * c], [x0 + ix * c, y0 + (iy + 1) * c]])
-                for n in names:
-                    if polygons_within(cell, self.obstacles[n].polygon, self.radius):
-                        free &= ~np.uint64(1 << (iy * self.cells + ix))
-                        break
-        return free
+        ix, iy = np.meshgrid(np.arange(self.cells), np.arange(self.cells), indexing="xy")
+        x0 = tile[0] * self.side + ix.ravel() * c
+        y0 = tile[1] * self.side + iy.ravel() * c
+        occluded = np.zeros(x0.size, bool)
+        for n in names:
+            occluded |= cells_within(x0, y0, c, self.obstacles[n].polygon, self.radius)
+        bits = np.left_shift(np.uint64(1), np.flatnonzero(occluded).astype(np.uint64))
+        return FULL & ~np.bitwise_or.reduce(bits) if bits.size else FULL
 
     def blocked(self, points, exclude=()):
         """(N,) True where world points come within the radius of any obstacle."""

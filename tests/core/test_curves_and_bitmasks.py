@@ -90,3 +90,22 @@ def test_a_thin_fence_across_a_cell_occludes_it_even_with_a_tiny_radius():
     free = int(env.free_cells((0, 0)))
     for ix in range(2, 6):
         assert not free >> (3 * 8 + ix) & 1
+
+
+def test_vectorised_cell_occlusion_matches_the_pairwise_polygon_test():
+    from motion_patches.environment import cells_within, polygons_within
+    rng = np.random.default_rng(5)
+    c = 0.3
+    ix, iy = np.meshgrid(np.arange(8), np.arange(8), indexing="xy")
+    x0, y0 = ix.ravel() * c, iy.ravel() * c
+    for _ in range(30):
+        pts = rng.uniform(-0.5, 2.9, size=(6, 2)) * rng.uniform(0.05, 1.0)
+        poly = convex_hull(pts + rng.uniform(0, 2, 2))
+        if len(poly) < 3:
+            continue
+        r = float(rng.choice([0.0, 0.05, 0.25]))
+        fast = cells_within(x0, y0, c, poly, r)
+        for k in range(64):
+            cell = np.array([[x0[k], y0[k]], [x0[k] + c, y0[k]], [x0[k] + c, y0[k] + c], [x0[k], y0[k] + c]])
+            if r > 0:
+                assert fast[k] == polygons_within(cell, poly, r), (k, r)
