@@ -188,12 +188,26 @@ class SegmentPlanner:
         for n in range(1, 5):
             sc = curves.fit_scale(p0, d0, p, d1, float(n), self._measure, CONNECTOR_SCALES,
                                   samples=48, table=table)
-            for idx in np.flatnonzero(~np.isnan(sc)):
+            for idx in self._bend_ok(p0, d0, p, d1, sc):
                 c = curves.hermite_curve(p0[idx], d0[idx], p[idx], d1[idx], sc[idx])
                 if self._valid(c):
                     out.append((int(keys[idx]), self._curve_cost(c, n),
                                 Piece("start", curve=c, cycles=n)))
         return out
+
+    def _bend_ok(self, p0, d0, p1, d1, scales, max_length=np.inf):
+        """Indices of candidate curves (one scale each, NaN: none) that bend within the
+        gait's range and are not too long, tested together on coarse samples first."""
+        idx = np.flatnonzero(~np.isnan(scales))
+        if idx.size == 0:
+            return idx
+        pos, vel, acc = curves.hermite(p0[idx], d0[idx], p1[idx], d1[idx], scales[idx],
+                                       np.linspace(0.0, 1.0, 65))
+        k = curves.curvature(vel, acc)
+        length = curves.arc_lengths(pos)[:, -1]
+        margin = 1.02  # the dense check in _valid decides; this only skips hopeless ones
+        ok = (k.min(axis=1) >= self.kmin * margin) & (k.max(axis=1) <= self.kmax * margin)
+        return idx[ok & (length <= max_length)]
 
     def _goal_connectors(self, goal, where):
         keys, p, h = self._entries(where)
@@ -204,9 +218,8 @@ class SegmentPlanner:
         _, bend = curves.tabulate(p, d0, p1, d1, scales=CONNECTOR_SCALES, samples=48)
         best = CONNECTOR_SCALES[np.argmin(bend, axis=1)]
         out = {}
-        for idx in range(m):
-            if np.linalg.norm(p[idx] - goal[:2]) < 0.2 * self.patch.gait.cycle_distance:
-                continue
+        best[np.linalg.norm(p - goal[:2], axis=1) < 0.2 * self.patch.gait.cycle_distance] = np.nan
+        for idx in self._bend_ok(p, d0, p1, d1, best, 1.5 * self.patch.side + 0.05):
             c = curves.hermite_curve(p[idx], d0[idx], p1[idx], d1[idx], best[idx])
             if c.length <= 1.5 * self.patch.side and self._valid(c):
                 cyc = float(cycles_along(self.patch.gait, c.pos[None], *_derivs(c))[0])
