@@ -23,6 +23,7 @@ from .locomotion_patch import (DIRECTIONS, EDGES, INWARD, node_id, node_position
 from .motion import ease_to, sliced
 from .stitching import BLEND_FRAMES, stitch
 from .synthesis import cycles_along, follow
+from .traversal_probability import accessibility, tile_traversal
 
 CONNECTOR_SCALES = np.linspace(0.25, 4.0, 40)  # coarser than the bake: fitted at plan time
 HEADING_SLACK = 0.02  # radians, for sampling error in precomputed turn sums
@@ -259,7 +260,8 @@ class SegmentPlanner:
         self.corridor = None
         tiles = None
         if use_corridor:
-            tiles = TilePlanner(self.patch, self.env).plan(start[:2], goal[:2], self.region)
+            tiles = TilePlanner(self.patch, self.env,
+                                traversal=self._tile_traversal).plan(start[:2], goal[:2], self.region)
             if tiles is not None:
                 self.corridor = {(t[0] + di, t[1] + dj) for t in tiles
                                  for di, dj in ((0, 0), (1, 0), (-1, 0), (0, 1), (0, -1))}
@@ -347,6 +349,14 @@ class SegmentPlanner:
                      "stitch_edges": len(stitches),
                      "stitch_seconds": counters["stitch_seconds"],
                      "traversals_used": sum(p.kind == "traversal" for p in pieces)})
+
+    def _tile_traversal(self, tile):
+        """tau (Eq. 3) of a tile, from the traversable props overlapping it (lazy)."""
+        names = self.env.members(tile)
+        props = [p for p in self.props if p.name in names and p.traversals()]
+        return tile_traversal(self.patch, self.env, props, tile,
+                              lambda p: accessibility(self.patch, p, self.env.radius,
+                                                      weights=(self.alpha, self.beta, self.gamma)))
 
     def _traversal_estimates(self, start):
         """Heap of (f lower bound, prop, clip copy) of every traversal copy in the region:

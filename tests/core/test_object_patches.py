@@ -122,3 +122,30 @@ def test_moving_a_prop_changes_the_path(walk_patch, hurdle_clip):
     b = SegmentPlanner(walk_patch, env).plan((1.0, y, 0.0), (9.0, y, 0.0))
     assert [p.label for p in a.pieces] != [p.label for p in b.pieces]
     assert b.cost < a.cost
+
+
+def test_traversal_probability_keeps_a_chair_line_tile_passable(walk_patch, hurdle_clip):
+    from motion_patches import traversal_probability as tp
+    from motion_patches.high_level import TilePlanner
+    env, props = chair_line(walk_patch, hurdle_clip)
+    planner = SegmentPlanner(walk_patch, env, 4.0, 0.5, 0.1, props=props)
+    tile = env.tile_of((5.0, 0.3))
+    psi = tp.accessibility(walk_patch, props[0], env.radius)
+    assert 0.0 < psi <= 1.0
+    upsilon = TilePlanner(walk_patch, env).upsilon(tile)
+    tau = planner._tile_traversal(tile)
+    assert upsilon[3, 1] == 0.0          # no walk crosses the line west to east ...
+    assert tau[3, 1] > 0.2               # ... but the jump likely does (Eq. 3)
+    with_tau = TilePlanner(walk_patch, env, traversal=planner._tile_traversal)
+    assert np.isfinite(with_tau.edge_cost(tile, 3, 1))
+    assert np.isinf(TilePlanner(walk_patch, env).edge_cost(tile, 3, 1))
+
+
+def test_corridor_planning_with_traversals_matches_the_full_search(walk_patch, hurdle_clip):
+    env, props = chair_line(walk_patch, hurdle_clip)
+    full = SegmentPlanner(walk_patch, env, 4.0, 0.5, 0.1, props=props).plan((1.0, 0.3, 0), (9.0, 0.3, 0))
+    env, props = chair_line(walk_patch, hurdle_clip)
+    corr = SegmentPlanner(walk_patch, env, 4.0, 0.5, 0.1, props=props).plan(
+        (1.0, 0.3, 0), (9.0, 0.3, 0), use_corridor=True)
+    assert corr.stats["high_level_tiles"] > 0 and corr.stats["traversals_used"] == 1
+    assert corr.cost <= 1.1 * full.cost
