@@ -20,7 +20,8 @@ from .motion_patches import contacts, metrics, object_patch
 from .motion_patches.gait import build_gait
 from .motion_patches.locomotion_patch import bake
 from .motion_patches.motion import concatenate
-from .motion_patches.planner import PlanError, SegmentPlanner, plan_motions
+from .motion_patches.planner import (PlanError, SegmentPlanner, interaction_states,
+                                     plan_motions, with_interactions)
 
 PLAN_KEY = "motion_patches_plan"
 
@@ -126,9 +127,11 @@ def tag_object_patch(obj, clips, patch_name=None, scene=None, context=None):
 def object_patches(scene, depsgraph, patch):
     """Core object patches of every tagged prop in the scene."""
     out = []
+    floor = patch.gait.floor()
     for obj in props_io.tagged(scene):
         try:
-            out.append(props_io.object_patch(obj, depsgraph, patch.gait.skeleton, patch.gait.fps))
+            out.append(props_io.object_patch(obj, depsgraph, patch.gait.skeleton, patch.gait.fps,
+                                             gait_floor=floor))
         except ValueError as exc:
             raise MotionPatchesError(str(exc)) from None
     return out
@@ -153,11 +156,14 @@ def load_plan_record(obj):
 
 
 def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2,
-              radius=0.25, frame_start=None, context=None, stitching="dynamic"):
+              radius=0.25, frame_start=None, context=None, stitching="dynamic", start_prop=None):
     """Plan ``character`` to ``goal`` (an object or (x, y, heading)) and write it as NLA.
 
     Tagged props (object patches) offer their traversal clips; ``stitching`` is
-    "dynamic" (lazy, the paper's method) or "static" (everything stitched first)."""
+    "dynamic" (lazy, the paper's method) or "static" (everything stitched first). A goal
+    that is a tagged prop with a sit-down interaction clip ends the path seated on it; a
+    ``start_prop`` with a stand-up clip starts it there (the character's own position is
+    then not used)."""
     try:
         patch = storage.load_patch(scene, patch_name)
     except ValueError as exc:
@@ -176,7 +182,8 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
     exclude = (character,) + tuple(character.children_recursive)
     if isinstance(goal, bpy.types.Object):
         goal_state = scene_io.ground_state(goal)
-        exclude += (goal,) + tuple(goal.children_recursive)
+        if not goal.motion_patch.enabled:  # a goal prop (sit on it) stays an obstacle
+            exclude += (goal,) + tuple(goal.children_recursive)
     else:
         if goal is None or len(goal) != 3:
             raise MotionPatchesError("choose a goal object (its location and facing)")
@@ -185,14 +192,30 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
     env = scene_io.environment(scene, depsgraph, patch, radius, exclude)
     start_state = scene_io.character_state(character, skel)
     props = object_patches(scene, depsgraph, patch)
-    if isinstance(goal, bpy.types.Object) and goal in props_io.tagged(scene):
-        raise MotionPatchesError(f"the goal '{goal.name}' is a prop; ending a path in an "
-                                 f"interaction clip is not supported yet")
+    by_name = {p.name: p for p in props}
+    start_ref = goal_ref = None
+    if isinstance(goal, bpy.types.Object) and goal.name in by_name:
+        i = props_io.interaction_clip(by_name[goal.name], sitting=True)
+        if i is None:
+            raise MotionPatchesError(f"the goal '{goal.name}' is a prop without a sit-down "
+                                     f"interaction clip: there is nowhere to end the path")
+        goal_ref = (by_name[goal.name], i)
+    if start_prop is not None:
+        if start_prop.name not in by_name:
+            raise MotionPatchesError(f"'{start_prop.name}' is not a tagged object patch")
+        i = props_io.interaction_clip(by_name[start_prop.name], sitting=False)
+        if i is None:
+            raise MotionPatchesError(f"'{start_prop.name}' has no stand-up interaction clip")
+        start_ref = (by_name[start_prop.name], i)
+    s_state, g_state = interaction_states(start_ref, goal_ref)
+    start_state = start_state if s_state is None else s_state
+    goal_state = goal_state if g_state is None else g_state
     try:
         plan = SegmentPlanner(patch, env, alpha, beta, gamma, props=props,
                               mode=stitching).plan(start_state, goal_state)
     except PlanError as exc:
         raise MotionPatchesError(str(exc)) from None
+    plan = with_interactions(plan, start_ref, goal_ref)
     motions = plan_motions(patch, plan)
     world = concatenate(motions)
     frame_start = scene.frame_current if frame_start is None else int(frame_start)
@@ -209,6 +232,7 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
         "boundaries": [s["start"] for s in strips[1:]], "radius": radius,
         "facing": nla.facing_angle(skel),
         "traversals": [[s["start"], s["end"]] for s in strips if s["kind"] == "traversal"],
+        "interactions": [[s["start"], s["end"]] for s in strips if s["kind"] == "interaction"],
         "obstacles": {o.name: o.polygon.tolist() for o in env.obstacles.values()},
     })
     return PlanResult(character.name, frame_start, frame_end, [p.label for p in plan.pieces],
@@ -234,8 +258,8 @@ def analyse(context, character):
         env.place(Obstacle(name, np.array(poly)))
     inside_mask = env.blocked(root[:, :2]) if meta["obstacles"] else np.zeros(frames.size, bool)
     during = np.zeros(frames.size, bool)
-    for a, b in meta.get("traversals", []):
-        during[(frames >= a) & (frames <= b)] = True
+    for a, b in meta.get("traversals", []) + meta.get("interactions", []):
+        during[(frames >= a) & (frames <= b)] = True  # clips that touch their prop
     inside = int((inside_mask & ~during).sum())
     boundaries = [b - meta["frame_start"] for b in meta["boundaries"]]
     pops = metrics.boundary_pops(rot, boundaries, fps)

@@ -51,6 +51,8 @@ def import_bvh(paths, scale=CMU_SCALE, armature=None, name=None):
                 ob.data.name = name
         else:
             missing = set(b.name for b in ob.data.bones) ^ set(b.name for b in armature.data.bones)
+            if not missing and _same_rest(ob, armature) is False:
+                act = _retargeted(act, ob, armature, p)
             data = ob.data
             bpy.data.objects.remove(ob)
             bpy.data.armatures.remove(data)
@@ -59,3 +61,37 @@ def import_bvh(paths, scale=CMU_SCALE, armature=None, name=None):
                                  f"armature '{armature.name}'; import it on its own armature")
         actions.append(act)
     return armature, actions
+
+
+def _same_rest(a, b, tol=1e-3):
+    """Whether two armatures with the same bone names have the same rest offsets."""
+    ha = {bn.name: bn.head_local for bn in a.data.bones}
+    return all((ha[bn.name] - bn.head_local).length < tol and
+               abs((bn.tail_local - bn.head_local).length -
+                   (a.data.bones[bn.name].tail_local - a.data.bones[bn.name].head_local).length) < tol
+               for bn in b.data.bones)
+
+
+def _retargeted(action, source_obj, target_obj, path):
+    """Another subject's clip (same joint names, other bone lengths) moved onto the target
+    rig: rotations kept relative to each bone's rest, root motion scaled by hip height."""
+    import numpy as np
+    from ..motion_patches.clip import retarget
+    from ..motion_patches.skeleton import root_position_to_location
+    from . import actions as act_io, compat
+    fps = bpy.context.scene.render.fps / bpy.context.scene.render.fps_base
+    src = act_io.clip_from_action(action, source_obj, fps)
+    target = act_io.skeleton_of(target_obj)
+    clip = retarget(src, target)
+    name = action.name
+    action.name = name + " (subject skeleton)"
+    new, slot = compat.new_action(name)
+    frames = np.arange(clip.frames) * (fps / clip.fps) + 1.0
+    act_io.key_pose(new, slot, target, frames, root_position_to_location(target, clip.root_pos),
+                    clip.rotations)
+    new[SOURCE_KEY] = str(path.name)
+    new["motion_patches_retargeted"] = f"from the skeleton of {path.name}, root scaled by hip height"
+    new.use_fake_user = True
+    action.use_fake_user = False
+    bpy.data.actions.remove(action)
+    return new

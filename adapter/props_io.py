@@ -46,15 +46,16 @@ def footprint(obj, depsgraph):
     return hull
 
 
-def object_patch(obj, depsgraph, skeleton, fps):
-    """The core ObjectPatch of a tagged object (clips read and copied around it)."""
+def object_patch(obj, depsgraph, skeleton, fps, gait_floor=None):
+    """The core ObjectPatch of a tagged object (clips read and copied around it); clips
+    are put down on the walk's floor (``gait_floor``) when given."""
     patch = op.ObjectPatch(obj.name, footprint(obj, depsgraph), pose=prop_pose(obj))
     for item in obj.motion_patch.clips:
         if item.action is None:
             raise ValueError(f"object patch '{obj.name}' has a clip without an action")
         clip = act_io.clip_from_action(item.action, None, fps, skeleton=skeleton)
         pc = op.patch_clip_from(clip, KINDS[item.kind], fps, effort=item.effort,
-                                name=item.action.name)
+                                name=item.action.name, floor=gait_floor)
         pc.layer_in, pc.layer_out = item.layer_in, item.layer_out
         if pc.kind == op.TRAVERSAL and item.copy_step > 0:
             if patch.add_traversal_copies(pc, item.copy_step) == 0:
@@ -68,3 +69,13 @@ def object_patch(obj, depsgraph, skeleton, fps):
 def tagged(scene):
     return [o for o in scene.objects if o.type == "MESH" and o.motion_patch.enabled
             and o.visible_get()]
+
+
+def interaction_clip(patch, sitting):
+    """Index of the patch's interaction clip that ends seated (``sitting``) or standing."""
+    for i, c in enumerate(patch.clips):
+        if c.kind == op.INTERACTION:
+            lower = c.motion.root_local[-1, 2] < c.motion.root_local[0, 2] - 0.2
+            if lower == sitting:
+                return i
+    return None

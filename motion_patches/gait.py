@@ -77,6 +77,13 @@ class Gait:
         w[:, int(np.argmin(np.abs(self.curvatures)))] = 1.0
         return w
 
+    def floor(self):
+        """Floor height under the straight loop (where interaction clips are put down)."""
+        from .clip import Clip
+        from .object_patch import floor_level
+        lp = self.straight
+        return floor_level(Clip("loop", self.skeleton, self.fps, lp.root_local, lp.rotations))
+
     def cycle_distances(self):
         return np.array([lp.cycle_distance for lp in self.loops])
 

@@ -72,13 +72,25 @@ def clip_ground(clip):
     return np.column_stack((pos, np.full(clip.frames, np.arctan2(u[1], u[0]))))
 
 
-def patch_clip_from(clip, kind, fps, effort=1.0, anchor=None, name=None):
+def floor_level(clip):
+    """Height of the floor under a clip: a low percentile of its lowest foot joint."""
+    pos = clip.joint_positions()[:, contacts_mod.foot_joints(clip.skeleton)]
+    return float(np.percentile(pos[..., 2].min(axis=1), 10))
+
+
+def ends_lower(clip):
+    """True when the clip ends with the root much lower than it starts (a sit down)."""
+    return clip.root_pos[-1, 2] < clip.root_pos[0, 2] - 0.2
+
+
+def patch_clip_from(clip, kind, fps, effort=1.0, anchor=None, name=None, floor=None):
     """A PatchClip from a recorded clip, placed so ``anchor`` (in the clip's ground
     coordinates) sits on the prop's origin and the clip starts facing +X.
 
     For a traversal the default anchor is the ground position under the highest root
-    frame (the top of the jump); for an interaction, the ground position of its last
-    frame for a sit (or first for a stand) is what the caller passes.
+    frame (the top of the jump); for an interaction, where the root is lowest (seated).
+    With ``floor`` the clip is moved vertically so its own capture floor lies at that
+    height (the walk's), as captures differ (CMU 13_05's floor is 0.26 m below zero).
     """
     if kind not in (TRAVERSAL, INTERACTION):
         raise ValueError(f"clip kind must be '{TRAVERSAL}' or '{INTERACTION}', not '{kind}'")
@@ -89,9 +101,13 @@ def patch_clip_from(clip, kind, fps, effort=1.0, anchor=None, name=None):
         raise ValueError(f"clip '{clip.name}' moves the root only {travel:.2f} m: a traversal "
                          f"clip must carry the character past the prop (no root motion)")
     root_local, rot = to_inplace(c, ground)
+    if floor is not None:
+        root_local = root_local.copy()
+        root_local[:, 2] += floor - floor_level(c)
     con, _, _ = contacts_mod.foot_contacts(c, level_floor=True)
     if anchor is None:
-        anchor = ground[int(np.argmax(c.root_pos[:, 2])), :2]
+        pick = np.argmax if kind == TRAVERSAL else np.argmin
+        anchor = ground[int(pick(c.root_pos[:, 2])), :2]
     h0 = ground[0, 2]
     m = Motion(ground, root_local, rot, con).transformed(0.0, 0.0, -h0)
     a = np.array([np.cos(-h0) * anchor[0] - np.sin(-h0) * anchor[1],

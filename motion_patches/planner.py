@@ -54,7 +54,7 @@ class Piece:
             return f"seg{self.segment:04d}"
         if self.kind == "part":
             return f"seg{self.segment:04d}[{self.frames[0]}-{self.frames[1]}]"
-        if self.kind == "traversal":
+        if self.kind in ("traversal", "interaction"):
             c = self.prop.clips[self.clip_index]
             return f"{self.prop.name} {c.name} {np.degrees(c.angle):.0f}deg"
         return self.kind
@@ -398,14 +398,41 @@ def _derivs(curve):
 def plan_motions(patch, plan):
     """World-space motion of every piece, eased across stitches into and out of clips."""
     ms = [piece_motion(patch, p) for p in plan.pieces]
+    clips = ("traversal", "interaction")
     for i, p in enumerate(plan.pieces):
-        if p.kind != "part":
+        if p.kind in clips:
             continue
-        if i + 1 < len(ms) and plan.pieces[i + 1].kind == "traversal":
+        if i + 1 < len(ms) and plan.pieces[i + 1].kind in clips:
             ms[i] = ease_to(ms[i], ms[i + 1], BLEND_FRAMES, at_end=True)
-        if i > 0 and plan.pieces[i - 1].kind == "traversal":
+        if i > 0 and plan.pieces[i - 1].kind in clips:
             ms[i] = ease_to(ms[i], ms[i - 1], BLEND_FRAMES, at_end=False)
     return ms
+
+
+def with_interactions(plan, start=None, goal=None):
+    """The plan with an interaction clip before it (stand up) and/or after it (sit down):
+    ``start`` / ``goal`` are (ObjectPatch, clip index); the plan must run from the start
+    clip's last frame to the goal clip's first frame (see :func:`interaction_states`)."""
+    def piece(ref):
+        prop, ci = ref
+        return Piece("interaction", prop=prop, clip_index=ci, cost=prop.clips[ci].effort)
+    pieces = ([piece(start)] if start is not None else []) + list(plan.pieces) \
+        + ([piece(goal)] if goal is not None else [])
+    return Plan(pieces, plan.cost, plan.expansions, plan.seconds, plan.start, plan.goal,
+                dict(plan.stats, interactions=[p.label for p in pieces if p.kind == "interaction"]))
+
+
+def interaction_states(start=None, goal=None):
+    """World (x, y, heading) where walking must start after a stand-up clip and end before
+    a sit-down clip: the clips' last and first ground frames."""
+    s = g = None
+    if start is not None:
+        prop, ci = start
+        s = prop.world_clip(prop.clips[ci]).ground[-1]
+    if goal is not None:
+        prop, ci = goal
+        g = prop.world_clip(prop.clips[ci]).ground[0]
+    return s, g
 
 
 def piece_motion(patch, piece):
@@ -415,7 +442,7 @@ def piece_motion(patch, piece):
         if piece.kind == "part":
             m = sliced(m, *piece.frames)
         return m.transformed(piece.tile[0] * patch.side, piece.tile[1] * patch.side)
-    if piece.kind == "traversal":
+    if piece.kind in ("traversal", "interaction"):
         return piece.prop.world_clip(piece.prop.clips[piece.clip_index])
     if piece.kind == "start":
         return follow(patch.gait, piece.curve, cycles=piece.cycles)

@@ -28,8 +28,8 @@ def chairs_blend(addon_module, mocap_dir, tmp_path_factory):
     scene = bpy.context.scene
     scene.render.fps = 30
     cmu = mocap_dir / "cmu"
-    arm, acts = api.import_mocap([cmu / "16_15.bvh", cmu / "16_18.bvh", cmu / "16_06.bvh"],
-                                 name="Source")
+    arm, acts = api.import_mocap([cmu / "16_15.bvh", cmu / "16_18.bvh", cmu / "16_06.bvh",
+                                  cmu / "13_05.bvh", cmu / "13_05_standup.bvh"], name="Source")
     api.bake_locomotion_patch(scene, arm, acts[0], [acts[1]], layer="walk")
     for k, y in enumerate(np.linspace(-2.5, 2.5, 11)):
         ob = chair(f"Chair.{k:02d}", 5.0, y)
@@ -110,3 +110,43 @@ def test_tagging_bad_input_reports_and_changes_nothing(chairs_blend, addon_modul
     with pytest.raises(api.MotionPatchesError, match="footprint"):
         api.tag_object_patch(hollow, [(bpy.data.actions["16_06"], 'TRAVERSAL', 8.0, 10.0)])
     assert not hollow.motion_patch.enabled
+
+
+def test_import_retargets_another_subjects_clip(chairs_blend, addon_module):
+    bpy.ops.wm.open_mainfile(filepath=str(chairs_blend))
+    sit = bpy.data.actions["13_05"]
+    assert "hip height" in sit["motion_patches_retargeted"]
+    assert "13_05 (subject skeleton)" not in bpy.data.actions
+
+
+def test_stand_up_walk_and_sit_down(chairs_blend, addon_module):
+    bpy.ops.wm.open_mainfile(filepath=str(chairs_blend))
+    api = addon_module.api
+    a, b = chair("Chair A", 1.0, -4.5), chair("Chair B", 9.0, -4.0)
+    b.rotation_euler = (0, 0, 2.0)
+    api.tag_object_patch(a, [(bpy.data.actions["13_05_standup"], 'INTERACTION', 2.0, 0.0)])
+    api.tag_object_patch(b, [(bpy.data.actions["13_05"], 'INTERACTION', 2.0, 0.0)])
+    walker = bpy.data.objects["Walker"]
+    res = api.plan_path(bpy.context.scene, walker, b, start_prop=a, frame_start=1)
+    names = [s.name for s in walker.animation_data.nla_tracks["MP motion"].strips]
+    assert "13_05_standup" in names[0] and "13_05" in names[-1], names
+    f = api.analyse(bpy.context, walker)
+    assert f["frames_root_inside_obstacle"] == 0
+    scene = bpy.context.scene
+    scene.frame_set(res.frame_end)
+    hips = walker.matrix_world @ walker.pose.bones["Hips"].head
+    assert hips.z < 0.75 and np.hypot(hips.x - 9.0, hips.y + 4.0) < 0.3  # seated on chair B
+    scene.frame_set(res.frame_start)
+    hips = walker.matrix_world @ walker.pose.bones["Hips"].head
+    assert hips.z < 0.75 and np.hypot(hips.x - 1.0, hips.y + 4.5) < 0.3  # seated on chair A
+
+
+def test_a_goal_prop_without_a_sit_clip_is_refused(chairs_blend, addon_module):
+    bpy.ops.wm.open_mainfile(filepath=str(chairs_blend))
+    api = addon_module.api
+    walker = bpy.data.objects["Walker"]
+    tracks = [t.name for t in walker.animation_data.nla_tracks] if walker.animation_data else []
+    with pytest.raises(api.MotionPatchesError, match="sit-down"):
+        api.plan_path(bpy.context.scene, walker, bpy.data.objects["Chair.03"])
+    now = [t.name for t in walker.animation_data.nla_tracks] if walker.animation_data else []
+    assert now == tracks
