@@ -83,7 +83,7 @@ def test_hurried_character_hurdles_the_chair_line_unhurried_walks_around(walk_pa
         assert np.linalg.norm(np.diff(whole.ground[:, :2], axis=0), axis=1).max() < 0.1
 
 
-@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("seed", range(8))
 def test_dynamic_and_static_stitching_find_paths_of_equal_cost(walk_patch, hurdle_clip, seed):
     rng = np.random.default_rng(seed)
     def layout():
