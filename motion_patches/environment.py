@@ -36,6 +36,11 @@ class Obstacle:
         return out
 
 
+def _cross2(a, b):
+    """z of the cross product of two 2-D vectors (numpy 2 refuses 2-D np.cross)."""
+    return a[0] * b[1] - a[1] * b[0]
+
+
 def convex_hull(points):
     """Counter-clockwise convex hull (monotone chain) of points (N, 2)."""
     pts = np.unique(np.asarray(points, float).round(9), axis=0)
@@ -46,7 +51,7 @@ def convex_hull(points):
     def half(seq):
         out = []
         for p in seq:
-            while len(out) >= 2 and np.cross(out[-1] - out[-2], p - out[-2]) <= 0:
+            while len(out) >= 2 and _cross2(out[-1] - out[-2], p - out[-2]) <= 0:
                 out.pop()
             out.append(p)
         return out
