@@ -26,6 +26,7 @@ from .synthesis import cycles_along, follow
 from .traversal_probability import accessibility, tile_traversal
 
 CONNECTOR_SCALES = np.linspace(0.25, 4.0, 40)  # coarser than the bake: fitted at plan time
+GOAL_SCALE_FACTORS = (1.0, 0.7, 1.4)  # of the least-bent scale, tried for goal connectors
 HEADING_SLACK = 0.02  # radians, for sampling error in precomputed turn sums
 
 
@@ -211,21 +212,29 @@ class SegmentPlanner:
         return idx[ok & (length <= max_length)]
 
     def _goal_connectors(self, goal, where):
+        """For each entry node, the cheapest valid curve into the goal among a few tangent
+        scales (the least bent first): next to a prop the least bent one often grazes it."""
         keys, p, h = self._entries(where)
         m = keys.size
         p1 = np.tile(goal[:2], (m, 1))
         d1 = np.tile(curves.unit(goal[2]), (m, 1))
         d0 = curves.unit(h)
         _, bend = curves.tabulate(p, d0, p1, d1, scales=CONNECTOR_SCALES, samples=48)
-        best = CONNECTOR_SCALES[np.argmin(bend, axis=1)]
+        least = CONNECTOR_SCALES[np.argmin(bend, axis=1)]
+        too_close = np.linalg.norm(p - goal[:2], axis=1) < 0.2 * self.patch.gait.cycle_distance
         out = {}
-        best[np.linalg.norm(p - goal[:2], axis=1) < 0.2 * self.patch.gait.cycle_distance] = np.nan
-        for idx in self._bend_ok(p, d0, p1, d1, best, 1.5 * self.patch.side + 0.05):
-            c = curves.hermite_curve(p[idx], d0[idx], p1[idx], d1[idx], best[idx])
-            if c.length <= 1.5 * self.patch.side and self._valid(c):
+        for factor in GOAL_SCALE_FACTORS:
+            sc = least * factor
+            sc[too_close] = np.nan
+            for idx in self._bend_ok(p, d0, p1, d1, sc, 1.5 * self.patch.side + 0.05):
+                key = int(keys[idx])
+                c = curves.hermite_curve(p[idx], d0[idx], p1[idx], d1[idx], sc[idx])
+                if c.length > 1.5 * self.patch.side or not self._valid(c):
+                    continue
                 cyc = float(cycles_along(self.patch.gait, c.pos[None], *_derivs(c))[0])
                 cost = self._curve_cost(c, cyc)
-                out[int(keys[idx])] = (cost, Piece("goal", curve=c, cost=cost))
+                if key not in out or cost < out[key][0]:
+                    out[key] = (cost, Piece("goal", curve=c, cost=cost))
         return out
 
     # -- search ---------------------------------------------------------------------------
