@@ -29,7 +29,7 @@ import numpy as np
 from . import api
 from .adapter import nla, scene as scene_io, storage
 from .motion_patches.motion import concatenate
-from .motion_patches.planner import PlanError, SegmentPlanner, piece_motion
+from .motion_patches.planner import PlanError, SegmentPlanner, plan_motions
 
 COMMAND_ID = "motion_patches"
 PROG = "blender -c " + COMMAND_ID
@@ -670,13 +670,17 @@ def check_layout(scene, spec, context=None):
                     exclude[o.name] = o
         jobs.append((p, start, sob, goal, gob, exclude))
     envs, results = {}, []
+    props = api.object_patches(scene, depsgraph, patch)  # tagged props offer traversals
     for p, start, sob, goal, gob, exclude in jobs:
-        key = tuple(sorted(exclude))
+        allow = bool(p["limits"]["allow_traversal"])
+        key = (tuple(sorted(exclude)), allow)
         if key not in envs:
             env = scene_io.environment(scene, depsgraph, patch, w["radius"],
                                        tuple(exclude.values()))
+            usable = [pr for pr in props if pr.name not in exclude] if allow else []
             try:
-                planner = SegmentPlanner(patch, env, w["alpha"], w["beta"], w["gamma"])
+                planner = SegmentPlanner(patch, env, w["alpha"], w["beta"], w["gamma"],
+                                         props=usable)
             except PlanError as exc:
                 raise api.MotionPatchesError(str(exc)) from None
             envs[key] = env, planner
@@ -692,7 +696,7 @@ def check_layout(scene, spec, context=None):
             r["error"] = str(exc)
             r["blocked_by"], r["blocked_reason"] = blocking_obstacles(env, start, goal, margin)
         else:
-            world = concatenate([piece_motion(patch, pc) for pc in plan.pieces])
+            world = concatenate(plan_motions(patch, plan))
             r.update(reachable=True, frames=int(world.frames),
                      seconds=(world.frames - 1) / patch.gait.fps,
                      length_m=_path_length(world.ground), cost=float(plan.cost),

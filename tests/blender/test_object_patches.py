@@ -150,3 +150,17 @@ def test_a_goal_prop_without_a_sit_clip_is_refused(chairs_blend, addon_module):
         api.plan_path(bpy.context.scene, walker, bpy.data.objects["Chair.03"])
     now = [t.name for t in walker.animation_data.nla_tracks] if walker.animation_data else []
     assert now == tracks
+
+
+def test_layout_check_sees_traversals_and_can_forbid_them(chairs_blend, addon_module):
+    bpy.ops.wm.open_mainfile(filepath=str(chairs_blend))
+    check = addon_module.cli.check_layout
+    spec = {"alpha": 4.0, "beta": 0.5, "gamma": 0.1,
+            "pairs": [{"character": "Walker", "goal": "Goal"},
+                      {"character": "Walker", "goal": "Goal", "allow_traversal": False}]}
+    hurdle, around = check(bpy.context.scene, spec)
+    assert hurdle["reachable"] and hurdle["traversals"] == 1 and hurdle["passed"]
+    assert around["reachable"] and around["traversals"] == 0 and around["passed"]
+    assert around["length_m"] > hurdle["length_m"]
+    ad = bpy.data.objects["Walker"].animation_data  # a check writes nothing
+    assert ad is None or "MP motion" not in [t.name for t in ad.nla_tracks]
