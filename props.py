@@ -5,6 +5,11 @@ from bpy.props import (BoolProperty, CollectionProperty, EnumProperty, FloatProp
                        IntProperty, PointerProperty, StringProperty)
 
 
+def _overlay_toggle(on):
+    from .panels import overlay
+    overlay.enable() if on else overlay.disable()
+
+
 class MOTION_PATCHES_PG_patch(bpy.types.PropertyGroup):
     layer: StringProperty(name="Layer", description="Gait of this locomotion patch")
     payload: StringProperty(name="Payload", description="Baked patch (base64 npz)",
@@ -59,6 +64,10 @@ class MOTION_PATCHES_PG_scene(bpy.types.PropertyGroup):
                          description="Cost per unit of effort")
     radius: FloatProperty(name="Character Radius", default=0.25, min=0.05, max=2.0,
                           unit='LENGTH', description="Clearance kept between the root and props")
+    show_overlay: BoolProperty(
+        name="Show Planner Overlay", default=False,
+        description="Draw the tile grid, occluded cells, planned paths and stitches",
+        update=lambda self, context: _overlay_toggle(self.show_overlay))
     stitching: EnumProperty(name="Stitching", default='DYNAMIC', items=(
         ('DYNAMIC', "Dynamic", "Stitch traversal clips lazily, when the search needs them"),
         ('STATIC', "Static", "Stitch every traversal clip before searching (Lee 2006 baseline)")))

@@ -2,8 +2,17 @@
 
 import bpy
 
-from . import main
+from . import main, overlay
 
 classes = main.classes
 
-register, unregister = bpy.utils.register_classes_factory(classes)
+_register, _unregister = bpy.utils.register_classes_factory(classes)
+
+
+def register():
+    _register()
+
+
+def unregister():
+    overlay.disable()  # never leave a draw handler behind
+    _unregister()

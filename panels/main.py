@@ -47,6 +47,7 @@ class MOTION_PATCHES_PT_main(bpy.types.Panel):
         box.prop(s, "stitching")
         box.operator("motion_patches.plan_path", icon='PLAY')
         box.operator("motion_patches.analyse_motion", icon='GRAPH')
+        box.prop(s, "show_overlay")
 
 
 classes = (MOTION_PATCHES_PT_main,)

@@ -164,3 +164,30 @@ def test_layout_check_sees_traversals_and_can_forbid_them(chairs_blend, addon_mo
     assert around["length_m"] > hurdle["length_m"]
     ad = bpy.data.objects["Walker"].animation_data  # a check writes nothing
     assert ad is None or "MP motion" not in [t.name for t in ad.nla_tracks]
+
+
+def test_overlay_buffers_and_handler_lifecycle(chairs_blend, addon_module):
+    bpy.ops.wm.open_mainfile(filepath=str(chairs_blend))
+    overlay = addon_module.panels.overlay
+    walker = plan(4.0, 0.5, 0.1)
+    buf = overlay.buffers(bpy.context.scene)
+    lines, colours = buf["lines"]
+    assert lines.shape[1] == 3 and colours.shape == (lines.shape[0], 4) and len(lines) % 2 == 0
+    red = np.all(np.isclose(colours, overlay.COLOURS["traversal"][0]), axis=1)
+    assert red.any()  # the hurdle is drawn in the traversal colour
+    strips = walker.animation_data.nla_tracks["MP motion"].strips
+    assert len(buf["points"][0]) == len(strips)  # one stitch point per strip start
+    assert len(buf["tris"][0]) > 0 and len(buf["tris"][0]) % 6 == 0  # occluded cells
+    s = bpy.context.scene.motion_patches
+    s.show_overlay = True
+    assert overlay.is_enabled()
+    s.show_overlay = False
+    assert not overlay.is_enabled()
+    s.show_overlay = True
+    addon_utils = __import__("addon_utils")
+    name = addon_module.__name__
+    addon_utils.disable(name, default_set=True)
+    try:
+        assert not overlay.is_enabled()  # unregister removed the handler
+    finally:
+        addon_utils.enable(name, default_set=True)
