@@ -146,7 +146,6 @@ class Environment:
         self._tiles_of = {}     # obstacle name -> set of tiles
         self._members = {}      # tile -> set of obstacle names
         self._free = {}         # tile -> uint64 free-cell bitfield (lazy)
-        self._free_excl = {}    # (tile, obstacle) -> bitfield without that obstacle (lazy)
         self.occlusion_computations = 0
 
     def tile_of(self, xy):
@@ -167,18 +166,13 @@ class Environment:
         self._tiles_of[obstacle.name] = tiles
         for t in tiles:
             self._members.setdefault(t, set()).add(obstacle.name)
-            self._forget(t)
+            self._free.pop(t, None)
 
     def remove(self, name):
         for t in self._tiles_of.pop(name, ()):
             self._members[t].discard(name)
-            self._forget(t)
+            self._free.pop(t, None)
         self.obstacles.pop(name, None)
-
-    def _forget(self, tile):
-        self._free.pop(tile, None)
-        for key in [k for k in self._free_excl if k[0] == tile]:
-            del self._free_excl[key]
 
     def members(self, tile):
         return self._members.get(tile, set())
@@ -191,17 +185,9 @@ class Environment:
             self._free[tile] = f
         return f
 
-    def free_cells_excluding(self, tile, name):
-        """``B_t`` as if obstacle ``name`` were absent: for segments stitched to one of that
-        prop's traversal clips, which handle the prop themselves."""
-        key = (tile, name)
-        if key not in self._free_excl:
-            self._free_excl[key] = self._occlude(tile, exclude=name)
-        return self._free_excl[key]
-
-    def _occlude(self, tile, exclude=None):
+    def _occlude(self, tile):
         self.occlusion_computations += 1
-        names = self.members(tile) - {exclude}
+        names = self.members(tile)
         if not names:
             return FULL
         c = self.side / self.cells
