@@ -15,6 +15,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import blender_session  # noqa: E402
+import demo_layout  # noqa: E402
 
 REPO = blender_session.REPO_ROOT
 
@@ -30,21 +31,14 @@ def parse_args(argv):
     return p.parse_args(argv)
 
 
-def pillar_field(bpy, seed, keep_clear):
-    """Pillars on a jittered grid, none within 1.2 m of the start or goal."""
-    import numpy as np
-    rng = np.random.default_rng(seed)
+def pillar_field(bpy, seed):
+    """Cylinders at the shared demo layout's pillar positions."""
     made = []
-    for gx in np.arange(1.5, 12.0, 2.2):
-        for gy in np.arange(-3.0, 8.0, 2.2):
-            x, y = gx + rng.uniform(-0.5, 0.5), gy + rng.uniform(-0.5, 0.5)
-            if min(np.hypot(x - a, y - b) for a, b in keep_clear) < 1.2:
-                continue
-            r = rng.uniform(0.18, 0.32)
-            bpy.ops.mesh.primitive_cylinder_add(radius=r, depth=2.5, location=(x, y, 1.25))
-            ob = bpy.context.object
-            ob.name = f"Pillar.{len(made):02d}"
-            made.append(ob)
+    for x, y, r in demo_layout.pillar_positions(seed):
+        bpy.ops.mesh.primitive_cylinder_add(radius=r, depth=2.5, location=(x, y, 1.25))
+        ob = bpy.context.object
+        ob.name = f"Pillar.{len(made):02d}"
+        made.append(ob)
     return made
 
 
@@ -115,22 +109,22 @@ def main(argv):
     bake = api.bake_locomotion_patch(scene, arm, acts[0], [acts[1]], layer="walk")
     bake_s = time.perf_counter() - t0
 
-    start, goal = (0.0, 0.0), (11.0, 5.0)
+    start, goal = demo_layout.START, demo_layout.GOAL
     bpy.ops.mesh.primitive_plane_add(size=30, location=(5, 2, 0))
     bpy.context.object.name = "Ground"
-    pillars = pillar_field(bpy, args.seed, [start, goal])
+    pillars = pillar_field(bpy, args.seed)
     walker = arm.copy()
     walker.name = "Walker"
     walker.animation_data_clear()
     scene.collection.objects.link(walker)
     walker.hide_set(False)
     walker.location = (start[0], start[1], 0)
-    walker.rotation_euler = (0, 0, np.pi / 2)  # rest faces -Y; face +X
+    walker.rotation_euler = (0, 0, np.pi / 2 + start[2])  # rest faces -Y; face start[2]
     goal_ob = bpy.data.objects.new("Goal", None)
     goal_ob.empty_display_type = 'SINGLE_ARROW'
     scene.collection.objects.link(goal_ob)
     goal_ob.location = (goal[0], goal[1], 0)
-    goal_ob.rotation_euler = (0, 0, np.pi / 2 + 0.5)  # its -Y axis (the facing) at 0.5 rad
+    goal_ob.rotation_euler = (0, 0, np.pi / 2 + goal[2])  # its -Y axis (the facing) at goal[2]
     s.goal = goal_ob
 
     plan = api.plan_path(scene, walker, goal_ob, alpha=s.alpha, beta=s.beta, gamma=s.gamma,

@@ -472,25 +472,13 @@ def _legend(cv, plan, motions, patch, title):
 
 # -- demo -----------------------------------------------------------------------------------
 
-def demo_pillars(seed=7, keep_clear=((0.0, 0.0), (11.0, 5.0)), sides=32):
-    """The pillar field of tools/demo.py: a jittered grid, none within 1.2 m of start/goal.
-
-    Same random sequence as the demo, so the same pillars (Blender's default cylinder has
-    32 sides; its footprint is that polygon).
-    """
+def demo_pillars(seed=7, sides=32):
+    """The pillars of tools/demo.py as footprints (Blender's default cylinder has 32 sides)."""
+    import demo_layout
     from motion_patches.environment import Obstacle
-    rng = np.random.default_rng(seed)
-    out = []
     a = np.linspace(0.0, 2.0 * np.pi, sides + 1)[:-1]
-    for gx in np.arange(1.5, 12.0, 2.2):
-        for gy in np.arange(-3.0, 8.0, 2.2):
-            x, y = gx + rng.uniform(-0.5, 0.5), gy + rng.uniform(-0.5, 0.5)
-            if min(np.hypot(x - p, y - q) for p, q in keep_clear) < 1.2:
-                continue
-            r = rng.uniform(0.18, 0.32)
-            out.append(Obstacle(f"Pillar.{len(out):02d}",
-                                np.column_stack((x + r * np.cos(a), y + r * np.sin(a)))))
-    return out
+    return [Obstacle(f"Pillar.{n:02d}", np.column_stack((x + r * np.cos(a), y + r * np.sin(a))))
+            for n, (x, y, r) in enumerate(demo_layout.pillar_positions(seed))]
 
 
 def main(argv=None):
@@ -510,9 +498,10 @@ def main(argv=None):
     mocap = Path(args.mocap) / "cmu"
     g = gait.build_gait("walk", bvh.read(mocap / "16_15.bvh"), (bvh.read(mocap / "16_18.bvh"),))
     patch = locomotion_patch.bake(g)
-    start, goal = (0.0, 0.0, 0.0), (11.0, 5.0, 0.5)  # as tools/demo.py
+    import demo_layout
+    start, goal = demo_layout.START, demo_layout.GOAL
     env = Environment(patch.side, patch.cells, args.radius)
-    for ob in demo_pillars(args.seed, (start[:2], goal[:2])):
+    for ob in demo_pillars(args.seed):
         env.place(ob)
     plan = SegmentPlanner(patch, env).plan(start, goal)
     motions = [piece_motion(patch, pc) for pc in plan.pieces]
