@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from conftest import enable_addon, raise_error
+from scene_helpers import empty, pillar, walker_from
 
 
 @pytest.fixture
@@ -43,20 +44,6 @@ def one_line(err):
     assert len(lines) == 1, err
     assert "Traceback" not in err
     return lines[0]
-
-
-def pillar(name, x, y, r=0.25, h=2.0):
-    bpy.ops.mesh.primitive_cylinder_add(radius=r, depth=h, location=(x, y, h / 2))
-    bpy.context.object.name = name
-    return bpy.context.object
-
-
-def empty(name, x, y, heading):
-    ob = bpy.data.objects.new(name, None)
-    bpy.context.scene.collection.objects.link(ob)
-    ob.location = (x, y, 0)
-    ob.rotation_euler = (0, 0, heading + np.pi / 2)  # -Y axis points along ``heading``
-    return ob
 
 
 def scene_state(name="Walker"):
@@ -90,11 +77,7 @@ def layout(baked, tmp_path_factory):
     """The baked file plus a walker, pillars, a goal, and a goal caged in a ring of pillars."""
     bpy.ops.wm.open_mainfile(filepath=str(baked[0]))
     scene = bpy.context.scene
-    walker = scene.motion_patches.source_armature.copy()
-    walker.name = "Walker"
-    walker.animation_data_clear()
-    scene.collection.objects.link(walker)
-    walker.location = (0.4, 0.3, 0)
+    walker = walker_from(scene.motion_patches.source_armature)
     for n, (x, y) in enumerate([(3.0, 1.0), (4.5, 3.0), (2.5, 4.0), (6.0, 1.5)]):
         pillar(f"Pillar{n}", x, y)
     for n, a in enumerate(np.linspace(0, 2 * np.pi, 25)[:-1]):

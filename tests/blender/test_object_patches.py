@@ -4,20 +4,14 @@ import bpy
 import numpy as np
 import pytest
 
+from scene_helpers import empty, walker_from
+
 
 def chair(name, x, y):
     bpy.ops.mesh.primitive_cube_add(size=1.0, location=(x, y, 0.25))
     ob = bpy.context.object
     ob.name = name
     ob.scale = (0.4, 0.44, 0.5)
-    return ob
-
-
-def empty(name, x, y, heading):
-    ob = bpy.data.objects.new(name, None)
-    bpy.context.scene.collection.objects.link(ob)
-    ob.location = (x, y, 0)
-    ob.rotation_euler = (0, 0, heading + np.pi / 2)  # -Y axis along ``heading``
     return ob
 
 
@@ -36,11 +30,7 @@ def chairs_blend(addon_module, mocap_dir, tmp_path_factory):
         bpy.context.view_layer.objects.active = ob
         assert bpy.ops.motion_patches.tag_object_patch(action="16_06", kind='TRAVERSAL',
                                                        effort=8.0) == {'FINISHED'}
-    walker = arm.copy()
-    walker.name = "Walker"
-    walker.animation_data_clear()
-    scene.collection.objects.link(walker)
-    walker.location = (1.0, 0.3, 0)
+    walker = walker_from(arm, location=(1.0, 0.3, 0))
     walker.rotation_euler = (0, 0, np.pi / 2)  # the rig's rest faces -Y: face +X
     scene.motion_patches.goal = empty("Goal", 9.0, 0.3, 0.0)
     path = tmp_path_factory.mktemp("chairs") / "chairs.blend"

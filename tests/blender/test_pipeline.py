@@ -6,19 +6,7 @@ import bpy
 import numpy as np
 import pytest
 
-
-def pillar(name, x, y, r=0.25, h=2.0):
-    bpy.ops.mesh.primitive_cylinder_add(radius=r, depth=h, location=(x, y, h / 2))
-    bpy.context.object.name = name
-    return bpy.context.object
-
-
-def goal_empty(x, y, heading):
-    ob = bpy.data.objects.new("Goal", None)
-    bpy.context.scene.collection.objects.link(ob)
-    ob.location = (x, y, 0)
-    ob.rotation_euler = (0, 0, heading + np.pi / 2)  # -Y axis points along ``heading``
-    return ob
+from scene_helpers import empty, pillar, walker_from
 
 
 @pytest.fixture(scope="module")
@@ -63,15 +51,10 @@ def test_bake_survives_save_and_reload(baked_blend, addon_module):
 def test_plan_writes_nla_and_evaluates_onto_the_goal(baked_blend, addon_module):
     bpy.ops.wm.open_mainfile(filepath=str(baked_blend))
     scene = bpy.context.scene
-    src = scene.motion_patches.source_armature
-    char = src.copy()
-    char.name = "Walker"
-    char.animation_data_clear()
-    scene.collection.objects.link(char)
-    char.location = (0.4, 0.3, 0)
+    char = walker_from(scene.motion_patches.source_armature)
     for n, (x, y) in enumerate([(3.0, 1.0), (4.5, 3.0), (2.5, 4.0), (6.0, 1.5)]):
         pillar(f"Pillar{n}", x, y)
-    scene.motion_patches.goal = goal_empty(7.5, 5.0, 0.6)
+    scene.motion_patches.goal = empty("Goal", 7.5, 5.0, 0.6)
     bpy.context.view_layer.objects.active = char
     assert bpy.ops.motion_patches.plan_path() == {'FINISHED'}
     tracks = [t.name for t in char.animation_data.nla_tracks]
@@ -104,7 +87,7 @@ def test_replanning_replaces_only_the_addon_tracks(baked_blend, addon_module):
     user_action = char.animation_data.action
     user_track = char.animation_data.nla_tracks.new()
     user_track.name = "My layout notes"
-    scene.motion_patches.goal = goal_empty(5.0, 2.0, 0.0)
+    scene.motion_patches.goal = empty("Goal", 5.0, 2.0, 0.0)
     bpy.context.view_layer.objects.active = char
     assert bpy.ops.motion_patches.plan_path() == {'FINISHED'}
     scene.motion_patches.goal.location = (4.0, -3.0, 0)
@@ -122,7 +105,7 @@ def test_unreachable_goal_reports_and_leaves_the_scene_untouched(baked_blend, ad
     char = scene.motion_patches.source_armature
     for n, a in enumerate(np.linspace(0, 2 * np.pi, 25)[:-1]):
         pillar(f"Ring{n}", 6 + 1.6 * np.cos(a), 6 + 1.6 * np.sin(a), r=0.3)
-    scene.motion_patches.goal = goal_empty(6.0, 6.0, 0.0)
+    scene.motion_patches.goal = empty("Goal", 6.0, 6.0, 0.0)
     bpy.context.view_layer.objects.active = char
     tracks_before = [t.name for t in char.animation_data.nla_tracks]
     actions_before = sorted(a.name for a in bpy.data.actions)
