@@ -1,4 +1,4 @@
-"""Python API: the functions behind every operator (and, later, the CLI).
+"""Python API: the functions behind every operator and every CLI command.
 
 Arguments are plain Blender objects, actions, names and numbers; results are small
 dataclasses. Every failure is a :class:`MotionPatchesError` with a message meant for the
@@ -8,6 +8,7 @@ user, raised before the scene is changed.
 import base64
 import io
 import json
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -16,7 +17,7 @@ import numpy as np
 
 from .adapter import actions as act_io
 from .adapter import evaluate, mocap, nla, props_io, scene as scene_io, storage
-from .motion_patches import contacts, metrics, object_patch
+from .motion_patches import blocking, contacts, crowd, layout_spec, metrics, object_patch
 from .motion_patches.gait import build_gait
 from .motion_patches.locomotion_patch import bake
 from .motion_patches.motion import concatenate
@@ -28,6 +29,10 @@ PLAN_KEY = "motion_patches_plan"
 
 class MotionPatchesError(ValueError):
     """A request the add-on cannot carry out; the message says why and what to do."""
+
+
+class PathNotFound(MotionPatchesError):
+    """The request was fine but the props leave the character no way to its goal."""
 
 
 @dataclass
@@ -51,6 +56,16 @@ class PlanResult:
     strips: list
     stashed_action_track: str = None
     stats: dict = field(default_factory=dict)
+    length_m: float = 0.0
+
+
+@dataclass
+class CrowdResult:
+    plans: list        # PlanResult per planned character, in the order given
+    failed: list       # [(character name, why no path)]
+    conflicts: list    # [{"a", "b", "frame", "distance_m"}] closer than two radii
+    delays: dict       # character name -> frames it waits at its start
+    seconds: float
 
 
 def scene_fps(scene):
@@ -124,6 +139,26 @@ def tag_object_patch(obj, clips, patch_name=None, scene=None, context=None):
     return obj
 
 
+def export_patch(scene, path, patch_name=None):
+    """Write a baked patch (the active one by default) to a file another scene can import."""
+    try:
+        storage.export_patch(scene, patch_name, path)
+    except ValueError as exc:
+        raise MotionPatchesError(str(exc)) from None
+    except OSError as exc:
+        raise MotionPatchesError(f"cannot write {path}: {exc.strerror or exc}") from None
+
+
+def import_patch(scene, path, name=None):
+    """Store a patch file written by :func:`export_patch` in ``scene``; returns its name."""
+    try:
+        return storage.import_patch(scene, path, name).name
+    except OSError as exc:
+        raise MotionPatchesError(f"cannot read {path}: {exc.strerror or exc}") from None
+    except ValueError as exc:
+        raise MotionPatchesError(f"{path}: {exc}") from None
+
+
 def object_patches(scene, depsgraph, patch):
     """Core object patches of every tagged prop in the scene."""
     out = []
@@ -155,15 +190,22 @@ def load_plan_record(obj):
     return d["meta"], arrays
 
 
-def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2,
-              radius=0.25, frame_start=None, context=None, stitching="dynamic", start_prop=None):
-    """Plan ``character`` to ``goal`` (an object or (x, y, heading)) and write it as NLA.
+def state_dict(state, name=None):
+    """(x, y, heading) as JSON-friendly numbers (heading in degrees, -180..180)."""
+    h = (float(np.degrees(state[2])) + 180.0) % 360.0 - 180.0
+    d = {"x": round(float(state[0]), 6), "y": round(float(state[1]), 6),
+         "heading_deg": round(h, 4) + 0.0}
+    if name is not None:
+        d["object"] = name
+    return d
 
-    Tagged props (object patches) offer their traversal clips; ``stitching`` is
-    "dynamic" (lazy, the paper's method) or "static" (everything stitched first). A goal
-    that is a tagged prop with a sit-down interaction clip ends the path seated on it; a
-    ``start_prop`` with a stand-up clip starts it there (the character's own position is
-    then not used)."""
+
+def path_length(ground):
+    """Metres walked by a ground trajectory (frames, >= 2)."""
+    return float(np.linalg.norm(np.diff(np.asarray(ground)[:, :2], axis=0), axis=1).sum())
+
+
+def _patch_for_planning(scene, patch_name):
     try:
         patch = storage.load_patch(scene, patch_name)
     except ValueError as exc:
@@ -171,28 +213,42 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
     if abs(patch.gait.fps - scene_fps(scene)) > 1e-3:
         raise MotionPatchesError(f"the patch was baked at {patch.gait.fps:g} fps but the scene "
                                  f"runs at {scene_fps(scene):g} fps; re-bake or change the scene rate")
-    skel = patch.gait.skeleton
-    # Objects moved by a script have stale matrix_world until the view layer updates.
-    (context or bpy.context).view_layer.update()
+    return patch
+
+
+def _check_character(character, patch):
     try:
-        nla.check_rig(character, skel)
+        nla.check_rig(character, patch.gait.skeleton)
     except ValueError as exc:
         raise MotionPatchesError(str(exc)) from None
-    # The character's own meshes (children of the rig) never block it.
-    exclude = (character,) + tuple(character.children_recursive)
+
+
+def _not_obstacles(objects):
+    """Objects that never block: the given ones with their children (a character's own
+    body mesh), except tagged props (a goal prop to sit on stays an obstacle)."""
+    out = []
+    for ob in objects:
+        if ob is not None and not (ob.type == "MESH" and ob.motion_patch.enabled):
+            out += [ob, *ob.children_recursive]
+    return tuple(out)
+
+
+def _goal(goal):
     if isinstance(goal, bpy.types.Object):
-        goal_state = scene_io.ground_state(goal)
-        if not goal.motion_patch.enabled:  # a goal prop (sit on it) stays an obstacle
-            exclude += (goal,) + tuple(goal.children_recursive)
-    else:
-        if goal is None or len(goal) != 3:
-            raise MotionPatchesError("choose a goal object (its location and facing)")
-        goal_state = np.asarray(goal, float)
-    depsgraph = (context or bpy.context).evaluated_depsgraph_get()
-    env = scene_io.environment(scene, depsgraph, patch, radius, exclude)
-    start_state = scene_io.character_state(character, skel)
-    props = object_patches(scene, depsgraph, patch)
-    by_name = {p.name: p for p in props}
+        return scene_io.ground_state(goal)
+    try:
+        state = np.asarray(goal, float).reshape(3)
+    except (TypeError, ValueError):
+        raise MotionPatchesError("choose a goal object (its location and facing) or give "
+                                 "(x, y, heading)") from None
+    if not np.isfinite(state).all():
+        raise MotionPatchesError("the goal (x, y, heading) must be finite numbers")
+    return state
+
+
+def _endpoints(character, goal, start_prop, by_name, skel):
+    """Start and goal states with the interaction clips that begin / end the path there."""
+    start_state, goal_state = scene_io.character_state(character, skel), _goal(goal)
     start_ref = goal_ref = None
     if isinstance(goal, bpy.types.Object) and goal.name in by_name:
         i = props_io.interaction_clip(by_name[goal.name], sitting=True)
@@ -208,20 +264,26 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
             raise MotionPatchesError(f"'{start_prop.name}' has no stand-up interaction clip")
         start_ref = (by_name[start_prop.name], i)
     s_state, g_state = interaction_states(start_ref, goal_ref)
-    start_state = start_state if s_state is None else s_state
-    goal_state = goal_state if g_state is None else g_state
+    return (start_state if s_state is None else s_state,
+            goal_state if g_state is None else g_state, start_ref, goal_ref)
+
+
+def _solve(planner, character, endpoints):
+    start_state, goal_state, start_ref, goal_ref = endpoints
     try:
-        plan = SegmentPlanner(patch, env, alpha, beta, gamma, props=props,
-                              mode=stitching).plan(start_state, goal_state)
+        plan = planner.plan(start_state, goal_state)
     except PlanError as exc:
-        raise MotionPatchesError(str(exc)) from None
-    plan = with_interactions(plan, start_ref, goal_ref)
+        raise PathNotFound(f"no path for '{character.name}': {exc}") from None
+    return with_interactions(plan, start_ref, goal_ref)
+
+
+def _write(scene, character, patch, patch_name, plan, frame_start, env, goal_state, radius):
+    """NLA strips and the plan record of one planned character."""
+    skel = patch.gait.skeleton
     motions = plan_motions(patch, plan)
     world = concatenate(motions)
-    frame_start = scene.frame_current if frame_start is None else int(frame_start)
-    patch_key = storage.patch_key(scene, patch_name)
-    strips, stashed = nla.write_plan(bpy, character, patch, patch_key, plan, motions, world,
-                                     frame_start)
+    strips, stashed = nla.write_plan(bpy, character, patch, storage.patch_key(scene, patch_name),
+                                     plan, motions, world, frame_start)
     wm = world.world_matrices(skel)
     foot = contacts.foot_joints(skel)
     frame_end = frame_start + world.frames - 1
@@ -236,7 +298,107 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
         "obstacles": {o.name: o.polygon.tolist() for o in env.obstacles.values()},
     })
     return PlanResult(character.name, frame_start, frame_end, [p.label for p in plan.pieces],
-                      plan.cost, plan.seconds, plan.expansions, strips, stashed, plan.stats)
+                      plan.cost, plan.seconds, plan.expansions, strips, stashed, plan.stats,
+                      path_length(world.ground))
+
+
+def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2,
+              radius=0.25, frame_start=None, context=None, stitching="dynamic", start_prop=None):
+    """Plan ``character`` to ``goal`` (an object or (x, y, heading)) and write it as NLA.
+
+    Tagged props (object patches) offer their traversal clips; ``stitching`` is
+    "dynamic" (lazy, the paper's method) or "static" (everything stitched first). A goal
+    that is a tagged prop with a sit-down interaction clip ends the path seated on it; a
+    ``start_prop`` with a stand-up clip starts it there (the character's own position is
+    then not used). Raises :class:`PathNotFound` when the props leave no way, and
+    :class:`MotionPatchesError` for bad input; either way the scene is unchanged."""
+    patch = _patch_for_planning(scene, patch_name)
+    context = context or bpy.context
+    # Objects moved by a script have stale matrix_world until the view layer updates.
+    context.view_layer.update()
+    _check_character(character, patch)
+    if goal is None:
+        raise MotionPatchesError("choose a goal object (its location and facing)")
+    if goal == character:
+        raise MotionPatchesError("the goal cannot be the character itself")
+    depsgraph = context.evaluated_depsgraph_get()
+    goal_obj = goal if isinstance(goal, bpy.types.Object) else None
+    env = scene_io.environment(scene, depsgraph, patch, radius,
+                               _not_obstacles((character, goal_obj)))
+    props = object_patches(scene, depsgraph, patch)
+    ends = _endpoints(character, goal, start_prop, {p.name: p for p in props}, patch.gait.skeleton)
+    planner = SegmentPlanner(patch, env, alpha, beta, gamma, props=props, mode=stitching)
+    plan = _solve(planner, character, ends)
+    frame_start = scene.frame_current if frame_start is None else int(frame_start)
+    return _write(scene, character, patch, patch_name, plan, frame_start, env, ends[1], radius)
+
+
+def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, radius=0.25,
+               frame_start=None, context=None, stitching="dynamic", progress=None,
+               max_wait_seconds=4.0, spacing=None):
+    """Plan several characters, ``pairs`` = [(armature, goal object or (x, y, heading))],
+    and write each one's NLA; characters that find no path are listed in ``failed``.
+
+    Each path is planned against the props alone (other characters are not obstacles);
+    then, in the given order, each character waits at its start (whole 0.2 s steps, at
+    most ``max_wait_seconds``) until it keeps ``spacing`` metres (default: two radii)
+    from everyone before it at every frame, standing at the goal afterwards included
+    (:func:`motion_patches.crowd.stagger`). Closer approaches no wait clears are returned
+    as ``conflicts``. Bad input raises
+    :class:`MotionPatchesError` before anything is planned or written."""
+    t0 = time.perf_counter()
+    patch = _patch_for_planning(scene, patch_name)
+    context = context or bpy.context
+    context.view_layer.update()
+    pairs = list(pairs)
+    if not pairs:
+        raise MotionPatchesError("a crowd needs at least one character with a goal")
+    spacing = 2 * radius if spacing is None else float(spacing)
+    if not (np.isfinite(spacing) and spacing >= 0) or not max_wait_seconds >= 0:
+        raise MotionPatchesError("spacing and the longest wait must be numbers >= 0")
+    seen = set()
+    for character, goal in pairs:
+        _check_character(character, patch)
+        if character.name in seen:
+            raise MotionPatchesError(f"'{character.name}' appears twice in the crowd")
+        seen.add(character.name)
+        if goal is None:
+            raise MotionPatchesError(f"'{character.name}' has no goal")
+        if goal == character:
+            raise MotionPatchesError(f"the goal of '{character.name}' is the character itself")
+        _goal(goal)
+    depsgraph = context.evaluated_depsgraph_get()
+    # Other characters are kept apart in time, not avoided in space: none is an obstacle.
+    env = scene_io.environment(scene, depsgraph, patch, radius, _not_obstacles(
+        [c for c, _ in pairs] + [g for _, g in pairs if isinstance(g, bpy.types.Object)]))
+    props = object_patches(scene, depsgraph, patch)
+    by_name = {p.name: p for p in props}
+    ends = [_endpoints(c, g, None, by_name, patch.gait.skeleton) for c, g in pairs]
+    planner = SegmentPlanner(patch, env, alpha, beta, gamma, props=props, mode=stitching)
+    planned, failed = [], []
+    for n, ((character, _), e) in enumerate(zip(pairs, ends)):
+        try:
+            planned.append((character, e, _solve(planner, character, e)))
+        except PathNotFound as exc:
+            failed.append((character.name, str(exc)))
+        if progress is not None:
+            progress(0.9 * (n + 1) / len(pairs))
+    fps = scene_fps(scene)
+    tracks = [concatenate(plan_motions(patch, plan)).ground for _, _, plan in planned]
+    delays, conflicts = crowd.stagger(tracks, spacing, round(max_wait_seconds * fps),
+                                      max(1, round(0.2 * fps)))
+    first = scene.frame_current if frame_start is None else int(frame_start)
+    plans = []
+    for (character, e, plan), d in zip(planned, delays):
+        plans.append(_write(scene, character, patch, patch_name, plan, first + d, env, e[1],
+                            radius))
+    if progress is not None:
+        progress(1.0)
+    names = [c.name for c, _, _ in planned]
+    for c in conflicts:
+        c["a"], c["b"], c["frame"] = names[c["a"]], names[c["b"]], first + c["frame"]
+    return CrowdResult(plans, failed, conflicts, dict(zip(names, delays)),
+                       time.perf_counter() - t0)
 
 
 def analyse(context, character):
@@ -278,3 +440,107 @@ def analyse(context, character):
         "traversals": len(meta.get("traversals", [])),
         "boundary_pop": pops,
     }
+
+
+def _resolve(place, what, skel):
+    """(state, object or None) for an object name or [x, y, heading_deg]."""
+    if what == "exclude":
+        ob = bpy.data.objects.get(place)
+        if ob is None:
+            raise MotionPatchesError(f"layout spec: no object named '{place}' to exclude")
+        return None, ob
+    if not isinstance(place, str):
+        return np.array([place[0], place[1], math.radians(place[2])]), None
+    ob = bpy.data.objects.get(place)
+    if ob is None:
+        raise MotionPatchesError(f"layout spec: no object named '{place}' for a {what} "
+                                 f"(have: {_some_names(bpy.data.objects)})")
+    if what == "start" and ob.type == "ARMATURE":
+        try:
+            nla.check_rig(ob, skel)
+        except ValueError as exc:
+            raise MotionPatchesError(str(exc)) from None
+        return scene_io.character_state(ob, skel), ob
+    return scene_io.ground_state(ob), ob
+
+
+def check_layout(scene, spec, context=None):
+    """Plan every start/goal pair of a layout ``spec`` WITHOUT writing to the scene.
+
+    Returns one dict per pair: reachable, seconds of motion, length, cost, the props
+    blocking it when it is not reachable, and whether it passed its limits. Raises
+    :class:`MotionPatchesError` for a bad spec (unknown object or patch), before planning.
+    """
+    try:
+        spec = layout_spec.normalise(spec)
+    except layout_spec.SpecError as exc:
+        raise MotionPatchesError(str(exc)) from None
+    try:
+        patch = storage.load_patch(scene, spec["patch"])
+    except ValueError as exc:
+        raise MotionPatchesError(str(exc)) from None
+    skel = patch.gait.skeleton
+    s = scene.motion_patches
+    w = {k: float(getattr(s, k) if spec[k] is None else spec[k])
+         for k in ("alpha", "beta", "gamma", "radius")}
+    if w["radius"] <= 0:
+        raise MotionPatchesError("layout spec: radius must be > 0")
+    margin = 3 if spec["margin_tiles"] is None else int(spec["margin_tiles"])
+    # Evaluate first: it also brings the objects' world matrices up to date.
+    depsgraph = (context or bpy.context).evaluated_depsgraph_get()
+    jobs = []
+    for p in spec["pairs"]:
+        start, sob = _resolve(p["start"], "start", skel)
+        goal, gob = _resolve(p["goal"], "goal", skel)
+        # Not obstacles: the start and goal objects with their children (a character's own
+        # body mesh) and whatever the spec excludes.
+        exclude = {}
+        for ob in [sob, gob] + [_resolve(n, "exclude", skel)[1]
+                                for n in spec["exclude"] + p["exclude"]]:
+            if ob is not None:
+                for o in (ob, *ob.children_recursive):
+                    exclude[o.name] = o
+        jobs.append((p, start, sob, goal, gob, exclude))
+    envs, results = {}, []
+    props = object_patches(scene, depsgraph, patch)  # tagged props offer traversals
+    for p, start, sob, goal, gob, exclude in jobs:
+        allow = bool(p["limits"]["allow_traversal"])
+        key = (tuple(sorted(exclude)), allow)
+        if key not in envs:
+            env = scene_io.environment(scene, depsgraph, patch, w["radius"],
+                                       tuple(exclude.values()))
+            usable = [pr for pr in props if pr.name not in exclude] if allow else []
+            try:
+                planner = SegmentPlanner(patch, env, w["alpha"], w["beta"], w["gamma"],
+                                         props=usable)
+            except PlanError as exc:
+                raise MotionPatchesError(str(exc)) from None
+            envs[key] = env, planner
+        env, planner = envs[key]
+        r = {"name": p["name"], "start": state_dict(start, sob and sob.name),
+             "goal": state_dict(goal, gob and gob.name), "reachable": False,
+             "seconds": None, "frames": None, "length_m": None, "cost": None, "pieces": None,
+             "traversals": 0, "expansions": None, "plan_seconds": None, "blocked_by": [],
+             "blocked_reason": None, "error": None, "limits": p["limits"]}
+        try:
+            plan = planner.plan(start, goal, margin_tiles=margin)
+        except PlanError as exc:
+            r["error"] = str(exc)
+            r["blocked_by"], r["blocked_reason"] = blocking.blocking_props(env, start, goal, margin)
+        else:
+            world = concatenate(plan_motions(patch, plan))
+            r.update(reachable=True, frames=int(world.frames),
+                     seconds=(world.frames - 1) / patch.gait.fps,
+                     length_m=path_length(world.ground), cost=float(plan.cost),
+                     pieces=len(plan.pieces), expansions=int(plan.expansions),
+                     plan_seconds=float(plan.seconds),
+                     traversals=sum(pc.kind == "traversal" for pc in plan.pieces))
+        r["failures"] = layout_spec.judge(r, p["limits"])
+        r["passed"] = not r["failures"]
+        results.append(r)
+    return results
+
+
+def _some_names(coll, limit=8):
+    names = sorted(x.name for x in coll)
+    return (", ".join(names[:limit]) + (", ..." if len(names) > limit else "")) or "none"

@@ -3,8 +3,7 @@
 The handler :func:`main` is a plain function of ``argv`` (every argument after the
 command id) returning an exit code; it is registered with
 ``bpy.utils.register_cli_command`` while the extension is enabled, and tests call it
-directly. Everything it does goes through :mod:`api` (and, for ``check``, the core
-planner through :func:`check_layout`).
+directly. Everything it does goes through :mod:`api`, as the operators do.
 
 Exit codes: 0 ok; 1 a check failed or no path was found; 2 bad input (usage error, missing
 file, unknown object or action, no patch baked: nothing is written and the scene is left
@@ -27,9 +26,7 @@ import bpy
 import numpy as np
 
 from . import api
-from .adapter import nla, scene as scene_io, storage
-from .motion_patches.motion import concatenate
-from .motion_patches.planner import PlanError, SegmentPlanner, plan_motions
+from .adapter import storage
 
 COMMAND_ID = "motion_patches"
 PROG = "blender -c " + COMMAND_ID
@@ -315,30 +312,6 @@ def _weights(scene, args):
     return out
 
 
-def _check_character(obj, patch):
-    try:
-        nla.check_rig(obj, patch.gait.skeleton)
-    except ValueError as exc:
-        raise BadInput(str(exc)) from None
-    if obj.rotation_mode != "QUATERNION" and (abs(obj.rotation_euler[0]) > 1e-6
-                                              or abs(obj.rotation_euler[1]) > 1e-6):
-        raise BadInput(f"armature '{obj.name}' is tilted (X/Y rotation); the planned root "
-                       f"turns about Z only")
-
-
-def _state_json(state, obj=None):
-    h = (float(np.degrees(state[2])) + 180.0) % 360.0 - 180.0
-    d = {"x": round(float(state[0]), 6), "y": round(float(state[1]), 6),
-         "heading_deg": round(h, 4) + 0.0}
-    if obj is not None:
-        d["object"] = obj
-    return d
-
-
-def _path_length(ground):
-    return float(np.linalg.norm(np.diff(np.asarray(ground)[:, :2], axis=0), axis=1).sum())
-
-
 # --- bake ------------------------------------------------------------------------------------
 
 
@@ -431,60 +404,142 @@ def cmd_bake(args):
 # --- plan ------------------------------------------------------------------------------------
 
 
-def cmd_plan(args):
-    scene = bpy.context.scene
-    char = _object(args.character, "character", {"ARMATURE"})
+def _goal_of(args, scene):
+    """(goal for api.plan_path, goal object or None) from --goal / --goal-xyh / the scene."""
     if args.goal:
-        goal_obj = _object(args.goal, "goal")
-        goal = goal_obj
-    elif args.goal_xyh:
+        ob = _object(args.goal, "goal")
+        return ob, ob
+    if args.goal_xyh:
         x, y, h = args.goal_xyh
         if not all(math.isfinite(v) for v in (x, y, h)):
             raise BadInput("--goal-xyh needs finite numbers")
-        goal_obj, goal = None, (x, y, math.radians(h))
-    elif scene.motion_patches.goal is not None:
-        goal_obj = goal = scene.motion_patches.goal
-    else:
-        raise BadInput("no goal: give --goal OBJECT or --goal-xyh X Y HEADING_DEG")
-    if goal_obj is not None and goal_obj == char:
-        raise BadInput("the goal cannot be the character itself")
-    patch = _load_patch(scene, args.patch)
-    fps = api.scene_fps(scene)
-    if abs(patch.gait.fps - fps) > 1e-3:
-        raise BadInput(f"the patch was baked at {patch.gait.fps:g} fps but the scene runs at "
-                       f"{fps:g} fps; re-bake or change the scene rate")
-    _check_character(char, patch)
+        return (x, y, math.radians(h)), None
+    if scene.motion_patches.goal is not None:
+        return scene.motion_patches.goal, scene.motion_patches.goal
+    raise BadInput("no goal: give --goal OBJECT or --goal-xyh X Y HEADING_DEG")
+
+
+def _plan_doc(res, fps):
+    return {"character": res.character, "frame_start": res.frame_start,
+            "frame_end": res.frame_end, "frames": res.frame_end - res.frame_start + 1,
+            "seconds_of_motion": (res.frame_end - res.frame_start) / fps,
+            "length_m": res.length_m, "cost": res.cost, "plan_seconds": res.seconds,
+            "expansions": res.expansions, "pieces": res.pieces, "strips": len(res.strips),
+            "stashed_action_track": res.stashed_action_track, "stats": res.stats}
+
+
+def _plan_line(res, fps):
+    return (f"planned '{res.character}': {len(res.pieces)} pieces, frames {res.frame_start}-"
+            f"{res.frame_end} ({(res.frame_end - res.frame_start) / fps:.1f} s of motion, "
+            f"{res.length_m:.1f} m), cost {res.cost:.2f}, {res.seconds * 1000:.0f} ms")
+
+
+def cmd_plan(args):
+    scene = bpy.context.scene
+    char = _object(args.character, "character", {"ARMATURE"})
+    goal, goal_obj = _goal_of(args, scene)
     w = _weights(scene, args)
     save = _save_target(args)
-    # Evaluate first: api.plan_path reads the goal's world matrix before it evaluates, so a
-    # goal moved by a script just before would be read where it was.
-    bpy.context.evaluated_depsgraph_get()
     try:
         res = api.plan_path(scene, char, goal, patch_name=args.patch, frame_start=args.frame_start,
-                            **w)
-    except api.MotionPatchesError as exc:
-        raise Failed(f"no path for '{char.name}': {exc}") from None
-    meta, arrays = api.load_plan_record(char)
-    length = _path_length(arrays["ground"])
-    seconds = (res.frame_end - res.frame_start) / fps
+                            stitching=args.stitching, **w)
+    except api.PathNotFound as exc:
+        raise Failed(str(exc)) from None
+    meta, _ = api.load_plan_record(char)
+    fps = api.scene_fps(scene)
     saved = _save(save)
-    goal_state = np.asarray(meta["goal"], float)
-    doc = {"character": char.name, "goal": _state_json(goal_state, goal_obj and goal_obj.name),
-           "patch": args.patch or _active_patch_name(scene), "weights": w,
-           "frame_start": res.frame_start, "frame_end": res.frame_end,
-           "frames": res.frame_end - res.frame_start + 1, "seconds_of_motion": seconds,
-           "length_m": length, "cost": res.cost, "plan_seconds": res.seconds,
-           "expansions": res.expansions, "pieces": res.pieces, "strips": len(res.strips),
-           "stashed_action_track": res.stashed_action_track, "stats": res.stats, "saved": saved}
-    text = [f"planned '{char.name}': {len(res.pieces)} pieces, frames {res.frame_start}-"
-            f"{res.frame_end} ({seconds:.1f} s of motion, {length:.1f} m), cost {res.cost:.2f}, "
-            f"{res.seconds * 1000:.0f} ms"]
+    doc = _plan_doc(res, fps)
+    doc.update(goal=api.state_dict(np.asarray(meta["goal"], float), goal_obj and goal_obj.name),
+               patch=args.patch or _active_patch_name(scene), weights=w, saved=saved)
+    text = [_plan_line(res, fps)]
     if res.stashed_action_track:
         text.append(f"  its active action was moved to the muted track "
                     f"'{res.stashed_action_track}'")
     if saved:
         text.append(f"saved {saved}")
     return Result(doc, OK, text)
+
+
+# --- crowd -----------------------------------------------------------------------------------
+
+
+def _crowd_pairs(args, scene):
+    if args.pair:
+        return [(_object(c, "character", {"ARMATURE"}), _object(g, "goal")) for c, g in args.pair]
+    pairs = []
+    for ob in sorted(scene.objects, key=lambda o: o.name):
+        goal = getattr(getattr(ob, "motion_patches_character", None), "goal", None)
+        if ob.type == "ARMATURE" and goal is not None:
+            pairs.append((ob, goal))
+    if not pairs:
+        raise BadInput("no crowd: give --pair CHARACTER GOAL (repeat), or set a goal on each "
+                       "character (Motion Patches panel)")
+    return pairs
+
+
+def cmd_crowd(args):
+    scene = bpy.context.scene
+    pairs = _crowd_pairs(args, scene)
+    w = _weights(scene, args)
+    _nonneg(args.max_wait, "--max-wait")
+    _nonneg(args.spacing, "--spacing")
+    save = _save_target(args)
+    progress = Progress("crowd", enabled=not args.json)
+    try:
+        res = api.plan_crowd(scene, pairs, patch_name=args.patch, frame_start=args.frame_start,
+                             stitching=args.stitching, progress=progress,
+                             max_wait_seconds=4.0 if args.max_wait is None else args.max_wait,
+                             spacing=args.spacing, **w)
+    finally:
+        progress.close()
+    fps = api.scene_fps(scene)
+    ok = not res.failed and not res.conflicts
+    saved = _save(save) if ok else None
+    doc = {"characters": len(pairs), "planned": [_plan_doc(p, fps) for p in res.plans],
+           "failed": [{"character": c, "error": e} for c, e in res.failed],
+           "conflicts": res.conflicts, "delays_frames": res.delays, "seconds": res.seconds,
+           "patch": args.patch or _active_patch_name(scene), "weights": w, "saved": saved}
+    text = [f"crowd: {len(res.plans)} of {len(pairs)} characters planned in "
+            f"{res.seconds:.1f} s, {len(res.conflicts)} conflict(s)"]
+    for p in res.plans:
+        wait = res.delays[p.character]
+        text.append("  " + _plan_line(p, fps) + (f", waits {wait} frames" if wait else ""))
+    for c, e in res.failed:
+        text.append(f"  FAILED {e}")
+    for c in res.conflicts:
+        text.append(f"  CONFLICT '{c['a']}' and '{c['b']}' come {c['distance_m'] * 100:.0f} cm "
+                    f"apart at frame {c['frame']}")
+    if saved:
+        text.append(f"saved {saved}")
+    elif save is not None:
+        text.append("not saved: the crowd has failures or conflicts")
+    return Result(doc, OK if ok else FAILED, text)
+
+
+# --- patch files -----------------------------------------------------------------------------
+
+
+def cmd_export(args):
+    scene = bpy.context.scene
+    out = Path(args.file).expanduser()
+    if not out.parent.is_dir():
+        raise BadInput(f"cannot write {out}: folder {out.parent} does not exist")
+    name = args.patch or _active_patch_name(scene) if len(scene.motion_patches.patches) else None
+    api.export_patch(scene, out, name)
+    return Result({"patch": name, "file": str(out.resolve())}, OK,
+                  [f"exported '{name}' to {out}"])
+
+
+def cmd_import(args):
+    scene = bpy.context.scene
+    src = Path(args.file).expanduser()
+    if not src.is_file():
+        raise BadInput(f"patch file not found: {src}")
+    save = _save_target(args)
+    name = api.import_patch(scene, src, args.name)
+    saved = _save(save)
+    text = [f"imported '{name}' from {src}"] + ([f"saved {saved}"] if saved else [])
+    return Result({"patch": name, "file": str(src.resolve()), "saved": saved}, OK, text)
 
 
 # --- analyse ---------------------------------------------------------------------------------
@@ -512,334 +567,6 @@ def cmd_analyse(args):
 
 
 # --- check -----------------------------------------------------------------------------------
-
-TOP_KEYS = {"patch", "alpha", "beta", "gamma", "radius", "margin_tiles", "limits", "exclude",
-            "pairs"}
-LIMIT_KEYS = {"must_reach", "max_seconds", "max_length", "max_cost", "allow_traversal"}
-PAIR_KEYS = {"name", "character", "start", "goal", "exclude"} | LIMIT_KEYS
-LIMIT_DEFAULTS = {"must_reach": True, "max_seconds": None, "max_length": None,
-                  "max_cost": None, "allow_traversal": True}
-
-
-def _spec_error(msg):
-    return api.MotionPatchesError(f"layout spec: {msg}")
-
-
-def _limits(d, where, base):
-    out = dict(base)
-    for k in LIMIT_KEYS & set(d):
-        v = d[k]
-        if k in ("must_reach", "allow_traversal"):
-            if not isinstance(v, bool):
-                raise _spec_error(f"{where}: {k} must be true or false")
-        elif v is not None:
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or v < 0:
-                raise _spec_error(f"{where}: {k} must be a number >= 0")
-            v = float(v)
-        out[k] = v
-    return out
-
-
-def _place(value, where):
-    if isinstance(value, str) and value:
-        return value
-    if (isinstance(value, (list, tuple)) and len(value) == 3
-            and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)):
-        return [float(v) for v in value]
-    raise _spec_error(f"{where} must be an object name or [x, y, heading_deg]")
-
-
-def normalise_spec(spec):
-    """A validated copy of a layout spec (see ``SPEC_HELP``); MotionPatchesError if bad."""
-    if not isinstance(spec, dict):
-        raise _spec_error("the top level must be a table / object")
-    unknown = set(spec) - TOP_KEYS
-    if unknown:
-        raise _spec_error(f"unknown key(s) {', '.join(sorted(unknown))} (known: "
-                          f"{', '.join(sorted(TOP_KEYS))})")
-    out = {"patch": spec.get("patch")}
-    if out["patch"] is not None and not isinstance(out["patch"], str):
-        raise _spec_error("patch must be a name")
-    for k in ("alpha", "beta", "gamma", "radius", "margin_tiles"):
-        v = spec.get(k)
-        if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float)) or v < 0):
-            raise _spec_error(f"{k} must be a number >= 0")
-        out[k] = v
-    limits = spec.get("limits", {})
-    if not isinstance(limits, dict) or set(limits) - LIMIT_KEYS:
-        raise _spec_error(f"limits must be a table of {', '.join(sorted(LIMIT_KEYS))}")
-    base = _limits(limits, "limits", LIMIT_DEFAULTS)
-    out["exclude"] = _names_list(spec.get("exclude"), "top level")
-    pairs = spec.get("pairs")
-    if not isinstance(pairs, list) or not pairs:
-        raise _spec_error("'pairs' must be a non-empty list of start/goal pairs")
-    out["pairs"] = []
-    for n, p in enumerate(pairs):
-        where = f"pair {n + 1}"
-        if not isinstance(p, dict):
-            raise _spec_error(f"{where} must be a table / object")
-        unknown = set(p) - PAIR_KEYS
-        if unknown:
-            raise _spec_error(f"{where}: unknown key(s) {', '.join(sorted(unknown))} (known: "
-                              f"{', '.join(sorted(PAIR_KEYS))})")
-        if ("character" in p) == ("start" in p):
-            raise _spec_error(f"{where}: give either 'character' or 'start'")
-        if "goal" not in p:
-            raise _spec_error(f"{where}: 'goal' is missing")
-        start = p["character"] if "character" in p else p["start"]
-        start = _place(start, f"{where}: {'character' if 'character' in p else 'start'}")
-        if "character" in p and not isinstance(start, str):
-            raise _spec_error(f"{where}: 'character' must be an armature's name")
-        goal = _place(p["goal"], f"{where}: goal")
-        name = p.get("name") or f"{_label(start)} -> {_label(goal)}"
-        out["pairs"].append({"name": str(name), "start": start, "goal": goal,
-                             "exclude": _names_list(p.get("exclude"), where),
-                             "limits": _limits(p, where, base)})
-    return out
-
-
-def _names_list(value, where):
-    if value is None:
-        return []
-    if not isinstance(value, list) or not all(isinstance(v, str) and v for v in value):
-        raise _spec_error(f"{where}: exclude must be a list of object names")
-    return list(value)
-
-
-def _label(place):
-    if isinstance(place, str):
-        return place
-    return f"({place[0]:g}, {place[1]:g}, {place[2]:g} deg)"
-
-
-def _resolve(place, what, skel):
-    """(state, object or None) for an object name or [x, y, heading_deg]."""
-    if what == "exclude":
-        ob = bpy.data.objects.get(place)
-        if ob is None:
-            raise api.MotionPatchesError(f"layout spec: no object named '{place}' to exclude")
-        return None, ob
-    if not isinstance(place, str):
-        return np.array([place[0], place[1], math.radians(place[2])]), None
-    ob = bpy.data.objects.get(place)
-    if ob is None:
-        raise api.MotionPatchesError(f"layout spec: no object named '{place}' for a {what} "
-                                     f"(have: {_names(bpy.data.objects)})")
-    if what == "start" and ob.type == "ARMATURE":
-        try:
-            nla.check_rig(ob, skel)
-        except ValueError as exc:
-            raise api.MotionPatchesError(str(exc)) from None
-        return scene_io.character_state(ob, skel), ob
-    return scene_io.ground_state(ob), ob
-
-
-def check_layout(scene, spec, context=None):
-    """Plan every start/goal pair of a layout ``spec`` WITHOUT writing to the scene.
-
-    Returns one dict per pair: reachable, seconds of motion, length, cost, the props
-    blocking it when it is not reachable, and whether it passed its limits. Raises
-    :class:`api.MotionPatchesError` for a bad spec (unknown object or patch), before planning.
-    (A layout check is a Python API function: this belongs in ``api.py``.)
-    """
-    spec = normalise_spec(spec)
-    try:
-        patch = storage.load_patch(scene, spec["patch"])
-    except ValueError as exc:
-        raise api.MotionPatchesError(str(exc)) from None
-    skel = patch.gait.skeleton
-    s = scene.motion_patches
-    w = {k: float(getattr(s, k) if spec[k] is None else spec[k])
-         for k in ("alpha", "beta", "gamma", "radius")}
-    if w["radius"] <= 0:
-        raise _spec_error("radius must be > 0")
-    margin = 3 if spec["margin_tiles"] is None else int(spec["margin_tiles"])
-    # Evaluate first: it also brings the objects' world matrices up to date.
-    depsgraph = (context or bpy.context).evaluated_depsgraph_get()
-    jobs = []
-    for p in spec["pairs"]:
-        start, sob = _resolve(p["start"], "start", skel)
-        goal, gob = _resolve(p["goal"], "goal", skel)
-        # Not obstacles: the start and goal objects with their children (a character's own
-        # body mesh) and whatever the spec excludes.
-        exclude = {}
-        for ob in [sob, gob] + [_resolve(n, "exclude", skel)[1]
-                                for n in spec["exclude"] + p["exclude"]]:
-            if ob is not None:
-                for o in (ob, *ob.children_recursive):
-                    exclude[o.name] = o
-        jobs.append((p, start, sob, goal, gob, exclude))
-    envs, results = {}, []
-    props = api.object_patches(scene, depsgraph, patch)  # tagged props offer traversals
-    for p, start, sob, goal, gob, exclude in jobs:
-        allow = bool(p["limits"]["allow_traversal"])
-        key = (tuple(sorted(exclude)), allow)
-        if key not in envs:
-            env = scene_io.environment(scene, depsgraph, patch, w["radius"],
-                                       tuple(exclude.values()))
-            usable = [pr for pr in props if pr.name not in exclude] if allow else []
-            try:
-                planner = SegmentPlanner(patch, env, w["alpha"], w["beta"], w["gamma"],
-                                         props=usable)
-            except PlanError as exc:
-                raise api.MotionPatchesError(str(exc)) from None
-            envs[key] = env, planner
-        env, planner = envs[key]
-        r = {"name": p["name"], "start": _state_json(start, sob and sob.name),
-             "goal": _state_json(goal, gob and gob.name), "reachable": False,
-             "seconds": None, "frames": None, "length_m": None, "cost": None, "pieces": None,
-             "traversals": 0, "expansions": None, "plan_seconds": None, "blocked_by": [],
-             "blocked_reason": None, "error": None, "limits": p["limits"]}
-        try:
-            plan = planner.plan(start, goal, margin_tiles=margin)
-        except PlanError as exc:
-            r["error"] = str(exc)
-            r["blocked_by"], r["blocked_reason"] = blocking_obstacles(env, start, goal, margin)
-        else:
-            world = concatenate(plan_motions(patch, plan))
-            r.update(reachable=True, frames=int(world.frames),
-                     seconds=(world.frames - 1) / patch.gait.fps,
-                     length_m=_path_length(world.ground), cost=float(plan.cost),
-                     pieces=len(plan.pieces), expansions=int(plan.expansions),
-                     plan_seconds=float(plan.seconds),
-                     traversals=sum(pc.kind == "traversal" for pc in plan.pieces))
-        r["failures"] = _judge(r, p["limits"])
-        r["passed"] = not r["failures"]
-        results.append(r)
-    return results
-
-
-def _judge(r, lim):
-    if not r["reachable"]:
-        if not lim["must_reach"]:
-            return []
-        why = f"unreachable ({r['error']})"
-        if r["blocked_by"]:
-            why = f"unreachable: blocked by {', '.join(r['blocked_by'][:6])}" + (
-                ", ..." if len(r["blocked_by"]) > 6 else "") + f" ({r['blocked_reason']})"
-        return [why]
-    out = []
-    for key, value, unit in (("max_seconds", r["seconds"], " s of motion"),
-                             ("max_length", r["length_m"], " m"), ("max_cost", r["cost"], "")):
-        if lim[key] is not None and value > lim[key]:
-            out.append(f"{value:.2f}{unit} exceeds {key} {lim[key]:g}")
-    if not lim["allow_traversal"] and r["traversals"]:
-        out.append(f"{r['traversals']} traversal(s) but allow_traversal is false")
-    return out
-
-
-# --- which props block an unreachable pair ---------------------------------------------------
-
-
-def blocking_obstacles(env, start, goal, margin_tiles=3):
-    """(names, reason) of the props that keep ``start`` from ``goal`` on ``env``.
-
-    Read from the planner's own view: the free-cell bitfields ``B_t`` (footprints grown by
-    the character's radius) of the tiles it may search (start and goal tiles plus the
-    margin). Free cells are flood-filled (4-connected) from the start's cell and the goal's.
-
-    * start or goal within the radius of props -> those props ("start" / "goal");
-    * separate open areas -> the props whose occluded cells border both areas, i.e. the
-      wall between them; if no single prop does (a barrier several props thick), the props
-      bordering the smaller area ("separated");
-    * one open area (a point could pass, the walk cannot fit or turn through) -> the props
-      whose occluded cells lie within two cells of the shortest open cell path, those with
-      most such cells first ("narrow");
-    * nothing found -> ([], "unknown") (e.g. start and goal too close to join the graph).
-    """
-    from .motion_patches.environment import distance_to_polygon
-    for what, pt in (("start", start), ("goal", goal)):
-        near = [n for n, ob in env.obstacles.items()
-                if distance_to_polygon(np.asarray(pt[:2])[None], ob.polygon)[0] < env.radius]
-        if near:
-            return sorted(near), what
-    if not env.obstacles:
-        return [], "unknown"
-    side, cells = env.side, env.cells
-    c = side / cells
-    ts, tg = env.tile_of(start[:2]), env.tile_of(goal[:2])
-    i0, j0 = min(ts[0], tg[0]) - margin_tiles, min(ts[1], tg[1]) - margin_tiles
-    i1, j1 = max(ts[0], tg[0]) + margin_tiles, max(ts[1], tg[1]) + margin_tiles
-    W, H = (i1 - i0 + 1) * cells, (j1 - j0 + 1) * cells
-    free = np.ones((H, W), bool)
-    bit = np.arange(cells * cells, dtype=np.uint64)
-    for i in range(i0, i1 + 1):
-        for j in range(j0, j1 + 1):
-            if not env.members((i, j)):
-                continue
-            f = np.uint64(env.free_cells((i, j)))
-            block = ((f >> bit) & np.uint64(1)).astype(bool).reshape(cells, cells)  # [iy, ix]
-            y0, x0 = (j - j0) * cells, (i - i0) * cells
-            free[y0:y0 + cells, x0:x0 + cells] = block
-
-    def cell_of(p):
-        gx = int(np.clip(np.floor(p[0] / c) - i0 * cells, 0, W - 1))
-        gy = int(np.clip(np.floor(p[1] / c) - j0 * cells, 0, H - 1))
-        return gy, gx
-
-    cs, cg = cell_of(start), cell_of(goal)
-    free[cs] = free[cg] = True
-    comp_s, parent = _flood(free, cs)
-
-    def owners(cells_yx):
-        """prop name -> number of the given occluded cells it occludes."""
-        from .motion_patches.environment import polygons_within
-        count = {}
-        for gy, gx in cells_yx:
-            x0, y0 = (gx + i0 * cells) * c, (gy + j0 * cells) * c
-            box = np.array([[x0, y0], [x0 + c, y0], [x0 + c, y0 + c], [x0, y0 + c]])
-            tile = env.tile_of((x0 + c / 2, y0 + c / 2))
-            for n in env.members(tile):
-                if polygons_within(box, env.obstacles[n].polygon, env.radius):
-                    count[n] = count.get(n, 0) + 1
-        return count
-
-    if not comp_s[cg]:
-        comp_g, _ = _flood(free, cg)
-        bs, bg = owners(_border(comp_s, free)), owners(_border(comp_g, free))
-        both = sorted(set(bs) & set(bg))
-        if not both:
-            both = sorted(bg if comp_g.sum() <= comp_s.sum() else bs)
-        return both, "separated"
-    path = []
-    node = cg
-    while node is not None:
-        path.append(node)
-        node = parent.get(node)
-    touch = np.zeros_like(free)
-    for gy, gx in path:
-        touch[max(gy - 2, 0):gy + 3, max(gx - 2, 0):gx + 3] = True
-    count = owners(zip(*np.nonzero(touch & ~free)))
-    return sorted(count, key=lambda n: (-count[n], n)), ("narrow" if count else "unknown")
-
-
-def _flood(free, seed):
-    """Cells reachable from ``seed`` over free cells (4-connected) and BFS parents."""
-    from collections import deque
-    H, W = free.shape
-    seen = np.zeros_like(free)
-    seen[seed] = True
-    parent = {seed: None}
-    q = deque([seed])
-    while q:
-        y, x = q.popleft()
-        for ny, nx in ((y - 1, x), (y + 1, x), (y, x - 1), (y, x + 1)):
-            if 0 <= ny < H and 0 <= nx < W and free[ny, nx] and not seen[ny, nx]:
-                seen[ny, nx] = True
-                parent[(ny, nx)] = (y, x)
-                q.append((ny, nx))
-    return seen, parent
-
-
-def _border(comp, free):
-    """Occluded cells 4-adjacent to a component."""
-    grow = comp.copy()
-    grow[1:] |= comp[:-1]
-    grow[:-1] |= comp[1:]
-    grow[:, 1:] |= comp[:, :-1]
-    grow[:, :-1] |= comp[:, 1:]
-    return list(zip(*np.nonzero(grow & ~free)))
-
 
 def _load_spec(path):
     p = Path(path).expanduser()
@@ -912,7 +639,7 @@ def cmd_check(args):
                 spec["limits"] = dict(spec.get("limits") or {})
                 spec["limits"][k] = v
     try:
-        results = check_layout(scene, spec)
+        results = api.check_layout(scene, spec)
     except api.MotionPatchesError as exc:
         raise BadInput(str(exc)) from None
     failed = [r for r in results if not r["passed"]]
@@ -933,10 +660,6 @@ def cmd_check(args):
         for f in r["failures"] if r["reachable"] else ():
             text.append(f"        {f}")
     return Result(doc, FAILED if failed else OK, text)
-
-
-def cmd_crowd(args):
-    raise BadInput("'crowd' is not implemented yet: plan characters one by one with 'plan'")
 
 
 # --- parser ----------------------------------------------------------------------------------
@@ -992,6 +715,7 @@ def build_parser():
                    help="goal position (m) and facing (degrees counter-clockwise from +X)")
     pl.add_argument("--patch", metavar="NAME", help="locomotion patch (default: the active one)")
     _weight_options(pl)
+    _stitching_option(pl)
     pl.add_argument("--frame-start", type=int, metavar="N",
                     help="first frame of the motion (default: the current frame)")
     _save_options(pl)
@@ -1027,10 +751,45 @@ def build_parser():
     c.add_argument("--max-cost", type=float, metavar="C", help="limit: at most this cost")
     c.set_defaults(run=cmd_check)
 
-    cr = sub.add_parser("crowd", parents=[common], formatter_class=fmt,
-                        help="(not implemented yet) plan several characters together",
-                        description="Not implemented yet: exits with code 2.")
+    cr = sub.add_parser("crowd", parents=[common], formatter_class=fmt, epilog=INVOCATION,
+                        help="plan several characters, each to its goal, kept apart in time",
+                        description="Plan every character to its goal against the props, then "
+                                    "let later characters wait at their start until they keep "
+                                    "--spacing from the earlier ones at every frame; exit 1 when "
+                                    "a character finds no path or a conflict remains (then "
+                                    "nothing is saved).")
+    cr.add_argument("--pair", nargs=2, action="append", metavar=("CHARACTER", "GOAL"),
+                    help="an armature and its goal object (repeat; the order is the priority); "
+                         "default: every armature with a goal set in its Motion Patches panel")
+    cr.add_argument("--patch", metavar="NAME", help="locomotion patch (default: the active one)")
+    _weight_options(cr)
+    _stitching_option(cr)
+    cr.add_argument("--frame-start", type=int, metavar="N",
+                    help="first frame of the motion (default: the current frame)")
+    cr.add_argument("--max-wait", type=float, metavar="S",
+                    help="longest wait at the start, in seconds (default 4)")
+    cr.add_argument("--spacing", type=float, metavar="M",
+                    help="closest two characters' roots may come, in metres (default: two "
+                         "radii)")
+    _save_options(cr)
     cr.set_defaults(run=cmd_crowd)
+
+    ex = sub.add_parser("export", parents=[common], formatter_class=fmt, epilog=INVOCATION,
+                        help="write a baked patch to a file",
+                        description="Write a baked locomotion patch to a file that 'import' (or "
+                                    "the panel) reads into another .blend.")
+    ex.add_argument("file", metavar="FILE", help="patch file to write (e.g. walk.mpatch)")
+    ex.add_argument("--patch", metavar="NAME", help="patch to export (default: the active one)")
+    ex.set_defaults(run=cmd_export)
+
+    im = sub.add_parser("import", parents=[common], formatter_class=fmt, epilog=INVOCATION,
+                        help="store a patch file in the .blend",
+                        description="Store a locomotion patch file written by 'export' in the "
+                                    "open .blend (replacing a patch of the same name).")
+    im.add_argument("file", metavar="FILE", help="patch file to read")
+    im.add_argument("--name", help="name to store it under (default: its layer)")
+    _save_options(im)
+    im.set_defaults(run=cmd_import)
     return p
 
 
@@ -1039,6 +798,12 @@ def _weight_options(p):
     p.add_argument("--beta", type=float, help="cost per radian turned")
     p.add_argument("--gamma", type=float, help="cost per unit of effort")
     p.add_argument("--radius", type=float, help="character radius in metres")
+
+
+def _stitching_option(p):
+    p.add_argument("--stitching", choices=("dynamic", "static"), default="dynamic",
+                   help="stitch traversal clips lazily (dynamic, the paper's method) or all "
+                        "before the search (static, Lee 2006)")
 
 
 def _save_options(p):
@@ -1069,6 +834,8 @@ def main(argv):
             result = args.run(args)
     except CLIError as exc:
         return _fail(exc.code, str(exc), args.json, args.command)
+    except api.PathNotFound as exc:
+        return _fail(FAILED, str(exc), args.json, args.command)
     except api.MotionPatchesError as exc:
         return _fail(BAD_INPUT, str(exc), args.json, args.command)
     except Exception:

@@ -113,12 +113,13 @@ def test_command_is_registered_and_released_with_the_addon(addon_module_name, ca
     assert sys.modules[addon_module_name].cli._handle is not None
 
 
-@pytest.mark.parametrize("command", [None, "bake", "plan", "analyse", "check", "crowd"])
+@pytest.mark.parametrize("command", [None, "bake", "plan", "crowd", "analyse", "check",
+                                     "export", "import"])
 def test_help_exits_0(cli, capsys, command):
     code, out, err = call(cli, capsys, *([command] if command else []), "--help")
     assert code == 0
     assert out.startswith("usage: blender -c motion_patches")
-    assert "exit codes" in out or command == "crowd"
+    assert "exit codes" in out
 
 
 @pytest.mark.parametrize("argv, needle", [
@@ -138,11 +139,6 @@ def test_usage_error_with_json_still_prints_one_document(cli, capsys):
     code, doc, err = call_json(cli, capsys, "plan")
     assert code == 2 and doc["ok"] is False and "--character" in doc["error"]
     one_line(err)
-
-
-def test_crowd_is_explicitly_not_implemented(cli, capsys):
-    code, out, err = call(cli, capsys, "crowd")
-    assert code == 2 and "not implemented yet" in one_line(err)
 
 
 # --- bake -----------------------------------------------------------------------------------
@@ -419,27 +415,134 @@ def test_missing_blend_exits_2(cli, capsys, tmp_path):
     assert code == 2 and ".blend file not found" in one_line(err)
 
 
-def test_blocking_props_are_read_from_the_occluded_cells(cli):
-    """The answers of ``blocking_obstacles`` on a synthetic environment (no planning)."""
-    Environment, Obstacle = cli.scene_io.Environment, cli.scene_io.Obstacle
+# --- crowd ----------------------------------------------------------------------------------
 
-    def rect(name, x0, y0, x1, y1):
-        return Obstacle(name, np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]], float))
 
-    def env(*obstacles):
-        e = Environment(2.4, 8, 0.25)
-        for ob in obstacles:
-            e.place(ob)
-        return e
+def evaluated_roots(names, frames):
+    """(characters, frames, 2) ground positions of each armature's evaluated root bone."""
+    scene = bpy.context.scene
+    out = np.zeros((len(names), len(frames), 2))
+    for k, f in enumerate(frames):
+        scene.frame_set(int(f))
+        dg = bpy.context.evaluated_depsgraph_get()
+        for n, name in enumerate(names):
+            ob = bpy.data.objects[name].evaluated_get(dg)
+            root = ob.pose.bones[0]
+            out[n, k] = (ob.matrix_world @ root.head)[:2]
+    return out
 
-    start, goal = np.array([0.0, 0.0, 0.0]), np.array([4.0, 0.0, 0.0])
-    far = rect("FarCrate", 20, 20, 21, 21)
-    wall = env(rect("Wall", 2.0, -30, 2.3, 30), far)
-    assert cli.blocking_obstacles(wall, start, goal) == (["Wall"], "separated")
-    slot = env(rect("WallS", 2.0, -30, 2.3, -0.6), rect("WallN", 2.0, 0.6, 2.3, 30), far)
-    assert cli.blocking_obstacles(slot, start, goal) == (["WallN", "WallS"], "narrow")
-    cage = env(rect("N", 3, 1, 5, 1.3), rect("S", 3, -1.3, 5, -1), rect("E", 5, -1.3, 5.3, 1.3),
-               rect("W", 2.7, -1.3, 3, 1.3), rect("Outside", 0.5, 2, 1, 2.5), far)
-    assert cli.blocking_obstacles(cage, start, goal) == (["E", "N", "S", "W"], "separated")
-    assert cli.blocking_obstacles(wall, np.array([1.9, 5.0, 0.0]), goal) == (["Wall"], "start")
-    assert cli.blocking_obstacles(env(), start, goal) == ([], "unknown")
+
+def facing(cli, walker, heading):
+    """Turn ``walker`` about Z so that its rest facing points along ``heading``."""
+    skel = cli.api.storage.load_patch(bpy.context.scene).gait.skeleton
+    walker.rotation_euler = (0, 0, 0)
+    bpy.context.view_layer.update()
+    walker.rotation_euler = (0, 0, heading - cli.api.scene_io.character_state(walker, skel)[2])
+
+
+@pytest.fixture
+def crossing(cli, baked, layout, tmp_path, capsys):
+    """Two walkers on an open floor whose straight ways cross at the same moment, plus
+    the pillar layout (its caged goal) for the failure cases."""
+    scene = open_blend(layout)
+    src = scene.motion_patches.source_armature
+    for ob in [o for o in scene.objects if o.type == "MESH"]:
+        bpy.data.objects.remove(ob)
+    facing(cli, walker_from(src, "East", (0.0, 0.0, 0.0)), 0.0)
+    facing(cli, walker_from(src, "North", (4.0, -4.0, 0.0)), np.pi / 2)
+    empty("EastGoal", 8.0, 0.0, 0.0)
+    empty("NorthGoal", 4.0, 4.0, np.pi / 2)
+    path = tmp_path / "crossing.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    capsys.readouterr()  # Blender's "Saved as" is not the tests' output
+    return path
+
+
+def test_crowd_plans_everyone_and_keeps_them_apart(cli, capsys, crossing, tmp_path):
+    pairs = ["--pair", "East", "EastGoal", "--pair", "North", "NorthGoal"]
+    # Walking at once, they would come within a metre of each other: a conflict, exit 1.
+    code, doc, err = call_json(cli, capsys, "crowd", "--blend", crossing, *pairs,
+                               "--spacing", "1", "--max-wait", "0")
+    assert code == 1 and len(doc["conflicts"]) == 1 and doc["saved"] is None
+    c = doc["conflicts"][0]
+    assert (c["a"], c["b"]) == ("East", "North") and c["distance_m"] < 1
+    out = tmp_path / "crowd.blend"
+    code, doc, err = call_json(cli, capsys, "crowd", "--blend", crossing, *pairs,
+                               "--spacing", "1", "--frame-start", "1", "--save", out)
+    assert code == 0 and doc["ok"] and doc["conflicts"] == [] and doc["failed"] == [], err
+    assert [p["character"] for p in doc["planned"]] == ["East", "North"]
+    wait = doc["delays_frames"]["North"]
+    assert doc["delays_frames"]["East"] == 0 and 0 < wait <= 4 * 30
+    first, second = doc["planned"]
+    assert first["frame_start"] == 1 and second["frame_start"] == 1 + wait
+    # Evaluated through the depsgraph: both arrive, and they keep a metre apart throughout.
+    open_blend(out)
+    end = max(first["frame_end"], second["frame_end"])
+    roots = evaluated_roots(["East", "North"], range(1, end + 1))
+    gap = np.linalg.norm(roots[0] - roots[1], axis=1)
+    assert gap.min() >= 1.0 - 0.05, f"closest approach {gap.min():.2f} m"
+    assert np.linalg.norm(roots[0, -1] - (8.0, 0.0)) < 0.3
+    assert np.linalg.norm(roots[1, -1] - (4.0, 4.0)) < 0.3
+    assert np.linalg.norm(roots[1, wait - 1] - roots[1, 0]) < 0.01  # it waits where it stood
+
+
+def test_crowd_with_an_unreachable_goal_exits_1_and_saves_nothing(cli, capsys, layout, tmp_path):
+    scene = open_blend(layout)
+    walker_from(scene.motion_patches.source_armature, "North", (1.0, -2.0, 0.0))
+    out = tmp_path / "crowd.blend"
+    code, doc, err = call_json(cli, capsys, "crowd", "--pair", "Walker", "Goal", "--pair",
+                               "North", "CageGoal", "--save", out)
+    assert code == 1 and not out.exists()
+    assert [p["character"] for p in doc["planned"]] == ["Walker"]
+    assert doc["failed"][0]["character"] == "North"
+    assert "no path for 'North'" in doc["failed"][0]["error"]
+
+
+@pytest.mark.parametrize("argv, needle", [
+    ([], "no crowd: give --pair"),
+    (["--pair", "East", "Goal", "--pair", "East", "NorthGoal"], "'East' appears twice"),
+    (["--pair", "East", "Nowhere"], "no object named 'Nowhere'"),
+    (["--pair", "East", "East"], "the character itself"),
+    (["--pair", "Goal", "East"], "no armature object named 'Goal'"),
+    (["--pair", "East", "Goal", "--max-wait", "-2"], "--max-wait"),
+])
+def test_crowd_bad_input_exits_2_and_changes_nothing(cli, capsys, crossing, tmp_path, argv,
+                                                     needle):
+    out = tmp_path / "out.blend"
+    open_blend(crossing)
+    before = scene_state("East"), scene_state("North")
+    code, stdout, err = call(cli, capsys, "crowd", *argv, "--save", out)
+    assert code == 2 and stdout == ""
+    assert needle in one_line(err)
+    assert not out.exists() and (scene_state("East"), scene_state("North")) == before
+
+
+# --- patch files ----------------------------------------------------------------------------
+
+
+def test_export_then_import_gives_the_same_plan(cli, capsys, layout, baked, tmp_path):
+    patch_file = tmp_path / "walk.mpatch"
+    code, doc, err = call_json(cli, capsys, "export", "--blend", baked[0], patch_file)
+    assert code == 0 and patch_file.stat().st_size > 10_000, err
+    open_blend(layout)
+    code, doc, err = call_json(cli, capsys, "plan", "--character", "Walker", "--goal", "Goal")
+    cost = doc["cost"]
+    # A scene without the patch gets it from the file and plans the same path.
+    scene = bpy.context.scene
+    scene.motion_patches.patches.clear()
+    code, doc, err = call_json(cli, capsys, "import", patch_file, "--name", "walk2")
+    assert code == 0 and doc["patch"] == "walk2", err
+    code, doc, err = call_json(cli, capsys, "plan", "--character", "Walker", "--goal", "Goal")
+    assert code == 0 and doc["cost"] == pytest.approx(cost), err
+
+
+def test_importing_a_file_that_is_not_a_patch_exits_2(cli, capsys, layout, tmp_path):
+    junk = tmp_path / "junk.mpatch"
+    junk.write_bytes(b"not a patch")
+    open_blend(layout)
+    before = len(bpy.context.scene.motion_patches.patches)
+    code, out, err = call(cli, capsys, "import", junk)
+    assert code == 2 and "not a stored locomotion patch" in one_line(err)
+    assert len(bpy.context.scene.motion_patches.patches) == before
+    code, out, err = call(cli, capsys, "import", tmp_path / "missing.mpatch")
+    assert code == 2 and "patch file not found" in one_line(err)

@@ -1,0 +1,60 @@
+"""Crowds of independently planned characters kept apart in time.
+
+Each character's path is planned on its own against the props (the paper plans one
+character). Characters are then kept apart the way a previs animator would first try:
+later characters wait at their start (holding their first pose) until their whole walk,
+and their standing at the goal afterwards, stays clear of everyone planned before them.
+What no wait within the limit clears is reported as a conflict, not hidden: paths are not
+re-planned around other characters.
+"""
+
+import numpy as np
+
+
+def timeline(track, delay, horizon):
+    """(horizon, 2) positions of a ground ``track`` started ``delay`` frames late: it
+    stands at its first point before and at its last point after."""
+    t = np.clip(np.arange(horizon) - delay, 0, len(track) - 1)
+    return track[t]
+
+
+def closest_approach(a, b):
+    """(frame, distance) where two equally long timelines come closest."""
+    d = np.linalg.norm(a - b, axis=1)
+    k = int(np.argmin(d))
+    return k, float(d[k])
+
+
+def stagger(tracks, clearance, max_delay, step):
+    """Delays (frames) for ``tracks`` [(frames, 2) xy arrays, first frames aligned], in
+    order, and the conflicts left: [{"a", "b", "frame", "distance_m"}], pairs (by index)
+    closer than ``clearance`` at the same frame, with the frame they come closest.
+
+    Each track takes the smallest delay (0, step, 2 step, ... <= max_delay) at which it
+    stays ``clearance`` away from every earlier track at every frame; if none does, the
+    delay with the fewest frames too close (then the smallest)."""
+    tracks = [np.asarray(t, float)[:, :2] for t in tracks]
+    delays = []
+    for i, track in enumerate(tracks):
+        best = None
+        for d in range(0, int(max_delay) + 1, max(int(step), 1)):
+            horizon = max([len(track) + d] + [len(t) + dj for t, dj in zip(tracks, delays)])
+            mine = timeline(track, d, horizon)
+            close = 0
+            for t, dj in zip(tracks, delays):
+                close += int((np.linalg.norm(mine - timeline(t, dj, horizon), axis=1)
+                              < clearance).sum())
+            if best is None or close < best[0]:
+                best = (close, d)
+            if close == 0:
+                break
+        delays.append(best[1])
+    horizon = max(len(t) + d for t, d in zip(tracks, delays))
+    lines = [timeline(t, d, horizon) for t, d in zip(tracks, delays)]
+    conflicts = []
+    for i in range(len(lines)):
+        for j in range(i):
+            k, dist = closest_approach(lines[j], lines[i])
+            if dist < clearance:
+                conflicts.append({"a": j, "b": i, "frame": k, "distance_m": dist})
+    return delays, conflicts

@@ -1,0 +1,60 @@
+"""Crowds: characters planned one by one are kept apart by waiting at their start."""
+
+import numpy as np
+import pytest
+
+from motion_patches import crowd
+from motion_patches.environment import Environment
+from motion_patches.motion import concatenate
+from motion_patches.planner import SegmentPlanner, plan_motions
+
+
+def line(p0, p1, frames):
+    return np.linspace(p0, p1, frames)
+
+
+def min_gap(a, b, da, db):
+    horizon = max(len(a) + da, len(b) + db)
+    return np.linalg.norm(crowd.timeline(a, da, horizon) - crowd.timeline(b, db, horizon),
+                          axis=1).min()
+
+
+def test_a_crossing_is_cleared_by_the_smallest_wait():
+    a = line((-5.0, 0.0), (5.0, 0.0), 101)   # 10 m in 100 frames
+    b = line((0.0, -5.0), (0.0, 5.0), 101)   # crosses a's path at the same moment
+    assert min_gap(a, b, 0, 0) < 0.1
+    delays, conflicts = crowd.stagger([a, b], clearance=0.5, max_delay=60, step=2)
+    assert delays[0] == 0 and conflicts == []
+    d = delays[1]
+    assert min_gap(a, b, 0, d) >= 0.5
+    assert min_gap(a, b, 0, d - 2) < 0.5       # and no shorter wait would do
+
+
+def test_a_goal_on_someone_elses_path_is_reported_not_hidden():
+    a = line((-5.0, 0.0), (5.0, 0.0), 101)
+    b = line((0.0, -2.0), (0.0, 0.0), 21)      # b stands on a's path long before a comes
+    delays, conflicts = crowd.stagger([a, b], clearance=0.5, max_delay=30, step=3)
+    assert crowd.stagger([a, b], clearance=0.5, max_delay=60, step=3)[1] == []  # waiting longer lets a pass first
+    assert len(conflicts) == 1
+    c = conflicts[0]
+    assert (c["a"], c["b"]) == (0, 1) and c["distance_m"] < 0.5
+    assert abs(c["frame"] - 50) <= 3           # where a walks past b standing there
+
+
+def test_far_apart_characters_do_not_wait():
+    tracks = [line((x, 0.0), (x, 8.0), 80) for x in (0.0, 3.0, 6.0)]
+    delays, conflicts = crowd.stagger(tracks, clearance=0.5, max_delay=60, step=6)
+    assert delays == [0, 0, 0] and conflicts == []
+
+
+def test_two_planned_walkers_crossing_in_the_open_are_staggered(walk_patch):
+    env = Environment(walk_patch.side, walk_patch.cells, 0.25)
+    planner = SegmentPlanner(walk_patch, env)
+    plans = [planner.plan((0.0, 0.0, 0.0), (8.0, 0.0, 0.0)),
+             planner.plan((4.0, -4.0, np.pi / 2), (4.0, 4.0, np.pi / 2))]
+    tracks = [concatenate(plan_motions(walk_patch, p)).ground[:, :2] for p in plans]
+    clearance = 1.0  # two characters of 0.5 m radius
+    assert min_gap(tracks[0], tracks[1], 0, 0) < clearance  # they would walk into each other
+    delays, conflicts = crowd.stagger(tracks, clearance, max_delay=120, step=6)
+    assert conflicts == [] and delays[0] == 0 and delays[1] > 0
+    assert min_gap(tracks[0], tracks[1], 0, delays[1]) >= clearance
