@@ -24,7 +24,8 @@ from conftest import EXTENSION_ID, REPO_ROOT, blender_user_env
 
 # Top-level entries of the working tree that must never ship in the zip.
 DEV_ONLY_DIRS = (
-    "tests/", "bench/", "sample_blends/", "tools/", "requirements/", "dist/",
+    "tests/", "bench/", "sample_blends/", "tools/", "requirements/", "dist/", "examples/",
+    "docs/",
     ".ci/", ".venv/", ".git/", ".pytest_cache/",
 )
 DEV_ONLY_FILES = ("dev", ".gitignore", "THIRD_PARTY_NOTICES.md")

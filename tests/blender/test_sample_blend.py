@@ -27,3 +27,22 @@ def test_sample_blend_saved_by_blender_4_5_opens_and_replans(addon_module):
     hurried = bpy.data.objects["Hurried"]
     names = [s.name for s in hurried.animation_data.nla_tracks["MP motion"].strips]
     assert any("16_06" in n for n in names)  # the hurdle strip written by 4.5 survives
+
+
+def test_the_documented_layout_spec_passes_on_the_sample(addon_module):
+    """examples/demo_layout.toml (shown in the README) checks the sample scene."""
+    import tomllib
+    if not SAMPLE.is_file():
+        pytest.fail(f"{SAMPLE} is missing: ./dev test generates it before the Blender suites")
+    bpy.ops.wm.open_mainfile(filepath=str(SAMPLE))
+    with open(REPO_ROOT / "examples" / "demo_layout.toml", "rb") as fh:
+        spec = tomllib.load(fh)
+    nla_before = [t.name for t in bpy.data.objects["Calm"].animation_data.nla_tracks]
+    results = addon_module.api.check_layout(bpy.context.scene, spec)
+    assert [r["passed"] for r in results] == [True, True, True], [r["failures"] for r in results]
+    assert results[1]["traversals"] == 0 and results[1]["reachable"]
+    assert [t.name for t in bpy.data.objects["Calm"].animation_data.nla_tracks] == nla_before
+    # The same spec with the pillar field closed: the check fails and names what blocks it.
+    spec["pairs"][0]["max_seconds"] = 1.0
+    r = addon_module.api.check_layout(bpy.context.scene, spec)[0]
+    assert not r["passed"] and "exceeds max_seconds" in r["failures"][0]
