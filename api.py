@@ -268,6 +268,29 @@ def _endpoints(character, goal, start_prop, by_name, skel):
             goal_state if g_state is None else g_state, start_ref, goal_ref)
 
 
+def _check_clear(env, character, endpoints, by_name):
+    """Refuse a start or goal the character cannot stand on, naming the prop in the way."""
+    from .motion_patches.environment import distance_to_polygon
+    for what, state, ref in (("start", endpoints[0], endpoints[2]),
+                             ("goal", endpoints[1], endpoints[3])):
+        if ref is not None:  # sitting down / standing up: the clip's own end, beside the prop
+            continue
+        near = sorted(n for n, ob in env.obstacles.items()
+                      if distance_to_polygon(np.asarray(state[:2])[None], ob.polygon)[0]
+                      < env.radius)
+        if not near:
+            continue
+        who = f"the {what} of '{character.name}'"
+        tagged = [n for n in near if n in by_name]
+        if tagged:
+            raise MotionPatchesError(
+                f"{who} is inside the object patch '{tagged[0]}', which has no interaction "
+                f"clip that starts or ends there: move the {what} out, or give "
+                f"'{tagged[0]}' a sit-down / stand-up clip and use the prop itself")
+        raise MotionPatchesError(f"{who} is inside or within {env.radius:.2f} m of "
+                                 f"{', '.join(repr(n) for n in near[:4])}: move it into the open")
+
+
 def _solve(planner, character, endpoints):
     start_state, goal_state, start_ref, goal_ref = endpoints
     try:
@@ -326,7 +349,9 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
     env = scene_io.environment(scene, depsgraph, patch, radius,
                                _not_obstacles((character, goal_obj)))
     props = object_patches(scene, depsgraph, patch)
-    ends = _endpoints(character, goal, start_prop, {p.name: p for p in props}, patch.gait.skeleton)
+    by_name = {p.name: p for p in props}
+    ends = _endpoints(character, goal, start_prop, by_name, patch.gait.skeleton)
+    _check_clear(env, character, ends, by_name)
     planner = SegmentPlanner(patch, env, alpha, beta, gamma, props=props, mode=stitching)
     plan = _solve(planner, character, ends)
     frame_start = scene.frame_current if frame_start is None else int(frame_start)
@@ -374,6 +399,8 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
     props = object_patches(scene, depsgraph, patch)
     by_name = {p.name: p for p in props}
     ends = [_endpoints(c, g, None, by_name, patch.gait.skeleton) for c, g in pairs]
+    for (c, _), e in zip(pairs, ends):
+        _check_clear(env, c, e, by_name)
     planner = SegmentPlanner(patch, env, alpha, beta, gamma, props=props, mode=stitching)
     planned, failed = [], []
     for n, ((character, _), e) in enumerate(zip(pairs, ends)):

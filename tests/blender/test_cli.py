@@ -260,6 +260,9 @@ def test_plan_to_coordinates_prints_a_summary(cli, capsys, layout):
     (["--character", "Walker", "--goal", "Nowhere"], "no object named 'Nowhere'"),
     (["--character", "Walker", "--goal", "Goal", "--patch", "run"], "no locomotion patch named"),
     (["--character", "Walker", "--goal", "Goal", "--radius", "-1"], "--radius"),
+    (["--character", "Walker", "--goal-xyh", "3", "1", "0"],
+     "the goal of 'Walker' is inside or within 0.25 m of 'Pillar0'"),
+    (["--character", "Walker", "--goal", "Walker"], "the goal cannot be the character itself"),
 ])
 def test_plan_bad_input_exits_2_and_changes_nothing(cli, capsys, layout, tmp_path, argv, needle):
     out = tmp_path / "out.blend"
