@@ -3,7 +3,8 @@
 Graph structure is supplied as a vectorised ``expand(key)`` returning numpy arrays of
 successor keys, edge costs and an edge payload, so callers keep segments in arrays and
 the search never builds per-node objects. Expansions are cached by the closed set, so a
-node's successors (and the occlusion tests behind them) are computed once (Cain 2002).
+node's successors (and the occlusion tests behind them) are computed once (Cain 2002);
+a node is expanded again only when an edge added late by the observer lowers its cost.
 """
 
 import heapq
@@ -28,10 +29,21 @@ def search(starts, expand, heuristic, goal_cost, max_expansions=500_000, observe
 
     ``expand(key) -> (keys, costs, payloads)``; ``heuristic(keys) -> h`` (admissible);
     ``goal_cost(key) -> (cost, payload) or None`` links a node to the goal.
-    ``observer(f) -> [(from_key, to_key, cost, payload)]`` is called with the f of every
-    popped node and may add edges (lazy stitching). It must add an edge before any node
-    on a path through it could be popped, i.e. once ``f`` reaches a lower bound of such
-    paths; edges out of nodes already expanded are relaxed at once.
+
+    ``observer(f, key) -> [(from_key, to_key, cost, payload)]`` may add edges (lazy
+    stitching). It is called once for every node taken off the open list, just before
+    the node is expanded, with its key and f = g + h (stale heap entries of nodes
+    already expanded are skipped); with ``key == GOAL`` and f = the best goal cost found
+    so far whenever the virtual goal comes off the list; and with ``key == GOAL`` and
+    f = inf when the list runs empty without reaching the goal. Added edges are kept
+    for the whole search: an edge out of a node not yet expanded joins its expansion;
+    one out of an expanded node is relaxed at once, and a node whose cost it lowers is
+    reopened and expanded again, so edges may come late. If edges are added at a GOAL
+    call, the goal goes back on the list and the search goes on: it ends only when a
+    GOAL call adds nothing. The result is then optimal over every edge the observer
+    could add provided that, at that last call, it has added every edge lying on a path
+    cheaper than f (e.g. every edge whose lower bound of cost + heuristic of the paths
+    through it is <= f).
     """
     g = {}
     parent = {}
@@ -49,24 +61,29 @@ def search(starts, expand, heuristic, goal_cost, max_expansions=500_000, observe
     closed = set()
     expansions = 0
     best_goal = np.inf
-    extra = {}
-    while heap:
-        f, _, key = heapq.heappop(heap)
-        added = observer(f) if observer is not None else ()
+    extra = {}  # from_key -> [(to_key, cost, payload)] added by the observer
+    while heap or observer is not None:
+        if heap:
+            f, _, key = heapq.heappop(heap)
+        else:  # every reachable node expanded: the observer may still open a way
+            f, key = np.inf, GOAL
+        if key in closed:  # a stale entry: the node was reached more cheaply since
+            continue
+        added = observer(f, key) if observer is not None else ()
         if added and key == GOAL:  # new edges may still beat the goal found so far
             heapq.heappush(heap, (f, tie, GOAL))
             tie += 1
         for a, b, c, p in added:
-            if a not in closed:
-                extra.setdefault(a, []).append((b, c, p))
-            elif g[a] + c < g.get(b, np.inf) and b not in closed:
+            extra.setdefault(a, []).append((b, c, p))
+            if a in closed and g[a] + c < g.get(b, np.inf):
                 g[b] = g[a] + c
                 parent[b] = (a, p)
+                closed.discard(b)  # reopen: its successors may get cheaper too
                 heapq.heappush(heap, (g[b] + float(heuristic(np.array([b]))[0]), tie, b))
                 tie += 1
-        if key == GOAL and not added:
-            break
-        if key == GOAL or key in closed:
+        if key == GOAL:
+            if not added:
+                break
             continue
         closed.add(key)
         expansions += 1
@@ -81,8 +98,8 @@ def search(starts, expand, heuristic, goal_cost, max_expansions=500_000, observe
             heapq.heappush(heap, (best_goal, tie, GOAL))
             tie += 1
         nkeys, ncosts, payloads = expand(key)
-        if key in extra:
-            more = extra.pop(key)
+        more = extra.get(key)
+        if more:
             nkeys = np.concatenate((nkeys, np.array([m[0] for m in more], np.int64)))
             ncosts = np.concatenate((ncosts, np.array([m[1] for m in more], float)))
             payloads = np.concatenate((payloads, np.array([m[2] for m in more], np.int64)))
@@ -95,10 +112,11 @@ def search(starts, expand, heuristic, goal_cost, max_expansions=500_000, observe
         nkeys, ng, payloads = nkeys[better], ng[better], payloads[better]
         hs = heuristic(nkeys)
         for k, c, h, p in zip(nkeys.tolist(), ng.tolist(), hs.tolist(), payloads.tolist()):
-            if k in closed or c >= g.get(k, np.inf):  # parallel edges: keep the cheapest
+            if c >= g.get(k, np.inf):  # parallel edges: keep the cheapest
                 continue
             g[k] = c
             parent[k] = (key, p)
+            closed.discard(k)  # only after a late edge: with a consistent h, never closed
             heapq.heappush(heap, (c + h, tie, k))
             tie += 1
     if GOAL not in parent:

@@ -6,7 +6,8 @@ that entry state, drops those whose cell mask is occluded in the tile (Eq. 8), a
 each exit to the entry state of the neighbouring tile. The character's start and goal are
 joined to the node graph by connectors: Hermite curves fitted on the fly, the start ones
 to a whole number of cycles (so they end on the node pose), the goal ones to the exact
-goal position and heading.
+goal position and heading. Traversal clips of object patches join the graph as stitched
+edges, lazily, through a per-tile observer of the search (:class:`TraversalObserver`).
 """
 
 import heapq
@@ -17,7 +18,7 @@ import numpy as np
 
 from . import astar, curves
 from .high_level import TilePlanner
-from .node_keys import LOCAL, NEXT_EDGE, TILE_STEP, pack, unpack
+from .node_keys import BIAS, LOCAL, NEXT_EDGE, TILE_STEP, pack, unpack
 from .locomotion_patch import (DIRECTIONS, EDGES, INWARD, node_id, node_position,
                                split_node_id)
 from .motion import ease_to, sliced
@@ -95,6 +96,11 @@ class SegmentPlanner:
         self.max_speed = max(lp.cycle_distance for lp in loops) * patch.gait.fps / patch.gait.frames
         self.kmin, self.kmax = patch.stats.get("curvature_limits", patch.gait.kappa_limits)
         self.corridor = None
+        e, _, _ = split_node_id(np.arange(LOCAL), patch.nodes)
+        step = TILE_STEP[e % EDGES]
+        # Tile ids are node keys // LOCAL; a node on edge e of its tile also lies in the
+        # tile across that edge, whose id differs by this much.
+        self.across = (step[:, 0] * (2 * BIAS) + step[:, 1]).tolist()
 
     # -- graph -------------------------------------------------------------------------
     def node_pose(self, keys):
@@ -275,30 +281,21 @@ class SegmentPlanner:
                 self.corridor = {(t[0] + di, t[1] + dj) for t in tiles
                                  for di, dj in ((0, 0), (1, 0), (-1, 0), (0, 1), (0, -1))}
 
-        def expand(key):
-            keys, costs, segs = self.expand(key)
-            return keys, costs, segs
+        stitched, stitches = {}, []
+        counters = {"stitch_seconds": 0.0}
 
-        stitches, pending = [], self._traversal_estimates(start)
-        counters = {"copies_stitched": 0, "stitch_seconds": 0.0}
-
-        def stitch_until(f):
-            added = []
-            while pending and pending[0][0] <= f:
-                _, pi, ci = heapq.heappop(pending)
+        def stitch_copy(pi, ci):
+            """The edges of one traversal copy (stitched once per plan, kept for a retry)."""
+            if (pi, ci) not in stitched:
                 t_s = time.perf_counter()
+                edges = []
                 for st in stitch(self.patch, self.env, self.props[pi], ci,
                                  self.alpha, self.beta, self.gamma):
-                    added.append((st.from_key, st.to_key, st.cost, STITCH_PAYLOAD - len(stitches)))
+                    edges.append((st.from_key, st.to_key, st.cost, STITCH_PAYLOAD - len(stitches)))
                     stitches.append(st)
-                counters["copies_stitched"] += 1
+                stitched[(pi, ci)] = edges
                 counters["stitch_seconds"] += time.perf_counter() - t_s
-            return added
-
-        observer = stitch_until if pending else None
-        static_edges = stitch_until(np.inf) if self.mode == "static" else []
-        if static_edges:
-            observer = lambda f, first=[static_edges]: first.pop() if first else []  # noqa: E731
+            return stitched[(pi, ci)]
 
         def goal_cost(key):
             link = goals.get(key)
@@ -307,15 +304,20 @@ class SegmentPlanner:
             payloads[key] = link[1]
             return link[0], -1
 
-        result = astar.search([(k, c, -1) for k, c, _ in starts], expand, self.heuristic,
-                              goal_cost, max_expansions, observer)
+        def search():
+            copies = self._traversal_estimates(start)
+            observer = TraversalObserver(copies, stitch_copy, self.across,
+                                         up_front=self.mode == "static")
+            result = astar.search([(k, c, -1) for k, c, _ in starts], self.expand,
+                                  self.heuristic, goal_cost, max_expansions,
+                                  observer if copies else None)
+            return result, observer
+
+        result, observer = search()
         corridor_fallback = False
         if not result.found and self.corridor is not None:
             self.corridor, corridor_fallback = None, True
-            stitches.clear()
-            pending[:] = self._traversal_estimates(start)
-            result = astar.search([(k, c, -1) for k, c, _ in starts], expand, self.heuristic,
-                                  goal_cost, max_expansions, stitch_until if pending else None)
+            result, observer = search()
         if not result.found:
             raise PlanError(f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is unreachable: obstacles "
                             f"close every path within {margin_tiles} tiles of start and goal "
@@ -353,7 +355,9 @@ class SegmentPlanner:
                      "high_level_tiles": len(tiles) if tiles else 0,
                      "corridor_fallback": corridor_fallback,
                      "mode": self.mode,
-                     "copies_stitched": counters["copies_stitched"],
+                     "copies_stitched": len(stitched),
+                     "copies_stitched_by_tile": observer.by_tile,
+                     "copies_stitched_at_goal": observer.at_goal,
                      "copies_culled_by_bins": self.bin_culled,
                      "stitch_edges": len(stitches),
                      "stitch_seconds": counters["stitch_seconds"],
@@ -368,8 +372,11 @@ class SegmentPlanner:
                                                       weights=(self.alpha, self.beta, self.gamma)))
 
     def _traversal_estimates(self, start):
-        """Heap of (f lower bound, prop, clip copy) of every traversal copy in the region:
-        alpha |start - entry| (+ effort bound) + clip cost + heuristic from the exit."""
+        """[(f lower bound, prop, clip copy, tile id)] of every traversal copy in the region.
+
+        The bound is alpha |start - entry| (+ effort bound) + clip cost + heuristic from
+        the exit: no path through the copy costs less. The tile id (node key // LOCAL) is
+        the tile of the copy's entry keyframe, where its stitched edges start."""
         out = []
         self.bin_culled = 0
         for pi, prop in enumerate(self.props):
@@ -392,9 +399,103 @@ class SegmentPlanner:
                 cost = (self.alpha * clip.length() + self.beta * clip.turn()
                         + self.gamma * clip.effort)
                 h = float(self.state_heuristic(xg[None, :2], np.array([xg[2]]))[0])
-                out.append((approach + cost + h, pi, ci))
-        heapq.heapify(out)
+                ti, tj = self.env.tile_of(e[:2])  # the tile stitching indexes for the entry
+                out.append((approach + cost + h, pi, ci, int(pack(ti, tj, 0)) // LOCAL))
         return out
+
+
+class TraversalObserver:
+    """High-level observer of the segment search (paper Sec. 4.3): lazy stitching.
+
+    It keeps, per tile, the traversal copies whose entry keyframe lies in the tile (their
+    stitched edges leave from nodes of that tile) in a heap by estimate, a lower bound of
+    cost + heuristic of any path through the copy, and records per tile the cost +
+    heuristic f of the best path through it the search has reached: that of the node it
+    has just taken off its open list (A* takes nodes by increasing f). Tiles are node
+    keys // LOCAL; a node on a tile edge lies in both tiles sharing the edge. Each call
+    looks at the popped node's two tiles only: two dict look-ups when nothing is due.
+
+    Paper's rule: when the search takes off a node of tile t with f >= the lowest pending
+    estimate of t, the copies of t with estimates <= f are stitched and their edges join
+    the graph before the node is expanded (edges out of nodes expanded earlier are relaxed
+    by astar at once).
+
+    Backstop, for optimality: when the goal comes off with f (the cheapest path found so
+    far; inf when the search ran out of nodes), every pending copy with estimate <= f in a
+    tile the search has entered is stitched, and astar puts the goal back and goes on.
+    The rule alone misses copies: a tile whose nodes were all taken off before f reached
+    its copies' estimates never triggers again, though a copy there may still give a
+    cheaper path (the hurried walker of the chair line: the line's tile is left at
+    f = 36.35, the goal comes off at 39.25, and the copies of that tile estimated in between
+    are stitched by the backstop only; on some layouts the cheapest path uses one).
+    Tiles never entered can be skipped: take a path cheaper than f whose first copy not
+    yet stitched is X; the part before X uses only edges already in the graph, so with an
+    admissible heuristic each of its nodes, X's entry node (in X's tile) included, has
+    f below the goal's and was expanded before the goal came off. So when the goal comes
+    off and nothing is added, no copy left could give a cheaper path: dynamic stitching
+    finds the cost static stitching (every copy stitched before the search) finds, with
+    ``copies_stitched_by_tile`` + ``copies_stitched_at_goal`` copies stitched.
+    """
+
+    def __init__(self, copies, stitch_copy, across, up_front=False):
+        """``copies`` [(estimate, prop, copy, tile id)]; ``stitch_copy(prop, copy) ->
+        edges``; ``across[local]``: tile id offset of the other tile of a node; with
+        ``up_front`` (static mode) every copy is stitched now and added at the first call."""
+        self.stitch_copy, self.across = stitch_copy, across
+        self.pending = {}   # tile id -> heap of (estimate, prop, copy)
+        self.tile_f = {}    # tile id -> f of the last node taken off in it (tiles with copies)
+        self.by_tile = self.at_goal = 0
+        self.ready = []
+        if up_front:
+            for _, pi, ci, _ in copies:
+                self.ready += stitch_copy(pi, ci)
+            return
+        for est, pi, ci, tile in copies:
+            self.pending.setdefault(tile, []).append((est, pi, ci))
+        for heap in self.pending.values():
+            heapq.heapify(heap)
+
+    def __call__(self, f, key):
+        if self.ready:
+            ready, self.ready = self.ready, []
+            return ready
+        if key == astar.GOAL:
+            return self._backstop(f)
+        pending = self.pending
+        if not pending:
+            return ()
+        tile = key // LOCAL
+        added = ()
+        for t in (tile, tile + self.across[key - tile * LOCAL]):
+            heap = pending.get(t)
+            if heap is None:
+                continue
+            self.tile_f[t] = f
+            if heap[0][0] <= f:
+                edges, n = self._stitch(t, f)
+                self.by_tile += n
+                added = [*added, *edges]
+        return added
+
+    def _stitch(self, tile, f):
+        """Stitch the copies of ``tile`` whose estimates are <= f: (edges, copies)."""
+        heap, edges, n = self.pending[tile], [], 0
+        while heap and heap[0][0] <= f:
+            _, pi, ci = heapq.heappop(heap)
+            edges += self.stitch_copy(pi, ci)
+            n += 1
+        if not heap:
+            del self.pending[tile]
+        return edges, n
+
+    def _backstop(self, f):
+        edges = []
+        for t in [t for t in self.pending if t in self.tile_f]:
+            if self.pending[t][0][0] <= f:
+                more, n = self._stitch(t, f)
+                edges += more
+                self.at_goal += n
+        return edges
 
 
 def _derivs(curve):

@@ -79,6 +79,104 @@ def test_static_stitching_finds_the_same_plan(chairs_blend, addon_module):
     assert dynamic == static
 
 
+def user_notes_track(walker):
+    """The animator's own animation on the walker: an action keying a custom property
+    (so it does not move the rig) on an NLA track of their own, no active action."""
+    walker["notes"] = 0.0
+    walker.keyframe_insert('["notes"]', frame=1)
+    walker["notes"] = 1.0
+    walker.keyframe_insert('["notes"]', frame=40)
+    ad = walker.animation_data
+    action, slot = ad.action, ad.action_slot
+    action.name = "My notes"
+    track = ad.nla_tracks.new()
+    track.name = "My notes track"
+    strip = track.strips.new("My notes strip", 1, action)
+    strip.action_slot = slot
+    ad.action = None
+    return action
+
+
+def user_animation(walker):
+    """Everything of the user's own tracks and actions an edit could change."""
+    tracks = [(t.name, t.mute, [(s.name, s.frame_start, s.frame_end, s.action.name)
+                                for s in t.strips])
+              for t in walker.animation_data.nla_tracks if not t.name.startswith("MP ")]
+    action = bpy.data.actions["My notes"]
+    keys = [(fc.data_path, [tuple(k.co) for k in fc.keyframe_points])
+            for fc in action.layers[0].strips[0].channelbags[0].fcurves]
+    return tracks, keys
+
+
+def evaluated_root(api, walker):
+    """(F, 3) world position of the hips over the last plan's frames, as Blender plays
+    them (depsgraph-evaluated NLA)."""
+    from importlib import import_module
+    evaluate = import_module(api.__name__.rpartition(".")[0] + ".adapter.evaluate")
+    meta, _ = api.load_plan_record(walker)
+    frames = np.arange(meta["frame_start"], meta["frame_end"] + 1)
+    pos, _, _, _ = evaluate.sample_armature(bpy.context, walker, frames, [meta["root_name"]])
+    return pos[:, 0]
+
+
+def crossing_y(root, x=5.0):
+    """y of the hips where they first pass the chair line's x."""
+    i = int(np.argmax(root[:, 0] >= x))
+    assert root[i, 0] >= x, "the hips never reach the chair line"
+    return float(root[i, 1])
+
+
+def test_moving_chairs_and_re_planning_changes_the_path(chairs_blend, addon_module):
+    """An animator sees the hurried walker hurdle a chair, slides that chair and its
+    neighbours to the end of the row, re-plans: the walker now walks through the gap
+    (no jump, another route, never inside a chair) and their own animation is intact."""
+    bpy.ops.wm.open_mainfile(filepath=str(chairs_blend))
+    api = addon_module.api
+    walker = bpy.data.objects["Walker"]
+    user_notes_track(walker)
+    users_before = user_animation(walker)
+    plan(4.0, 0.5, 0.1)
+    jump = [n for n in strip_names(walker) if "16_06" in n]
+    assert len(jump) == 1, strip_names(walker)
+    hurdled = next(ob for ob in bpy.data.objects
+                   if ob.name.startswith("Chair.") and ob.name in jump[0])
+    before = evaluated_root(api, walker)
+    f = api.analyse(bpy.context, walker)
+    assert f["traversals"] == 1 and f["frames_root_inside_obstacle"] == 0
+
+    # Clear a passage around the walker's line: the chairs between y = 0 and 1.5 (the
+    # hurdled one among them) go to the north end of the row.
+    moved = [ob for ob in bpy.data.objects if ob.name.startswith("Chair.")
+             and -0.1 < ob.location.y < 1.6]
+    assert hurdled in moved and len(moved) == 4
+    for k, ob in enumerate(moved):
+        ob.location = (5.0, 3.0 + 0.5 * k, ob.location.z)
+    plan(4.0, 0.5, 0.1)
+    after = evaluated_root(api, walker)
+    assert not any("16_06" in n for n in strip_names(walker)), strip_names(walker)
+    f = api.analyse(bpy.context, walker)
+    assert f["traversals"] == 0
+    assert f["frames_root_inside_obstacle"] == 0  # against the chairs where they are now
+    assert f["goal_root_position_error_cm"] < 10 and f["root_from_plan_cm"]["max"] < 5
+    meta, _ = api.load_plan_record(walker)
+    for ob in moved:
+        assert np.allclose(np.mean(meta["obstacles"][ob.name], axis=0), ob.location[:2], atol=0.01)
+
+    # What an animator sees: the hips no longer rise into a jump, and the walker crosses
+    # the row through the gap (between the remaining chairs at y = -0.5 and 2.0, grown
+    # by the footprint and the radius), well away from where it jumped.
+    assert after[:, 2].max() < before[:, 2].max() - 0.1  # the jump lifted the hips 0.24 m
+    y0, y1 = crossing_y(before), crossing_y(after)
+    assert -0.03 < y1 < 1.53 and abs(y1 - y0) > 0.3, (y0, y1)
+    assert len(after) < len(before)  # no take-off and landing: a shorter walk
+
+    # The user's own track and action are untouched; the add-on's tracks were replaced.
+    assert user_animation(walker) == users_before
+    names = [t.name for t in walker.animation_data.nla_tracks]
+    assert names.count("MP motion") == 1 and names.count("MP root") == 1
+    assert walker.animation_data.action is None
+
+
 def test_tagging_bad_input_reports_and_changes_nothing(chairs_blend, addon_module):
     bpy.ops.wm.open_mainfile(filepath=str(chairs_blend))
     api = addon_module.api
@@ -144,7 +242,7 @@ def test_a_goal_prop_without_a_sit_clip_is_refused(chairs_blend, addon_module):
 
 def test_layout_check_sees_traversals_and_can_forbid_them(chairs_blend, addon_module):
     bpy.ops.wm.open_mainfile(filepath=str(chairs_blend))
-    check = addon_module.cli.check_layout
+    check = addon_module.api.check_layout
     spec = {"alpha": 4.0, "beta": 0.5, "gamma": 0.1,
             "pairs": [{"character": "Walker", "goal": "Goal"},
                       {"character": "Walker", "goal": "Goal", "allow_traversal": False}]}

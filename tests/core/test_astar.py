@@ -75,3 +75,161 @@ def test_astar_reports_no_path_when_goal_is_disconnected():
         return np.array([], np.int64), np.array([]), np.array([], np.int64)
     res = astar.search([(0, 0.0, -1)], expand, lambda k: np.zeros(len(k)), lambda k: None)
     assert not res.found and res.expansions == 1
+
+
+# -- the observer: lazily added edges --------------------------------------------------
+# Nodes are packed like the planner's: key = tile * LOCAL + local, three nodes per tile;
+# a node with local 0 also lies in the next tile (like a node on a tile edge).
+
+from motion_patches.node_keys import LOCAL  # noqa: E402
+from motion_patches.planner import TraversalObserver  # noqa: E402
+
+ACROSS = [1] + [0] * (LOCAL - 1)
+
+
+def key_of(node):
+    return (node // 3) * LOCAL + node % 3
+
+
+def node_of(keys):
+    keys = np.asarray(keys)
+    return (keys // LOCAL) * 3 + keys % LOCAL
+
+
+def dijkstra(starts, edges, n):
+    dist = np.full(n, np.inf)
+    heap = []
+    for s, c in starts:
+        if c < dist[s]:
+            dist[s] = c
+            heapq.heappush(heap, (c, s))
+    while heap:
+        d, a = heapq.heappop(heap)
+        if d > dist[a]:
+            continue
+        for b, c in edges.get(a, ()):
+            if d + c < dist[b]:
+                dist[b] = d + c
+                heapq.heappush(heap, (d + c, b))
+    return dist
+
+
+def lazy_problem(seed, n=12):
+    """A random graph, some of its edges hidden (to be added by an observer), each with a
+    tight estimate: the exact cost + heuristic of the best path through it."""
+    rng = np.random.default_rng(seed)
+    pos, edges = random_graph(rng, n, 0.25)
+    goal_xy = pos[n - 1]
+    goals = {n - 1: 0.0}
+    starts = [(0, 0.0)]
+    visible, hidden = {}, []
+    for a, out in edges.items():
+        for b, c in out:
+            if rng.random() < 0.35:
+                hidden.append((a, b, c))
+            else:
+                visible.setdefault(a, []).append((b, c))
+    h = np.linalg.norm(pos - goal_xy, axis=1)  # consistent: edges cost >= their length
+    g_full = dijkstra(starts, edges, n)
+    estimates = [g_full[a] + c + h[b] for a, b, c in hidden]
+
+    def expand(k):
+        out = visible.get(int(node_of(k)), [])
+        return (np.array([key_of(b) for b, _ in out], np.int64), np.array([c for _, c in out]),
+                np.array([b for b, _ in out], np.int64))
+
+    def heuristic(keys):
+        return h[node_of(keys)]
+
+    def goal_cost(k):
+        node = int(node_of(k))
+        return (goals[node], -1) if node in goals else None
+
+    problem = dict(starts=[(key_of(s), c, -1) for s, c in starts], expand=expand,
+                   heuristic=heuristic, goal_cost=goal_cost)
+    return problem, hidden, estimates, brute_force(starts, edges, goals, n), \
+        brute_force(starts, visible, goals, n)
+
+
+def hidden_edges(hidden, which):
+    return [(key_of(a), key_of(b), c, 1000 + e) for e, (a, b, c) in enumerate(hidden) if e in which]
+
+
+def per_tile_observer(hidden, estimates):
+    copies = [(est, 0, e, key_of(a) // LOCAL)
+              for e, ((a, _, _), est) in enumerate(zip(hidden, estimates))]
+    return TraversalObserver(copies, lambda _, e: hidden_edges(hidden, {e}), ACROSS)
+
+
+def late_observer(hidden):
+    """Adds every hidden edge when the goal first comes off: edges out of expanded nodes
+    into expanded nodes, which only reopening can use."""
+    done = []
+
+    def observer(f, key):
+        if key == astar.GOAL and not done:
+            done.append(True)
+            return hidden_edges(hidden, range(len(hidden)))
+        return ()
+    return observer
+
+
+SEEDS = range(40)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_edges_added_by_observers_reach_the_brute_force_optimum(seed):
+    problem, hidden, estimates, full, visible_only = lazy_problem(seed)
+    for observer in (per_tile_observer(hidden, estimates), late_observer(hidden)):
+        res = astar.search(observer=observer, **problem)
+        if np.isinf(full):
+            assert not res.found
+        else:
+            assert res.found and np.isclose(res.cost, full), (res.cost, full, visible_only)
+
+
+def test_lazy_edges_matter_and_the_goal_backstop_is_needed(monkeypatch):
+    """Guards the test above from passing vacuously: hidden edges often make the optimum
+    cheaper, and without the observer's backstop at the goal the per-tile rule alone
+    misses some of them."""
+    cheaper = missed = 0
+    monkeypatch.setattr(TraversalObserver, "_backstop", lambda self, f: [])
+    for seed in SEEDS:
+        problem, hidden, estimates, full, visible_only = lazy_problem(seed)
+        cheaper += full < visible_only - 1e-9
+        res = astar.search(observer=per_tile_observer(hidden, estimates), **problem)
+        missed += res.found and res.cost > full + 1e-9
+    assert cheaper >= 10 and missed >= 2, (cheaper, missed)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_observer_sees_each_expanded_node_once_with_its_f_then_the_goal(seed):
+    rng = np.random.default_rng(seed)
+    n = 10
+    pos, edges = random_graph(rng, n, 0.35)
+    h = np.linalg.norm(pos - pos[n - 1], axis=1)
+    calls = []
+
+    def observer(f, key):
+        calls.append((f, key))
+        return ()
+
+    def expand(k):
+        out = edges.get(k, [])
+        return (np.array([b for b, _ in out], np.int64), np.array([c for _, c in out]),
+                np.array([b for b, _ in out], np.int64))
+
+    res = astar.search([(0, 0.0, -1)], expand, lambda k: h[k],
+                       lambda k: (0.0, -1) if k == n - 1 else None, observer=observer)
+    g = dijkstra([(0, 0.0)], edges, n)
+    nodes = [k for _, k in calls if k != astar.GOAL]
+    assert len(nodes) == len(set(nodes)) == res.expansions  # no stale entries reported
+    for f, k in calls:
+        if k != astar.GOAL:
+            assert np.isclose(f, g[k] + h[k])
+    fs = [f for f, _ in calls]
+    assert all(a <= b + 1e-9 for a, b in zip(fs, fs[1:]))  # consistent h: f never drops
+    if res.found:
+        assert calls[-1] == (res.cost, astar.GOAL)
+    else:
+        assert astar.GOAL not in [k for _, k in calls]

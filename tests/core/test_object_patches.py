@@ -28,6 +28,18 @@ def chair_line(patch, clip, n=11, x=5.0, half=2.5):
     return env, props
 
 
+def scattered_chairs(patch, clip, seed, n):
+    env = Environment(patch.side, patch.cells, 0.25)
+    props, r = [], np.random.default_rng(seed)
+    for k in range(n):
+        pose = (r.uniform(2, 8), r.uniform(-2, 3), r.uniform(0, np.pi))
+        o = op.ObjectPatch(f"c{k}", CHAIR, pose=pose)
+        o.add_traversal_copies(clip, step_deg=30)
+        env.place(Obstacle(o.name, o.world_footprint()))
+        props.append(o)
+    return env, props
+
+
 def test_jump_clip_is_anchored_at_its_apex_and_faces_along_x(hurdle_clip):
     e, x = hurdle_clip.entry, hurdle_clip.exit
     assert e[0] < -0.4 and x[0] > 0.4 and abs(e[1]) < 1e-6 and abs(x[1]) < 1e-6
@@ -86,21 +98,11 @@ def test_hurried_character_hurdles_the_chair_line_unhurried_walks_around(walk_pa
 @pytest.mark.parametrize("seed", range(8))
 def test_dynamic_and_static_stitching_find_paths_of_equal_cost(walk_patch, hurdle_clip, seed):
     rng = np.random.default_rng(seed)
-    def layout():
-        env = Environment(walk_patch.side, walk_patch.cells, 0.25)
-        props = []
-        r = np.random.default_rng(seed)
-        for k in range(8):
-            o = op.ObjectPatch(f"c{k}", CHAIR, pose=(r.uniform(2, 8), r.uniform(-2, 3), r.uniform(0, np.pi)))
-            o.add_traversal_copies(hurdle_clip, step_deg=30)
-            env.place(Obstacle(o.name, o.world_footprint()))
-            props.append(o)
-        return env, props
     start = (0.5, 0.5, 0.0)
     goal = (10.0, float(rng.uniform(-1, 2)), 0.0)
     costs = []
     for mode in ("dynamic", "static"):
-        env, props = layout()
+        env, props = scattered_chairs(walk_patch, hurdle_clip, seed, 8)
         try:
             costs.append(SegmentPlanner(walk_patch, env, 3.0, 0.5, 0.1, props=props, mode=mode)
                          .plan(start, goal).cost)
@@ -110,6 +112,52 @@ def test_dynamic_and_static_stitching_find_paths_of_equal_cost(walk_patch, hurdl
         assert isinstance(costs[1], str)
     else:
         assert np.isclose(costs[0], costs[1])
+
+
+def test_per_tile_observer_stitches_the_chair_line_lazily(walk_patch, hurdle_clip):
+    """The paper's rule fires in the chair line's tile for the hurried walker; copies in
+    tiles the search never enters are never stitched, so dynamic stitching does fewer
+    copies than the global rule (every copy whose estimate is below the plan's cost)
+    and far fewer than static; a walker who walks around stitches fewer than static."""
+    start, goal = (1.0, 0.3, 0.0), (9.0, 0.3, 0.0)
+    for weights, traversals in (((4.0, 0.5, 0.1), 1), ((0.3, 0.1, 3.0), 0)):
+        plans = {}
+        for mode in ("dynamic", "static"):
+            env, props = chair_line(walk_patch, hurdle_clip)
+            planner = SegmentPlanner(walk_patch, env, *weights, props=props, mode=mode)
+            plans[mode] = planner.plan(start, goal)
+        dyn, sta = plans["dynamic"].stats, plans["static"].stats
+        assert np.isclose(plans["dynamic"].cost, plans["static"].cost)
+        assert dyn["traversals_used"] == sta["traversals_used"] == traversals
+        assert dyn["copies_stitched"] == (dyn["copies_stitched_by_tile"]
+                                          + dyn["copies_stitched_at_goal"])
+        assert sta["copies_stitched_by_tile"] == sta["copies_stitched_at_goal"] == 0
+        assert dyn["copies_stitched"] < sta["copies_stitched"] / 2, (dyn, sta)
+        if traversals:
+            assert dyn["copies_stitched_by_tile"] > 0
+            below = sum(e <= plans["dynamic"].cost
+                        for e, *_ in planner._traversal_estimates(np.array(start)))
+            assert dyn["copies_stitched"] < below
+
+
+def test_goal_backstop_is_what_keeps_dynamic_stitching_optimal(walk_patch, hurdle_clip,
+                                                               monkeypatch):
+    """On this layout the per-tile rule alone never fires for the jump of the cheapest
+    path: without the backstop at the goal the walker takes a 48 % costlier detour."""
+    from motion_patches import planner as planner_mod
+    args = ((0.5, 1.6, 0.0), (10.0, 1.5, 0.0))
+    costs = {}
+    for mode in ("dynamic", "static"):
+        env, props = scattered_chairs(walk_patch, hurdle_clip, 132, 18)
+        plan = SegmentPlanner(walk_patch, env, 4.2, 0.5, 0.75, props=props, mode=mode).plan(*args)
+        costs[mode] = plan.cost
+        if mode == "dynamic":
+            assert plan.stats["copies_stitched_at_goal"] > 0 and plan.stats["traversals_used"] == 1
+    assert np.isclose(costs["dynamic"], costs["static"])
+    monkeypatch.setattr(planner_mod.TraversalObserver, "_backstop", lambda self, f: [])
+    env, props = scattered_chairs(walk_patch, hurdle_clip, 132, 18)
+    rule_only = SegmentPlanner(walk_patch, env, 4.2, 0.5, 0.75, props=props).plan(*args)
+    assert rule_only.cost > 1.2 * costs["static"]
 
 
 def test_moving_a_prop_changes_the_path(walk_patch, hurdle_clip):
