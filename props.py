@@ -1,4 +1,11 @@
-"""Properties the add-on stores in the .blend: baked patches and planning settings."""
+"""Properties the add-on stores: baked patches and planning settings in the .blend, each
+character's own goal, and the add-on preferences that hold an animator's defaults.
+
+The planning settings are declared once (:data:`PLANNING`) and used twice: on the scene,
+where the planner reads them, and in the preferences, from which "Reset to Preferences"
+copies them (a property's default is fixed when the class registers, so new scenes cannot
+read the preferences by themselves).
+"""
 
 import bpy
 from bpy.props import (BoolProperty, CollectionProperty, EnumProperty, FloatProperty,
@@ -8,6 +15,30 @@ from bpy.props import (BoolProperty, CollectionProperty, EnumProperty, FloatProp
 def _overlay_toggle(on):
     from .panels import overlay
     overlay.enable() if on else overlay.disable()
+
+
+PLANNING = {  # name -> factory of the bpy property (one fresh definition per class)
+    "alpha": lambda: FloatProperty(name="Distance (α)", default=1.0, min=0.0,
+                                   description="Cost per metre walked"),
+    "beta": lambda: FloatProperty(name="Turning (β)", default=0.5, min=0.0,
+                                  description="Cost per radian turned"),
+    "gamma": lambda: FloatProperty(name="Effort (γ)", default=0.2, min=0.0,
+                                   description="Cost per unit of effort (jumping a prop costs "
+                                               "its clip's effort)"),
+    "radius": lambda: FloatProperty(name="Character Radius", default=0.25, min=0.05, max=2.0,
+                                    unit='LENGTH',
+                                    description="Clearance kept between the root and props"),
+    "stitching": lambda: EnumProperty(name="Stitching", default='DYNAMIC', items=(
+        ('DYNAMIC', "Dynamic", "Stitch traversal clips lazily, when the search needs them"),
+        ('STATIC', "Static", "Stitch every traversal clip before searching (Lee 2006 baseline)"))),
+}
+BAKE = {
+    "cells": lambda **kw: IntProperty(name="Cells", default=8, min=2, max=8, description=
+                                      "Cells per side of the patch's square", **kw),
+    "nodes": lambda **kw: IntProperty(name="Nodes per Edge", default=8, min=2, max=8,
+                                      description="Entry/exit points along each side of the "
+                                                  "patch", **kw),
+}
 
 
 class MOTION_PATCHES_PG_patch(bpy.types.PropertyGroup):
@@ -44,9 +75,16 @@ class MOTION_PATCHES_PG_object(bpy.types.PropertyGroup):
     active_clip_index: IntProperty(default=0)
 
 
+class MOTION_PATCHES_PG_character(bpy.types.PropertyGroup):
+    goal: PointerProperty(type=bpy.types.Object, name="Own Goal",
+                          description="Where this character walks to when a crowd is planned "
+                                      "(empty: the scene's goal)")
+
+
 class MOTION_PATCHES_PG_scene(bpy.types.PropertyGroup):
     patches: CollectionProperty(type=MOTION_PATCHES_PG_patch)
-    active_patch_index: IntProperty(default=0)
+    active_patch_index: IntProperty(name="Active Patch", default=0,
+                                    description="The patch the planner uses")
     source_armature: PointerProperty(
         type=bpy.types.Object, name="Source Armature",
         description="Armature the mocap clips were imported on",
@@ -54,27 +92,53 @@ class MOTION_PATCHES_PG_scene(bpy.types.PropertyGroup):
     straight_action: PointerProperty(type=bpy.types.Action, name="Straight",
                                      description="Straight locomotion clip of the layer")
     turn_actions: CollectionProperty(type=MOTION_PATCHES_PG_action_ref)
+    active_turn_index: IntProperty(default=0)
     goal: PointerProperty(type=bpy.types.Object, name="Goal",
-                          description="Object whose location and facing (+Y) is the goal")
-    alpha: FloatProperty(name="Distance (α)", default=1.0, min=0.0,
-                         description="Cost per metre walked")
-    beta: FloatProperty(name="Turning (β)", default=0.5, min=0.0,
-                        description="Cost per radian turned")
-    gamma: FloatProperty(name="Effort (γ)", default=0.2, min=0.0,
-                         description="Cost per unit of effort")
-    radius: FloatProperty(name="Character Radius", default=0.25, min=0.05, max=2.0,
-                          unit='LENGTH', description="Clearance kept between the root and props")
+                          description="Object whose location and facing (-Y) is the goal")
+    alpha: PLANNING["alpha"]()
+    beta: PLANNING["beta"]()
+    gamma: PLANNING["gamma"]()
+    radius: PLANNING["radius"]()
+    stitching: PLANNING["stitching"]()
     show_overlay: BoolProperty(
         name="Show Planner Overlay", default=False,
-        description="Draw the tile grid, occluded cells, planned paths and stitches",
+        description="Draw the tile grid, occluded cells, planned paths, stitches and where "
+                    "the props' clips start and end",
         update=lambda self, context: _overlay_toggle(self.show_overlay))
-    stitching: EnumProperty(name="Stitching", default='DYNAMIC', items=(
-        ('DYNAMIC', "Dynamic", "Stitch traversal clips lazily, when the search needs them"),
-        ('STATIC', "Static", "Stitch every traversal clip before searching (Lee 2006 baseline)")))
+
+
+class MOTION_PATCHES_AP_preferences(bpy.types.AddonPreferences):
+    bl_idname = __package__  # the root package: bl_ext.<repository>.motion_patches
+
+    alpha: PLANNING["alpha"]()
+    beta: PLANNING["beta"]()
+    gamma: PLANNING["gamma"]()
+    radius: PLANNING["radius"]()
+    stitching: PLANNING["stitching"]()
+    cells: BAKE["cells"]()
+    nodes: BAKE["nodes"]()
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        col = layout.column(heading="Planning Defaults")
+        for name in PLANNING:
+            col.prop(self, name)
+        col = layout.column(heading="Bake Defaults")
+        col.prop(self, "cells")
+        col.prop(self, "nodes")
+        layout.label(text="Planning > Reset to Preferences copies these into a scene", icon='INFO')
+
+
+def preferences(context):
+    """The add-on's preferences, or None (not enabled as an add-on, e.g. in some scripts)."""
+    addon = context.preferences.addons.get(__package__)
+    return addon.preferences if addon is not None else None
 
 
 classes = (MOTION_PATCHES_PG_patch, MOTION_PATCHES_PG_action_ref, MOTION_PATCHES_PG_patch_clip,
-           MOTION_PATCHES_PG_object, MOTION_PATCHES_PG_scene)
+           MOTION_PATCHES_PG_object, MOTION_PATCHES_PG_character, MOTION_PATCHES_PG_scene,
+           MOTION_PATCHES_AP_preferences)
 _register, _unregister = bpy.utils.register_classes_factory(classes)
 
 
@@ -82,9 +146,11 @@ def register():
     _register()
     bpy.types.Scene.motion_patches = PointerProperty(type=MOTION_PATCHES_PG_scene)
     bpy.types.Object.motion_patch = PointerProperty(type=MOTION_PATCHES_PG_object)
+    bpy.types.Object.motion_patches_character = PointerProperty(type=MOTION_PATCHES_PG_character)
 
 
 def unregister():
+    del bpy.types.Object.motion_patches_character
     del bpy.types.Object.motion_patch
     del bpy.types.Scene.motion_patches
     _unregister()

@@ -1,3 +1,6 @@
+"""Measure the active character's evaluated motion and keep the figures on it for the
+Analysis panel (a JSON string in the custom property ``RESULT_KEY``)."""
+
 import json
 
 import bpy
@@ -7,11 +10,17 @@ from .. import api
 RESULT_KEY = "motion_patches_analysis"
 
 
+def last_figures(ob):
+    """The figures of the last analysis of ``ob`` (dict), or None."""
+    raw = ob.get(RESULT_KEY) if ob is not None else None
+    return json.loads(raw) if raw else None
+
+
 class MOTION_PATCHES_OT_analyse_motion(bpy.types.Operator):
-    """Measure the evaluated motion: foot skate, distance from the plan, goal error, pops"""
+    """Measure the motion as Blender plays it: foot skate, goal error, props walked into, pops"""
     bl_idname = "motion_patches.analyse_motion"
     bl_label = "Analyse Motion"
-    bl_options = {'REGISTER'}
+    bl_options = {'REGISTER', 'UNDO'}  # the figures are stored on the character
 
     @classmethod
     def poll(cls, context):
@@ -24,7 +33,7 @@ class MOTION_PATCHES_OT_analyse_motion(bpy.types.Operator):
         except api.MotionPatchesError as exc:
             self.report({'ERROR'}, str(exc))
             return {'CANCELLED'}
-        context.scene[RESULT_KEY] = json.dumps(figures)
+        ob[RESULT_KEY] = json.dumps(figures)
         sk = figures["foot_skate"]
         self.report({'INFO'}, f"Foot skate {sk['mean_cm_per_frame']:.2f} cm/frame "
                               f"({sk['mean_cm_per_s']:.1f} cm/s), goal error "

@@ -1,7 +1,10 @@
-import bpy
-from bpy.props import IntProperty, StringProperty
+"""Bake a locomotion patch from the scene's chosen clips, and edit the list of turn clips."""
 
-from .. import api
+import bpy
+from bpy.props import StringProperty
+
+from .. import api, props
+from .common import list_operators, progress
 
 
 class MOTION_PATCHES_OT_bake_locomotion_patch(bpy.types.Operator):
@@ -15,27 +18,35 @@ class MOTION_PATCHES_OT_bake_locomotion_patch(bpy.types.Operator):
                              description="Straight clip (default: the scene's bake setting)")
     turns: StringProperty(name="Turn Actions",
                           description="Comma-separated turn clips (default: the scene's list)")
-    cells: IntProperty(name="Cells", default=8, min=2, max=8)
-    nodes: IntProperty(name="Nodes per Edge", default=8, min=2, max=8)
+    # Not remembered between calls: unless given, they start from the add-on preferences.
+    cells: props.BAKE["cells"](options={'SKIP_SAVE'})
+    nodes: props.BAKE["nodes"](options={'SKIP_SAVE'})
+
+    def _size_from_preferences(self, context):
+        """Cells and nodes the caller did not give come from the preferences. Done in
+        execute, not invoke: a button, a script and the redo panel all get it (bpy.ops calls
+        from scripts, EXEC by default, and headless Blender never run invoke)."""
+        prefs = props.preferences(context)
+        for name in props.BAKE:
+            if prefs is not None and not self.properties.is_property_set(name):
+                setattr(self, name, getattr(prefs, name))
 
     def execute(self, context):
+        self._size_from_preferences(context)
         settings = context.scene.motion_patches
         try:
             straight = _action(self.straight) if self.straight else settings.straight_action
             turns = ([_action(n.strip()) for n in self.turns.split(",") if n.strip()]
                      if self.turns else [r.action for r in settings.turn_actions if r.action])
             arm = settings.source_armature or context.active_object
-            wm = context.window_manager
-            wm.progress_begin(0, 100)
-            try:
+            with progress(context) as update:
                 res = api.bake_locomotion_patch(
                     context.scene, arm, straight, turns, layer=self.layer, cells=self.cells,
-                    nodes=self.nodes, progress=lambda f: wm.progress_update(int(f * 100)))
-            finally:
-                wm.progress_end()
+                    nodes=self.nodes, progress=update)
         except api.MotionPatchesError as exc:
             self.report({'ERROR'}, str(exc))
             return {'CANCELLED'}
+        settings.active_patch_index = settings.patches.find(res.name)
         st = res.stats
         self.report({'INFO'}, f"Baked '{res.name}': {st['kept']} segments kept, {st['culled']} "
                               f"culled ({res.seconds:.1f} s)")
@@ -49,4 +60,8 @@ def _action(name):
     return act
 
 
-classes = (MOTION_PATCHES_OT_bake_locomotion_patch,)
+turn_list = list_operators("turn", "Turn Clip", "the clips the patch is baked from",
+                           lambda context: context.scene.motion_patches, "turn_actions",
+                           "active_turn_index")
+
+classes = (MOTION_PATCHES_OT_bake_locomotion_patch,) + turn_list

@@ -1,16 +1,26 @@
+"""Tag a mesh as an object patch (a prop carrying clips), untag it, edit its clip list."""
+
 import bpy
 from bpy.props import EnumProperty, FloatProperty, StringProperty
 
 from .. import api
+from .common import list_operators
+
+
+def _active_mesh(context):
+    ob = context.active_object
+    return ob if ob is not None and ob.type == 'MESH' else None
 
 
 class MOTION_PATCHES_OT_tag_object_patch(bpy.types.Operator):
-    """Make the active mesh object an object patch carrying a clip"""
+    """Check the active mesh's clips and make it an object patch the planner can use"""
     bl_idname = "motion_patches.tag_object_patch"
     bl_label = "Tag Object Patch"
     bl_options = {'REGISTER', 'UNDO'}
 
-    action: StringProperty(name="Action", description="Clip (traversal or interaction)")
+    action: StringProperty(name="Action",
+                           description="Clip to add (traversal or interaction); empty: tag "
+                                       "with the clips already in the prop's list")
     kind: EnumProperty(name="Kind", items=(('TRAVERSAL', "Traversal", ""),
                                            ('INTERACTION', "Interaction", "")))
     effort: FloatProperty(name="Effort (T)", default=8.0, min=0.0)
@@ -18,17 +28,23 @@ class MOTION_PATCHES_OT_tag_object_patch(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        return context.active_object is not None and context.active_object.type == 'MESH'
+        return _active_mesh(context) is not None
 
     def execute(self, context):
         ob = context.active_object
-        act = bpy.data.actions.get(self.action)
-        if act is None:
-            self.report({'ERROR'}, f"no action named '{self.action}'")
-            return {'CANCELLED'}
+        act = None
+        if self.action:
+            act = bpy.data.actions.get(self.action)
+            if act is None:
+                self.report({'ERROR'}, f"no action named '{self.action}'")
+                return {'CANCELLED'}
         clips = [(c.action, c.kind, c.effort, c.copy_step) for c in ob.motion_patch.clips
                  if c.action is not None and c.action != act]
-        clips.append((act, self.kind, self.effort, self.copy_step))
+        if act is not None:
+            clips.append((act, self.kind, self.effort, self.copy_step))
+        if not clips:
+            self.report({'ERROR'}, f"'{ob.name}' has no clip: add one and choose its action")
+            return {'CANCELLED'}
         try:
             api.tag_object_patch(ob, clips, scene=context.scene, context=context)
         except api.MotionPatchesError as exc:
@@ -46,12 +62,17 @@ class MOTION_PATCHES_OT_untag_object_patch(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        ob = context.active_object
-        return ob is not None and ob.type == 'MESH' and ob.motion_patch.enabled
+        ob = _active_mesh(context)
+        return ob is not None and ob.motion_patch.enabled
 
     def execute(self, context):
         context.active_object.motion_patch.enabled = False
         return {'FINISHED'}
 
 
-classes = (MOTION_PATCHES_OT_tag_object_patch, MOTION_PATCHES_OT_untag_object_patch)
+# Choose the new clip's action in the list, then Tag to check it and use it.
+clip_list = list_operators("clip", "Clip", "the active prop's clips",
+                           lambda context: getattr(_active_mesh(context), "motion_patch", None),
+                           "clips", "active_clip_index")
+
+classes = (MOTION_PATCHES_OT_tag_object_patch, MOTION_PATCHES_OT_untag_object_patch) + clip_list

@@ -1,7 +1,18 @@
+"""Plan one character (the active armature) or a crowd (every selected armature), and
+reset the scene's planning settings to the animator's defaults from the preferences."""
+
 import bpy
 from bpy.props import StringProperty
 
-from .. import api
+from .. import api, props
+from .common import progress
+
+
+def _weights(settings):
+    """The planning arguments of :func:`api.plan_path` / :func:`api.plan_crowd` that the
+    scene's settings hold."""
+    return dict(alpha=settings.alpha, beta=settings.beta, gamma=settings.gamma,
+                radius=settings.radius, stitching=settings.stitching.lower())
 
 
 class MOTION_PATCHES_OT_plan_path(bpy.types.Operator):
@@ -20,9 +31,7 @@ class MOTION_PATCHES_OT_plan_path(bpy.types.Operator):
         s = context.scene.motion_patches
         try:
             res = api.plan_path(context.scene, context.active_object, s.goal,
-                                patch_name=self.patch or None, alpha=s.alpha, beta=s.beta,
-                                gamma=s.gamma, radius=s.radius, context=context,
-                                stitching=s.stitching.lower())
+                                patch_name=self.patch or None, context=context, **_weights(s))
         except api.MotionPatchesError as exc:
             self.report({'ERROR'}, str(exc))
             return {'CANCELLED'}
@@ -34,4 +43,76 @@ class MOTION_PATCHES_OT_plan_path(bpy.types.Operator):
         return {'FINISHED'}
 
 
-classes = (MOTION_PATCHES_OT_plan_path,)
+def _crowd(context):
+    """[(armature, goal)] of the selected armatures, by name; each one's own goal, else the
+    scene's. Raises :class:`api.MotionPatchesError` naming a character without either."""
+    scene_goal = context.scene.motion_patches.goal
+    pairs = []
+    for ob in sorted(context.selected_objects, key=lambda o: o.name):
+        if ob.type != 'ARMATURE':
+            continue
+        goal = ob.motion_patches_character.goal or scene_goal
+        if goal is None:
+            raise api.MotionPatchesError(f"'{ob.name}' has no goal: give it its own goal or "
+                                         f"set the scene's goal")
+        pairs.append((ob, goal))
+    return pairs
+
+
+class MOTION_PATCHES_OT_plan_crowd(bpy.types.Operator):
+    """Plan every selected armature to its own goal (or the scene's), starting them apart"""
+    bl_idname = "motion_patches.plan_crowd"
+    bl_label = "Plan Crowd"
+    bl_options = {'REGISTER', 'UNDO'}
+
+    patch: StringProperty(name="Patch", description="Locomotion patch (default: the active one)")
+
+    @classmethod
+    def poll(cls, context):
+        return any(ob.type == 'ARMATURE' for ob in context.selected_objects)
+
+    def execute(self, context):
+        s = context.scene.motion_patches
+        try:
+            pairs = _crowd(context)
+            with progress(context) as update:
+                res = api.plan_crowd(context.scene, pairs, patch_name=self.patch or None,
+                                     context=context, progress=update, **_weights(s))
+        except api.MotionPatchesError as exc:
+            self.report({'ERROR'}, str(exc))
+            return {'CANCELLED'}
+        for name, why in res.failed:
+            self.report({'WARNING'}, why if name in why else f"{name}: {why}")
+        if not res.plans:
+            self.report({'ERROR'}, "No character found a path; nothing was written")
+            return {'CANCELLED'}
+        for c in res.conflicts:
+            self.report({'WARNING'}, f"'{c['a']}' and '{c['b']}' come within "
+                                     f"{c['distance_m']:.2f} m at frame {c['frame']}")
+        waits = [f"{n} {d} frames" for n, d in res.delays.items() if d]
+        self.report({'INFO'}, f"Planned {len(res.plans)} of {len(pairs)} characters in "
+                              f"{res.seconds:.1f} s" + (f"; waiting: {', '.join(waits)}"
+                                                        if waits else ""))
+        return {'FINISHED'}
+
+
+class MOTION_PATCHES_OT_reset_planning(bpy.types.Operator):
+    """Set this scene's α, β, γ, radius and stitching to the defaults in the preferences"""
+    bl_idname = "motion_patches.reset_planning"
+    bl_label = "Reset to Preferences"
+    bl_options = {'REGISTER', 'UNDO'}
+
+    def execute(self, context):
+        prefs = props.preferences(context)
+        if prefs is None:
+            self.report({'ERROR'}, "The add-on preferences are not available (is the add-on "
+                                   "enabled?)")
+            return {'CANCELLED'}
+        s = context.scene.motion_patches
+        for name in props.PLANNING:
+            setattr(s, name, getattr(prefs, name))
+        return {'FINISHED'}
+
+
+classes = (MOTION_PATCHES_OT_plan_path, MOTION_PATCHES_OT_plan_crowd,
+           MOTION_PATCHES_OT_reset_planning)

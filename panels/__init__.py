@@ -1,10 +1,13 @@
-"""UI: the Motion Patches tab of the 3D viewport's sidebar."""
+"""UI: the Motion Patches tab of the 3D viewport's sidebar (one panel per concept, in the
+order an animator works: locomotion patches, object patch, planning, analysis, overlay)
+and the planner overlay's draw handler."""
 
 import bpy
 
-from . import main, overlay
+from . import analysis, locomotion, object_patch, overlay, planning
 
-classes = main.classes
+classes = (locomotion.classes + object_patch.classes + planning.classes + analysis.classes
+           + overlay.classes)
 
 _register, _unregister = bpy.utils.register_classes_factory(classes)
 

@@ -1,19 +1,23 @@
 """Viewport overlay: what the planner sees, drawn with the ``gpu`` module when enabled.
 
 Tile grid and occluded cells around each planned path, the path coloured by piece kind
-(segments alternate two colours, traversals red, interactions green, connectors grey) and
-the stitch points between pieces. The geometry is computed by :func:`buffers` from the
-plans stored on the characters, so it can be tested without a GPU; the draw handler is
-added only while the overlay is enabled and always removed on unregister.
+(segments alternate two colours, traversals red, interactions green, connectors grey), the
+stitch points between pieces, and for every tagged prop where its clips start (green) and
+end (red) with a short tick along the heading there: the places the planner can stitch a
+hurdle or a sit-down into the walk. The geometry is computed by :func:`buffers`, so it can
+be tested without a GPU; the draw handler is added only while the overlay is enabled and
+always removed on unregister.
 """
 
 import json
 
+import bpy
 import numpy as np
 
 from .. import api
 from ..adapter import storage
 from ..motion_patches.environment import Environment, Obstacle
+from .sidebar import SidebarPanel
 
 COLOURS = {"segment": ((0.16, 0.45, 0.85, 1.0), (0.95, 0.6, 0.1, 1.0)),
            "part": ((0.16, 0.45, 0.85, 1.0), (0.95, 0.6, 0.1, 1.0)),
@@ -22,14 +26,63 @@ COLOURS = {"segment": ((0.16, 0.45, 0.85, 1.0), (0.95, 0.6, 0.1, 1.0)),
 GRID = (0.5, 0.5, 0.5, 0.35)
 OCCLUDED = (0.9, 0.35, 0.3, 0.35)
 STITCH = (1.0, 1.0, 1.0, 1.0)
+ENTRY = (0.2, 0.9, 0.3, 1.0)
+EXIT = (0.95, 0.2, 0.2, 1.0)
+TICK = 0.2  # metres: the heading tick at a clip's entry / exit
 Z = 0.01  # drawn just above the ground
 
 _handle = None
-_cache = {"key": None, "buffers": None}
+_cache = {"plans": (None, None), "markers": (None, None)}
 
 
-def buffers(scene):
-    """{"lines": (coords, colours), "points": (...), "tris": (...)} in world space."""
+def _arr(v, n):
+    return np.array(v, np.float32).reshape(-1, n)
+
+
+def buffers(scene, depsgraph=None):
+    """Everything the overlay draws, in world space, as (coords, colours) float32 arrays:
+    "lines", "points", "tris" for the plans (paths, stitches, tile grid, occluded cells),
+    "markers" (points) and "ticks" (lines) for the props' clip entries and exits."""
+    out = plan_buffers(scene)
+    out.update(marker_buffers(scene, depsgraph))
+    return out
+
+
+def marker_buffers(scene, depsgraph=None):
+    """{"markers": (P, 3) points, "ticks": (2P, 3) line ends} of every tagged prop's clips:
+    for each (copy of a) clip its first ground frame (ENTRY colour) and last (EXIT colour),
+    each with a TICK-long line along the heading there. Nothing is marked when no patch is
+    baked, or when a tagged prop cannot be read (a clip without an action): planning would
+    refuse that scene too, and says why."""
+    points, pcol, ticks, tcol = [], [], [], []
+    try:
+        patch = storage.load_patch(scene)
+    except ValueError:
+        patch = None
+    if patch is not None and any(_tagged(scene)):
+        if depsgraph is None:
+            depsgraph = bpy.context.evaluated_depsgraph_get()
+        try:
+            props = api.object_patches(scene, depsgraph, patch)
+        except api.MotionPatchesError:
+            props = []
+        for prop in props:
+            for clip in prop.clips:
+                g = prop.world_clip(clip).ground
+                for (x, y, h), colour in ((g[0], ENTRY), (g[-1], EXIT)):
+                    points.append((x, y, Z))
+                    ticks += [(x, y, Z), (x + TICK * np.cos(h), y + TICK * np.sin(h), Z)]
+                    pcol.append(colour)
+                    tcol += [colour, colour]
+    return {"markers": (_arr(points, 3), _arr(pcol, 4)), "ticks": (_arr(ticks, 3), _arr(tcol, 4))}
+
+
+def _tagged(scene):
+    return (ob for ob in scene.objects if ob.type == "MESH" and ob.motion_patch.enabled)
+
+
+def plan_buffers(scene):
+    """{"lines", "points", "tris"} of every planned character (see :func:`buffers`)."""
     lines, lcol, points, pcol, tris, tcol = [], [], [], [], [], []
     try:
         patch = storage.load_patch(scene)
@@ -86,59 +139,94 @@ def buffers(scene):
                         tris += quad
                         tcol += [OCCLUDED] * 6
 
-    def arr(v, n):
-        return np.array(v, np.float32).reshape(-1, n)
-    return {"lines": (arr(lines, 3), arr(lcol, 4)), "points": (arr(points, 3), arr(pcol, 4)),
-            "tris": (arr(tris, 3), arr(tcol, 4))}
+    return {"lines": (_arr(lines, 3), _arr(lcol, 4)), "points": (_arr(points, 3), _arr(pcol, 4)),
+            "tris": (_arr(tris, 3), _arr(tcol, 4))}
 
 
-def _scene_key(scene):
+def _patch_key(scene):
+    """Changes when another patch becomes active or one is re-baked (its bake report)."""
+    s = scene.motion_patches
+    return [s.active_patch_index] + [[p.name, p.stats] for p in s.patches]
+
+
+def _plans_key(scene):
     return json.dumps([ob.get(api.PLAN_KEY, "")[:64] + str(len(ob.get(api.PLAN_KEY, "")))
-                       for ob in scene.objects if ob.type == "ARMATURE"])
+                       for ob in scene.objects if ob.type == "ARMATURE"] + _patch_key(scene))
+
+
+def _markers_key(scene):
+    """Changes when a tagged prop moves, is (un)tagged or its clips change."""
+    return json.dumps([[ob.name, [list(r) for r in ob.matrix_world], ob.visible_get(),
+                        [[c.action.name if c.action else "", c.kind, c.effort, c.copy_step]
+                         for c in ob.motion_patch.clips]] for ob in _tagged(scene)]
+                      + _patch_key(scene))
+
+
+def _cached(name, key, make):
+    if _cache[name][0] != key:
+        _cache[name] = (key, make())
+    return _cache[name][1]
 
 
 def draw():
-    import bpy
     import gpu
     from gpu_extras.batch import batch_for_shader
     scene = bpy.context.scene
     if not scene.motion_patches.show_overlay:
         return
-    key = _scene_key(scene)
-    if _cache["key"] != key:
-        _cache["key"], _cache["buffers"] = key, buffers(scene)
+    buf = dict(_cached("plans", _plans_key(scene), lambda: plan_buffers(scene)))
+    # The viewport's own (already evaluated) depsgraph: drawing never triggers evaluation.
+    depsgraph = bpy.context.view_layer.depsgraph
+    buf.update(_cached("markers", _markers_key(scene), lambda: marker_buffers(scene, depsgraph)))
     flat = gpu.shader.from_builtin("FLAT_COLOR")
     gpu.state.blend_set("ALPHA")
-    for prim, name in (("TRIS", "tris"), ("LINES", "lines"), ("POINTS", "points")):
-        pos, col = _cache["buffers"][name]
+    for prim, name, size in (("TRIS", "tris", 0), ("LINES", "lines", 0), ("LINES", "ticks", 0),
+                             ("POINTS", "points", 6.0), ("POINTS", "markers", 9.0)):
+        pos, col = buf[name]
         if not len(pos):
             continue
         shader = flat
         if prim == "POINTS":
             try:  # point shaders with a size uniform (4.x+, required on Metal/Vulkan)
                 shader = gpu.shader.from_builtin("POINT_FLAT_COLOR")
-                shader.uniform_float("size", 6.0)
+                shader.uniform_float("size", size)
             except (ValueError, KeyError):
-                gpu.state.point_size_set(6.0)
+                gpu.state.point_size_set(size)
         batch_for_shader(shader, prim, {"pos": pos, "color": col}).draw(shader)
     gpu.state.blend_set("NONE")
 
 
 def enable():
     global _handle
-    import bpy
     if _handle is None:
         _handle = bpy.types.SpaceView3D.draw_handler_add(draw, (), "WINDOW", "POST_VIEW")
 
 
 def disable():
     global _handle
-    import bpy
     if _handle is not None:
         bpy.types.SpaceView3D.draw_handler_remove(_handle, "WINDOW")
         _handle = None
-    _cache["key"] = _cache["buffers"] = None
+    _cache.update(plans=(None, None), markers=(None, None))
 
 
 def is_enabled():
     return _handle is not None
+
+
+class MOTION_PATCHES_PT_overlay(SidebarPanel, bpy.types.Panel):
+    bl_label = "Overlay"
+    bl_idname = "MOTION_PATCHES_PT_overlay"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.prop(context.scene.motion_patches, "show_overlay")
+        col = layout.column(align=True)
+        col.active = context.scene.motion_patches.show_overlay
+        for text in ("Path: segments blue / orange, traversals red, interactions green",
+                     "White points: stitches between pieces",
+                     "Props: green = a clip starts, red = it ends (tick: heading)"):
+            col.label(text=text)
+
+
+classes = (MOTION_PATCHES_PT_overlay,)

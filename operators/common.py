@@ -1,0 +1,55 @@
+"""What several operators share: the window manager's progress indicator, and the add /
+remove buttons beside the add-on's lists (turn clips of a bake, a prop's clips)."""
+
+from contextlib import contextmanager
+
+import bpy
+
+
+@contextmanager
+def progress(context):
+    """Show Blender's progress indicator for the block; yields ``update(fraction 0..1)``,
+    the callable the API's ``progress`` argument takes. Always ended, even on error."""
+    wm = context.window_manager
+    wm.progress_begin(0, 100)
+    try:
+        yield lambda fraction: wm.progress_update(int(round(fraction * 100)))
+    finally:
+        wm.progress_end()
+
+
+def list_operators(name, noun, where, owner, items, index):
+    """The Add and Remove operators (``motion_patches.<name>_add`` / ``_remove``) of the
+    list ``owner(context).<items>`` whose active row is ``<index>``; ``owner`` returns None
+    when there is no list to edit (the buttons are then greyed out)."""
+
+    def has_list(context):
+        return owner(context) is not None
+
+    def add(self, context):
+        data = owner(context)
+        getattr(data, items).add()
+        setattr(data, index, len(getattr(data, items)) - 1)
+        return {'FINISHED'}
+
+    def has_active(context):
+        data = owner(context)
+        return data is not None and 0 <= getattr(data, index) < len(getattr(data, items))
+
+    def remove(self, context):
+        data = owner(context)
+        i = getattr(data, index)
+        getattr(data, items).remove(i)
+        setattr(data, index, max(0, min(i, len(getattr(data, items)) - 1)))
+        return {'FINISHED'}
+
+    def operator(verb, description, poll, execute):
+        return type(f"MOTION_PATCHES_OT_{name}_{verb.lower()}", (bpy.types.Operator,), {
+            "bl_idname": f"motion_patches.{name}_{verb.lower()}",
+            "bl_label": f"{verb} {noun}", "bl_description": description,
+            "bl_options": {'REGISTER', 'UNDO'},
+            "poll": classmethod(lambda cls, context: poll(context)), "execute": execute})
+
+    return (operator("Add", f"Add a {noun.lower()} to {where}", has_list, add),
+            operator("Remove", f"Remove the selected {noun.lower()} from {where} (the action "
+                               f"itself is kept)", has_active, remove))

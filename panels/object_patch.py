@@ -1,0 +1,70 @@
+"""Object Patch panel: the active mesh as a prop carrying clips (traversals, interactions),
+its clip list, its footprint and the tag / untag buttons."""
+
+import bpy
+import numpy as np
+
+from ..motion_patches.environment import convex_hull
+from .sidebar import SidebarPanel, list_with_buttons
+
+MAX_FOOTPRINT_VERTICES = 20000  # above this the panel does not compute the footprint area
+
+
+def footprint_info(ob):
+    """(vertex count, plan-view area in m² of the mesh's convex hull, or None when the mesh
+    is too large to measure while drawing). Modifiers are not applied here."""
+    me = ob.data
+    n = len(me.vertices)
+    if n < 3 or n > MAX_FOOTPRINT_VERTICES:
+        return n, None
+    co = np.empty(n * 3)
+    me.vertices.foreach_get("co", co)
+    m = np.array(ob.matrix_world)
+    hull = convex_hull(co.reshape(n, 3) @ m[:2, :3].T + m[:2, 3])
+    if len(hull) < 3:
+        return n, 0.0
+    x, y = hull[:, 0], hull[:, 1]
+    return n, float(abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))) / 2)
+
+
+class MOTION_PATCHES_UL_clips(bpy.types.UIList):
+    """A prop's clips: action and kind per row (effort and copies below the list)."""
+
+    def draw_item(self, context, layout, data, item, icon, active_data, active_propname,
+                  index=0):
+        row = layout.row(align=True)
+        row.prop(item, "action", text="", emboss=True)
+        row.prop(item, "kind", text="")
+
+
+class MOTION_PATCHES_PT_object_patch(SidebarPanel, bpy.types.Panel):
+    bl_label = "Object Patch"
+    bl_idname = "MOTION_PATCHES_PT_object_patch"
+
+    @classmethod
+    def poll(cls, context):
+        ob = context.active_object
+        return ob is not None and ob.type == 'MESH'
+
+    def draw(self, context):
+        ob = context.active_object
+        mp = ob.motion_patch
+        layout = self.layout
+        layout.label(text=ob.name, icon='MESH_CUBE')
+        layout.prop(mp, "enabled")
+        list_with_buttons(layout, "MOTION_PATCHES_UL_clips", mp, "clips", "active_clip_index",
+                          "motion_patches.clip_add", "motion_patches.clip_remove")
+        if 0 <= mp.active_clip_index < len(mp.clips):
+            clip = mp.clips[mp.active_clip_index]
+            col = layout.column(align=True)
+            col.prop(clip, "effort")
+            col.prop(clip, "copy_step")
+        n, area = footprint_info(ob)
+        layout.label(text=f"{n} vertices" + (f", footprint {area:.2f} m²" if area is not None
+                                             else ""), icon='MESH_DATA')
+        row = layout.row(align=True)
+        row.operator("motion_patches.tag_object_patch", icon='CHECKMARK')
+        row.operator("motion_patches.untag_object_patch", icon='X')
+
+
+classes = (MOTION_PATCHES_UL_clips, MOTION_PATCHES_PT_object_patch)
