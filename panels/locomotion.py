@@ -52,6 +52,9 @@ class MOTION_PATCHES_PT_locomotion(SidebarPanel, bpy.types.Panel):
                           "active_turn_index", "motion_patches.turn_add",
                           "motion_patches.turn_remove")
         layout.operator("motion_patches.bake_locomotion_patch", icon='RENDER_ANIMATION')
+        row = layout.row(align=True)
+        row.operator("motion_patches.import_patch", icon='IMPORT')
+        row.operator("motion_patches.export_patch", icon='EXPORT')
         if not len(s.patches):
             layout.label(text="No patch baked yet", icon='INFO')
             return

@@ -427,3 +427,27 @@ def test_overlay_draw_cache_follows_a_moved_prop(scene, addon_module):
     assert overlay._markers_key(scene) != key  # the drawn markers are rebuilt
     chair.motion_patch.clips[0].copy_step = 45.0
     assert overlay._markers_key(scene) != key
+
+
+def test_export_and_import_patch_operators_carry_a_patch_to_another_scene(scene, addon_module,
+                                                                           tmp_path):
+    api = addon_module.api
+    path = tmp_path / "walk.mpatch"
+    assert bpy.ops.motion_patches.export_patch(filepath=str(path)) == {'FINISHED'}
+    activate("Walker")
+    before = api.plan_path(scene, bpy.data.objects["Walker"], scene.motion_patches.goal)
+    scene.motion_patches.patches.clear()
+    assert not bpy.ops.motion_patches.export_patch.poll()  # nothing to export any more
+    assert bpy.ops.motion_patches.import_patch(filepath=str(path)) == {'FINISHED'}
+    assert [p.name for p in scene.motion_patches.patches] == ["walk"]
+    after = api.plan_path(scene, bpy.data.objects["Walker"], scene.motion_patches.goal)
+    assert after.cost == pytest.approx(before.cost) and after.pieces == before.pieces
+
+
+def test_importing_a_file_that_is_not_a_patch_reports_and_changes_nothing(scene, tmp_path):
+    junk = tmp_path / "junk.mpatch"
+    junk.write_bytes(b"PK\x03\x04 not really")
+    n = len(scene.motion_patches.patches)
+    with pytest.raises(RuntimeError, match="not a stored locomotion patch"):
+        bpy.ops.motion_patches.import_patch(filepath=str(junk))
+    assert len(scene.motion_patches.patches) == n

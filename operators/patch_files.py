@@ -1,0 +1,59 @@
+"""Baked patches to and from files: bake once on the farm, use the patch in every shot."""
+
+import bpy
+from bpy.props import StringProperty
+from bpy_extras.io_utils import ExportHelper, ImportHelper
+
+from .. import api
+
+EXT = ".mpatch"
+
+
+class MOTION_PATCHES_OT_export_patch(bpy.types.Operator, ExportHelper):
+    """Write the active locomotion patch to a file other .blend files can import"""
+    bl_idname = "motion_patches.export_patch"
+    bl_label = "Export Patch"
+    bl_options = {'REGISTER', 'UNDO'}
+
+    filename_ext = EXT
+    filter_glob: StringProperty(default="*" + EXT, options={'HIDDEN'})
+
+    @classmethod
+    def poll(cls, context):
+        return len(context.scene.motion_patches.patches) > 0
+
+    def execute(self, context):
+        s = context.scene.motion_patches
+        name = s.patches[s.active_patch_index].name if 0 <= s.active_patch_index < len(
+            s.patches) else None
+        try:
+            api.export_patch(context.scene, self.filepath, name)
+        except api.MotionPatchesError as exc:
+            self.report({'ERROR'}, str(exc))
+            return {'CANCELLED'}
+        self.report({'INFO'}, f"Exported '{name}' to {self.filepath}")
+        return {'FINISHED'}
+
+
+class MOTION_PATCHES_OT_import_patch(bpy.types.Operator, ImportHelper):
+    """Store a locomotion patch file in this .blend (replacing a patch of the same name)"""
+    bl_idname = "motion_patches.import_patch"
+    bl_label = "Import Patch"
+    bl_options = {'REGISTER', 'UNDO'}
+
+    filename_ext = EXT
+    filter_glob: StringProperty(default="*" + EXT, options={'HIDDEN'})
+
+    def execute(self, context):
+        try:
+            name = api.import_patch(context.scene, self.filepath)
+        except api.MotionPatchesError as exc:
+            self.report({'ERROR'}, str(exc))
+            return {'CANCELLED'}
+        s = context.scene.motion_patches
+        s.active_patch_index = list(s.patches).index(s.patches[name])
+        self.report({'INFO'}, f"Imported '{name}'")
+        return {'FINISHED'}
+
+
+classes = (MOTION_PATCHES_OT_export_patch, MOTION_PATCHES_OT_import_patch)
