@@ -236,6 +236,14 @@ def test_a_goal_prop_without_a_sit_clip_is_refused(chairs_blend, addon_module):
     tracks = [t.name for t in walker.animation_data.nla_tracks] if walker.animation_data else []
     with pytest.raises(api.MotionPatchesError, match="sit-down"):
         api.plan_path(bpy.context.scene, walker, bpy.data.objects["Chair.03"])
+    # A goal position inside the chair (not the chair itself): refused the same way, as
+    # bad input, not as "no path".
+    x, y = bpy.data.objects["Chair.03"].matrix_world.translation[:2]
+    with pytest.raises(api.MotionPatchesError,
+                       match="inside the object patch 'Chair.03', which has no interaction"
+                       ) as err:
+        api.plan_path(bpy.context.scene, walker, (x, y, 0.0))
+    assert not isinstance(err.value, api.PathNotFound)
     now = [t.name for t in walker.animation_data.nla_tracks] if walker.animation_data else []
     assert now == tracks
 
