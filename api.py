@@ -17,7 +17,8 @@ import numpy as np
 
 from .adapter import actions as act_io
 from .adapter import evaluate, mocap, nla, props_io, scene as scene_io, storage
-from .motion_patches import blocking, contacts, crowd, layout_spec, metrics, object_patch
+from .motion_patches import (blocking, contacts, crowd, foot_lock, layout_spec, metrics,
+                             object_patch)
 from .motion_patches.gait import build_gait
 from .motion_patches.locomotion_patch import bake
 from .motion_patches.motion import concatenate
@@ -300,13 +301,15 @@ def _solve(planner, character, endpoints):
     return with_interactions(plan, start_ref, goal_ref)
 
 
-def _write(scene, character, patch, patch_name, plan, frame_start, env, goal_state, radius):
+def _write(scene, character, patch, patch_name, plan, frame_start, env, goal_state, radius,
+           lock=True):
     """NLA strips and the plan record of one planned character."""
     skel = patch.gait.skeleton
     motions = plan_motions(patch, plan)
     world = concatenate(motions)
+    locked = foot_lock.lock_feet(skel, world) if lock else None
     strips, stashed = nla.write_plan(bpy, character, patch, storage.patch_key(scene, patch_name),
-                                     plan, motions, world, frame_start)
+                                     plan, motions, world, frame_start, locked)
     wm = world.world_matrices(skel)
     foot = contacts.foot_joints(skel)
     frame_end = frame_start + world.frames - 1
@@ -315,7 +318,7 @@ def _write(scene, character, patch, patch_name, plan, frame_start, env, goal_sta
         "foot_names": [skel.names[i] for i in foot], "root_name": skel.names[skel.root],
         "frame_start": frame_start, "frame_end": frame_end, "goal": goal_state.tolist(),
         "boundaries": [s["start"] for s in strips[1:]], "radius": radius,
-        "facing": nla.facing_angle(skel),
+        "facing": nla.facing_angle(skel), "foot_lock": bool(lock),
         "traversals": [[s["start"], s["end"]] for s in strips if s["kind"] == "traversal"],
         "interactions": [[s["start"], s["end"]] for s in strips if s["kind"] == "interaction"],
         "obstacles": {o.name: o.polygon.tolist() for o in env.obstacles.values()},
@@ -326,14 +329,16 @@ def _write(scene, character, patch, patch_name, plan, frame_start, env, goal_sta
 
 
 def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2,
-              radius=0.25, frame_start=None, context=None, stitching="dynamic", start_prop=None):
+              radius=0.25, frame_start=None, context=None, stitching="dynamic", start_prop=None,
+              foot_lock=True):
     """Plan ``character`` to ``goal`` (an object or (x, y, heading)) and write it as NLA.
 
     Tagged props (object patches) offer their traversal clips; ``stitching`` is
     "dynamic" (lazy, the paper's method) or "static" (everything stitched first). A goal
     that is a tagged prop with a sit-down interaction clip ends the path seated on it; a
     ``start_prop`` with a stand-up clip starts it there (the character's own position is
-    then not used). Raises :class:`PathNotFound` when the props leave no way, and
+    then not used). With ``foot_lock`` planted feet are pinned by leg IK, written as a
+    Combine track over the shared segment strips. Raises :class:`PathNotFound` when the props leave no way, and
     :class:`MotionPatchesError` for bad input; either way the scene is unchanged."""
     patch = _patch_for_planning(scene, patch_name)
     context = context or bpy.context
@@ -355,12 +360,13 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
     planner = SegmentPlanner(patch, env, alpha, beta, gamma, props=props, mode=stitching)
     plan = _solve(planner, character, ends)
     frame_start = scene.frame_current if frame_start is None else int(frame_start)
-    return _write(scene, character, patch, patch_name, plan, frame_start, env, ends[1], radius)
+    return _write(scene, character, patch, patch_name, plan, frame_start, env, ends[1], radius,
+                  foot_lock)
 
 
 def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, radius=0.25,
                frame_start=None, context=None, stitching="dynamic", progress=None,
-               max_wait_seconds=4.0, spacing=None):
+               max_wait_seconds=4.0, spacing=None, foot_lock=True):
     """Plan several characters, ``pairs`` = [(armature, goal object or (x, y, heading))],
     and write each one's NLA; characters that find no path are listed in ``failed``.
 
@@ -418,7 +424,7 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
     plans = []
     for (character, e, plan), d in zip(planned, delays):
         plans.append(_write(scene, character, patch, patch_name, plan, first + d, env, e[1],
-                            radius))
+                            radius, foot_lock))
     if progress is not None:
         progress(1.0)
     names = [c.name for c, _, _ in planned]

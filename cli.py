@@ -442,7 +442,7 @@ def cmd_plan(args):
     save = _save_target(args)
     try:
         res = api.plan_path(scene, char, goal, patch_name=args.patch, frame_start=args.frame_start,
-                            stitching=args.stitching, **w)
+                            stitching=args.stitching, foot_lock=args.foot_lock, **w)
     except api.PathNotFound as exc:
         raise Failed(str(exc)) from None
     meta, _ = api.load_plan_record(char)
@@ -487,7 +487,8 @@ def cmd_crowd(args):
     progress = Progress("crowd", enabled=not args.json)
     try:
         res = api.plan_crowd(scene, pairs, patch_name=args.patch, frame_start=args.frame_start,
-                             stitching=args.stitching, progress=progress,
+                             stitching=args.stitching, foot_lock=args.foot_lock,
+                             progress=progress,
                              max_wait_seconds=4.0 if args.max_wait is None else args.max_wait,
                              spacing=args.spacing, **w)
     finally:
@@ -804,6 +805,8 @@ def _stitching_option(p):
     p.add_argument("--stitching", choices=("dynamic", "static"), default="dynamic",
                    help="stitch traversal clips lazily (dynamic, the paper's method) or all "
                         "before the search (static, Lee 2006)")
+    p.add_argument("--no-foot-lock", dest="foot_lock", action="store_false",
+                   help="leave planted feet as synthesised (no leg IK track)")
 
 
 def _save_options(p):

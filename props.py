@@ -31,6 +31,9 @@ PLANNING = {  # name -> factory of the bpy property (one fresh definition per cl
     "stitching": lambda: EnumProperty(name="Stitching", default='DYNAMIC', items=(
         ('DYNAMIC', "Dynamic", "Stitch traversal clips lazily, when the search needs them"),
         ('STATIC', "Static", "Stitch every traversal clip before searching (Lee 2006 baseline)"))),
+    "foot_lock": lambda: BoolProperty(name="Lock Planted Feet", default=True,
+                                      description="Pin each planted foot with leg IK (a Combine "
+                                                  "track over the walk) so it does not slide"),
 }
 BAKE = {
     "cells": lambda **kw: IntProperty(name="Cells", default=8, min=2, max=8, description=
@@ -100,6 +103,7 @@ class MOTION_PATCHES_PG_scene(bpy.types.PropertyGroup):
     gamma: PLANNING["gamma"]()
     radius: PLANNING["radius"]()
     stitching: PLANNING["stitching"]()
+    foot_lock: PLANNING["foot_lock"]()
     show_overlay: BoolProperty(
         name="Show Planner Overlay", default=False,
         description="Draw the tile grid, occluded cells, planned paths, stitches and where "
@@ -115,6 +119,7 @@ class MOTION_PATCHES_AP_preferences(bpy.types.AddonPreferences):
     gamma: PLANNING["gamma"]()
     radius: PLANNING["radius"]()
     stitching: PLANNING["stitching"]()
+    foot_lock: PLANNING["foot_lock"]()
     cells: BAKE["cells"]()
     nodes: BAKE["nodes"]()
 

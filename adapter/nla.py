@@ -21,6 +21,7 @@ from . import compat
 TRACK_PREFIX = "MP "
 TRACK_MOTION = TRACK_PREFIX + "motion"
 TRACK_ROOT = TRACK_PREFIX + "root"
+TRACK_FOOT = TRACK_PREFIX + "foot lock"
 TRACKS_KEY = "motion_patches_tracks"
 SEGMENT_KEY = "motion_patches_segment"
 CHARACTER_KEY = "motion_patches_character"
@@ -119,8 +120,12 @@ def _inplace_action(name, skel, motion, tags):
     return action, slot
 
 
-def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start):
-    """Write a plan's strips and root trajectory on ``obj``; returns strip records."""
+def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start, locked=None):
+    """Write a plan's strips and root trajectory on ``obj``; returns strip records.
+
+    ``locked``: rotation channels (F, J, 4) of ``world`` with the feet pinned
+    (:func:`motion_patches.foot_lock.lock_feet`); the difference is written as a
+    per-character correction on its own track, combined over the shared segment actions."""
     skel = patch.gait.skeleton
     check_rig(obj, skel)
     ad = obj.animation_data or obj.animation_data_create()
@@ -168,5 +173,36 @@ def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start):
     compat.set_strip_slot(rs, root_slot)
     rs.extrapolation = "HOLD"
     rs.blend_in = rs.blend_out = 0.0
-    obj[TRACKS_KEY] = json.dumps([TRACK_MOTION, TRACK_ROOT])
+    owned = [TRACK_MOTION, TRACK_ROOT]
+    if locked is not None:
+        _write_foot_lock(obj, skel, world, locked, frame_start)
+        owned.append(TRACK_FOOT)
+    obj[TRACKS_KEY] = json.dumps(owned)
     return strips, stashed
+
+
+def _write_foot_lock(obj, skel, world, locked, frame_start):
+    """The foot lock as a Combine strip above the motion: for every bone it changes, the
+    quaternion ``delta`` with ``base @ delta = locked`` (Blender's Combine multiplies a
+    strip's quaternion onto what the tracks below give), so segment actions stay shared."""
+    base = world.rotations
+    changed = [j for j in range(len(skel.names))
+               if not np.allclose(np.abs(np.sum(base[:, j] * locked[:, j], axis=-1)), 1.0,
+                                  atol=1e-9)]
+    action, slot = compat.new_action(f"MP {obj.name} foot lock")
+    action[CHARACTER_KEY] = obj.name
+    frames = np.arange(world.frames, dtype=float)
+    for j in changed:
+        delta = quat.make_continuous(quat.mul(quat.conj(base[:, j]), locked[:, j]), axis=0)
+        delta *= np.where(delta[:, :1] < 0, -1.0, 1.0)  # near identity: keep w >= 0
+        name = skel.names[j]
+        for i in range(4):
+            act_io.key_curve(action, slot, f'pose.bones["{name}"].rotation_quaternion', i,
+                             frames, delta[:, i], group=name)
+    track = obj.animation_data.nla_tracks.new()
+    track.name = TRACK_FOOT
+    strip = track.strips.new(f"{obj.name} foot lock", int(frame_start), action)
+    compat.set_strip_slot(strip, slot)
+    strip.blend_type = "COMBINE"
+    strip.extrapolation = "HOLD"
+    strip.blend_in = strip.blend_out = 0.0

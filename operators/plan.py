@@ -12,7 +12,8 @@ def _weights(settings):
     """The planning arguments of :func:`api.plan_path` / :func:`api.plan_crowd` that the
     scene's settings hold."""
     return dict(alpha=settings.alpha, beta=settings.beta, gamma=settings.gamma,
-                radius=settings.radius, stitching=settings.stitching.lower())
+                radius=settings.radius, stitching=settings.stitching.lower(),
+                foot_lock=settings.foot_lock)
 
 
 class MOTION_PATCHES_OT_plan_path(bpy.types.Operator):
@@ -97,7 +98,8 @@ class MOTION_PATCHES_OT_plan_crowd(bpy.types.Operator):
 
 
 class MOTION_PATCHES_OT_reset_planning(bpy.types.Operator):
-    """Set this scene's α, β, γ, radius and stitching to the defaults in the preferences"""
+    """Set this scene's α, β, γ, radius, stitching and foot lock to the defaults in the
+    preferences"""
     bl_idname = "motion_patches.reset_planning"
     bl_label = "Reset to Preferences"
     bl_options = {'REGISTER', 'UNDO'}

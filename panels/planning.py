@@ -23,6 +23,7 @@ class MOTION_PATCHES_PT_planning(SidebarPanel, bpy.types.Panel):
         col.prop(s, "gamma")
         layout.prop(s, "radius")
         layout.prop(s, "stitching")
+        layout.prop(s, "foot_lock")
         layout.operator("motion_patches.reset_planning", icon='LOOP_BACK')
         row = layout.row(align=True)
         row.operator("motion_patches.plan_path", icon='PLAY')

@@ -242,7 +242,7 @@ def test_plan_saves_nla_and_analyse_reports_figures(cli, capsys, layout, tmp_pat
     assert f["goal_position_error_cm"] < 10 and f["frames_root_inside_obstacle"] == 0
     open_blend(out)
     tracks = [t.name for t in bpy.data.objects["Walker"].animation_data.nla_tracks]
-    assert tracks == ["MP motion", "MP root"]
+    assert tracks == ["MP motion", "MP root", "MP foot lock"]
 
 
 def test_plan_to_coordinates_prints_a_summary(cli, capsys, layout):

@@ -58,7 +58,7 @@ def test_plan_writes_nla_and_evaluates_onto_the_goal(baked_blend, addon_module):
     bpy.context.view_layer.objects.active = char
     assert bpy.ops.motion_patches.plan_path() == {'FINISHED'}
     tracks = [t.name for t in char.animation_data.nla_tracks]
-    assert tracks == ["MP motion", "MP root"]
+    assert tracks == ["MP motion", "MP root", "MP foot lock"]
     strips = char.animation_data.nla_tracks["MP motion"].strips
     assert len(strips) >= 3 and all(s.action_slot is not None for s in strips)
 
@@ -78,6 +78,36 @@ def test_plan_writes_nla_and_evaluates_onto_the_goal(baked_blend, addon_module):
     assert figures["foot_skate"]["mean_cm_per_frame"] < 1.0
     pop = figures["boundary_pop"]
     assert pop["max_boundary_jump_deg"] <= max(pop["p99_step_deg"], 1.0) * 1.5
+
+
+def test_foot_lock_pins_the_evaluated_feet(baked_blend, addon_module):
+    """The Combine track over the shared segment strips: the same plan, evaluated through
+    the depsgraph with and without it; planted feet slide much less with it, nothing else
+    about the path changes, and no pose pops."""
+    bpy.ops.wm.open_mainfile(filepath=str(baked_blend))
+    scene = bpy.context.scene
+    api = addon_module.api
+    char = walker_from(scene.motion_patches.source_armature)
+    goal = empty("Goal", 6.0, 4.0, -0.8)
+    free = api.plan_path(scene, char, goal, frame_start=1, foot_lock=False)
+    assert [t.name for t in char.animation_data.nla_tracks] == ["MP motion", "MP root"]
+    before = api.analyse(bpy.context, char)
+    locked = api.plan_path(scene, char, goal, frame_start=1)
+    assert locked.pieces == free.pieces and locked.cost == free.cost
+    lock_track = char.animation_data.nla_tracks["MP foot lock"]
+    assert lock_track.strips[0].blend_type == "COMBINE"
+    after = api.analyse(bpy.context, char)
+    sk0, sk1 = before["foot_skate"], after["foot_skate"]
+    assert sk1["mean_cm_per_s"] < 0.5 * sk0["mean_cm_per_s"], (sk0, sk1)
+    assert sk1["p95_cm_per_s"] < sk0["p95_cm_per_s"]
+    assert after["root_from_plan_cm"]["max"] < 0.5  # the hips are not touched
+    assert after["goal_root_position_error_cm"] == pytest.approx(
+        before["goal_root_position_error_cm"], abs=0.1)
+    assert (after["boundary_pop"]["max_boundary_jump_deg"]
+            <= before["boundary_pop"]["max_boundary_jump_deg"] + 5.0)
+    # Re-planning without the lock removes its track (the add-on owns it), nothing else.
+    api.plan_path(scene, char, goal, frame_start=1, foot_lock=False)
+    assert [t.name for t in char.animation_data.nla_tracks] == ["MP motion", "MP root"]
 
 
 def test_replanning_replaces_only_the_addon_tracks(baked_blend, addon_module):

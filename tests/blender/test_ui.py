@@ -286,7 +286,7 @@ def test_undo_after_plan_restores_the_previous_nla_state(scene):
     assert bpy.ops.motion_patches.plan_path('EXEC_DEFAULT', True) == {'FINISHED'}
     planned, pose_planned = nla_state(bpy.data.objects["Walker"]), evaluated_pose("Walker", 40)
     assert planned["action"] is None and planned["plan"]
-    assert [t[0] for t in planned["tracks"]][-2:] == ["MP motion", "MP root"]
+    assert [t[0] for t in planned["tracks"]][-3:] == ["MP motion", "MP root", "MP foot lock"]
     assert np.abs(pose_planned - pose_before).max() > 0.1  # the plan moves the rig
 
     assert bpy.ops.ed.undo() == {'FINISHED'}

@@ -1,0 +1,173 @@
+"""Foot locking: keep a planted foot where it was put down.
+
+Space-curve following turns and bends the recorded walk, so a foot that was planted in the
+source slides a little on the ground (skate). This pass pins each planted foot: during a
+run of frames where a foot is planted, its ankle is held at the mean position of that run
+and, once the heel is up, its toe where the held foot put it, and the leg reaches it by two-bone IK (the knee bends or
+opens, then the thigh swings). The hips, the body above them and the foot's own world
+orientation are kept, so only the thigh and shin channels change and bone lengths cannot.
+The correction eases in and out over a few frames around each run, so nothing pops.
+"""
+
+import numpy as np
+
+from . import quat
+from .contacts import foot_joints
+from .skeleton import local_rotations_from_global
+
+BLEND_FRAMES = 4  # frames the correction takes to ease in before and out after a contact
+STRETCH = 0.985   # the straightest a locked leg gets, as a fraction of thigh + shin
+
+
+def leg_chains(skel):
+    """[(hip, knee, ankle, toe) joint indices] per side, left then right."""
+    feet = foot_joints(skel)
+    out = []
+    for ankle, toe in ((feet[0], feet[1]), (feet[2], feet[3])):
+        knee = int(skel.parents[ankle])
+        hip = int(skel.parents[knee])
+        out.append((hip, knee, int(ankle), int(toe)))
+    return out
+
+
+def _runs(flags):
+    """[(start, stop)] of True runs, stop inclusive."""
+    f = np.concatenate(([False], np.asarray(flags, bool), [False]))
+    d = np.diff(f.astype(np.int8))
+    return list(zip(np.nonzero(d == 1)[0], np.nonzero(d == -1)[0] - 1))
+
+
+def planted_offsets(ankle_xy, toe_xy, ankle_on, toe_on, blend=BLEND_FRAMES):
+    """(F, 2) horizontal corrections of the ankle that pin a foot while it is planted.
+
+    On frames where the ankle is planted it is moved to the mean position of its run. On
+    frames where only the toe is (heel up, or a toe landing), the foot is moved so the toe
+    stays where the corrected foot had it on the neighbouring ankle-planted frame (or at
+    the mean of its run when there is none), so the correction is continuous within a
+    contact. Outside contacts the correction of the nearest contact frame fades out with a
+    smoothstep over ``blend`` frames."""
+    n = len(ankle_xy)
+    ankle_on = np.asarray(ankle_on, bool)
+    toe_only = np.asarray(toe_on, bool) & ~ankle_on
+    d = np.zeros((n, 2))
+    for a, b in _runs(ankle_on):
+        d[a:b + 1] = ankle_xy[a:b + 1].mean(axis=0) - ankle_xy[a:b + 1]
+    for a, b in _runs(toe_only):
+        if a > 0 and ankle_on[a - 1]:      # heel off: the toe stays where it was
+            anchor = toe_xy[a - 1] + d[a - 1]
+        elif b + 1 < n and ankle_on[b + 1]:  # toe first: it lands where the heel will
+            anchor = toe_xy[b + 1] + d[b + 1]
+        else:
+            anchor = toe_xy[a:b + 1].mean(axis=0)
+        d[a:b + 1] = anchor - toe_xy[a:b + 1]
+    on = ankle_on | toe_only
+    if not on.any():
+        return d
+    idx = np.arange(n)
+    planted = idx[on]
+    k = np.searchsorted(planted, idx)
+    after = planted[np.clip(k, 0, planted.size - 1)]
+    before = planted[np.clip(k - 1, 0, planted.size - 1)]
+
+    def fade(gap):
+        t = np.clip(1.0 - gap / float(blend + 1), 0.0, 1.0)
+        return t * t * (3 - 2 * t)
+
+    wb = np.where(before <= idx, fade(np.abs(idx - before)), 0.0)
+    wa = np.where(after >= idx, fade(np.abs(after - idx)), 0.0)
+    total = wb + wa
+    # Between two contacts close together the corrections of both blend (never a jump
+    # from one to the other); a single one fades out alone.
+    scale = np.where(total > 1.0, 1.0 / np.maximum(total, 1e-12), 1.0)
+    out = (d[before] * (wb * scale)[:, None] + d[after] * (wa * scale)[:, None])
+    out[on] = d[on]
+    return out
+
+
+def _rotation_between(u, v):
+    """(F, 3, 3) rotations taking unit vectors u to v along the shortest arc."""
+    axis = np.cross(u, v)
+    s = np.linalg.norm(axis, axis=-1)
+    c = np.clip(np.sum(u * v, axis=-1), -1.0, 1.0)
+    angle = np.arctan2(s, c)
+    axis = np.where(s[:, None] > 1e-9, axis / np.maximum(s, 1e-12)[:, None], [1.0, 0.0, 0.0])
+    return quat.to_matrix(_axis_angle(axis, angle))
+
+
+def _axis_angle(axis, angle):
+    h = 0.5 * np.asarray(angle)[..., None]
+    return np.concatenate((np.cos(h), np.sin(h) * axis), axis=-1)
+
+
+def two_bone_ik(hip, knee, ankle, target, hinge):
+    """(F, 3, 3) world rotations (thigh, shin) that move ``ankle`` to ``target``.
+
+    The knee angle is set for the hip-target distance (clamped to what the leg reaches
+    without locking straight),
+    bending about the leg's plane (``hinge`` where the leg is straight), then the whole leg
+    swings about the hip onto the target. Returns (R_thigh, R_shin): left-multiply the
+    thigh's and the shin's world rotations by them."""
+    a, b = knee - hip, ankle - knee
+    l1, l2 = np.linalg.norm(a, axis=-1), np.linalg.norm(b, axis=-1)
+    d0 = np.clip(np.linalg.norm(ankle - hip, axis=-1), np.abs(l1 - l2) + 1e-4, l1 + l2 - 1e-4)
+    # Never snap the knee straight: the leg stretches at most to STRETCH of its length
+    # (or as far as the recorded pose already did); a farther target is left a little short.
+    reach = np.maximum(d0, STRETCH * (l1 + l2))
+    d1 = np.clip(np.linalg.norm(target - hip, axis=-1), np.abs(l1 - l2) + 1e-4, reach)
+
+    def interior(d):
+        return np.arccos(np.clip((l1 ** 2 + l2 ** 2 - d ** 2) / (2 * l1 * l2), -1.0, 1.0))
+
+    delta = interior(d1) - interior(d0)
+    n = np.cross(a, b)
+    ns = np.linalg.norm(n, axis=-1)
+    n = np.where(ns[:, None] > 1e-6, n / np.maximum(ns, 1e-12)[:, None], hinge)
+    best, r_knee = None, None
+    for sign in (1.0, -1.0):  # the sense of the hinge that opens the knee by delta
+        r = quat.to_matrix(_axis_angle(n, sign * delta))
+        reach = np.linalg.norm(a + np.einsum("fij,fj->fi", r, b), axis=-1)
+        err = np.abs(reach - d1)
+        if best is None:
+            best, r_knee = err, r
+        else:
+            pick = err < best
+            r_knee = np.where(pick[:, None, None], r, r_knee)
+            best = np.minimum(err, best)
+    new_ankle = hip + a + np.einsum("fij,fj->fi", r_knee, b)
+    u = new_ankle - hip
+    v = target - hip
+    swing = _rotation_between(u / np.linalg.norm(u, axis=-1, keepdims=True),
+                              v / np.linalg.norm(v, axis=-1, keepdims=True))
+    return swing, swing @ r_knee
+
+
+def lock_feet(skel, world, blend=BLEND_FRAMES):
+    """Rotation channels (F, J, 4) of ``world`` (a Motion) with planted feet pinned.
+
+    Only the hip (thigh) and knee (shin) channels of each leg change, and the ankle's so
+    that the foot keeps its world orientation."""
+    m = world.world_matrices(skel)
+    g = m[..., :3, :3].copy()
+    p = m[..., :3, 3]
+    for side, (hip, knee, ankle, toe) in enumerate(leg_chains(skel)):
+        d = planted_offsets(p[:, ankle, :2], p[:, toe, :2], world.contacts[:, 2 * side],
+                            world.contacts[:, 2 * side + 1], blend)
+        moving = np.linalg.norm(d, axis=-1) > 1e-7
+        if not moving.any():
+            continue
+        target = p[:, ankle].copy()
+        target[:, :2] += d
+        hinge = g[:, hip, :, 0]  # the thigh's X axis: the knee's hinge in a rest-like leg
+        r_thigh, r_shin = two_bone_ik(p[:, hip], p[:, knee], p[:, ankle], target, hinge)
+        eye = np.eye(3)
+        r_thigh = np.where(moving[:, None, None], r_thigh, eye)
+        r_shin = np.where(moving[:, None, None], r_shin, eye)
+        g[:, hip] = r_thigh @ g[:, hip]
+        g[:, knee] = r_shin @ g[:, knee]
+        # the foot keeps its world rotation (g[:, ankle] unchanged); its children follow it
+    local = local_rotations_from_global(skel, g)
+    out = world.rotations.copy()
+    for hip, knee, ankle, _ in leg_chains(skel):
+        for j in (hip, knee, ankle):
+            out[:, j] = local[:, j]
+    return quat.make_continuous(out, axis=0)

@@ -1,0 +1,72 @@
+"""Foot locking: planted feet of a planned walk stay put, nothing else moves or pops."""
+
+import numpy as np
+import pytest
+
+from motion_patches import foot_lock, metrics, quat
+from motion_patches.contacts import foot_joints
+from motion_patches.environment import Environment
+from motion_patches.motion import Motion, concatenate
+from motion_patches.planner import SegmentPlanner, plan_motions
+
+
+@pytest.fixture(scope="module")
+def walk(walk_patch):
+    """A planned walk that turns (start facing +Y, goal 8 m east facing south)."""
+    env = Environment(walk_patch.side, walk_patch.cells, 0.25)
+    plan = SegmentPlanner(walk_patch, env).plan((0.0, 0.0, np.pi / 2), (8.0, 2.0, -np.pi / 2))
+    return concatenate(plan_motions(walk_patch, plan))
+
+
+def skate(skel, motion, fps=30.0):
+    m = motion.world_matrices(skel)
+    return metrics.foot_skate(m[:, foot_joints(skel)][..., :3, 3], fps, motion.contacts)
+
+
+def test_locked_feet_skate_far_less_than_the_followed_curve(walk_patch, walk):
+    skel = walk_patch.gait.skeleton
+    locked = Motion(walk.ground, walk.root_local, foot_lock.lock_feet(skel, walk), walk.contacts)
+    before, after = skate(skel, walk), skate(skel, locked)
+    assert before["mean_cm_per_s"] > 10          # the synthesis alone skates
+    assert after["mean_cm_per_s"] < 0.4 * before["mean_cm_per_s"]
+    assert after["p95_cm_per_s"] < before["p95_cm_per_s"]
+
+
+def test_only_the_legs_change_and_the_feet_keep_their_orientation(walk_patch, walk):
+    skel = walk_patch.gait.skeleton
+    rot = foot_lock.lock_feet(skel, walk)
+    legs = {j for chain in foot_lock.leg_chains(skel) for j in chain[:3]}
+    others = [j for j in range(len(skel.names)) if j not in legs]
+    assert np.allclose(np.abs(np.sum(rot[:, others] * walk.rotations[:, others], axis=-1)), 1.0)
+    a = walk.world_matrices(skel)
+    b = Motion(walk.ground, walk.root_local, rot, walk.contacts).world_matrices(skel)
+    for hip, knee, ankle, toe in foot_lock.leg_chains(skel):
+        assert np.allclose(a[:, ankle, :3, :3], b[:, ankle, :3, :3], atol=1e-6)
+        assert np.allclose(a[:, hip, :3, 3], b[:, hip, :3, 3])  # the hips do not move
+        # the toe stays where the ankle puts it: the foot is carried, not bent
+        assert np.allclose(np.linalg.norm(b[:, toe, :3, 3] - b[:, ankle, :3, 3], axis=-1),
+                           np.linalg.norm(a[:, toe, :3, 3] - a[:, ankle, :3, 3], axis=-1))
+
+
+def test_locking_adds_no_pop(walk_patch, walk):
+    """The largest per-frame change of a leg channel grows by a few degrees at most."""
+    skel = walk_patch.gait.skeleton
+    rot = foot_lock.lock_feet(skel, walk)
+    legs = [j for chain in foot_lock.leg_chains(skel) for j in chain[:3]]
+
+    def steps(r):
+        return np.degrees(quat.angle_between(r[1:, legs], r[:-1, legs])).max()
+
+    assert steps(rot) < steps(walk.rotations) + 5.0
+
+
+def test_planted_offsets_ease_in_and_out():
+    n = 30
+    ankle = np.column_stack((np.linspace(0, 0.3, n), np.zeros(n)))  # sliding 1 cm a frame
+    on = np.zeros(n, bool)
+    on[10:20] = True
+    d = foot_lock.planted_offsets(ankle, ankle, on, np.zeros(n, bool), blend=4)
+    pinned = ankle[10:20] + d[10:20]
+    assert np.allclose(pinned, pinned[0])                       # held still while planted
+    assert np.allclose(d[:5], 0) and np.allclose(d[25:], 0)     # untouched far from it
+    assert np.all(np.abs(np.diff(d[:, 0])) <= 0.045)            # no jump into or out of it
