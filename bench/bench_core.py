@@ -34,9 +34,9 @@ if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
 from motion_patches import bvh, clip as clip_mod, contacts, gait as gait_mod  # noqa: E402
-from motion_patches import locomotion_patch, metrics  # noqa: E402
+from motion_patches import foot_lock, locomotion_patch, metrics  # noqa: E402
 from motion_patches.environment import Environment, Obstacle  # noqa: E402
-from motion_patches.motion import concatenate  # noqa: E402
+from motion_patches.motion import Motion, concatenate  # noqa: E402
 from motion_patches.planner import PlanError, SegmentPlanner, piece_motion  # noqa: E402
 
 PILLAR_SIDES = 12
@@ -102,8 +102,9 @@ def foot_positions(motion, skel):
     return motion.world_matrices(skel)[:, contacts.foot_joints(skel)][..., :3, 3]
 
 
-def pooled_skate(records):
+def pooled_skate(records, key="skate"):
     """Skate over every scored step of every path (weighted by planted steps)."""
+    records = [{"skate": r[key]} for r in records]
     steps = np.array([r["skate"]["planted_steps"] for r in records], float)
     if steps.sum() == 0:
         return {"mean_cm_per_frame": float("nan"), "mean_cm_per_s": float("nan"),
@@ -178,6 +179,10 @@ def bench_plans(patch, args, profiler=None):
         synth = time.perf_counter() - t1
         ground = m.ground[:, :2]
         skate = metrics.foot_skate(foot_positions(m, skel), fps, m.contacts)
+        t2 = time.perf_counter()
+        locked = Motion(m.ground, m.root_local, foot_lock.lock_feet(skel, m), m.contacts)
+        lock_s = time.perf_counter() - t2
+        skate_locked = metrics.foot_skate(foot_positions(locked, skel), fps, m.contacts)
         rec = {
             "layout": layout, "seconds": dt, "synthesis_seconds": synth,
             "expansions": plan.expansions, "pieces": len(plan.pieces),
@@ -190,13 +195,14 @@ def bench_plans(patch, args, profiler=None):
             "cost": plan.cost, "start": start.tolist(), "goal": goal.tolist(),
             "start_connectors": plan.stats.get("start_connectors"),
             "goal_connectors": plan.stats.get("goal_connectors"),
-            "skate": skate}
+            "skate": skate, "skate_locked": skate_locked, "foot_lock_seconds": lock_s}
         records.append(rec)
         print(f"  layout {layout:3d}: {dt * 1000:7.1f} ms, {plan.expansions:6d} nodes, "
               f"{rec['pieces']:3d} pieces, {rec['motion_seconds']:5.1f} s / {rec['metres']:5.1f} m "
               f"of motion ({rec['straight_line_m']:4.1f} m apart), "
               f"{env.occlusion_computations:4d} tiles occluded, skate "
-              f"{skate['mean_cm_per_frame']:.2f} cm/frame")
+              f"{skate['mean_cm_per_frame']:.2f} cm/frame ({skate_locked['mean_cm_per_frame']:.2f} "
+              f"locked)")
     return records, failures, count
 
 
@@ -302,6 +308,11 @@ def markdown(res):
                                      f"source clip 16_15: "
                                      f"{res['source_skate']['mean_cm_per_frame']:.2f} cm/frame, "
                                      f"{res['source_skate']['mean_cm_per_s']:.1f} cm/s"),
+        ("foot skate with foot locking", f"{pl['skate_locked']['mean_cm_per_frame']:.2f} cm/frame, "
+                                         f"{pl['skate_locked']['mean_cm_per_s']:.1f} cm/s (worst "
+                                         f"path {pl['skate_locked']['worst_path_mean_cm_per_s']:.1f}"
+                                         f" cm/s); leg IK {fmt_ms(pl['foot_lock_seconds']['mean'])}"
+                                         f" per path"),
     ]
     for n, p in res["placement"].items():
         rows.append((f"placement, scene of {int(n):,} obstacles",
@@ -358,6 +369,8 @@ def main(argv=None):
         "synthesis_seconds": stats([r["synthesis_seconds"] for r in records]),
         "frames_inside_obstacle": int(sum(r["frames_inside_obstacle"] for r in records)),
         "skate": pooled_skate(records),
+        "skate_locked": pooled_skate(records, "skate_locked"),
+        "foot_lock_seconds": stats([r["foot_lock_seconds"] for r in records]),
     }
     res = {
         "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
