@@ -19,6 +19,7 @@ from .adapter import actions as act_io
 from .adapter import evaluate, mocap, nla, props_io, scene as scene_io, storage
 from .motion_patches import (blocking, contacts, crowd, foot_lock, layout_spec, metrics,
                              object_patch)
+from .motion_patches.environment import Obstacle
 from .motion_patches.gait import build_gait
 from .motion_patches.locomotion_patch import bake
 from .motion_patches.motion import concatenate
@@ -26,6 +27,7 @@ from .motion_patches.planner import (PlanError, SegmentPlanner, interaction_stat
                                      plan_motions, with_interactions)
 
 PLAN_KEY = "motion_patches_plan"
+CROWD_SPOT = "\x00crowd spot "  # obstacle names of other characters' standing spots
 
 
 class MotionPatchesError(ValueError):
@@ -370,8 +372,10 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
     """Plan several characters, ``pairs`` = [(armature, goal object or (x, y, heading))],
     and write each one's NLA; characters that find no path are listed in ``failed``.
 
-    Each path is planned against the props alone (other characters are not obstacles);
-    then, in the given order, each character waits at its start (whole 0.2 s steps, at
+    Each path is planned against the props and the spots where the others stand still
+    while it walks: the goals of the characters before it and the starts of those after it
+    (:func:`motion_patches.crowd.standing_spots`; dropped when they box it in). Then, in
+    the given order, each character waits at its start (whole 0.2 s steps, at
     most ``max_wait_seconds``) until it keeps ``spacing`` metres (default: two radii)
     from everyone before it at every frame, standing at the goal afterwards included
     (:func:`motion_patches.crowd.stagger`). Closer approaches no wait clears are returned
@@ -399,7 +403,8 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
             raise MotionPatchesError(f"the goal of '{character.name}' is the character itself")
         _goal(goal)
     depsgraph = context.evaluated_depsgraph_get()
-    # Other characters are kept apart in time, not avoided in space: none is an obstacle.
+    # Other characters are not obstacles of the scene: they are kept apart in time, and
+    # only where they stand still (goals of earlier ones, starts of later ones) in space.
     env = scene_io.environment(scene, depsgraph, patch, radius, _not_obstacles(
         [c for c, _ in pairs] + [g for _, g in pairs if isinstance(g, bpy.types.Object)]))
     props = object_patches(scene, depsgraph, patch)
@@ -410,10 +415,25 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
     planner = SegmentPlanner(patch, env, alpha, beta, gamma, props=props, mode=stitching)
     planned, failed = [], []
     for n, ((character, _), e) in enumerate(zip(pairs, ends)):
+        spots = [(f"{CROWD_SPOT}{pairs[m][0].name}", polygon) for m, polygon in
+                 crowd.standing_spots([(x[0], x[1]) for x in ends], n, spacing, radius)]
         try:
-            planned.append((character, e, _solve(planner, character, e)))
+            for name, polygon in spots:  # where the others stand still while this one walks
+                env.place(Obstacle(name, polygon))
+            try:
+                plan = _solve(planner, character, e)
+            except PathNotFound:
+                if not spots:
+                    raise
+                for name, _ in spots:  # boxed in by the others: plan past them, staggered
+                    env.remove(name)
+                plan = _solve(planner, character, e)
+            planned.append((character, e, plan))
         except PathNotFound as exc:
             failed.append((character.name, str(exc)))
+        finally:
+            for name, _ in spots:
+                env.remove(name)
         if progress is not None:
             progress(0.9 * (n + 1) / len(pairs))
     fps = scene_fps(scene)

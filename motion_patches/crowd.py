@@ -1,14 +1,41 @@
 """Crowds of independently planned characters kept apart in time.
 
 Each character's path is planned on its own against the props (the paper plans one
-character). Characters are then kept apart the way a previs animator would first try:
-later characters wait at their start (holding their first pose) until their whole walk,
-and their standing at the goal afterwards, stays clear of everyone planned before them.
-What no wait within the limit clears is reported as a conflict, not hidden: paths are not
-re-planned around other characters.
+character), with the spots where the others will stand still while it walks as extra
+obstacles: the goals of the characters planned before it (they end there) and the starts
+of those after it (they wait there). Characters are then kept apart in time the way a
+previs animator would first try: later characters wait at their start (holding their
+first pose) until their whole walk, and their standing at the goal afterwards, stays clear
+of everyone planned before them. What no wait within the limit clears is reported as a
+conflict, not hidden; moving characters are not avoided in space.
 """
 
 import numpy as np
+
+
+def disc(centre, radius, sides=12):
+    """(sides, 2) convex polygon around a point, counter-clockwise."""
+    a = np.linspace(0.0, 2 * np.pi, sides, endpoint=False)
+    return np.column_stack((centre[0] + radius * np.cos(a), centre[1] + radius * np.sin(a)))
+
+
+def standing_spots(ends, n, spacing, radius):
+    """[(index, polygon)] of the spots character ``n`` walks around: the goals of the
+    characters before it and the starts of those after it, as discs that keep ``spacing``
+    between roots once grown by the planner's ``radius``. ``ends`` [(start, goal)] are
+    (x, y, heading) states; a spot within that distance of ``n``'s own start or goal is
+    left out (it could not start or arrive at all)."""
+    grow = max(spacing - radius, 0.05)
+    mine = np.array([ends[n][0][:2], ends[n][1][:2]], float)
+    out = []
+    for m, (start, goal) in enumerate(ends):
+        if m == n:
+            continue
+        where = np.asarray(goal if m < n else start, float)[:2]
+        if np.linalg.norm(mine - where, axis=1).min() < grow + radius:
+            continue
+        out.append((m, disc(where, grow)))
+    return out
 
 
 def timeline(track, delay, horizon):

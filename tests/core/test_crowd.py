@@ -58,3 +58,16 @@ def test_two_planned_walkers_crossing_in_the_open_are_staggered(walk_patch):
     delays, conflicts = crowd.stagger(tracks, clearance, max_delay=120, step=6)
     assert conflicts == [] and delays[0] == 0 and delays[1] > 0
     assert min_gap(tracks[0], tracks[1], 0, delays[1]) >= clearance
+
+
+def test_standing_spots_are_earlier_goals_and_later_starts():
+    ends = [((0, 0, 0), (10, 0, 0)), ((0, 3, 0), (10, 3, 0)), ((0, 6, 0), (10, 6, 0))]
+    spots = crowd.standing_spots(ends, 1, spacing=1.0, radius=0.25)
+    assert [m for m, _ in spots] == [0, 2]
+    centres = [poly.mean(axis=0) for _, poly in spots]
+    assert np.allclose(centres[0], (10, 0)) and np.allclose(centres[1], (0, 6))
+    # grown by the planner's radius, a disc keeps the spacing between the two roots
+    assert np.allclose(np.linalg.norm(spots[0][1] - (10, 0), axis=1), 0.75)
+    # a spot on the character's own goal is left out: it could never arrive
+    ends[0] = ((0, 0, 0), (10, 3.5, 0))
+    assert [m for m, _ in crowd.standing_spots(ends, 1, 1.0, 0.25)] == [2]
