@@ -39,6 +39,8 @@ COLOURS = {
     "Walker": (0.02, 0.16, 0.75),
     "Hurried": (0.85, 0.18, 0.02),
     "Calm": (0.02, 0.42, 0.20),
+    "Crowd.0": (0.75, 0.10, 0.10), "Crowd.1": (0.85, 0.45, 0.02), "Crowd.2": (0.55, 0.55, 0.02),
+    "Crowd.3": (0.05, 0.50, 0.15), "Crowd.4": (0.02, 0.25, 0.80), "Crowd.5": (0.45, 0.08, 0.65),
 }
 FINGER_BONES = ("FingerBase", "HandIndex", "Thumb")
 
@@ -54,6 +56,9 @@ VIEWS = {
     "chairs": dict(characters=("Hurried", "Calm"), labels=True, props="chair", near=6.0,
                    azimuth=-8.0, pitch=36.0, lens=60.0,
                    size=(960, 720), out="docs/demo_render_chairs.png"),
+    "crowd": dict(characters=tuple(f"Crowd.{n}" for n in range(6)), labels=False, props=None,
+                  near=0.0, azimuth=-90.0, pitch=62.0, lens=35.0, copies=4,
+                  size=(960, 600), out="docs/demo_render_crowd.png"),
 }
 
 
@@ -68,10 +73,11 @@ def parse_args(argv):
                                  "view, docs/demo_render_chairs.png for the chairs view)")
     p.add_argument("--samples", type=int, default=32, help="Cycles samples (default: %(default)s)")
     p.add_argument("--size", type=int, nargs=2, metavar=("W", "H"),
-                   help="image size (default: 960 540 for pillars, 960 720 for chairs)")
-    p.add_argument("--copies", type=int, default=8,
-                   help="poses drawn per character, evenly spaced in time (default: %(default)s; "
-                        "a traversal adds its take-off, top and landing)")
+                   help="image size (default: 960 540 for pillars, 960 720 for chairs, 960 600 "
+                        "for crowd)")
+    p.add_argument("--copies", type=int,
+                   help="poses drawn per character, evenly spaced in time (default: 8, 4 for "
+                        "the crowd; a traversal adds its take-off, top and landing)")
     p.add_argument("--verbose", action="store_true", help="show Blender's render progress")
     return p.parse_args(argv)
 
@@ -417,7 +423,8 @@ def main(argv):
     scene = bpy.context.scene
     saved_frame = scene.frame_current
 
-    labels, fit_points, report = build(bpy, addon.api, args.view, args.copies)
+    copies = args.copies or VIEWS[args.view].get("copies", 8)
+    labels, fit_points, report = build(bpy, addon.api, args.view, copies)
     scene.frame_set(saved_frame)
     size = tuple(args.size or VIEWS[args.view]["size"])
     cam = camera_and_light(bpy, args.view, fit_points, size)
