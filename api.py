@@ -6,6 +6,7 @@ user, raised before the scene is changed.
 """
 
 import base64
+import contextlib
 import io
 import json
 import math
@@ -271,6 +272,19 @@ def _endpoints(character, goal, start_prop, by_name, skel):
             goal_state if g_state is None else g_state, start_ref, goal_ref)
 
 
+@contextlib.contextmanager
+def _without(env, names):
+    """``env`` with the named obstacles taken out for the block (put back after)."""
+    saved = [env.obstacles[n] for n in names if n in env.obstacles]
+    for ob in saved:
+        env.remove(ob.name)
+    try:
+        yield env
+    finally:
+        for ob in saved:
+            env.place(ob)
+
+
 def _check_clear(env, character, endpoints, by_name):
     """Refuse a start or goal the character cannot stand on, naming the prop in the way."""
     from .motion_patches.environment import distance_to_polygon
@@ -389,7 +403,7 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
     if not pairs:
         raise MotionPatchesError("a crowd needs at least one character with a goal")
     spacing = 2 * radius if spacing is None else float(spacing)
-    if not (np.isfinite(spacing) and spacing >= 0) or not max_wait_seconds >= 0:
+    if not (0 <= spacing < np.inf and 0 <= max_wait_seconds < np.inf):
         raise MotionPatchesError("spacing and the longest wait must be numbers >= 0")
     seen = set()
     for character, goal in pairs:
@@ -403,51 +417,58 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
             raise MotionPatchesError(f"the goal of '{character.name}' is the character itself")
         _goal(goal)
     depsgraph = context.evaluated_depsgraph_get()
-    # Other characters are not obstacles of the scene: they are kept apart in time, and
-    # only where they stand still (goals of earlier ones, starts of later ones) in space.
-    env = scene_io.environment(scene, depsgraph, patch, radius, _not_obstacles(
-        [c for c, _ in pairs] + [g for _, g in pairs if isinstance(g, bpy.types.Object)]))
+    # Characters are not obstacles of the scene: they are kept apart in time, and only where
+    # they stand still (goals of earlier ones, starts of later ones) in space. A goal object
+    # is no obstacle for its own character only.
+    env = scene_io.environment(scene, depsgraph, patch, radius,
+                               _not_obstacles([c for c, _ in pairs]))
     props = object_patches(scene, depsgraph, patch)
     by_name = {p.name: p for p in props}
     ends = [_endpoints(c, g, None, by_name, patch.gait.skeleton) for c, g in pairs]
-    for (c, _), e in zip(pairs, ends):
-        _check_clear(env, c, e, by_name)
+    own_goal = [[o.name for o in _not_obstacles([g])] if isinstance(g, bpy.types.Object) else []
+                for _, g in pairs]
+    for (c, _), e, mine in zip(pairs, ends, own_goal):
+        with _without(env, mine):
+            _check_clear(env, c, e, by_name)
     planner = SegmentPlanner(patch, env, alpha, beta, gamma, props=props, mode=stitching)
     planned, failed = [], []
     for n, ((character, _), e) in enumerate(zip(pairs, ends)):
-        spots = [(f"{CROWD_SPOT}{pairs[m][0].name}", polygon) for m, polygon in
+        spots = [Obstacle(f"{CROWD_SPOT}{pairs[m][0].name}", polygon) for m, polygon in
                  crowd.standing_spots([(x[0], x[1]) for x in ends], n, spacing, radius)]
         try:
-            for name, polygon in spots:  # where the others stand still while this one walks
-                env.place(Obstacle(name, polygon))
-            try:
-                plan = _solve(planner, character, e)
-            except PathNotFound:
-                if not spots:
-                    raise
-                for name, _ in spots:  # boxed in by the others: plan past them, staggered
-                    env.remove(name)
-                plan = _solve(planner, character, e)
-            planned.append((character, e, plan))
+            with _without(env, own_goal[n]):
+                for spot in spots:  # where the others stand still while this one walks
+                    env.place(spot)
+                try:
+                    try:
+                        plan = _solve(planner, character, e)
+                    except PathNotFound:
+                        if not spots:
+                            raise
+                        for spot in spots:  # boxed in by the others: plan past them
+                            env.remove(spot.name)
+                        plan = _solve(planner, character, e)
+                finally:
+                    for spot in spots:
+                        env.remove(spot.name)
+            planned.append((n, plan))
         except PathNotFound as exc:
             failed.append((character.name, str(exc)))
-        finally:
-            for name, _ in spots:
-                env.remove(name)
         if progress is not None:
             progress(0.9 * (n + 1) / len(pairs))
     fps = scene_fps(scene)
-    tracks = [concatenate(plan_motions(patch, plan)).ground for _, _, plan in planned]
+    tracks = [concatenate(plan_motions(patch, plan)).ground for _, plan in planned]
     delays, conflicts = crowd.stagger(tracks, spacing, round(max_wait_seconds * fps),
                                       max(1, round(0.2 * fps)))
     first = scene.frame_current if frame_start is None else int(frame_start)
     plans = []
-    for (character, e, plan), d in zip(planned, delays):
-        plans.append(_write(scene, character, patch, patch_name, plan, first + d, env, e[1],
-                            radius, foot_lock))
+    for (n, plan), d in zip(planned, delays):
+        with _without(env, own_goal[n]):  # the plan record lists what it walked around
+            plans.append(_write(scene, pairs[n][0], patch, patch_name, plan, first + d, env,
+                                ends[n][1], radius, foot_lock))
     if progress is not None:
         progress(1.0)
-    names = [c.name for c, _, _ in planned]
+    names = [pairs[n][0].name for n, _ in planned]
     for c in conflicts:
         c["a"], c["b"], c["frame"] = names[c["a"]], names[c["b"]], first + c["frame"]
     return CrowdResult(plans, failed, conflicts, dict(zip(names, delays)),

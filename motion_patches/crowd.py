@@ -25,6 +25,8 @@ def standing_spots(ends, n, spacing, radius):
     between roots once grown by the planner's ``radius``. ``ends`` [(start, goal)] are
     (x, y, heading) states; a spot within that distance of ``n``'s own start or goal is
     left out (it could not start or arrive at all)."""
+    if spacing <= 0:
+        return []
     grow = max(spacing - radius, 0.05)
     mine = np.array([ends[n][0][:2], ends[n][1][:2]], float)
     out = []
@@ -61,6 +63,8 @@ def stagger(tracks, clearance, max_delay, step):
     stays ``clearance`` away from every earlier track at every frame; if none does, the
     delay with the fewest frames too close (then the smallest)."""
     tracks = [np.asarray(t, float)[:, :2] for t in tracks]
+    if not tracks:
+        return [], []
     delays = []
     for i, track in enumerate(tracks):
         best = None

@@ -2,6 +2,8 @@
 studio writes them), validated before anything is planned, and the verdict of one pair
 against its limits. Plain Python, so a spec can be checked without Blender."""
 
+import math
+
 
 class SpecError(ValueError):
     """A spec that cannot be checked; the message names the key and the pair."""
@@ -27,7 +29,7 @@ def _limits(d, where, base):
             if not isinstance(v, bool):
                 raise _spec_error(f"{where}: {k} must be true or false")
         elif v is not None:
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or v < 0:
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v < math.inf:
                 raise _spec_error(f"{where}: {k} must be a number >= 0")
             v = float(v)
         out[k] = v
@@ -38,7 +40,8 @@ def _place(value, where):
     if isinstance(value, str) and value:
         return value
     if (isinstance(value, (list, tuple)) and len(value) == 3
-            and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)):
+            and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                    for v in value)):
         return [float(v) for v in value]
     raise _spec_error(f"{where} must be an object name or [x, y, heading_deg]")
 
@@ -56,7 +59,8 @@ def normalise(spec):
         raise _spec_error("patch must be a name")
     for k in ("alpha", "beta", "gamma", "radius", "margin_tiles"):
         v = spec.get(k)
-        if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float)) or v < 0):
+        if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float))
+                              or not 0 <= v < math.inf):
             raise _spec_error(f"{k} must be a number >= 0")
         out[k] = v
     limits = spec.get("limits", {})

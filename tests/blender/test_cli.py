@@ -549,3 +549,25 @@ def test_importing_a_file_that_is_not_a_patch_exits_2(cli, capsys, layout, tmp_p
     assert len(bpy.context.scene.motion_patches.patches) == before
     code, out, err = call(cli, capsys, "import", tmp_path / "missing.mpatch")
     assert code == 2 and "patch file not found" in one_line(err)
+
+
+def test_crowd_where_nobody_finds_a_path_exits_1(cli, capsys, layout, tmp_path):
+    open_blend(layout)
+    before = scene_state()
+    code, doc, err = call_json(cli, capsys, "crowd", "--pair", "Walker", "CageGoal")
+    assert code == 1 and doc["planned"] == [] and doc["failed"][0]["character"] == "Walker"
+    assert "Traceback" not in err and scene_state() == before
+
+
+def test_a_crowd_goal_object_blocks_everyone_but_its_own_character(cli, capsys, layout):
+    """North walks to a pillar (its goal): for North it is no obstacle, for Walker it is."""
+    scene = open_blend(layout)
+    walker_from(scene.motion_patches.source_armature, "North", (1.0, -2.0, 0.0))
+    code, doc, err = call_json(cli, capsys, "crowd", "--pair", "Walker", "Goal", "--pair",
+                               "North", "Pillar0")
+    assert not doc["failed"], err
+    walker_obstacles = cli.api.load_plan_record(bpy.data.objects["Walker"])[0]["obstacles"]
+    north_obstacles = cli.api.load_plan_record(bpy.data.objects["North"])[0]["obstacles"]
+    assert "Pillar0" in walker_obstacles and "Pillar0" not in north_obstacles
+    assert "Pillar1" in walker_obstacles and "Pillar1" in north_obstacles
+    assert not any(n.startswith("\x00") for n in walker_obstacles)  # no standing spot left

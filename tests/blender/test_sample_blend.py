@@ -42,7 +42,7 @@ def test_the_documented_layout_spec_passes_on_the_sample(addon_module):
     assert [r["passed"] for r in results] == [True, True, True], [r["failures"] for r in results]
     assert results[1]["traversals"] == 0 and results[1]["reachable"]
     assert [t.name for t in bpy.data.objects["Calm"].animation_data.nla_tracks] == nla_before
-    # The same spec with the pillar field closed: the check fails and names what blocks it.
+    # The same spec with a limit the walk cannot keep: the check fails and says which.
     spec["pairs"][0]["max_seconds"] = 1.0
     r = addon_module.api.check_layout(bpy.context.scene, spec)[0]
     assert not r["passed"] and "exceeds max_seconds" in r["failures"][0]

@@ -71,3 +71,9 @@ def test_standing_spots_are_earlier_goals_and_later_starts():
     # a spot on the character's own goal is left out: it could never arrive
     ends[0] = ((0, 0, 0), (10, 3.5, 0))
     assert [m for m, _ in crowd.standing_spots(ends, 1, 1.0, 0.25)] == [2]
+
+
+def test_an_empty_crowd_and_no_spacing_are_handled():
+    assert crowd.stagger([], clearance=0.5, max_delay=30, step=3) == ([], [])
+    ends = [((0, 0, 0), (10, 0, 0)), ((0, 3, 0), (10, 3, 0))]
+    assert crowd.standing_spots(ends, 0, spacing=0.0, radius=0.25) == []

@@ -73,3 +73,14 @@ def test_the_verdict_lists_every_broken_limit():
                "blocked_reason": "separated"}
     assert layout_spec.judge(blocked, lim) == ["unreachable: blocked by Wall (separated)"]
     assert layout_spec.judge(blocked, dict(lim, must_reach=False)) == []
+
+
+@pytest.mark.parametrize("spec", [
+    {"radius": float("nan"), "pairs": [{"start": "A", "goal": "G"}]},
+    {"pairs": [{"start": "A", "goal": "G", "max_seconds": float("nan")}]},
+    {"pairs": [{"start": "A", "goal": "G", "max_length": float("inf")}]},
+    {"pairs": [{"start": [0, float("nan"), 0], "goal": "G"}]},
+])
+def test_not_a_number_is_refused(spec):
+    with pytest.raises(layout_spec.SpecError, match="layout spec"):
+        layout_spec.normalise(spec)
