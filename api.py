@@ -250,9 +250,14 @@ def _goal(goal):
     return state
 
 
-def _endpoints(character, goal, start_prop, by_name, skel):
-    """Start and goal states with the interaction clips that begin / end the path there."""
+def _endpoints(character, goal, start_prop, by_name, skel, goal_facing="exact"):
+    """Start and goal states with the interaction clips that begin / end the path there;
+    ``goal_facing`` "any" leaves the goal heading free (NaN) unless a clip fixes it."""
+    if goal_facing not in ("exact", "any"):
+        raise MotionPatchesError(f"goal facing must be 'exact' or 'any', not {goal_facing!r}")
     start_state, goal_state = scene_io.character_state(character, skel), _goal(goal)
+    if goal_facing == "any":
+        goal_state = np.array([goal_state[0], goal_state[1], np.nan])
     start_ref = goal_ref = None
     if isinstance(goal, bpy.types.Object) and goal.name in by_name:
         i = props_io.interaction_clip(by_name[goal.name], sitting=True)
@@ -317,9 +322,9 @@ def _solve(planner, character, endpoints):
     return with_interactions(plan, start_ref, goal_ref)
 
 
-def _write(scene, character, patch, patch_name, plan, frame_start, env, goal_state, radius,
-           lock=True):
+def _write(scene, character, patch, patch_name, plan, frame_start, env, radius, lock=True):
     """NLA strips and the plan record of one planned character."""
+    goal_state = np.asarray(plan.goal, float)  # the facing reached when any facing would do
     skel = patch.gait.skeleton
     motions = plan_motions(patch, plan)
     world = concatenate(motions)
@@ -346,7 +351,7 @@ def _write(scene, character, patch, patch_name, plan, frame_start, env, goal_sta
 
 def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2,
               radius=0.25, frame_start=None, context=None, stitching="dynamic", start_prop=None,
-              foot_lock=True):
+              foot_lock=True, goal_facing="exact"):
     """Plan ``character`` to ``goal`` (an object or (x, y, heading)) and write it as NLA.
 
     Tagged props (object patches) offer their traversal clips; ``stitching`` is
@@ -354,7 +359,9 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
     that is a tagged prop with a sit-down interaction clip ends the path seated on it; a
     ``start_prop`` with a stand-up clip starts it there (the character's own position is
     then not used). With ``foot_lock`` planted feet are pinned by leg IK, written as a
-    Combine track over the shared segment strips. Raises :class:`PathNotFound` when the props leave no way, and
+    Combine track over the shared segment strips. ``goal_facing="any"`` lets the walk end
+    facing whichever way is cheapest (the goal object's facing is then ignored). Raises
+    :class:`PathNotFound` when the props leave no way, and
     :class:`MotionPatchesError` for bad input; either way the scene is unchanged."""
     patch = _patch_for_planning(scene, patch_name)
     context = context or bpy.context
@@ -371,18 +378,17 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
                                _not_obstacles((character, goal_obj)))
     props = object_patches(scene, depsgraph, patch)
     by_name = {p.name: p for p in props}
-    ends = _endpoints(character, goal, start_prop, by_name, patch.gait.skeleton)
+    ends = _endpoints(character, goal, start_prop, by_name, patch.gait.skeleton, goal_facing)
     _check_clear(env, character, ends, by_name)
     planner = SegmentPlanner(patch, env, alpha, beta, gamma, props=props, mode=stitching)
     plan = _solve(planner, character, ends)
     frame_start = scene.frame_current if frame_start is None else int(frame_start)
-    return _write(scene, character, patch, patch_name, plan, frame_start, env, ends[1], radius,
-                  foot_lock)
+    return _write(scene, character, patch, patch_name, plan, frame_start, env, radius, foot_lock)
 
 
 def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, radius=0.25,
                frame_start=None, context=None, stitching="dynamic", progress=None,
-               max_wait_seconds=4.0, spacing=None, foot_lock=True):
+               max_wait_seconds=4.0, spacing=None, foot_lock=True, goal_facing="exact"):
     """Plan several characters, ``pairs`` = [(armature, goal object or (x, y, heading))],
     and write each one's NLA; characters that find no path are listed in ``failed``.
 
@@ -424,7 +430,7 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
                                _not_obstacles([c for c, _ in pairs]))
     props = object_patches(scene, depsgraph, patch)
     by_name = {p.name: p for p in props}
-    ends = [_endpoints(c, g, None, by_name, patch.gait.skeleton) for c, g in pairs]
+    ends = [_endpoints(c, g, None, by_name, patch.gait.skeleton, goal_facing) for c, g in pairs]
     own_goal = [[o.name for o in _not_obstacles([g])] if isinstance(g, bpy.types.Object) else []
                 for _, g in pairs]
     for (c, _), e, mine in zip(pairs, ends, own_goal):
@@ -465,7 +471,7 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
     for (n, plan), d in zip(planned, delays):
         with _without(env, own_goal[n]):  # the plan record lists what it walked around
             plans.append(_write(scene, pairs[n][0], patch, patch_name, plan, first + d, env,
-                                ends[n][1], radius, foot_lock))
+                                radius, foot_lock))
     if progress is not None:
         progress(1.0)
     names = [pairs[n][0].name for n, _ in planned]
@@ -596,6 +602,9 @@ def check_layout(scene, spec, context=None):
              "seconds": None, "frames": None, "length_m": None, "cost": None, "pieces": None,
              "traversals": 0, "expansions": None, "plan_seconds": None, "blocked_by": [],
              "blocked_reason": None, "error": None, "limits": p["limits"]}
+        r["goal_facing"] = p["goal_facing"]
+        if p["goal_facing"] == "any":
+            goal = np.array([goal[0], goal[1], np.nan])
         try:
             plan = planner.plan(start, goal, margin_tiles=margin)
         except PlanError as exc:
@@ -603,6 +612,7 @@ def check_layout(scene, spec, context=None):
             r["blocked_by"], r["blocked_reason"] = blocking.blocking_props(env, start, goal, margin)
         else:
             world = concatenate(plan_motions(patch, plan))
+            r["goal"] = state_dict(plan.goal, gob and gob.name)
             r.update(reachable=True, frames=int(world.frames),
                      seconds=(world.frames - 1) / patch.gait.fps,
                      length_m=path_length(world.ground), cost=float(plan.cost),

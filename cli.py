@@ -64,6 +64,7 @@ layout spec (JSON or TOML), every key optional but "pairs":
   clockwise from +X). "character" is an armature start.
   limits: must_reach (default true), max_seconds (of motion), max_length (metres),
   max_cost (Eq. 5), allow_traversal (default true).
+  goal_facing (per pair): "exact" (default: arrive facing the goal's heading) or "any".
   exclude (top level or per pair): object names that are not obstacles; the start and
   goal objects and their children (a character's body mesh) never are.
 
@@ -442,7 +443,8 @@ def cmd_plan(args):
     save = _save_target(args)
     try:
         res = api.plan_path(scene, char, goal, patch_name=args.patch, frame_start=args.frame_start,
-                            stitching=args.stitching, foot_lock=args.foot_lock, **w)
+                            stitching=args.stitching, foot_lock=args.foot_lock,
+                            goal_facing=args.goal_facing, **w)
     except api.PathNotFound as exc:
         raise Failed(str(exc)) from None
     meta, _ = api.load_plan_record(char)
@@ -488,7 +490,7 @@ def cmd_crowd(args):
     try:
         res = api.plan_crowd(scene, pairs, patch_name=args.patch, frame_start=args.frame_start,
                              stitching=args.stitching, foot_lock=args.foot_lock,
-                             progress=progress,
+                             goal_facing=args.goal_facing, progress=progress,
                              max_wait_seconds=4.0 if args.max_wait is None else args.max_wait,
                              spacing=args.spacing, **w)
     finally:
@@ -716,7 +718,7 @@ def build_parser():
                    help="goal position (m) and facing (degrees counter-clockwise from +X)")
     pl.add_argument("--patch", metavar="NAME", help="locomotion patch (default: the active one)")
     _weight_options(pl)
-    _stitching_option(pl)
+    _planning_options(pl)
     pl.add_argument("--frame-start", type=int, metavar="N",
                     help="first frame of the motion (default: the current frame)")
     _save_options(pl)
@@ -764,7 +766,7 @@ def build_parser():
                          "default: every armature with a goal set in its Motion Patches panel")
     cr.add_argument("--patch", metavar="NAME", help="locomotion patch (default: the active one)")
     _weight_options(cr)
-    _stitching_option(cr)
+    _planning_options(cr)
     cr.add_argument("--frame-start", type=int, metavar="N",
                     help="first frame of the motion (default: the current frame)")
     cr.add_argument("--max-wait", type=float, metavar="S",
@@ -801,12 +803,15 @@ def _weight_options(p):
     p.add_argument("--radius", type=float, help="character radius in metres")
 
 
-def _stitching_option(p):
+def _planning_options(p):
     p.add_argument("--stitching", choices=("dynamic", "static"), default="dynamic",
                    help="stitch traversal clips lazily (dynamic, the paper's method) or all "
                         "before the search (static, Lee 2006)")
     p.add_argument("--no-foot-lock", dest="foot_lock", action="store_false",
                    help="leave planted feet as synthesised (no leg IK track)")
+    p.add_argument("--any-facing", dest="goal_facing", action="store_const", const="any",
+                   default="exact", help="end facing whichever way is cheapest (the goal's "
+                                         "own facing is ignored)")
 
 
 def _save_options(p):

@@ -31,6 +31,9 @@ PLANNING = {  # name -> factory of the bpy property (one fresh definition per cl
     "stitching": lambda: EnumProperty(name="Stitching", default='DYNAMIC', items=(
         ('DYNAMIC', "Dynamic", "Stitch traversal clips lazily, when the search needs them"),
         ('STATIC', "Static", "Stitch every traversal clip before searching (Lee 2006 baseline)"))),
+    "goal_facing": lambda: EnumProperty(name="Goal Facing", default='EXACT', items=(
+        ('EXACT', "Exact", "Arrive facing the goal object's facing (its -Y axis)"),
+        ('ANY', "Any", "Arrive facing whichever way is cheapest (e.g. a goal in a dead end)"))),
     "foot_lock": lambda: BoolProperty(name="Lock Planted Feet", default=True,
                                       description="Pin each planted foot with leg IK (a Combine "
                                                   "track over the walk) so it does not slide"),
@@ -104,6 +107,7 @@ class MOTION_PATCHES_PG_scene(bpy.types.PropertyGroup):
     radius: PLANNING["radius"]()
     stitching: PLANNING["stitching"]()
     foot_lock: PLANNING["foot_lock"]()
+    goal_facing: PLANNING["goal_facing"]()
     show_overlay: BoolProperty(
         name="Show Planner Overlay", default=False,
         description="Draw the tile grid, occluded cells, planned paths, stitches and where "
@@ -120,6 +124,7 @@ class MOTION_PATCHES_AP_preferences(bpy.types.AddonPreferences):
     radius: PLANNING["radius"]()
     stitching: PLANNING["stitching"]()
     foot_lock: PLANNING["foot_lock"]()
+    goal_facing: PLANNING["goal_facing"]()
     cells: BAKE["cells"]()
     nodes: BAKE["nodes"]()
 

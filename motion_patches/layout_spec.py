@@ -12,7 +12,7 @@ class SpecError(ValueError):
 TOP_KEYS = {"patch", "alpha", "beta", "gamma", "radius", "margin_tiles", "limits", "exclude",
             "pairs"}
 LIMIT_KEYS = {"must_reach", "max_seconds", "max_length", "max_cost", "allow_traversal"}
-PAIR_KEYS = {"name", "character", "start", "goal", "exclude"} | LIMIT_KEYS
+PAIR_KEYS = {"name", "character", "start", "goal", "goal_facing", "exclude"} | LIMIT_KEYS
 LIMIT_DEFAULTS = {"must_reach": True, "max_seconds": None, "max_length": None,
                   "max_cost": None, "allow_traversal": True}
 
@@ -90,7 +90,11 @@ def normalise(spec):
             raise _spec_error(f"{where}: 'character' must be an armature's name")
         goal = _place(p["goal"], f"{where}: goal")
         name = p.get("name") or f"{_label(start)} -> {_label(goal)}"
+        facing = p.get("goal_facing", "exact")
+        if facing not in ("exact", "any"):
+            raise _spec_error(f"{where}: goal_facing must be \"exact\" or \"any\"")
         out["pairs"].append({"name": str(name), "start": start, "goal": goal,
+                             "goal_facing": facing,
                              "exclude": _names_list(p.get("exclude"), where),
                              "limits": _limits(p, where, base)})
     return out

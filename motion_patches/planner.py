@@ -28,6 +28,7 @@ from .traversal_probability import accessibility, tile_traversal
 
 CONNECTOR_SCALES = np.linspace(0.25, 4.0, 40)  # coarser than the bake: fitted at plan time
 GOAL_SCALE_FACTORS = (1.0, 0.7, 1.4)  # of the least-bent scale, tried for goal connectors
+ANY_FACING = np.radians(np.arange(0, 360, 45))  # goal headings tried when any facing will do
 HEADING_SLACK = 0.02  # radians, for sampling error in precomputed turn sums
 
 
@@ -182,8 +183,18 @@ class SegmentPlanner:
     def goal_connectors(self, goal):
         """Connectors into the goal from the nodes of the 3x3 tiles around it, at most
         1.5 tiles long: from its own tile only, a goal facing away from the way in forces
-        the walk past the goal and back."""
-        return self._goal_connectors(goal, self._block(self.env.tile_of(goal[:2])))
+        the walk past the goal and back. A NaN goal heading means "any facing": the
+        cheapest connector of each node over ``ANY_FACING`` headings is kept."""
+        where = self._block(self.env.tile_of(goal[:2]))
+        if not np.isnan(goal[2]):
+            return self._goal_connectors(goal, where)
+        out = {}
+        for h in ANY_FACING:
+            for key, link in self._goal_connectors(np.array([goal[0], goal[1], h]),
+                                                   where).items():
+                if key not in out or link[0] < out[key][0]:
+                    out[key] = link
+        return out
 
     def _start_connectors(self, start, where):
         keys, p, h = self._entries(where)
@@ -348,6 +359,8 @@ class SegmentPlanner:
                                     cycles=int(self.patch.seg_cycles[payload]),
                                     cost=float(self.costs[payload])))
         seconds = time.perf_counter() - t0
+        if np.isnan(goal[2]):  # any facing: the plan ends facing along its last connector
+            goal = np.array([goal[0], goal[1], pieces[-1].curve.heading[-1]])
         return Plan(pieces, float(result.cost), result.expansions, seconds,
                     tuple(start), tuple(goal),
                     {"start_connectors": len(starts), "goal_connectors": len(goals),

@@ -13,7 +13,7 @@ def _weights(settings):
     scene's settings hold."""
     return dict(alpha=settings.alpha, beta=settings.beta, gamma=settings.gamma,
                 radius=settings.radius, stitching=settings.stitching.lower(),
-                foot_lock=settings.foot_lock)
+                foot_lock=settings.foot_lock, goal_facing=settings.goal_facing.lower())
 
 
 class MOTION_PATCHES_OT_plan_path(bpy.types.Operator):
@@ -98,8 +98,8 @@ class MOTION_PATCHES_OT_plan_crowd(bpy.types.Operator):
 
 
 class MOTION_PATCHES_OT_reset_planning(bpy.types.Operator):
-    """Set this scene's α, β, γ, radius, stitching and foot lock to the defaults in the
-    preferences"""
+    """Set this scene's planning settings (α, β, γ, radius, stitching, foot lock, goal
+    facing) to the defaults in the preferences"""
     bl_idname = "motion_patches.reset_planning"
     bl_label = "Reset to Preferences"
     bl_options = {'REGISTER', 'UNDO'}

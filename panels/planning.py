@@ -24,6 +24,7 @@ class MOTION_PATCHES_PT_planning(SidebarPanel, bpy.types.Panel):
         layout.prop(s, "radius")
         layout.prop(s, "stitching")
         layout.prop(s, "foot_lock")
+        layout.prop(s, "goal_facing")
         layout.operator("motion_patches.reset_planning", icon='LOOP_BACK')
         row = layout.row(align=True)
         row.operator("motion_patches.plan_path", icon='PLAY')

@@ -571,3 +571,31 @@ def test_a_crowd_goal_object_blocks_everyone_but_its_own_character(cli, capsys, 
     assert "Pillar0" in walker_obstacles and "Pillar0" not in north_obstacles
     assert "Pillar1" in walker_obstacles and "Pillar1" in north_obstacles
     assert not any(n.startswith("\x00") for n in walker_obstacles)  # no standing spot left
+
+
+def test_a_goal_facing_out_of_a_dead_end_is_reached_with_any_facing(cli, capsys, layout):
+    """A goal deep in a dead end facing its mouth cannot be reached (no room to turn);
+    --any-facing arrives facing the end wall instead, evaluated on the goal point."""
+    open_blend(layout)
+    for name, (x, y, sx, sy) in {"WallN": (9.8, 10.75, 3.6, 0.3), "WallS": (9.8, 9.25, 3.6, 0.3),
+                                 "WallEnd": (11.45, 10.0, 0.3, 1.8)}.items():
+        bpy.ops.mesh.primitive_cube_add(size=1.0, location=(x, y, 1.0))
+        bpy.context.object.name = name
+        bpy.context.object.scale = (sx, sy, 2.0)
+    empty("DeadEnd", 10.4, 10.0, np.pi)
+    code, doc, err = call_json(cli, capsys, "plan", "--character", "Walker", "--goal", "DeadEnd")
+    assert code == 1 and "no path for 'Walker'" in one_line(err)
+    code, doc, err = call_json(cli, capsys, "plan", "--character", "Walker", "--goal", "DeadEnd",
+                               "--any-facing")
+    assert code == 0, err
+    assert abs(doc["goal"]["heading_deg"]) < 30  # facing the end wall, not the way out
+    code, doc, err = call_json(cli, capsys, "analyse", "--character", "Walker")
+    f = doc["figures"]
+    assert f["goal_root_position_error_cm"] < 10 and f["frames_root_inside_obstacle"] == 0
+    assert f["goal_heading_error_deg"] < 5  # against the facing it chose
+    # The same pair as a layout check: exact facing fails, any facing passes.
+    spec = {"pairs": [{"character": "Walker", "goal": "DeadEnd"},
+                      {"character": "Walker", "goal": "DeadEnd", "goal_facing": "any"}]}
+    exact, anyway = cli.api.check_layout(bpy.context.scene, spec)
+    assert not exact["reachable"] and anyway["reachable"] and anyway["goal_facing"] == "any"
+    assert abs(anyway["goal"]["heading_deg"]) < 30

@@ -84,3 +84,11 @@ def test_the_verdict_lists_every_broken_limit():
 def test_not_a_number_is_refused(spec):
     with pytest.raises(layout_spec.SpecError, match="layout spec"):
         layout_spec.normalise(spec)
+
+
+def test_goal_facing_is_exact_unless_a_pair_says_any():
+    spec = layout_spec.normalise({"pairs": [{"start": "A", "goal": "G"},
+                                            {"start": "A", "goal": "G", "goal_facing": "any"}]})
+    assert [p["goal_facing"] for p in spec["pairs"]] == ["exact", "any"]
+    with pytest.raises(layout_spec.SpecError, match="goal_facing"):
+        layout_spec.normalise({"pairs": [{"start": "A", "goal": "G", "goal_facing": "left"}]})

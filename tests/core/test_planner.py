@@ -77,3 +77,26 @@ def test_goal_inside_an_obstacle_is_refused(walk_patch):
     env.place(pillar("p", 5, 5, 0.5))
     with pytest.raises(PlanError, match="goal .* inside"):
         SegmentPlanner(walk_patch, env).plan((0.5, 0.5, 0), (5.0, 5.0, 0.0))
+
+
+def test_a_goal_facing_out_of_a_dead_end_needs_any_facing(walk_patch):
+    """The goal stands deep in a dead-end corridor facing its mouth: no walk can turn round
+    in there, so the exact facing is refused; with any facing the walk ends facing in."""
+    from motion_patches.planner import plan_motions
+
+    def box(name, x0, y0, x1, y1):
+        return Obstacle(name, np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]], float))
+
+    env = Environment(walk_patch.side, walk_patch.cells, 0.25)
+    for ob in (box("N", 3.0, 0.6, 6.6, 0.9), box("S", 3.0, -0.9, 6.6, -0.6),
+               box("End", 6.3, -0.9, 6.6, 0.9)):
+        env.place(ob)
+    planner = SegmentPlanner(walk_patch, env)
+    start = (-2.0, 0.0, 0.0)
+    with pytest.raises(PlanError):
+        planner.plan(start, (5.4, 0.0, np.pi))
+    plan = planner.plan(start, (5.4, 0.0, np.nan))
+    assert abs(plan.goal[2]) < np.radians(30)  # it walks in and stops facing the end wall
+    world = concatenate(plan_motions(walk_patch, plan))
+    assert np.linalg.norm(world.ground[-1, :2] - (5.4, 0.0)) < 0.01
+    assert not env.blocked(world.ground[:, :2]).any()
