@@ -99,14 +99,15 @@ def _axis_angle(axis, angle):
     return np.concatenate((np.cos(h), np.sin(h) * axis), axis=-1)
 
 
-def two_bone_ik(hip, knee, ankle, target, hinge):
+def two_bone_ik(hip, knee, ankle, target, hinge, forward=None):
     """(F, 3, 3) world rotations (thigh, shin) that move ``ankle`` to ``target``.
 
     The knee angle is set for the hip-target distance (clamped to what the leg reaches
-    without locking straight),
-    bending about the leg's plane (``hinge`` where the leg is straight), then the whole leg
-    swings about the hip onto the target. Returns (R_thigh, R_shin): left-multiply the
-    thigh's and the shin's world rotations by them."""
+    without locking straight), bending about the leg's plane (``hinge`` where the leg is
+    straight), then the whole leg swings about the hip onto the target. Of the two senses
+    of bending, the one that reaches the distance wins; where both do (a straight leg) the
+    one that puts the knee towards ``forward`` (F, 3). Returns (R_thigh, R_shin):
+    left-multiply the thigh's and the shin's world rotations by them."""
     a, b = knee - hip, ankle - knee
     l1, l2 = np.linalg.norm(a, axis=-1), np.linalg.norm(b, axis=-1)
     d0 = np.clip(np.linalg.norm(ankle - hip, axis=-1), np.abs(l1 - l2) + 1e-4, l1 + l2 - 1e-4)
@@ -118,27 +119,28 @@ def two_bone_ik(hip, knee, ankle, target, hinge):
     def interior(d):
         return np.arccos(np.clip((l1 ** 2 + l2 ** 2 - d ** 2) / (2 * l1 * l2), -1.0, 1.0))
 
-    delta = interior(d1) - interior(d0)
+    # The knee's angle now, from the bones themselves (exact even for a straight leg).
+    now = np.arccos(np.clip(np.sum(-a * b, axis=-1) / (l1 * l2), -1.0, 1.0))
+    delta = interior(d1) - now
     n = np.cross(a, b)
     ns = np.linalg.norm(n, axis=-1)
     n = np.where(ns[:, None] > 1e-6, n / np.maximum(ns, 1e-12)[:, None], hinge)
-    best, r_knee = None, None
-    for sign in (1.0, -1.0):  # the sense of the hinge that opens the knee by delta
-        r = quat.to_matrix(_axis_angle(n, sign * delta))
-        reach = np.linalg.norm(a + np.einsum("fij,fj->fi", r, b), axis=-1)
-        err = np.abs(reach - d1)
-        if best is None:
-            best, r_knee = err, r
-        else:
-            pick = err < best
-            r_knee = np.where(pick[:, None, None], r, r_knee)
-            best = np.minimum(err, best)
-    new_ankle = hip + a + np.einsum("fij,fj->fi", r_knee, b)
-    u = new_ankle - hip
     v = target - hip
-    swing = _rotation_between(u / np.linalg.norm(u, axis=-1, keepdims=True),
-                              v / np.linalg.norm(v, axis=-1, keepdims=True))
-    return swing, swing @ r_knee
+    v = v / np.linalg.norm(v, axis=-1, keepdims=True)
+    options = []
+    for sign in (1.0, -1.0):
+        r_knee = quat.to_matrix(_axis_angle(n, sign * delta))
+        u = a + np.einsum("fij,fj->fi", r_knee, b)
+        err = np.abs(np.linalg.norm(u, axis=-1) - d1)
+        swing = _rotation_between(u / np.linalg.norm(u, axis=-1, keepdims=True), v)
+        knee_dir = np.einsum("fij,fj->fi", swing, a)
+        knee_dir -= np.sum(knee_dir * v, axis=-1, keepdims=True) * v
+        ahead = (np.zeros(len(a)) if forward is None
+                 else np.sum(knee_dir * forward, axis=-1))
+        options.append((err, ahead, swing, swing @ r_knee))
+    (e1, f1, s1, k1), (e2, f2, s2, k2) = options
+    second = np.where(np.abs(e1 - e2) > 1e-7, e2 < e1, f2 > f1)[:, None, None]
+    return np.where(second, s2, s1), np.where(second, k2, k1)
 
 
 def lock_feet(skel, world, blend=BLEND_FRAMES):
@@ -158,7 +160,10 @@ def lock_feet(skel, world, blend=BLEND_FRAMES):
         target = p[:, ankle].copy()
         target[:, :2] += d
         hinge = g[:, hip, :, 0]  # the thigh's X axis: the knee's hinge in a rest-like leg
-        r_thigh, r_shin = two_bone_ik(p[:, hip], p[:, knee], p[:, ankle], target, hinge)
+        h = world.ground[:, 2]
+        forward = np.column_stack((np.cos(h), np.sin(h), np.zeros_like(h)))
+        r_thigh, r_shin = two_bone_ik(p[:, hip], p[:, knee], p[:, ankle], target, hinge,
+                                      forward)
         eye = np.eye(3)
         r_thigh = np.where(moving[:, None, None], r_thigh, eye)
         r_shin = np.where(moving[:, None, None], r_shin, eye)

@@ -70,3 +70,17 @@ def test_planted_offsets_ease_in_and_out():
     assert np.allclose(pinned, pinned[0])                       # held still while planted
     assert np.allclose(d[:5], 0) and np.allclose(d[25:], 0)     # untouched far from it
     assert np.all(np.abs(np.diff(d[:, 0])) <= 0.045)            # no jump into or out of it
+
+
+def test_a_straight_leg_bends_its_knee_forward():
+    """Hip above knee above ankle, the target a little closer: both senses of bending
+    reach it; the knee must go the way the character faces (+X), never backwards."""
+    hip, knee, ankle = (np.array([[0.0, 0.0, z]]) for z in (1.0, 0.55, 0.1))
+    target = np.array([[0.0, 0.0, 0.2]])
+    for forward in (np.array([[1.0, 0.0, 0.0]]), np.array([[-1.0, 0.0, 0.0]])):
+        r_thigh, r_shin = foot_lock.two_bone_ik(hip, knee, ankle, target,
+                                                np.array([[0.0, 1.0, 0.0]]), forward)
+        new_knee = hip[0] + r_thigh[0] @ (knee - hip)[0]
+        new_ankle = new_knee + r_shin[0] @ (ankle - knee)[0]
+        assert np.allclose(new_ankle, target[0], atol=1e-6)
+        assert np.sign(new_knee[0]) == np.sign(forward[0, 0]) and abs(new_knee[0]) > 0.05
