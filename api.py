@@ -61,6 +61,7 @@ class PlanResult:
     stashed_action_track: str = None
     stats: dict = field(default_factory=dict)
     length_m: float = 0.0
+    goal: tuple = None  # (x, y, heading) reached: the facing chosen when any would do
 
 
 @dataclass
@@ -292,14 +293,11 @@ def _without(env, names):
 
 def _check_clear(env, character, endpoints, by_name):
     """Refuse a start or goal the character cannot stand on, naming the prop in the way."""
-    from .motion_patches.environment import distance_to_polygon
     for what, state, ref in (("start", endpoints[0], endpoints[2]),
                              ("goal", endpoints[1], endpoints[3])):
         if ref is not None:  # sitting down / standing up: the clip's own end, beside the prop
             continue
-        near = sorted(n for n, ob in env.obstacles.items()
-                      if distance_to_polygon(np.asarray(state[:2])[None], ob.polygon)[0]
-                      < env.radius)
+        near = env.near(state)
         if not near:
             continue
         who = f"the {what} of '{character.name}'"
@@ -322,11 +320,12 @@ def _solve(planner, character, endpoints):
     return with_interactions(plan, start_ref, goal_ref)
 
 
-def _write(scene, character, patch, patch_name, plan, frame_start, env, radius, lock=True):
-    """NLA strips and the plan record of one planned character."""
+def _write(scene, character, patch, patch_name, plan, motions, frame_start, env, radius,
+           lock=True):
+    """NLA strips and the plan record of one planned character (``motions``: its pieces'
+    synthesised motions, :func:`plan_motions`)."""
     goal_state = np.asarray(plan.goal, float)  # the facing reached when any facing would do
     skel = patch.gait.skeleton
-    motions = plan_motions(patch, plan)
     world = concatenate(motions)
     locked = foot_lock.lock_feet(skel, world) if lock else None
     strips, stashed = nla.write_plan(bpy, character, patch, storage.patch_key(scene, patch_name),
@@ -346,7 +345,7 @@ def _write(scene, character, patch, patch_name, plan, frame_start, env, radius, 
     })
     return PlanResult(character.name, frame_start, frame_end, [p.label for p in plan.pieces],
                       plan.cost, plan.seconds, plan.expansions, strips, stashed, plan.stats,
-                      path_length(world.ground))
+                      path_length(world.ground), tuple(goal_state))
 
 
 def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2,
@@ -383,7 +382,8 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
     planner = SegmentPlanner(patch, env, alpha, beta, gamma, props=props, mode=stitching)
     plan = _solve(planner, character, ends)
     frame_start = scene.frame_current if frame_start is None else int(frame_start)
-    return _write(scene, character, patch, patch_name, plan, frame_start, env, radius, foot_lock)
+    return _write(scene, character, patch, patch_name, plan, plan_motions(patch, plan),
+                  frame_start, env, radius, foot_lock)
 
 
 def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, radius=0.25,
@@ -463,15 +463,16 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
         if progress is not None:
             progress(0.9 * (n + 1) / len(pairs))
     fps = scene_fps(scene)
-    tracks = [concatenate(plan_motions(patch, plan)).ground for _, plan in planned]
+    motions = [plan_motions(patch, plan) for _, plan in planned]  # synthesised once
+    tracks = [concatenate(m).ground for m in motions]
     delays, conflicts = crowd.stagger(tracks, spacing, round(max_wait_seconds * fps),
                                       max(1, round(0.2 * fps)))
     first = scene.frame_current if frame_start is None else int(frame_start)
     plans = []
-    for (n, plan), d in zip(planned, delays):
+    for (n, plan), m, d in zip(planned, motions, delays):
         with _without(env, own_goal[n]):  # the plan record lists what it walked around
-            plans.append(_write(scene, pairs[n][0], patch, patch_name, plan, first + d, env,
-                                radius, foot_lock))
+            plans.append(_write(scene, pairs[n][0], patch, patch_name, plan, m, first + d,
+                                env, radius, foot_lock))
     if progress is not None:
         progress(1.0)
     names = [pairs[n][0].name for n, _ in planned]

@@ -447,11 +447,10 @@ def cmd_plan(args):
                             goal_facing=args.goal_facing, **w)
     except api.PathNotFound as exc:
         raise Failed(str(exc)) from None
-    meta, _ = api.load_plan_record(char)
     fps = api.scene_fps(scene)
     saved = _save(save)
     doc = _plan_doc(res, fps)
-    doc.update(goal=api.state_dict(np.asarray(meta["goal"], float), goal_obj and goal_obj.name),
+    doc.update(goal=api.state_dict(res.goal, goal_obj and goal_obj.name),
                patch=args.patch or _active_patch_name(scene), weights=w, saved=saved)
     text = [_plan_line(res, fps)]
     if res.stashed_action_track:

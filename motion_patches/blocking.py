@@ -6,7 +6,7 @@ from collections import deque
 
 import numpy as np
 
-from .environment import distance_to_polygon, polygons_within
+from .environment import polygons_within
 
 
 def blocking_props(env, start, goal, margin_tiles=3):
@@ -26,10 +26,9 @@ def blocking_props(env, start, goal, margin_tiles=3):
     * nothing found -> ([], "unknown") (e.g. start and goal too close to join the graph).
     """
     for what, pt in (("start", start), ("goal", goal)):
-        near = [n for n, ob in env.obstacles.items()
-                if distance_to_polygon(np.asarray(pt[:2])[None], ob.polygon)[0] < env.radius]
+        near = env.near(pt)
         if near:
-            return sorted(near), what
+            return near, what
     if not env.obstacles:
         return [], "unknown"
     side, cells = env.side, env.cells

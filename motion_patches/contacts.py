@@ -86,8 +86,8 @@ def foot_contacts(clip, level_floor=False):
     return detect(h, horizontal_speeds(pos, clip.fps), planted), planted, h
 
 
-def _runs(c, value):
-    """(start, end) index pairs of runs of ``value`` in a bool array."""
+def runs(c, value=True):
+    """(starts, ends) of the runs of ``value`` in a bool array, ends exclusive."""
     d = np.diff(np.concatenate(([not value], c == value, [not value])).astype(int))
     return np.flatnonzero(d == 1), np.flatnonzero(d == -1)
 
@@ -96,7 +96,7 @@ def debounce(contact, min_frames):
     """Contact flags with gaps and blips shorter than ``min_frames`` removed."""
     c = np.asarray(contact, bool).copy()
     for value in (False, True):  # close short gaps, then drop short contacts
-        starts, ends = _runs(c, value)
+        starts, ends = runs(c, value)
         for a, b in zip(starts, ends):
             if b - a < min_frames and a > 0 and b < c.size:
                 c[a:b] = not value

@@ -200,6 +200,12 @@ class Environment:
         bits = np.left_shift(np.uint64(1), np.flatnonzero(occluded).astype(np.uint64))
         return FULL & ~np.bitwise_or.reduce(bits) if bits.size else FULL
 
+    def near(self, xy):
+        """Sorted names of the obstacles a point (x, y) comes within the radius of."""
+        p = np.asarray(xy, float)[None, :2]
+        return sorted(n for n in self.members(self.tile_of(p[0]))
+                      if self.obstacles[n].within(p, self.radius)[0])
+
     def blocked(self, points, exclude=()):
         """(N,) True where world points come within the radius of any obstacle."""
         points = np.atleast_2d(np.asarray(points, float))

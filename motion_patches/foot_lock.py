@@ -12,7 +12,7 @@ The correction eases in and out over a few frames around each run, so nothing po
 import numpy as np
 
 from . import quat
-from .contacts import foot_joints
+from .contacts import foot_joints, runs
 from .skeleton import local_rotations_from_global
 
 BLEND_FRAMES = 4  # frames the correction takes to ease in before and out after a contact
@@ -30,13 +30,6 @@ def leg_chains(skel):
     return out
 
 
-def _runs(flags):
-    """[(start, stop)] of True runs, stop inclusive."""
-    f = np.concatenate(([False], np.asarray(flags, bool), [False]))
-    d = np.diff(f.astype(np.int8))
-    return list(zip(np.nonzero(d == 1)[0], np.nonzero(d == -1)[0] - 1))
-
-
 def planted_offsets(ankle_xy, toe_xy, ankle_on, toe_on, blend=BLEND_FRAMES):
     """(F, 2) horizontal corrections of the ankle that pin a foot while it is planted.
 
@@ -50,16 +43,16 @@ def planted_offsets(ankle_xy, toe_xy, ankle_on, toe_on, blend=BLEND_FRAMES):
     ankle_on = np.asarray(ankle_on, bool)
     toe_only = np.asarray(toe_on, bool) & ~ankle_on
     d = np.zeros((n, 2))
-    for a, b in _runs(ankle_on):
-        d[a:b + 1] = ankle_xy[a:b + 1].mean(axis=0) - ankle_xy[a:b + 1]
-    for a, b in _runs(toe_only):
+    for a, b in zip(*runs(ankle_on)):
+        d[a:b] = ankle_xy[a:b].mean(axis=0) - ankle_xy[a:b]
+    for a, b in zip(*runs(toe_only)):
         if a > 0 and ankle_on[a - 1]:      # heel off: the toe stays where it was
             anchor = toe_xy[a - 1] + d[a - 1]
-        elif b + 1 < n and ankle_on[b + 1]:  # toe first: it lands where the heel will
-            anchor = toe_xy[b + 1] + d[b + 1]
+        elif b < n and ankle_on[b]:        # toe first: it lands where the heel will
+            anchor = toe_xy[b] + d[b]
         else:
-            anchor = toe_xy[a:b + 1].mean(axis=0)
-        d[a:b + 1] = anchor - toe_xy[a:b + 1]
+            anchor = toe_xy[a:b].mean(axis=0)
+        d[a:b] = anchor - toe_xy[a:b]
     on = ankle_on | toe_only
     if not on.any():
         return d
@@ -91,12 +84,7 @@ def _rotation_between(u, v):
     c = np.clip(np.sum(u * v, axis=-1), -1.0, 1.0)
     angle = np.arctan2(s, c)
     axis = np.where(s[:, None] > 1e-9, axis / np.maximum(s, 1e-12)[:, None], [1.0, 0.0, 0.0])
-    return quat.to_matrix(_axis_angle(axis, angle))
-
-
-def _axis_angle(axis, angle):
-    h = 0.5 * np.asarray(angle)[..., None]
-    return np.concatenate((np.cos(h), np.sin(h) * axis), axis=-1)
+    return quat.to_matrix(quat.exp(axis * angle[:, None]))
 
 
 def two_bone_ik(hip, knee, ankle, target, hinge, forward=None):
@@ -129,7 +117,7 @@ def two_bone_ik(hip, knee, ankle, target, hinge, forward=None):
     v = v / np.linalg.norm(v, axis=-1, keepdims=True)
     options = []
     for sign in (1.0, -1.0):
-        r_knee = quat.to_matrix(_axis_angle(n, sign * delta))
+        r_knee = quat.to_matrix(quat.exp(n * (sign * delta)[:, None]))
         u = a + np.einsum("fij,fj->fi", r_knee, b)
         err = np.abs(np.linalg.norm(u, axis=-1) - d1)
         swing = _rotation_between(u / np.linalg.norm(u, axis=-1, keepdims=True), v)
