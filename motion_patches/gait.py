@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import quat
-from .clip import mirror, resample
+from .clip import mirror
 from .cycle import Loop, best_cycle, cycle_turns, detect_cycles, extract_loop
 from .inplace import facing_yaw
 from .skeleton import Skeleton

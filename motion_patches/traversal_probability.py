@@ -13,7 +13,7 @@ import hashlib
 
 import numpy as np
 
-from .environment import Environment, FULL, Obstacle
+from .environment import Environment, Obstacle
 from .object_patch import ObjectPatch
 from .stitching import stitch
 

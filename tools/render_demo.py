@@ -331,7 +331,7 @@ def frame_points(bpy, scene, cam, points, margin):
 
 
 def camera_and_light(bpy, view, fit_points, size):
-    from mathutils import Euler, Vector
+    from mathutils import Euler
     scene = bpy.context.scene
     spec = VIEWS[view]
     cam = bpy.data.objects.new("rd camera", bpy.data.cameras.new("rd camera"))

@@ -10,6 +10,15 @@ def pillar(name, x, y, r=0.25, h=2.0):
     return bpy.context.object
 
 
+def prop_box(name, x, y, size=(0.4, 0.44, 0.5)):
+    """A box prop (a chair's bulk) standing on the ground at (x, y)."""
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(x, y, size[2] / 2))
+    ob = bpy.context.object
+    ob.name = name
+    ob.scale = size
+    return ob
+
+
 def empty(name, x, y, heading):
     """An empty whose -Y axis (the add-on's facing convention) points along ``heading``."""
     ob = bpy.data.objects.new(name, None)

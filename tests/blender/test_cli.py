@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from conftest import enable_addon, raise_error
-from scene_helpers import empty, pillar, walker_from
+from scene_helpers import empty, pillar, prop_box, walker_from
 
 
 @pytest.fixture
@@ -77,7 +77,7 @@ def layout(baked, tmp_path_factory):
     """The baked file plus a walker, pillars, a goal, and a goal caged in a ring of pillars."""
     bpy.ops.wm.open_mainfile(filepath=str(baked[0]))
     scene = bpy.context.scene
-    walker = walker_from(scene.motion_patches.source_armature)
+    walker_from(scene.motion_patches.source_armature)
     for n, (x, y) in enumerate([(3.0, 1.0), (4.5, 3.0), (2.5, 4.0), (6.0, 1.5)]):
         pillar(f"Pillar{n}", x, y)
     for n, a in enumerate(np.linspace(0, 2 * np.pi, 25)[:-1]):
@@ -421,18 +421,11 @@ def test_missing_blend_exits_2(cli, capsys, tmp_path):
 # --- crowd ----------------------------------------------------------------------------------
 
 
-def evaluated_roots(names, frames):
+def evaluated_roots(cli, names, frames):
     """(characters, frames, 2) ground positions of each armature's evaluated root bone."""
-    scene = bpy.context.scene
-    out = np.zeros((len(names), len(frames), 2))
-    for k, f in enumerate(frames):
-        scene.frame_set(int(f))
-        dg = bpy.context.evaluated_depsgraph_get()
-        for n, name in enumerate(names):
-            ob = bpy.data.objects[name].evaluated_get(dg)
-            root = ob.pose.bones[0]
-            out[n, k] = (ob.matrix_world @ root.head)[:2]
-    return out
+    sample = cli.api.evaluate.sample_armature
+    return np.array([sample(bpy.context, ob, frames, [ob.pose.bones[0].name])[0][:, 0, :2]
+                     for ob in (bpy.data.objects[n] for n in names)])
 
 
 def facing(cli, walker, heading):
@@ -481,7 +474,7 @@ def test_crowd_plans_everyone_and_keeps_them_apart(cli, capsys, crossing, tmp_pa
     # Evaluated through the depsgraph: both arrive, and they keep a metre apart throughout.
     open_blend(out)
     end = max(first["frame_end"], second["frame_end"])
-    roots = evaluated_roots(["East", "North"], range(1, end + 1))
+    roots = evaluated_roots(cli, ["East", "North"], range(1, end + 1))
     gap = np.linalg.norm(roots[0] - roots[1], axis=1)
     assert gap.min() >= 1.0 - 0.05, f"closest approach {gap.min():.2f} m"
     assert np.linalg.norm(roots[0, -1] - (8.0, 0.0)) < 0.3
@@ -579,9 +572,7 @@ def test_a_goal_facing_out_of_a_dead_end_is_reached_with_any_facing(cli, capsys,
     open_blend(layout)
     for name, (x, y, sx, sy) in {"WallN": (9.8, 10.75, 3.6, 0.3), "WallS": (9.8, 9.25, 3.6, 0.3),
                                  "WallEnd": (11.45, 10.0, 0.3, 1.8)}.items():
-        bpy.ops.mesh.primitive_cube_add(size=1.0, location=(x, y, 1.0))
-        bpy.context.object.name = name
-        bpy.context.object.scale = (sx, sy, 2.0)
+        prop_box(name, x, y, (sx, sy, 2.0))
     empty("DeadEnd", 10.4, 10.0, np.pi)
     code, doc, err = call_json(cli, capsys, "plan", "--character", "Walker", "--goal", "DeadEnd")
     assert code == 1 and "no path for 'Walker'" in one_line(err)

@@ -4,15 +4,7 @@ import bpy
 import numpy as np
 import pytest
 
-from scene_helpers import empty, walker_from
-
-
-def chair(name, x, y):
-    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(x, y, 0.25))
-    ob = bpy.context.object
-    ob.name = name
-    ob.scale = (0.4, 0.44, 0.5)
-    return ob
+from scene_helpers import empty, prop_box, walker_from
 
 
 @pytest.fixture(scope="module")
@@ -26,7 +18,7 @@ def chairs_blend(addon_module, mocap_dir, tmp_path_factory):
                                   cmu / "13_05.bvh", cmu / "13_05_standup.bvh"], name="Source")
     api.bake_locomotion_patch(scene, arm, acts[0], [acts[1]], layer="walk")
     for k, y in enumerate(np.linspace(-2.5, 2.5, 11)):
-        ob = chair(f"Chair.{k:02d}", 5.0, y)
+        ob = prop_box(f"Chair.{k:02d}", 5.0, y)
         bpy.context.view_layer.objects.active = ob
         assert bpy.ops.motion_patches.tag_object_patch(action="16_06", kind='TRAVERSAL',
                                                        effort=8.0) == {'FINISHED'}
@@ -187,7 +179,7 @@ def test_tagging_bad_input_reports_and_changes_nothing(chairs_blend, addon_modul
     fc = bag.fcurves.new('pose.bones["Hips"].location', index=0)
     fc.keyframe_points.insert(1, 0.0)
     fc.keyframe_points.insert(30, 0.0)
-    target = chair("Extra", 12.0, 0.0)
+    target = prop_box("Extra", 12.0, 0.0)
     with pytest.raises(api.MotionPatchesError, match="root"):
         api.tag_object_patch(target, [(still, 'TRAVERSAL', 8.0, 10.0)])
     assert not target.motion_patch.enabled and len(target.motion_patch.clips) == 0
@@ -210,7 +202,7 @@ def test_import_retargets_another_subjects_clip(chairs_blend, addon_module):
 def test_stand_up_walk_and_sit_down(chairs_blend, addon_module):
     bpy.ops.wm.open_mainfile(filepath=str(chairs_blend))
     api = addon_module.api
-    a, b = chair("Chair A", 1.0, -4.5), chair("Chair B", 9.0, -4.0)
+    a, b = prop_box("Chair A", 1.0, -4.5), prop_box("Chair B", 9.0, -4.0)
     b.rotation_euler = (0, 0, 2.0)
     api.tag_object_patch(a, [(bpy.data.actions["13_05_standup"], 'INTERACTION', 2.0, 0.0)])
     api.tag_object_patch(b, [(bpy.data.actions["13_05"], 'INTERACTION', 2.0, 0.0)])

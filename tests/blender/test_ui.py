@@ -16,18 +16,9 @@ import bpy
 import numpy as np
 import pytest
 
-from scene_helpers import empty, walker_from
+from scene_helpers import empty, prop_box, walker_from
 
 ICONS = set(bpy.types.UILayout.bl_rna.functions["label"].parameters["icon"].enum_items.keys())
-
-
-def prop_box(name, x, y, size=(0.4, 0.44, 0.5)):
-    """A box prop (a chair's bulk) standing on the ground at (x, y)."""
-    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(x, y, size[2] / 2))
-    ob = bpy.context.object
-    ob.name = name
-    ob.scale = size
-    return ob
 
 
 @pytest.fixture(scope="module")

@@ -1,7 +1,6 @@
 """Crowds: characters planned one by one are kept apart by waiting at their start."""
 
 import numpy as np
-import pytest
 
 from motion_patches import crowd
 from motion_patches.environment import Environment
