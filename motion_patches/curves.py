@@ -41,6 +41,19 @@ def curvature(vel, acc):
     return cross / np.maximum(speed, 1e-9) ** 3
 
 
+def follows_turn_limits(pos, vel, kmin, kmax, slack=0.02):
+    """(C,) True where sampled curves (C, M, 2) turn, between every two samples, no more
+    than the curvature limits allow over the distance between them (plus ``slack``
+    radians). Curvature at the samples misses a cusp: where the speed vanishes the tangent
+    flips by 180 degrees between two samples while a straight back-and-forth has zero
+    curvature everywhere; the character would spin round on the spot."""
+    h = np.unwrap(np.arctan2(vel[..., 1], vel[..., 0]), axis=-1)
+    dh = np.diff(h, axis=-1)
+    ds = np.linalg.norm(np.diff(pos, axis=-2), axis=-1)
+    ok = (dh <= kmax * ds * 1.05 + slack) & (dh >= kmin * ds * 1.05 - slack)
+    return ok.all(axis=-1)
+
+
 def arc_lengths(pos):
     """Cumulative chord length along sampled curves (..., M, 2) -> (..., M)."""
     seg = np.linalg.norm(np.diff(pos, axis=-2), axis=-1)
@@ -70,6 +83,14 @@ class Curve:
 
     def total_turn(self):
         return float(np.sum(np.abs(np.diff(self.heading))))
+
+
+def joined(a, b):
+    """One curve running along ``a`` then ``b`` (b starts where a ends)."""
+    turns = np.round((a.heading[-1] - b.heading[0]) / (2 * np.pi)) * 2 * np.pi
+    return Curve(np.concatenate((a.s, a.s[-1] + b.s[1:])), np.concatenate((a.pos, b.pos[1:])),
+                 np.concatenate((a.heading, b.heading[1:] + turns)),
+                 np.concatenate((a.kappa, b.kappa[1:])))
 
 
 def hermite_curve(p0, d0, p1, d1, scale, samples=257):

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 
 FULL = np.uint64(0xFFFFFFFFFFFFFFFF)
+PATH_MARGIN = 0.002  # metres: sampled paths are tested this much wider (the frames between
+                     # samples run on chords a fraction of a millimetre inside the arcs)
 
 
 @dataclass
@@ -135,6 +137,23 @@ def cells_within(x0, y0, size, polygon, radius):
     return d < max(radius, 1e-12) if radius > 0 else d <= 0.0
 
 
+def cells_covered(x0, y0, size, polygon, radius):
+    """(K,) True for the square cells lying wholly within ``radius`` of a convex polygon:
+    the polygon grown by the radius is convex, so a cell is inside when its four corners
+    are. No point of such a cell can be walked; a segment crossing it is occluded."""
+    corners = np.stack((np.column_stack((x0, y0)), np.column_stack((x0 + size, y0)),
+                        np.column_stack((x0 + size, y0 + size)),
+                        np.column_stack((x0, y0 + size))), axis=1)
+    d = distance_to_polygon(corners.reshape(-1, 2), polygon).reshape(-1, 4)
+    return np.all(d < radius, axis=1) if radius > 0 else np.all(d <= 0.0, axis=1)
+
+
+def _bits(flags):
+    """uint64 with bit c set where ``flags[c]``."""
+    idx = np.flatnonzero(flags).astype(np.uint64)
+    return np.bitwise_or.reduce(np.left_shift(np.uint64(1), idx)) if idx.size else np.uint64(0)
+
+
 class Environment:
     """Obstacles and the lazily occluded tile grid of one locomotion patch size."""
 
@@ -146,6 +165,7 @@ class Environment:
         self._tiles_of = {}     # obstacle name -> set of tiles
         self._members = {}      # tile -> set of obstacle names
         self._free = {}         # tile -> uint64 free-cell bitfield (lazy)
+        self._solid = {}        # tile -> uint64 bitfield of cells no point of which is free
         self.occlusion_computations = 0
 
     def tile_of(self, xy):
@@ -167,11 +187,13 @@ class Environment:
         for t in tiles:
             self._members.setdefault(t, set()).add(obstacle.name)
             self._free.pop(t, None)
+            self._solid.pop(t, None)
 
     def remove(self, name):
         for t in self._tiles_of.pop(name, ()):
             self._members[t].discard(name)
             self._free.pop(t, None)
+            self._solid.pop(t, None)
         self.obstacles.pop(name, None)
 
     def members(self, tile):
@@ -181,24 +203,47 @@ class Environment:
         """``B_t``: bit c set when cell c of the tile is not occluded (computed lazily)."""
         f = self._free.get(tile)
         if f is None:
-            f = self._occlude(tile)
-            self._free[tile] = f
+            f, solid = self._occlude(tile)
+            self._free[tile], self._solid[tile] = f, solid
         return f
+
+    def cell_states(self, tile):
+        """(free, solid) bitfields of a tile: free cells have no point within the radius of
+        an obstacle (Eq. 8's ``B_t``); solid cells no point outside it. A segment through
+        cells that are neither is decided by testing its own path (the planner does)."""
+        free = self.free_cells(tile)
+        return free, self._solid[tile]
 
     def _occlude(self, tile):
         self.occlusion_computations += 1
         names = self.members(tile)
         if not names:
-            return FULL
+            return FULL, np.uint64(0)
         c = self.side / self.cells
         ix, iy = np.meshgrid(np.arange(self.cells), np.arange(self.cells), indexing="xy")
         x0 = tile[0] * self.side + ix.ravel() * c
         y0 = tile[1] * self.side + iy.ravel() * c
         occluded = np.zeros(x0.size, bool)
+        solid = np.zeros(x0.size, bool)
         for n in names:
             occluded |= cells_within(x0, y0, c, self.obstacles[n].polygon, self.radius)
-        bits = np.left_shift(np.uint64(1), np.flatnonzero(occluded).astype(np.uint64))
-        return FULL & ~np.bitwise_or.reduce(bits) if bits.size else FULL
+            solid |= cells_covered(x0, y0, c, self.obstacles[n].polygon, self.radius)
+        return (FULL & ~_bits(occluded)), _bits(solid)
+
+    def names_in_box(self, lo, hi):
+        """Names of the obstacles whose bounds overlap the box ``lo``-``hi`` (world)."""
+        i0, j0 = self.tile_of(lo)
+        i1, j1 = self.tile_of(hi)
+        if (i1 - i0 + 1) * (j1 - j0 + 1) > len(self._tiles_of) * 4:
+            names = self.obstacles.keys()  # a box larger than the scene: look at each once
+        else:
+            names = set()
+            for i in range(i0, i1 + 1):
+                for j in range(j0, j1 + 1):
+                    names |= self._members.get((i, j), set())
+        lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+        return sorted(n for n in names
+                      if np.all(self.obstacles[n].lo <= hi) and np.all(self.obstacles[n].hi >= lo))
 
     def near(self, xy):
         """Sorted names of the obstacles a point (x, y) comes within the radius of."""
@@ -206,13 +251,37 @@ class Environment:
         return sorted(n for n in self.members(self.tile_of(p[0]))
                       if self.obstacles[n].within(p, self.radius)[0])
 
-    def blocked(self, points, exclude=()):
-        """(N,) True where world points come within the radius of any obstacle."""
+    def blocked(self, points, exclude=(), radius=None):
+        """(N,) True where world points come within the radius (or ``radius``, at most a
+        tile side more) of any obstacle."""
         points = np.atleast_2d(np.asarray(points, float))
+        radius = self.radius if radius is None else float(radius)
         out = np.zeros(points.shape[0], bool)
+        tiles = set(map(tuple, np.floor(points / self.side).astype(int).tolist()))
+        if radius > self.radius:  # membership holds footprints grown by self.radius only
+            tiles = {(i + di, j + dj) for i, j in tiles for di in (-1, 0, 1) for dj in (-1, 0, 1)}
         near = set()
-        for t in set(map(tuple, np.floor(points / self.side).astype(int).tolist())):
+        for t in tiles:
             near |= self.members(t)
         for n in near - set(exclude):
-            out |= self.obstacles[n].within(points, self.radius)
+            out |= self.obstacles[n].within(points, radius)
         return out
+
+    def path_blocked(self, paths, spacing):
+        """(n,) True where sampled paths (n, M, 2), samples at most ``spacing`` apart,
+        come within the radius of an obstacle anywhere between samples (to the precision
+        of the sampling): every fourth sample first, the rest only where those do not
+        settle it (a point farther than radius + 2 x spacing from every footprint clears
+        the stretch around it)."""
+        n, m = paths.shape[:2]
+        r = self.radius + PATH_MARGIN
+        coarse = np.concatenate((paths[:, ::4], paths[:, -1:]), axis=1)
+        hit = self.blocked(coarse.reshape(-1, 2), radius=r).reshape(n, -1).any(axis=1)
+        unsure = np.flatnonzero(~hit)
+        if unsure.size:
+            close = self.blocked(coarse[unsure].reshape(-1, 2), radius=r + 2.0 * spacing)
+            close = close.reshape(unsure.size, -1).any(axis=1)
+            fine = unsure[close]
+            if fine.size:
+                hit[fine] = self.blocked(paths[fine].reshape(-1, 2), radius=r).reshape(fine.size, -1).any(axis=1)
+        return hit

@@ -20,6 +20,7 @@ EDGES = 4  # 0 south (y = 0), 1 east (x = side), 2 north (y = side), 3 west (x =
 DIRECTIONS = 8  # headings in 45 degree steps, direction d has heading d * 45 degrees
 INWARD = np.array([2, 4, 6, 0])  # direction of each edge's inward normal
 MAX_CYCLES = 4
+PATH_SAMPLES = 160  # points per segment for exact footprint tests (4 cycles ~ 5.3 m)
 
 
 def node_id(edge, slot, direction, nodes):
@@ -94,6 +95,18 @@ class LocomotionPatch:
                      start)
             self.__dict__["_all_ground"] = cache
         return cache
+
+    def path_points(self):
+        """(S, PATH_SAMPLES, 2) points along every segment's curve, patch coordinates, at
+        most about 4 cm apart: what the planner tests exactly against footprints when a
+        segment crosses cells only partly occluded (cached)."""
+        pts = self.__dict__.get("_path_points")
+        if pts is None:
+            p0, d0, p1, d1 = self.endpoints(np.arange(self.segment_count))
+            pts, _, _ = curves.hermite(p0, d0, p1, d1, self.seg_scale,
+                                       np.linspace(0.0, 1.0, PATH_SAMPLES))
+            self.__dict__["_path_points"] = pts
+        return pts
 
     def ground(self, seg):
         """(F, 3) ground frames of a segment (patch coordinates) and (F,) arc lengths,
@@ -179,7 +192,8 @@ def bake(gait, cells=8, nodes=8, side=None, effort_rate=1.0, curvature_margin=1.
         if idx.size:
             pos, vel, acc = curves.hermite(p0[idx], d0[idx], p1[idx], d1[idx], sc, u)
             kap = curves.curvature(vel, acc)
-            bends = (kap.min(axis=1) < kmin) | (kap.max(axis=1) > kmax)
+            bends = ((kap.min(axis=1) < kmin) | (kap.max(axis=1) > kmax)
+                     | ~curves.follows_turn_limits(pos, vel, kmin, kmax))
             eps = 1e-6
             outside = np.any((pos < -eps) | (pos > side + eps), axis=(1, 2))
             good = ~bends & ~outside

@@ -10,26 +10,32 @@ goal position and heading. Traversal clips of object patches join the graph as s
 edges, lazily, through a per-tile observer of the search (:class:`TraversalObserver`).
 """
 
+import contextlib
 import heapq
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import astar, curves
+from . import astar, curves, dubins, retime, shortcut
 from .high_level import TilePlanner
 from .node_keys import BIAS, LOCAL, NEXT_EDGE, TILE_STEP, pack, unpack
 from .locomotion_patch import (DIRECTIONS, EDGES, INWARD, node_id, node_position,
                                split_node_id)
 from .motion import ease_to, sliced
+from .plan_frame import IDENTITY, lattice_frame, local_environment, local_prop, state_to_local
 from .stitching import BLEND_FRAMES, stitch
 from .synthesis import cycles_along, follow
 from .traversal_probability import accessibility, tile_traversal
 
 CONNECTOR_SCALES = np.linspace(0.25, 4.0, 40)  # coarser than the bake: fitted at plan time
-GOAL_SCALE_FACTORS = (1.0, 0.7, 1.4)  # of the least-bent scale, tried for goal connectors
 ANY_FACING = np.radians(np.arange(0, 360, 45))  # goal headings tried when any facing will do
 HEADING_SLACK = 0.02  # radians, for sampling error in precomputed turn sums
+DUBINS_CURVATURE_SHARE = 0.8  # connectors turn at this share of the gait's sharpest turn
+MAX_CONNECTOR_TILES = 2.0     # longest start / goal connector, in tile sides
+MIN_CONNECTOR_CYCLES = 0.5    # shortest start connector (room to ease in from standing)
+START_CONNECTORS = 24         # valid start connectors offered to the search (best f first)
+APPROACH = 0.35               # metres of the way into the goal (out of the start) checked first
 
 
 class PlanError(ValueError):
@@ -50,6 +56,7 @@ class Piece:
     frames: tuple = None      # (first, last) frame of a segment used in part ("part")
     prop: object = None       # ObjectPatch of a traversal
     clip_index: int = -1
+    frame: tuple = IDENTITY   # plan frame (x, y, angle) taking the piece to the world
 
     @property
     def label(self):
@@ -81,9 +88,11 @@ class SegmentPlanner:
         if mode not in ("dynamic", "static"):
             raise PlanError(f"unknown stitching mode '{mode}' (dynamic or static)")
         self.props, self.mode = list(props), mode
+        self.world_props = self.props
         if patch.nodes * DIRECTIONS * EDGES > LOCAL:
             raise PlanError("the patch has more nodes per edge than the planner packs (8)")
         self.patch, self.env = patch, env
+        self.world_env = env
         self.alpha, self.beta, self.gamma = float(alpha), float(beta), float(gamma)
         self.costs = patch.costs(alpha, beta, gamma)
         self.order, self.first = patch.by_entry()
@@ -127,12 +136,32 @@ class SegmentPlanner:
         segs = self.order[self.first[local]:self.first[local + 1]]
         if segs.size == 0 or not self.in_region(i, j):
             return segs, segs, segs
-        free = self.env.free_cells((int(i), int(j)))
+        tile = (int(i), int(j))
+        free, solid = self.env.cell_states(tile)
         mask = self.patch.seg_mask[segs]
-        segs = segs[(mask & free) == mask]  # Eq. 8
+        clear = (mask & free) == mask  # Eq. 8
+        if not clear.all():
+            # Cells only partly occluded: the segment's own path decides (a gap the
+            # character fits through stays open however the cells fall on it).
+            unsure = np.flatnonzero(~clear & ((mask & solid) == 0))
+            if unsure.size:
+                clear[unsure] = self._path_clear(tile, segs[unsure])
+        segs = segs[clear]
         st = self.step[segs]
         keys = pack(i + st[:, 0], j + st[:, 1], self.next_local[segs])
         return keys, self.costs[segs], segs
+
+    def _path_clear(self, tile, segs):
+        """(n,) True where the paths of segments walked in ``tile`` keep the radius from
+        every footprint (exact test of their sampled curves; cached per plan)."""
+        cache = self._exact.setdefault(tile, {})
+        todo = np.array([s for s in segs.tolist() if s not in cache], int)
+        if todo.size:
+            pts = self.patch.path_points()[todo] + np.array(tile, float) * self.patch.side
+            spacing = float(np.linalg.norm(np.diff(pts[:, :2], axis=1), axis=-1).max())
+            hit = self.env.path_blocked(pts, spacing)
+            cache.update(zip(todo.tolist(), (~hit).tolist()))
+        return np.array([cache[s] for s in segs.tolist()], bool)
 
     def in_region(self, i, j):
         if self.corridor is not None:
@@ -166,97 +195,228 @@ class SegmentPlanner:
         effort = self.patch.effort_rate * frames / self.patch.gait.fps
         return self.alpha * curve.length + self.beta * curve.total_turn() + self.gamma * effort
 
-    def _valid(self, curve):
+    def _valid(self, curve, exact=False):
+        """The curve bends within the gait's limits and keeps the radius from every
+        footprint (every sample tested when ``exact``, else every fourth)."""
         if curve.kappa.min() < self.kmin or curve.kappa.max() > self.kmax:
             return False
-        return not self.env.blocked(curve.pos[::4]).any()
+        if not curves.follows_turn_limits(curve.pos, curves.unit(curve.heading), self.kmin, self.kmax):
+            return False
+        if not exact:
+            return not self.env.blocked(curve.pos[::4]).any()
+        spacing = float(np.diff(curve.s).max()) if curve.s.size > 1 else 0.0
+        return not self.env.path_blocked(curve.pos[None], spacing)[0]
+
+    def _long_last_piece(self, pieces):
+        """The pieces with a goal connector shorter than a gait cycle merged with the
+        walking pieces before it into one goal piece (one curve followed the same way), so
+        the stop (:mod:`.retime`) has a cycle to slow down over."""
+        out = list(pieces)
+        need = self.patch.gait.cycle_distance
+        while (len(out) > 1 and out[-1].kind == "goal" and out[-1].curve.length < need
+               and out[-2].kind in ("segment", "shortcut", "start")):
+            before = out[-2]
+            c = before.curve if before.curve is not None else self._segment_curve(before)
+            merged = curves.joined(c, out[-1].curve)
+            out[-2:] = [Piece("goal", curve=merged, cost=before.cost + out[-1].cost)]
+        return out
+
+    def _segment_curve(self, piece):
+        """A segment piece's curve in plan-frame coordinates."""
+        c = self.patch.curve(piece.segment)
+        return curves.Curve(c.s, c.pos + np.array(piece.tile, float) * self.patch.side,
+                            c.heading, c.kappa)
+
+    def _cycles(self, curve):
+        """Gait cycles (fractional) that following ``curve`` takes."""
+        return float(cycles_along(self.patch.gait, curve.pos[None], *_derivs(curve))[0])
 
     def _measure(self, pos, vel, acc):
         return cycles_along(self.patch.gait, pos, vel, acc)
 
     def start_connectors(self, start):
-        """Connectors from the start to the nodes leaving its tile (else the 3x3 block)."""
-        tile = self.env.tile_of(start[:2])
-        out = self._start_connectors(start, self._exits_of(tile))
-        return out or self._start_connectors(start, self._block(tile))
+        """[(key, cost, Piece)]: Dubins paths (:mod:`.dubins`) from the start to the entry
+        nodes of the 3 x 3 tiles around it, the cheapest valid word per node. The motion
+        along one starts at the gait phase that makes it end on the node pose."""
+        keys, p, h = self._entries(self._block(self.env.tile_of(start[:2])))
+        table = self._dubins_table(np.tile(start[:2], (keys.size, 1)),
+                                   np.full(keys.size, start[2]), p, h)
+        # The search takes start nodes by cost + heuristic: test them in that order and
+        # keep the first START_CONNECTORS valid ones (the rest would rarely be taken).
+        f = table[0].min(axis=0) + self.heuristic(keys)
+        out = []
+        shortest = MIN_CONNECTOR_CYCLES * self.patch.gait.cycle_distance
+        for m in np.argsort(f, kind="stable"):
+            if not np.isfinite(f[m]) or len(out) >= START_CONNECTORS:
+                break
+            found = self._first_valid(start[:2], start[2], table, m, shortest)
+            if found is not None:
+                c, cst = found
+                out.append((int(keys[m]), cst, Piece("start", curve=c, cycles=self._cycles(c))))
+        return out
 
     def goal_connectors(self, goal):
-        """Connectors into the goal from the nodes of the 3x3 tiles around it, at most
-        1.5 tiles long: from its own tile only, a goal facing away from the way in forces
-        the walk past the goal and back. A NaN goal heading means "any facing": the
-        cheapest connector of each node over ``ANY_FACING`` headings is kept."""
-        where = self._block(self.env.tile_of(goal[:2]))
-        if not np.isnan(goal[2]):
-            return self._goal_connectors(goal, where)
-        out = {}
-        for h in ANY_FACING:
-            for key, link in self._goal_connectors(np.array([goal[0], goal[1], h]),
-                                                   where).items():
-                if key not in out or link[0] < out[key][0]:
-                    out[key] = link
-        return out
-
-    def _start_connectors(self, start, where):
-        keys, p, h = self._entries(where)
-        m = keys.size
-        p0 = np.tile(start[:2], (m, 1))
-        d0 = np.tile(curves.unit(start[2]), (m, 1))
-        d1 = curves.unit(h)
-        table = curves.tabulate(p0, d0, p, d1, self._measure, CONNECTOR_SCALES, samples=48)
-        out = []
-        for n in range(1, 5):
-            sc = curves.fit_scale(p0, d0, p, d1, float(n), self._measure, CONNECTOR_SCALES,
-                                  samples=48, table=table)
-            for idx in self._bend_ok(p0, d0, p, d1, sc):
-                c = curves.hermite_curve(p0[idx], d0[idx], p[idx], d1[idx], sc[idx])
-                if self._valid(c):
-                    out.append((int(keys[idx]), self._curve_cost(c, n),
-                                Piece("start", curve=c, cycles=n)))
-        return out
-
-    def _bend_ok(self, p0, d0, p1, d1, scales, max_length=np.inf):
-        """Indices of candidate curves (one scale each, NaN: none) that bend within the
-        gait's range and are not too long, tested together on coarse samples first."""
-        idx = np.flatnonzero(~np.isnan(scales))
-        if idx.size == 0:
-            return idx
-        pos, vel, acc = curves.hermite(p0[idx], d0[idx], p1[idx], d1[idx], scales[idx],
-                                       np.linspace(0.0, 1.0, 65))
-        k = curves.curvature(vel, acc)
-        length = curves.arc_lengths(pos)[:, -1]
-        margin = 1.02  # the dense check in _valid decides; this only skips hopeless ones
-        ok = (k.min(axis=1) >= self.kmin * margin) & (k.max(axis=1) <= self.kmax * margin)
-        return idx[ok & (length <= max_length)]
-
-    def _goal_connectors(self, goal, where):
-        """For each entry node, the cheapest valid curve into the goal among a few tangent
-        scales (the least bent first): next to a prop the least bent one often grazes it."""
-        keys, p, h = self._entries(where)
-        m = keys.size
-        p1 = np.tile(goal[:2], (m, 1))
-        d1 = np.tile(curves.unit(goal[2]), (m, 1))
-        d0 = curves.unit(h)
-        _, bend = curves.tabulate(p, d0, p1, d1, scales=CONNECTOR_SCALES, samples=48)
-        least = CONNECTOR_SCALES[np.argmin(bend, axis=1)]
+        """Goal links of the entry nodes of the 3 x 3 tiles around the goal: for each node
+        the Dubins words into the goal, cheapest first (over ``ANY_FACING`` goal headings
+        when the goal heading is NaN). Nothing is sampled or tested here: the search asks
+        :meth:`goal_link` for the nodes it expands, and only those are tested."""
+        keys, p, h = self._entries(self._block(self.env.tile_of(goal[:2])))
+        headings = ANY_FACING if np.isnan(goal[2]) else np.array([goal[2]])
+        tables = [self._dubins_table(p, h, np.tile(goal[:2], (keys.size, 1)),
+                                     np.full(keys.size, gh)) for gh in headings]
+        cost = np.concatenate([t[0] for t in tables])
+        # Any facing: every heading's words in one table, wider turns first throughout.
+        rank = np.concatenate([np.where(np.isfinite(t[0]), t[0] + 1e6 * (t[2] < t[2].max())[:, None],
+                                        np.inf) for t in tables])
+        table = (cost, np.concatenate([t[1] for t in tables]), np.concatenate([t[2] for t in tables]),
+                 np.concatenate([t[3] for t in tables]), np.argsort(rank, axis=0, kind="stable"))
         too_close = np.linalg.norm(p - goal[:2], axis=1) < 0.2 * self.patch.gait.cycle_distance
-        out = {}
-        for factor in GOAL_SCALE_FACTORS:
-            sc = least * factor
-            sc[too_close] = np.nan
-            for idx in self._bend_ok(p, d0, p1, d1, sc, 1.5 * self.patch.side + 0.05):
-                key = int(keys[idx])
-                c = curves.hermite_curve(p[idx], d0[idx], p1[idx], d1[idx], sc[idx])
-                if c.length > 1.5 * self.patch.side or not self._valid(c):
-                    continue
-                cyc = float(cycles_along(self.patch.gait, c.pos[None], *_derivs(c))[0])
-                cost = self._curve_cost(c, cyc)
-                if key not in out or cost < out[key][0]:
-                    out[key] = (cost, Piece("goal", curve=c, cost=cost))
-        return out
+        self._goal_table = {"index": {int(k): m for m, k in enumerate(keys) if not too_close[m]},
+                            "p": p, "h": h, "table": table}
+        self._goal_links = {}
+        return self._goal_table["index"]
+
+    def goal_link(self, key):
+        """(cost, Piece) of the cheapest valid connector from node ``key`` into the goal,
+        or None (tested once per node and cached)."""
+        if key in self._goal_links:
+            return self._goal_links[key]
+        t = self._goal_table
+        m = t["index"].get(key)
+        link = None
+        if m is not None:
+            found = self._first_valid(t["p"][m], t["h"][m], t["table"], m)
+            if found is not None:
+                link = (found[1], Piece("goal", curve=found[0], cost=found[1]))
+        self._goal_links[key] = link
+        return link
+
+    def _check_turning_room(self, what, state):
+        """Refuse at once a start (goal) where no walk can leave (arrive) facing the given
+        way: every way out of the start (into the goal) runs, over its first (last)
+        ``APPROACH`` metres, between the sharpest left and right arcs the gait can turn;
+        when the straight way and both arcs meet props there, none can. A NaN heading
+        (any facing) always has room."""
+        if np.isnan(state[2]):
+            return
+        sign = 1.0 if what == "start" else -1.0
+        s = np.linspace(0.0, APPROACH, 12)
+        hit = set()
+        for k in (0.0, self.kmax, self.kmin):
+            pos, _ = curves.arc_frame(state[:2], state[2] + (np.pi if sign < 0 else 0.0), k, s)
+            blocked = self.env.blocked(pos[1:])
+            if not blocked.any():
+                return
+            for p in pos[1:][blocked]:
+                hit.update(self.env.near(p))
+        names = ", ".join(repr(n) for n in sorted(hit)[:4]) or "an obstacle"
+        way = "leave the start facing" if what == "start" else "arrive at the goal facing"
+        raise PlanError(f"no walk can {way} {np.degrees(state[2] + self._frame_angle):.0f} "
+                        f"degrees: {names} stand(s) in the way within {APPROACH:.2f} m and the "
+                        f"walk cannot turn tighter than {1 / max(self.kmax, -self.kmin):.2f} m; "
+                        f"turn the {what} or move {'it' if len(hit) <= 1 else 'them'}"
+                        + (" (or plan with goal facing 'any')" if what == "goal" else ""))
+
+    @property
+    def turn_radii(self):
+        """Radii of the Dubins arcs, in the order they are tried: a share of the sharpest
+        turn the gait follows, then that sharpest turn itself (only where nothing wider
+        fits: the tighter the turn, the more the planted feet slide)."""
+        tight = 1.0 / min(-self.kmin, self.kmax)
+        return (tight / DUBINS_CURVATURE_SHARE, tight)
+
+    def _dubins_table(self, p0, h0, p1, h1):
+        """Approximate Eq. 5 cost (R*6, M), lengths (R*6, M, 3), radius (R*6,), word (R*6,)
+        and the order to try them (R*6, M) of the Dubins words between state pairs at each
+        radius; too-long and missing words cost inf. Wider turns are tried first."""
+        costs, lens, radii, words, keys = [], [], [], [], []
+        for rank, r in enumerate(self.turn_radii):
+            lengths = dubins.words(p0, h0, p1, h1, r)
+            total = lengths.sum(axis=-1)
+            turn = dubins.turns(lengths, r)
+            effort = self.patch.effort_rate * total / self.max_speed
+            cost = self.alpha * total + self.beta * turn + self.gamma * effort
+            cost = np.where(np.isfinite(total) & (total <= MAX_CONNECTOR_TILES * self.patch.side),
+                            cost, np.inf)
+            costs.append(cost)
+            lens.append(lengths)
+            radii += [r] * len(dubins.WORDS)
+            words += list(range(len(dubins.WORDS)))
+            keys.append(np.where(np.isfinite(cost), cost + 1e6 * rank, np.inf))
+        cost, key = np.concatenate(costs), np.concatenate(keys)
+        return (cost, np.concatenate(lens), np.array(radii), np.array(words),
+                np.argsort(key, axis=0, kind="stable"))
+
+    def _first_valid(self, p0, h0, table, m, min_length=0.0):
+        """(curve, Eq. 5 cost) of the first valid Dubins word of column ``m`` of a
+        :meth:`_dubins_table` from state (p0, h0), or None."""
+        cost, lengths, radii, words, order = table
+        for r in order[:, m]:
+            if not np.isfinite(cost[r, m]):
+                return None
+            c = dubins.curve(p0, h0, int(words[r]), lengths[r, m], float(radii[r]))
+            if c.length >= min_length and self._valid(c, exact=True):
+                return c, self._curve_cost(c, self._cycles(c))
+        return None
 
     # -- search ---------------------------------------------------------------------------
-    def plan(self, start, goal, margin_tiles=3, max_expansions=400_000, use_corridor=False):
+    def plan(self, start, goal, margin_tiles=3, max_expansions=400_000, use_corridor=False,
+             shorten=True):
         """Cheapest path from ``start`` to ``goal`` (x, y, heading); raises PlanError.
+
+        The search runs in the plan frame (:mod:`.plan_frame`): the lattice anchored at the
+        start and turned to the goal; the obstacles and props near the way are moved into
+        it, and every piece of the result carries the frame back to the world.
+"""
+        t0 = time.perf_counter()
+        start, goal = np.asarray(start, float), np.asarray(goal, float)
+        for what, pt in (("start", start), ("goal", goal)):
+            if not np.isfinite(pt[:2]).all():
+                raise PlanError(f"the {what} position must be finite numbers")
+            if self.world_env.blocked(pt[None, :2])[0]:
+                raise PlanError(f"the {what} ({pt[0]:.2f}, {pt[1]:.2f}) is inside or within "
+                                f"{self.world_env.radius:.2f} m of an obstacle")
+        with self.framed(start, goal, margin_tiles) as (ls, lg, frame):
+            plan = self._plan_local(ls, lg, margin_tiles, max_expansions, use_corridor)
+            searched = len(plan.pieces)
+            if shorten:
+                plan.pieces = shortcut.shorten(self, plan.pieces, ls, lg)
+            plan.pieces = self._long_last_piece(plan.pieces)
+        plan.stats["pieces_searched"] = searched
+        plan.stats["cost_shortened"] = float(sum(p.cost for p in plan.pieces))
+        for piece in plan.pieces:
+            piece.frame = frame
+        goal_reached = np.array(goal)
+        if np.isnan(goal[2]):
+            goal_reached[2] = plan.goal[2] + frame[2]
+        plan.start, plan.goal = tuple(start), tuple(goal_reached)
+        plan.seconds = time.perf_counter() - t0
+        plan.stats["frame"] = frame
+        return plan
+
+    @contextlib.contextmanager
+    def framed(self, start, goal, margin_tiles=3):
+        """Within the block the planner's ``env``, ``props`` and ``goal`` are those of the
+        plan frame of ``start`` -> ``goal``; yields (local start, local goal, frame)."""
+        side = self.patch.side
+        frame = lattice_frame(start, goal, side, self.patch.nodes)
+        ls, lg = state_to_local(frame, start), state_to_local(frame, goal)
+        ts, tg = self.world_env.tile_of(ls[:2]), self.world_env.tile_of(lg[:2])
+        region = (min(ts[0], tg[0]) - margin_tiles, min(ts[1], tg[1]) - margin_tiles,
+                  max(ts[0], tg[0]) + margin_tiles, max(ts[1], tg[1]) + margin_tiles)
+        self.env = local_environment(self.world_env, frame, (region[0] * side, region[1] * side),
+                                     ((region[2] + 1) * side, (region[3] + 1) * side))
+        self.props = [local_prop(p, frame) for p in self.world_props]
+        self.goal, self.region = lg, region
+        self._frame_angle = frame[2]
+        self._exact = {}
+        try:
+            yield ls, lg, frame
+        finally:
+            self.env, self.props = self.world_env, self.world_props
+
+    def _plan_local(self, start, goal, margin_tiles, max_expansions, use_corridor):
+        """The search of :meth:`plan`, in plan-frame coordinates.
 
         With ``use_corridor`` the segment search runs inside the corridor of the
         high-level tile path (its tiles and their edge neighbours) and falls back to the
@@ -265,23 +425,19 @@ class SegmentPlanner:
         (up to 24 %) without saving time, because connectors dominate plan time.
         """
         t0 = time.perf_counter()
-        start, goal = np.asarray(start, float), np.asarray(goal, float)
         self.goal = goal
-        for what, pt in (("start", start), ("goal", goal)):
-            if self.env.blocked(pt[None, :2])[0]:
-                raise PlanError(f"the {what} ({pt[0]:.2f}, {pt[1]:.2f}) is inside or within "
-                                f"{self.env.radius:.2f} m of an obstacle")
         ts, tg = self.env.tile_of(start[:2]), self.env.tile_of(goal[:2])
         self.region = (min(ts[0], tg[0]) - margin_tiles, min(ts[1], tg[1]) - margin_tiles,
                        max(ts[0], tg[0]) + margin_tiles, max(ts[1], tg[1]) + margin_tiles)
+        for what, state in (("start", start), ("goal", goal)):
+            self._check_turning_room(what, state)
         starts = self.start_connectors(start)
         goals = self.goal_connectors(goal)
         if not starts:
             raise PlanError("no walkable way out of the start: every connector to the node "
                             "graph bends too sharply or meets an obstacle")
         if not goals:
-            raise PlanError("no walkable way into the goal: every connector from the node "
-                            "graph bends too sharply or meets an obstacle")
+            raise PlanError("no walkable way into the goal: every node around it is too close")
         payloads = {}
         self.corridor = None
         tiles = None
@@ -309,7 +465,9 @@ class SegmentPlanner:
             return stitched[(pi, ci)]
 
         def goal_cost(key):
-            link = goals.get(key)
+            if key not in goals:
+                return None
+            link = self.goal_link(key)
             if link is None:
                 return None
             payloads[key] = link[1]
@@ -329,6 +487,9 @@ class SegmentPlanner:
         if not result.found and self.corridor is not None:
             self.corridor, corridor_fallback = None, True
             result, observer = search()
+        if not result.found and not any(self.goal_link(k) is not None for k in goals):
+            raise PlanError("no walkable way into the goal: every connector from the node "
+                            "graph bends too sharply or meets an obstacle")
         if not result.found:
             raise PlanError(f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is unreachable: obstacles "
                             f"close every path within {margin_tiles} tiles of start and goal "
@@ -518,10 +679,20 @@ def _derivs(curve):
     return vel[None], acc[None]
 
 
-def plan_motions(patch, plan):
-    """World-space motion of every piece, eased across stitches into and out of clips."""
+def plan_motions(patch, plan, standing=True):
+    """World-space motion of every piece, eased across stitches into and out of clips;
+    with ``standing`` a plan that starts (ends) walking starts from (ends in) standing:
+    its first (last) piece is time-warped (:mod:`.retime`), ramps one gait cycle long."""
     ms = [piece_motion(patch, p) for p in plan.pieces]
     clips = ("traversal", "interaction")
+    if standing:
+        ramp = patch.gait.frames
+        first_walks, last_walks = plan.pieces[0].kind not in clips, plan.pieces[-1].kind not in clips
+        if len(ms) == 1:
+            ms[0] = retime.eased(ms[0], first_walks, last_walks, ramp)
+        else:
+            ms[0] = retime.eased(ms[0], ease_in=first_walks, ramp=ramp)
+            ms[-1] = retime.eased(ms[-1], ease_out=last_walks, ramp=ramp)
     for i, p in enumerate(plan.pieces):
         if p.kind in clips:
             continue
@@ -560,6 +731,11 @@ def interaction_states(start=None, goal=None):
 
 def piece_motion(patch, piece):
     """World-space motion of one planned piece (not eased; see :func:`plan_motions`)."""
+    m = _local_piece_motion(patch, piece)
+    return m if piece.frame == IDENTITY else m.transformed(*piece.frame)
+
+
+def _local_piece_motion(patch, piece):
     if piece.kind in ("segment", "part"):
         m = patch.motion(piece.segment)
         if piece.kind == "part":
@@ -568,5 +744,7 @@ def piece_motion(patch, piece):
     if piece.kind in ("traversal", "interaction"):
         return piece.prop.world_clip(piece.prop.clips[piece.clip_index])
     if piece.kind == "start":
+        return follow(patch.gait, piece.curve, cycles="to node")
+    if piece.kind == "shortcut":
         return follow(patch.gait, piece.curve, cycles=piece.cycles)
     return follow(patch.gait, piece.curve, cycles=None, eased=(True, False))

@@ -50,7 +50,16 @@ def frame_arclengths(gait, curve, cycles=None, start_phase=0, eased=(True, True)
     phase_at = np.concatenate(([0.0], np.cumsum(np.diff(curve.s) / dmid)))  # cycles along curve
     straight = gait.straight
     profile = straight.distance / straight.cycle_distance  # (n + 1,) within-cycle fraction
-    if cycles is not None:
+    if cycles == "to node":
+        # Any length, ending on the node pose: start at the phase that leaves a whole
+        # number of cycles to the end (the stride stretched by under one frame's travel).
+        whole = max(int(np.ceil(phase_at[-1] - 0.5 / n)), 1)
+        start_phase = int(np.argmin(np.abs(profile[:n] - (whole - phase_at[-1]))))
+        if whole - profile[start_phase] <= 0:
+            start_phase = 0
+        phase_at *= (whole - profile[start_phase]) / phase_at[-1]
+        total = whole * n - start_phase
+    elif cycles is not None:
         phase_at *= cycles / phase_at[-1]
         total = cycles * n
     else:
@@ -67,7 +76,8 @@ def follow(gait, curve, cycles=None, start_phase=0, eased=(True, True)):
     """Motion of the gait along ``curve``.
 
     With ``cycles`` the motion lasts exactly ``cycles`` loops (the curve was fitted to it)
-    and ends on the node pose; without, it stops where the curve ends, mid-cycle if need be.
+    and ends on the node pose; without, it stops where the curve ends, mid-cycle if need be;
+    with ``cycles="to node"`` it starts at the phase that makes it end on the node pose.
     """
     k, s, ease = frame_arclengths(gait, curve, cycles, start_phase, eased)
     x, y, h, kap = curve.at(s)

@@ -1,0 +1,128 @@
+"""Dubins paths: the shortest ground paths of bounded curvature between two states.
+
+A walk can turn no tighter than its turn clips show, so the shortest way from a standing
+start (position, facing) onto the node graph, or from a node into the goal, is a Dubins
+path (Dubins 1957): two arcs of the turning radius joined by a straight line or a third
+arc (words LSL, RSR, LSR, RSL, RLR, LRL). The closed forms here follow Shkel & Lumelsky
+(2001) and are vectorised over many pairs of states, so the connectors of every node
+around a start or goal cost a few array operations; only the ones the search reaches are
+sampled and tested against footprints. The curvature jumps where arcs meet; the curvature
+used for blending turn loops is smoothed over ``BLEND_SMOOTHING`` metres so the body
+leans into a turn without a pop.
+"""
+
+import numpy as np
+
+from .curves import Curve
+
+WORDS = ("LSL", "RSR", "LSR", "RSL", "RLR", "LRL")
+SIGN = {"L": 1.0, "R": -1.0, "S": 0.0}
+BLEND_SMOOTHING = 0.35  # metres over which the blending curvature is averaged
+SAMPLE_SPACING = 0.04   # metres between curve samples (exact footprint tests)
+
+
+def _mod2pi(a):
+    return np.mod(a, 2 * np.pi)
+
+
+def words(p0, h0, p1, h1, radius):
+    """(W, N, 3) segment lengths (metres) of the six words for N state pairs (NaN where
+    a word does not exist). ``p0, p1`` (N, 2), ``h0, h1`` (N,)."""
+    p0, p1 = np.atleast_2d(p0).astype(float), np.atleast_2d(p1).astype(float)
+    h0, h1 = np.broadcast_to(np.asarray(h0, float), p0.shape[:1]), np.broadcast_to(np.asarray(h1, float), p1.shape[:1])
+    dx, dy = p1[:, 0] - p0[:, 0], p1[:, 1] - p0[:, 1]
+    d = np.hypot(dx, dy) / radius
+    th = _mod2pi(np.arctan2(dy, dx))
+    a, b = _mod2pi(h0 - th), _mod2pi(h1 - th)
+    sa, sb, ca, cb = np.sin(a), np.sin(b), np.cos(a), np.cos(b)
+    cab = np.cos(a - b)
+    out = np.full((6, d.size, 3), np.nan)
+    with np.errstate(invalid="ignore"):
+        # LSL
+        p2 = 2 + d * d - 2 * cab + 2 * d * (sa - sb)
+        t1 = np.arctan2(cb - ca, d + sa - sb)
+        ok = p2 >= 0
+        out[0] = np.where(ok[:, None], np.stack((_mod2pi(-a + t1), np.sqrt(p2), _mod2pi(b - t1)), -1), np.nan)
+        # RSR
+        p2 = 2 + d * d - 2 * cab + 2 * d * (sb - sa)
+        t1 = np.arctan2(ca - cb, d - sa + sb)
+        ok = p2 >= 0
+        out[1] = np.where(ok[:, None], np.stack((_mod2pi(a - t1), np.sqrt(p2), _mod2pi(-b + t1)), -1), np.nan)
+        # LSR
+        p2 = -2 + d * d + 2 * cab + 2 * d * (sa + sb)
+        p = np.sqrt(p2)
+        t2 = np.arctan2(-ca - cb, d + sa + sb) - np.arctan2(-2.0, p)
+        ok = p2 >= 0
+        out[2] = np.where(ok[:, None], np.stack((_mod2pi(-a + t2), p, _mod2pi(-_mod2pi(b) + t2)), -1), np.nan)
+        # RSL
+        p2 = d * d - 2 + 2 * cab - 2 * d * (sa + sb)
+        p = np.sqrt(p2)
+        t2 = np.arctan2(ca + cb, d - sa - sb) - np.arctan2(2.0, p)
+        ok = p2 >= 0
+        out[3] = np.where(ok[:, None], np.stack((_mod2pi(a - t2), p, _mod2pi(b - t2)), -1), np.nan)
+        # RLR
+        tmp = (6 - d * d + 2 * cab + 2 * d * (sa - sb)) / 8
+        ok = np.abs(tmp) <= 1
+        p = _mod2pi(2 * np.pi - np.arccos(np.clip(tmp, -1, 1)))
+        t = _mod2pi(a - np.arctan2(ca - cb, d - sa + sb) + p / 2)
+        out[4] = np.where(ok[:, None], np.stack((t, p, _mod2pi(a - b - t + p)), -1), np.nan)
+        # LRL
+        tmp = (6 - d * d + 2 * cab + 2 * d * (sb - sa)) / 8
+        ok = np.abs(tmp) <= 1
+        p = _mod2pi(2 * np.pi - np.arccos(np.clip(tmp, -1, 1)))
+        t = _mod2pi(-a - np.arctan2(ca - cb, d + sa - sb) + p / 2)
+        out[5] = np.where(ok[:, None], np.stack((t, p, _mod2pi(_mod2pi(b) - a - t + p)), -1), np.nan)
+    return out * radius
+
+
+def turns(lengths, radius):
+    """(W, N) total |heading change| of each word: its arcs' lengths over the radius."""
+    arcs = np.array([[w[0] != "S", w[1] != "S", w[2] != "S"] for w in WORDS], float)
+    return np.einsum("wnk,wk->wn", np.nan_to_num(lengths), arcs) / radius
+
+
+def curve(p0, h0, word, lengths, radius):
+    """The sampled :class:`Curve` of one word from state (p0, h0) with segment
+    ``lengths`` (3,)."""
+    total = float(np.sum(lengths))
+    n = max(int(np.ceil(total / SAMPLE_SPACING)), 2) + 1
+    s = np.linspace(0.0, total, n)
+    bounds = np.concatenate(([0.0], np.cumsum(lengths)))
+    pos = np.empty((n, 2))
+    heading = np.empty(n)
+    kappa = np.empty(n)
+    x, y, h = float(p0[0]), float(p0[1]), float(h0)
+    for k, letter in enumerate(WORDS[word] if isinstance(word, (int, np.integer)) else word):
+        k_ = SIGN[letter] / radius
+        sel = (s >= bounds[k]) & (s <= bounds[k + 1]) if k == 2 else (s >= bounds[k]) & (s < bounds[k + 1])
+        u = s[sel] - bounds[k]
+        if k_ == 0.0:
+            pos[sel] = np.column_stack((x + u * np.cos(h), y + u * np.sin(h)))
+        else:
+            r = 1.0 / k_
+            pos[sel] = np.column_stack((x + r * (np.sin(h + k_ * u) - np.sin(h)),
+                                        y - r * (np.cos(h + k_ * u) - np.cos(h))))
+        heading[sel] = h + k_ * u
+        kappa[sel] = k_
+        seg = lengths[k]
+        if k_ == 0.0:
+            x, y = x + seg * np.cos(h), y + seg * np.sin(h)
+        else:
+            r = 1.0 / k_
+            x, y = x + r * (np.sin(h + k_ * seg) - np.sin(h)), y - r * (np.cos(h + k_ * seg) - np.cos(h))
+            h = h + k_ * seg
+    return Curve(s, pos, heading, _smoothed(s, kappa))
+
+
+def _smoothed(s, kappa):
+    """Curvature averaged over a window of ``BLEND_SMOOTHING`` metres (samples are evenly
+    spaced in arc length)."""
+    if s.size < 3:
+        return kappa
+    step = s[1] - s[0]
+    half = int(round(0.5 * BLEND_SMOOTHING / max(step, 1e-9)))
+    if half < 1:
+        return kappa
+    padded = np.concatenate((np.full(half, kappa[0]), kappa, np.full(half, kappa[-1])))
+    c = np.concatenate(([0.0], np.cumsum(padded)))
+    return (c[2 * half + 1:] - c[:-2 * half - 1]) / (2 * half + 1)
