@@ -3,6 +3,12 @@
 Reading takes every key of the rotation and root location curves (keys may sit on
 fractional frames when the importer scaled a 120 fps clip to the scene rate), so the
 clip keeps the source sampling; writing uses ``keyframe_points.add`` + ``foreach_set``.
+
+Rotation modes: the core works in quaternions; a pose bone plays only the channel of its
+own ``rotation_mode`` (``rotation_quaternion``; ``rotation_euler`` in one of six orders;
+``rotation_axis_angle`` as angle, then axis). :func:`rotation_channels` turns quaternions
+into the values of any mode, continuous over frames, and :func:`channels_to_quat` goes
+back; both agree with ``mathutils`` (Blender's ``'XYZ'`` applies X first: R = Rz Ry Rx).
 """
 
 import re
@@ -14,7 +20,12 @@ from ..motion_patches.clip import Clip
 from ..motion_patches.skeleton import Skeleton, root_location_to_position
 from . import compat
 
-_PATH = re.compile(r'^pose\.bones\["(.+)"\]\.(rotation_quaternion|rotation_euler|location)$')
+_PATH = re.compile(r'^pose\.bones\["(.+)"\]\.'
+                   r'(rotation_quaternion|rotation_euler|rotation_axis_angle|location)$')
+
+EULER_ORDERS = ("XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX")
+_AXES = {"X": 0, "Y": 1, "Z": 2}
+_TWO_PI = 2.0 * np.pi
 
 
 def skeleton_of(armature_obj):
@@ -83,33 +94,166 @@ def clip_from_action(action, armature_obj, scene_fps, skeleton=None):
     rot = np.empty((frames.size, len(skel.names), 4))
     modes = {pb.name: pb.rotation_mode for pb in armature_obj.pose.bones} if armature_obj else {}
     for j, name in enumerate(skel.names):
-        mode = modes.get(name, "QUATERNION")
-        if (name, "rotation_quaternion", 0) in curves or mode == "QUATERNION":
-            q = np.column_stack([sample(name, "rotation_quaternion", i, 1.0 if i == 0 else 0.0)
-                                 for i in range(4)])
-            rot[:, j] = quat.normalize(q)
-        elif mode in ("XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX"):
-            e = np.column_stack([sample(name, "rotation_euler", i, 0.0) for i in range(3)])
-            rot[:, j] = euler_to_quat(e, mode)
-        else:
-            raise ValueError(f"bone '{name}' uses rotation mode {mode}; use quaternion or Euler")
+        mode = _keyed_mode(action, name, modes.get(name), curves)
+        n = 3 if mode in EULER_ORDERS else 4
+        rest = rest_channels(mode)
+        v = np.column_stack([sample(name, rotation_path(mode), i, rest[i]) for i in range(n)])
+        rot[:, j] = channels_to_quat(v, mode)
     pos = root_location_to_position(skel, loc)
     clip = Clip(action.name, skel, float(fps), pos, quat.make_continuous(rot, axis=0))
     return clip.validate()
 
 
+def _keyed_mode(action, bone, mode, curves):
+    """The rotation mode to read a bone's keys in: the bone's own ``mode`` when the action
+    keys that channel (what Blender plays), else the channel the action does key. Euler
+    keys are read only in the bone's own Euler order: an F-curve does not record it."""
+    keyed = {p for (b, p, _) in curves if b == bone and p != "location"}
+    if mode is not None and rotation_path(mode) in keyed:
+        return mode
+    if "rotation_quaternion" in keyed:
+        return "QUATERNION"
+    if "rotation_axis_angle" in keyed:
+        return "AXIS_ANGLE"
+    if "rotation_euler" in keyed:
+        why = (f"the bone's rotation mode is {mode}" if mode is not None else
+               "no armature gives its Euler order")
+        raise ValueError(f"action '{action.name}' keys bone '{bone}' in Euler angles but {why}: "
+                         f"read it on the armature it was imported on (bones in the Euler "
+                         f"order of the keys)")
+    return "QUATERNION"  # not keyed: the rest pose
+
+
+def rotation_path(mode):
+    """The pose bone property a ``rotation_mode`` plays."""
+    if mode == "QUATERNION":
+        return "rotation_quaternion"
+    if mode == "AXIS_ANGLE":
+        return "rotation_axis_angle"
+    if mode in EULER_ORDERS:
+        return "rotation_euler"
+    raise ValueError(f"unknown rotation mode {mode!r}")
+
+
+def rest_channels(mode):
+    """Values of a ``mode``'s channel in the rest pose (Blender's defaults)."""
+    if mode == "QUATERNION":
+        return np.array([1.0, 0.0, 0.0, 0.0])
+    if mode == "AXIS_ANGLE":
+        return np.array([0.0, 0.0, 1.0, 0.0])  # angle 0 about +Y
+    rotation_path(mode)
+    return np.zeros(3)
+
+
 def euler_to_quat(e, order):
-    """Quaternions of Blender Euler angles (F, 3) in rotation ``order`` (e.g. 'XYZ')."""
-    axes = {"X": 0, "Y": 1, "Z": 2}
-    q = np.tile([1.0, 0, 0, 0], (e.shape[0], 1))
+    """Quaternions of Blender Euler angles (..., 3) in rotation ``order`` (e.g. 'XYZ')."""
+    e = np.asarray(e, float)
+    q = np.zeros(e.shape[:-1] + (4,))
+    q[..., 0] = 1.0
     for ax in order:  # Blender's 'XYZ' applies X first: R = Rz Ry Rx
-        i = axes[ax]
-        half = e[:, i] * 0.5
-        a = np.zeros((e.shape[0], 4))
-        a[:, 0] = np.cos(half)
-        a[:, 1 + i] = np.sin(half)
+        i = _AXES[ax]
+        half = e[..., i] * 0.5
+        a = np.zeros(e.shape[:-1] + (4,))
+        a[..., 0] = np.cos(half)
+        a[..., 1 + i] = np.sin(half)
         q = quat.mul(a, q)
     return q
+
+
+def axis_angle_to_quat(aa):
+    """Quaternions of Blender axis-angle values (..., 4) = (angle, x, y, z); the axis need
+    not be unit (Blender normalises it; a zero axis is no rotation)."""
+    aa = np.asarray(aa, float)
+    axis = aa[..., 1:]
+    n = np.linalg.norm(axis, axis=-1, keepdims=True)
+    half = 0.5 * aa[..., :1]
+    unit = np.where(n > 1e-12, axis / np.maximum(n, 1e-12), 0.0)
+    q = np.concatenate((np.cos(half), np.sin(half) * unit), axis=-1)
+    return np.where(n > 1e-12, q, np.array([1.0, 0.0, 0.0, 0.0]))
+
+
+def channels_to_quat(values, mode):
+    """Unit quaternions (..., 4) of a ``mode``'s channel values (..., 3 or 4)."""
+    if mode == "QUATERNION":
+        return quat.normalize(values)
+    if mode == "AXIS_ANGLE":
+        return axis_angle_to_quat(values)
+    rotation_path(mode)
+    return euler_to_quat(values, mode)
+
+
+def _wrap_near(angle, ref):
+    """``angle`` plus the whole turns that bring it within half a turn of ``ref``."""
+    return angle + _TWO_PI * np.round((ref - angle) / _TWO_PI)
+
+
+def _euler_pair(q, order):
+    """The two Euler triples (..., 3) in ``order`` of each quaternion (Blender's
+    ``mat3_normalized_to_eulo2``: the second takes the middle angle past 90 degrees)."""
+    i, j, k = (_AXES[a] for a in order)
+    odd = (i, j, k) not in ((0, 1, 2), (1, 2, 0), (2, 0, 1))
+    m = quat.to_matrix(q)  # m[..., row, col]
+
+    def at(r, c):
+        return m[..., r, c]
+    cy = np.hypot(at(i, i), at(j, i))
+    e1 = np.empty(np.shape(cy) + (3,))
+    e2 = np.empty_like(e1)
+    e1[..., i] = np.arctan2(at(k, j), at(k, k))
+    e1[..., j] = np.arctan2(-at(k, i), cy)
+    e1[..., k] = np.arctan2(at(j, i), at(i, i))
+    e2[..., i] = np.arctan2(-at(k, j), -at(k, k))
+    e2[..., j] = np.arctan2(-at(k, i), -cy)
+    e2[..., k] = np.arctan2(-at(j, i), -at(i, i))
+    lock = cy < 1e-9  # gimbal lock: the first and last axes coincide; put it all on the first
+    if np.any(lock):
+        g = np.zeros_like(e1)
+        g[..., i] = np.arctan2(-at(j, k), at(j, j))
+        g[..., j] = e1[..., j]
+        e1 = np.where(lock[..., None], g, e1)
+        e2 = np.where(lock[..., None], g, e2)
+    return (-e1, -e2) if odd else (e1, e2)
+
+
+def closest_channels(q, mode, reference):
+    """Channel values of ``mode`` for quaternions ``q`` (..., 4), each the representation of
+    its rotation nearest ``reference`` (same leading shape): quaternion sign, Euler triple
+    (either solution, any whole turns per angle), axis-angle (axis sign, whole turns)."""
+    q = quat.normalize(q)
+    ref = np.asarray(reference, float)
+    if mode == "QUATERNION":
+        return np.where(np.sum(q * ref, axis=-1, keepdims=True) < 0, -q, q)
+    if mode == "AXIS_ANGLE":
+        v = q[..., 1:]
+        s = np.linalg.norm(v, axis=-1, keepdims=True)
+        angle = 2.0 * np.arctan2(s[..., 0], q[..., 0])
+        ref_axis = ref[..., 1:]
+        rn = np.linalg.norm(ref_axis, axis=-1, keepdims=True)
+        ref_axis = np.where(rn > 1e-12, ref_axis / np.maximum(rn, 1e-12), [0.0, 1.0, 0.0])
+        axis = np.where(s > 1e-12, v / np.maximum(s, 1e-12), ref_axis)  # no rotation: any axis
+        flip = np.sum(axis * ref_axis, axis=-1) < 0
+        axis = np.where(flip[..., None], -axis, axis)
+        angle = _wrap_near(np.where(flip, -angle, angle), ref[..., 0])
+        return np.concatenate((angle[..., None], axis), axis=-1)
+    pair = [_wrap_near(e, ref) for e in _euler_pair(q, mode)]
+    d = [np.sum(np.abs(e - ref), axis=-1, keepdims=True) for e in pair]
+    return np.where(d[1] < d[0], pair[1], pair[0])
+
+
+def rotation_channels(q, mode, first=None):
+    """Channel values (F, ..., 3 or 4) of ``mode`` for quaternions ``q`` (F, ..., 4), made
+    continuous over frames (axis 0): each frame takes the representation nearest the
+    previous one, so no key jumps by a turn, flips an Euler solution or an axis-angle
+    axis. The first frame is nearest ``first`` (default: the rest values)."""
+    q = np.asarray(q, float)
+    rest = rest_channels(mode)
+    prev = np.broadcast_to(rest if first is None else first, q.shape[1:-1] + rest.shape)
+    if mode == "QUATERNION":
+        return quat.make_continuous(closest_channels(q, mode, np.broadcast_to(prev, q.shape)))
+    out = np.empty(q.shape[:-1] + rest.shape)
+    for f in range(q.shape[0]):
+        prev = out[f] = closest_channels(q[f], mode, prev)
+    return out
 
 
 LINEAR = 1  # Keyframe.interpolation enum value of 'LINEAR' (4.5 and 5.0)
@@ -129,13 +273,41 @@ def key_curve(action, slot, data_path, index, frames, values, group=None):
     return fc
 
 
-def key_pose(action, slot, skel, frames, root_location, rotations):
-    """Key the root bone's location and every bone's rotation quaternion."""
+def key_pose(action, slot, skel, frames, root_location, rotations, modes=None):
+    """Key the root bone's location and every bone's rotation in the channel its rotation
+    mode plays: ``modes`` is {bone name: rotation_mode}, quaternion for bones not in it.
+    Quaternion channels are keyed as given (the caller makes them continuous); Euler and
+    axis-angle ones are converted continuous over ``frames`` (:func:`rotation_channels`)."""
+    modes = modes or {}
     root = skel.names[skel.root]
     for i in range(3):
         key_curve(action, slot, f'pose.bones["{root}"].location', i, frames,
                   root_location[:, i], group=root)
+    by_mode = {}
     for j, name in enumerate(skel.names):
-        for i in range(4):
-            key_curve(action, slot, f'pose.bones["{name}"].rotation_quaternion', i, frames,
-                      rotations[:, j, i], group=name)
+        by_mode.setdefault(modes.get(name, "QUATERNION"), []).append(j)
+    for mode, joints in by_mode.items():
+        path = rotation_path(mode)
+        values = (rotations[:, joints] if mode == "QUATERNION"
+                  else rotation_channels(rotations[:, joints], mode))
+        for c, j in enumerate(joints):
+            name = skel.names[j]
+            for i in range(values.shape[-1]):
+                key_curve(action, slot, f'pose.bones["{name}"].{path}', i, frames,
+                          values[:, c, i], group=name)
+
+
+def read_channels(action, slot, bone, mode, frames):
+    """Values (F, 3 or 4) an action gives a bone's ``mode`` channel at (action) ``frames``,
+    linear between keys, the rest value where the channel is not keyed."""
+    path = f'pose.bones["{bone}"].{rotation_path(mode)}'
+    rest = rest_channels(mode)
+    out = np.tile(rest, (len(frames), 1))
+    for fc in compat.fcurves(action, slot):
+        if fc.data_path == path and fc.array_index < rest.size:
+            n = len(fc.keyframe_points)
+            co = np.empty(2 * n)
+            fc.keyframe_points.foreach_get("co", co)
+            co = co.reshape(n, 2)
+            out[:, fc.array_index] = np.interp(frames, co[:, 0], co[:, 1])
+    return out

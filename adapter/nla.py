@@ -2,11 +2,14 @@
 
 Tracks the add-on makes are named with ``TRACK_PREFIX`` and listed on the object, so a
 re-plan removes exactly those; user tracks and actions are never touched. Segment actions
-are shared between strips and characters (keyed by patch and segment); connector actions
-belong to one character and are replaced with its plan. The armature object carries the
-ground trajectory; its bones carry in-place motion facing the rig's rest facing.
+are shared between strips and characters (keyed by patch, segment and the rig's bone
+rotation modes, :func:`segment_action`); connector actions belong to one character and are
+replaced with its plan. The armature object carries the ground trajectory; its bones carry
+in-place motion facing the rig's rest facing. Every channel is written in the rotation mode
+of the bone (or object) it drives: a bone plays only the channel of its own mode.
 """
 
+import hashlib
 import json
 
 import numpy as np
@@ -57,8 +60,6 @@ def check_rig(obj, skel):
     if not np.allclose(np.array(obj.scale), 1.0, atol=1e-4):
         raise ValueError(f"armature '{obj.name}' is scaled {tuple(round(s, 3) for s in obj.scale)}; "
                          f"apply its scale first (the patch is in metres)")
-    if obj.rotation_mode == "AXIS_ANGLE":
-        raise ValueError(f"armature '{obj.name}' uses axis-angle rotation; use Euler or quaternion")
     m = np.array(obj.matrix_world)
     if abs(m[2, 2] - 1.0) > 1e-6:
         raise ValueError(f"armature '{obj.name}' is tilted (X/Y rotation); the planned root "
@@ -99,24 +100,53 @@ def stash_active_action(obj):
     return tr.name
 
 
-def segment_action(bpy, patch, patch_key, seg, skel):
-    """The shared in-place action of a patch segment (created on first use)."""
-    key = f"{patch_key}:{seg}"
+def rig_rotation_modes(obj, skel):
+    """{bone name: rotation_mode} of the rig's pose bones that the patch skeleton drives."""
+    return {n: obj.pose.bones[n].rotation_mode for n in skel.names}
+
+
+def rotation_signature(skel, modes):
+    """A short name for the per-bone rotation modes: '' when every bone is in quaternion
+    mode, the mode when all share one (e.g. 'ZYX'), else 'mixed-' and a hash of them."""
+    used = [modes.get(n, "QUATERNION") for n in skel.names]
+    if all(m == "QUATERNION" for m in used):
+        return ""
+    if len(set(used)) == 1:
+        return used[0]
+    text = ",".join(f"{n}={m}" for n, m in zip(skel.names, used))
+    return "mixed-" + hashlib.sha1(text.encode()).hexdigest()[:10]
+
+
+def segment_action(bpy, patch, patch_key, seg, skel, modes=None):
+    """The shared in-place action of a patch segment for a rig whose bones have rotation
+    ``modes`` ({bone: rotation_mode}; default all quaternion), created on first use.
+
+    Shared actions are keyed by patch, segment *and* a signature of the rig's per-bone
+    rotation modes (:func:`rotation_signature`), not made to hold every channel set a rig
+    could need: an action has one ``rotation_euler`` F-curve per bone and axis, so Euler
+    angles can be stored in one order only (the six orders give six different values for
+    the same rotation), and writing the quaternion, Euler and axis-angle channels of every
+    bone would triple the keys of every segment for channels most rigs never play. Rigs
+    whose bones have the same modes (every character copied from one rig, every rig from
+    one importer) still share one action per segment; an all-quaternion rig uses the
+    original key ``patch:seg``, so segment actions of earlier saved files are reused."""
+    sig = rotation_signature(skel, modes or {})
+    key = f"{patch_key}:{seg}" + (f":{sig}" if sig else "")
     for a in bpy.data.actions:
         if a.get(SEGMENT_KEY) == key:
             return a, compat.action_slot(a)
     motion = patch.motion(seg)
-    name = f"MP {patch.layer} seg{seg:04d}"
-    return _inplace_action(name, skel, motion, {SEGMENT_KEY: key})
+    name = f"MP {patch.layer} seg{seg:04d}" + (f" {sig}" if sig else "")
+    return _inplace_action(name, skel, motion, {SEGMENT_KEY: key}, modes)
 
 
-def _inplace_action(name, skel, motion, tags):
+def _inplace_action(name, skel, motion, tags, modes=None):
     loc, rot = inplace_channels(skel, motion)
     action, slot = compat.new_action(name)
     for k, v in tags.items():
         action[k] = v
     frames = np.arange(motion.frames, dtype=float)
-    act_io.key_pose(action, slot, skel, frames, loc, quat.make_continuous(rot, axis=0))
+    act_io.key_pose(action, slot, skel, frames, loc, quat.make_continuous(rot, axis=0), modes)
     return action, slot
 
 
@@ -128,6 +158,7 @@ def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start, lo
     per-character correction on its own track, combined over the shared segment actions."""
     skel = patch.gait.skeleton
     check_rig(obj, skel)
+    modes = rig_rotation_modes(obj, skel)
     ad = obj.animation_data or obj.animation_data_create()
     stashed = stash_active_action(obj)
     remove_owned(obj)
@@ -135,13 +166,14 @@ def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start, lo
 
     motion_track = ad.nla_tracks.new()
     motion_track.name = TRACK_MOTION
-    strips, frame = [], int(frame_start)
+    strips, frame, played = [], int(frame_start), []
     for n, (piece, m) in enumerate(zip(plan.pieces, motions)):
         if piece.kind == "segment":
-            action, slot = segment_action(bpy, patch, patch_key, piece.segment, skel)
+            action, slot = segment_action(bpy, patch, patch_key, piece.segment, skel, modes)
         else:
             action, slot = _inplace_action(f"MP {obj.name} {piece.kind}", skel, m,
-                                           {CHARACTER_KEY: obj.name})
+                                           {CHARACTER_KEY: obj.name}, modes)
+        played.append((action, slot, frame - int(frame_start), m.frames))
         strip = motion_track.strips.new(f"{n:02d} {piece.label}", frame, action)
         compat.set_strip_slot(strip, slot)
         strip.extrapolation = "HOLD" if n == 0 else (
@@ -158,15 +190,19 @@ def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start, lo
     z0 = float(obj.location[2])
     for i, v in enumerate((world.ground[:, 0], world.ground[:, 1], np.full(world.frames, z0))):
         act_io.key_curve(root_action, root_slot, "location", i, frames, v, group="Object Transforms")
+    # A turn about Z only: (0, 0, heading) is that turn in every Euler order, (heading, +Z)
+    # in axis-angle; the heading is unwrapped, so no channel jumps by a turn.
+    zero = np.zeros(world.frames)
     if obj.rotation_mode == "QUATERNION":
         q = quat.make_continuous(quat.about_z(heading), axis=0)
-        for i in range(4):
-            act_io.key_curve(root_action, root_slot, "rotation_quaternion", i, frames, q[:, i],
-                             group="Object Transforms")
+        rot_path, rot_values = "rotation_quaternion", q.T
+    elif obj.rotation_mode == "AXIS_ANGLE":
+        rot_path, rot_values = "rotation_axis_angle", (heading, zero, zero, zero + 1.0)
     else:
-        for i, v in enumerate((np.zeros(world.frames), np.zeros(world.frames), heading)):
-            act_io.key_curve(root_action, root_slot, "rotation_euler", i, frames, v,
-                             group="Object Transforms")
+        rot_path, rot_values = "rotation_euler", (zero, zero, heading)
+    for i, v in enumerate(rot_values):
+        act_io.key_curve(root_action, root_slot, rot_path, i, frames, v,
+                         group="Object Transforms")
     root_track = ad.nla_tracks.new()
     root_track.name = TRACK_ROOT
     rs = root_track.strips.new(f"{obj.name} root", int(frame_start), root_action)
@@ -175,16 +211,48 @@ def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start, lo
     rs.blend_in = rs.blend_out = 0.0
     owned = [TRACK_MOTION, TRACK_ROOT]
     if locked is not None:
-        _write_foot_lock(obj, skel, world, locked, frame_start)
+        _write_foot_lock(obj, skel, world, locked, frame_start, modes, played)
         owned.append(TRACK_FOOT)
     obj[TRACKS_KEY] = json.dumps(owned)
     return strips, stashed
 
 
-def _write_foot_lock(obj, skel, world, locked, frame_start):
-    """The foot lock as a Combine strip above the motion: for every bone it changes, the
-    quaternion ``delta`` with ``base @ delta = locked`` (Blender's Combine multiplies a
-    strip's quaternion onto what the tracks below give), so segment actions stay shared."""
+def _lower_channels(played, bone, mode, n_frames):
+    """What the motion track gives a bone's ``mode`` channel on each plan frame, read from
+    the keys of its strips' actions: ``played`` = [(action, slot, first plan frame, frames)]
+    in track order; where two strips meet on a frame the earlier one plays (Blender takes
+    the first strip whose range holds the frame)."""
+    out = np.tile(act_io.rest_channels(mode), (n_frames, 1))
+    done = np.zeros(n_frames, bool)
+    for action, slot, start, frames in played:
+        idx = np.arange(start, min(start + frames, n_frames))
+        idx = idx[~done[idx]]
+        out[idx] = act_io.read_channels(action, slot, bone, mode, (idx - start).astype(float))
+        done[idx] = True
+    return out
+
+
+def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=()):
+    """The foot lock as a Combine strip above the motion, so segment actions stay shared.
+
+    For every bone it changes the strip keys, in the bone's rotation mode, the ``delta``
+    that Blender's Combine blend (influence 1) turns into the ``locked`` rotation:
+
+    * quaternion: Combine multiplies, ``lower @ delta``: delta = conj(base) @ locked;
+    * Euler (any order): Combine adds the angles, ``lower + delta``: delta = locked - lower,
+      with ``locked`` written as the Euler triple nearest ``lower`` (same order), and
+      ``lower`` the angles the motion strips really key on that frame (an Euler rotation
+      has many triples, and the sum is only right against the one that plays);
+    * axis-angle: Combine adds the four values too (angle and axis; Blender normalises the
+      axis when it builds the matrix): delta = locked - lower, ``locked`` as the angle and
+      unit axis nearest ``lower``, so the sum is exactly the locked rotation.
+
+    These rules are Blender's ``nla_combine_value`` / ``nla_combine_quaternion`` (checked in
+    tests/blender/test_rotation_modes.py on every supported version). Blender takes the
+    quaternion delta's angle as acos of its float32 w, so corrections under ~0.0005 rad
+    are lost on quaternion bones (under a millimetre at the foot); the Euler and
+    axis-angle sums are exact to float32."""
+    modes = modes or {}
     base = world.rotations
     changed = [j for j in range(len(skel.names))
                if not np.allclose(np.abs(np.sum(base[:, j] * locked[:, j], axis=-1)), 1.0,
@@ -193,12 +261,17 @@ def _write_foot_lock(obj, skel, world, locked, frame_start):
     action[CHARACTER_KEY] = obj.name
     frames = np.arange(world.frames, dtype=float)
     for j in changed:
-        delta = quat.make_continuous(quat.mul(quat.conj(base[:, j]), locked[:, j]), axis=0)
-        delta *= np.where(delta[:, :1] < 0, -1.0, 1.0)  # near identity: keep w >= 0
         name = skel.names[j]
-        for i in range(4):
-            act_io.key_curve(action, slot, f'pose.bones["{name}"].rotation_quaternion', i,
-                             frames, delta[:, i], group=name)
+        mode = modes.get(name, "QUATERNION")
+        if mode == "QUATERNION":
+            delta = quat.make_continuous(quat.mul(quat.conj(base[:, j]), locked[:, j]), axis=0)
+            delta *= np.where(delta[:, :1] < 0, -1.0, 1.0)  # near identity: keep w >= 0
+        else:
+            lower = _lower_channels(played, name, mode, world.frames)
+            delta = act_io.closest_channels(locked[:, j], mode, lower) - lower
+        path = f'pose.bones["{name}"].{act_io.rotation_path(mode)}'
+        for i in range(delta.shape[1]):
+            act_io.key_curve(action, slot, path, i, frames, delta[:, i], group=name)
     track = obj.animation_data.nla_tracks.new()
     track.name = TRACK_FOOT
     strip = track.strips.new(f"{obj.name} foot lock", int(frame_start), action)
