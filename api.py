@@ -19,7 +19,7 @@ import numpy as np
 from .adapter import actions as act_io
 from .adapter import evaluate, mocap, nla, props_io, scene as scene_io, storage
 from .motion_patches import (blocking, contacts, crowd, foot_lock, layout_spec, metrics,
-                             object_patch)
+                             object_patch, validate)
 from .motion_patches.environment import Obstacle
 from .motion_patches.gait import build_gait
 from .motion_patches.locomotion_patch import bake
@@ -382,8 +382,10 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
     planner = SegmentPlanner(patch, env, alpha, beta, gamma, props=props, mode=stitching)
     plan = _solve(planner, character, ends)
     frame_start = scene.frame_current if frame_start is None else int(frame_start)
-    return _write(scene, character, patch, patch_name, plan, plan_motions(patch, plan),
-                  frame_start, env, radius, foot_lock)
+    motions = plan_motions(patch, plan)
+    plan.stats["glitches"] = validate.count(validate.plan_glitches(patch, plan, motions))
+    return _write(scene, character, patch, patch_name, plan, motions, frame_start, env, radius,
+                  foot_lock)
 
 
 def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, radius=0.25,

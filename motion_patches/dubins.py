@@ -91,10 +91,16 @@ def curve(p0, h0, word, lengths, radius):
     pos = np.empty((n, 2))
     heading = np.empty(n)
     kappa = np.empty(n)
+    # Which of the three parts each sample lies on; a part of zero length owns none (the
+    # last sample belongs to the last part that has a length).
+    part = np.clip(np.searchsorted(bounds, s, side="right") - 1, 0, 2)
+    for k in (2, 1):
+        if lengths[k] <= 0.0:
+            part[part == k] = k - 1
     x, y, h = float(p0[0]), float(p0[1]), float(h0)
     for k, letter in enumerate(WORDS[word] if isinstance(word, (int, np.integer)) else word):
         k_ = SIGN[letter] / radius
-        sel = (s >= bounds[k]) & (s <= bounds[k + 1]) if k == 2 else (s >= bounds[k]) & (s < bounds[k + 1])
+        sel = part == k
         u = s[sel] - bounds[k]
         if k_ == 0.0:
             pos[sel] = np.column_stack((x + u * np.cos(h), y + u * np.sin(h)))

@@ -120,6 +120,16 @@ class LocomotionPatch:
             g = cache[seg] = (np.column_stack((x, y, h)), s)
         return g
 
+    def without(self, segments):
+        """The patch with the given segments removed (caches dropped)."""
+        keep = np.setdiff1d(np.arange(self.segment_count), np.asarray(segments, int))
+        arrays = {name: getattr(self, name)[keep] for name in
+                  ("seg_entry", "seg_exit", "seg_scale", "seg_cycles", "seg_mask", "seg_length",
+                   "seg_turn", "seg_effort", "seg_pose")}
+        return LocomotionPatch(self.layer, self.gait, self.side, self.cells, self.nodes,
+                               self.effort_rate, pose_centres=self.pose_centres,
+                               stats=self.stats, **arrays)
+
     def costs(self, alpha, beta, gamma):
         """Eq. 5 cost of every segment for the weights of one character."""
         return alpha * self.seg_length + beta * self.seg_turn + gamma * self.seg_effort
@@ -228,11 +238,20 @@ def bake(gait, cells=8, nodes=8, side=None, effort_rate=1.0, curvature_margin=1.
              "culled_by": culled, "pose_clusters": int(centres.shape[0]),
              "cycles_histogram": {int(n): int(np.sum(cycles[keep] == n)) for n in range(1, MAX_CYCLES + 1)},
              "curvature_limits": [kmin, kmax]}
-    if progress:
-        progress(1.0)
-    return LocomotionPatch(
+    patch = LocomotionPatch(
         gait.layer, gait, side, cells, nodes, float(effort_rate),
         node_id(entries[keep, 0], entries[keep, 1], entries[keep, 2], nodes),
         node_id(exits[keep, 0], exits[keep, 1], exits[keep, 2], nodes),
         scale[keep], cycles[keep], seg_mask, seg_length, seg_turn, seg_effort, seg_pose,
         centres, stats)
+    # The validator looks at every kept segment's frames: a spin, a backward step or a
+    # jump the curve checks missed is culled here rather than played.
+    from .validate import segment_glitches
+    bad = segment_glitches(patch)
+    culled["glitch"] = len(bad)
+    if bad:
+        patch = patch.without(bad)
+        stats.update(kept=patch.segment_count, culled=int(ncand - patch.segment_count))
+    if progress:
+        progress(1.0)
+    return patch

@@ -1,0 +1,96 @@
+"""Paths an animator keeps, judged through the depsgraph: straight on open ground, through a
+narrow gap, starting and stopping from standing (issue: paths on any scene)."""
+
+import bpy
+import numpy as np
+import pytest
+
+from scene_helpers import empty, walker_from
+
+
+@pytest.fixture(scope="module")
+def baked_blend(addon_module, mocap_dir, tmp_path_factory):
+    """A saved .blend with the walk patch baked from CMU 16_15 + 16_18."""
+    api = addon_module.api
+    bpy.ops.wm.read_homefile(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.fps = 30
+    arm, acts = api.import_mocap([mocap_dir / "cmu" / "16_15.bvh", mocap_dir / "cmu" / "16_18.bvh"],
+                                 name="Source")
+    api.bake_locomotion_patch(scene, arm, acts[0], [acts[1]], layer="walk")
+    scene.motion_patches.source_armature = arm
+    path = tmp_path_factory.mktemp("paths") / "baked.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    return path
+
+
+def wall_box(name, x0, y0, x1, y1, height=2.0):
+    """An axis-aligned box prop from (x0, y0) to (x1, y1), as a user scales a cube."""
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=((x0 + x1) / 2, (y0 + y1) / 2, height / 2))
+    ob = bpy.context.object
+    ob.name = name
+    ob.scale = (x1 - x0, y1 - y0, height)
+    return ob
+
+
+def evaluated_hips(addon_module, char):
+    """World (x, y) of the hips at every planned frame, through the depsgraph, and fps."""
+    meta, _ = addon_module.api.load_plan_record(char)
+    frames = np.arange(meta["frame_start"], meta["frame_end"] + 1)
+    pos, _, _, _ = addon_module.adapter.evaluate.sample_armature(bpy.context, char, frames, ["Hips"])
+    scene = bpy.context.scene
+    return pos[:, 0, :2], scene.render.fps / scene.render.fps_base
+
+
+def plan(addon_module, char, goal, **kw):
+    bpy.context.view_layer.update()
+    return addon_module.api.plan_path(bpy.context.scene, char, goal, **kw)
+
+
+def test_open_ground_walk_goes_straight_and_starts_and_stops_standing(baked_blend, addon_module):
+    bpy.ops.wm.open_mainfile(filepath=str(baked_blend))
+    scene = bpy.context.scene
+    char = walker_from(scene.motion_patches.source_armature, location=(0.7, -0.4, 0.0))
+    bpy.context.view_layer.update()
+    start = addon_module.adapter.scene.character_state(
+        char, addon_module.adapter.storage.load_patch(scene, "walk").gait.skeleton)
+    d = np.array([np.cos(start[2]), np.sin(start[2])])
+    goal = empty("Goal", *(start[:2] + 16.0 * d), start[2])  # 16 m straight ahead, same facing
+    result = plan(addon_module, char, goal)
+    hips, fps = evaluated_hips(addon_module, char)
+    rel = hips - start[:2]
+    lateral = rel @ np.array([-d[1], d[0]])
+    along = rel @ d
+    assert np.abs(lateral).max() < 0.05, np.abs(lateral).max()   # within 5 cm of the line
+    assert along[-1] == pytest.approx(16.0, abs=0.1)
+    assert result.length_m < 16.0 * 1.01
+    speed = np.linalg.norm(np.diff(hips, axis=0), axis=1) * fps
+    assert speed[0] < 0.2 and speed[-1] < 0.2, (speed[:3], speed[-3:])
+    assert speed.max() > 1.0  # and it does walk at its pace in between
+
+
+def test_a_gap_of_twice_the_radius_plus_0_3_m_is_used(baked_blend, addon_module):
+    """A wall across the way with a 0.8 m gap (radius 0.25): the walk goes through it
+    instead of round the wall's ends, and never comes within the radius of the wall."""
+    bpy.ops.wm.open_mainfile(filepath=str(baked_blend))
+    scene = bpy.context.scene
+    char = walker_from(scene.motion_patches.source_armature, location=(0.0, 0.0, 0.0))
+    gap_lo, gap_hi = -0.17, 0.63  # 0.8 m, off the line start-goal and off any cell grid
+    wall_box("WallA", -8.0, 4.9, gap_lo, 5.1)
+    wall_box("WallB", gap_hi, 4.9, 8.0, 5.1)
+    char.rotation_euler[2] = np.pi  # face +Y, towards the wall
+    bpy.context.view_layer.update()
+    start = addon_module.adapter.scene.character_state(
+        char, addon_module.adapter.storage.load_patch(scene, "walk").gait.skeleton)
+    goal = empty("Goal", start[0], 10.0, np.pi / 2)
+    result = plan(addon_module, char, goal)
+    figures = addon_module.api.analyse(bpy.context, char)
+    assert figures["frames_root_inside_obstacle"] == 0
+    meta, arrays = addon_module.api.load_plan_record(char)
+    ground = arrays["ground"][:, :2]
+    crossing = np.flatnonzero(np.diff(np.sign(ground[:, 1] - 5.0)) != 0)
+    assert crossing.size == 1
+    x = ground[crossing[0], 0]
+    assert gap_lo + 0.25 <= x <= gap_hi - 0.25  # through the gap, clear of both ends
+    straight = np.hypot(goal.location.x - start[0], goal.location.y - start[1])
+    assert result.length_m < 1.25 * straight  # round a wall end would be over 1.6 x
