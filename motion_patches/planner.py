@@ -325,7 +325,7 @@ class SegmentPlanner:
         tight = 1.0 / min(-self.kmin, self.kmax)
         return (tight / DUBINS_CURVATURE_SHARE, tight)
 
-    def _dubins_table(self, p0, h0, p1, h1):
+    def _dubins_table(self, p0, h0, p1, h1, max_length=None):
         """Approximate Eq. 5 cost (R*6, M), lengths (R*6, M, 3), radius (R*6,), word (R*6,)
         and the order to try them (R*6, M) of the Dubins words between state pairs at each
         radius; too-long and missing words cost inf. Wider turns are tried first."""
@@ -336,8 +336,8 @@ class SegmentPlanner:
             turn = dubins.turns(lengths, r)
             effort = self.patch.effort_rate * total / self.max_speed
             cost = self.alpha * total + self.beta * turn + self.gamma * effort
-            cost = np.where(np.isfinite(total) & (total <= MAX_CONNECTOR_TILES * self.patch.side),
-                            cost, np.inf)
+            longest = MAX_CONNECTOR_TILES * self.patch.side if max_length is None else max_length
+            cost = np.where(np.isfinite(total) & (total <= longest), cost, np.inf)
             costs.append(cost)
             lens.append(lengths)
             radii += [r] * len(dubins.WORDS)
@@ -381,6 +381,7 @@ class SegmentPlanner:
             searched = len(plan.pieces)
             if shorten:
                 plan.pieces = shortcut.shorten(self, plan.pieces, ls, lg)
+                plan.pieces = shortcut.pull_tail(self, plan.pieces, lg)
             plan.pieces = self._long_last_piece(plan.pieces)
         plan.stats["pieces_searched"] = searched
         plan.stats["cost_shortened"] = float(sum(p.cost for p in plan.pieces))

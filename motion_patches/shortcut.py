@@ -126,3 +126,116 @@ def _fit(planner, a, b, old_cost):
         if cost < old_cost - MIN_GAIN and (best is None or cost < best[2]):
             best = (c, n, cost)
     return best
+
+
+PULL_SPACING = 0.1     # metres between the path points string pulling looks at
+PULL_CLEARANCE = 0.05  # metres kept beyond the radius by pulled chords (room for the turns)
+PULL_ENDS = 3          # where pulling may end: the goal, or the start of one of the last pieces
+
+
+def pull_tail(planner, pieces, goal):
+    """``pieces`` with the walk after the last clip re-laid as one goal piece when that is
+    cheaper: the found path's ground points are string-pulled (the farthest point whose
+    chord keeps the radius and a margin, and so on) and the corners joined by Dubins paths
+    through each corner along the bisector of its legs (or along a leg), every part tested
+    exactly (:func:`_chain`). It ends at the goal, or where one of the last pieces begins
+    (those are kept, followed on as the same curve). The pulled path stays in the found
+    path's corridor: the search chose the way round the props, pulling only straightens
+    it. Plan frame coordinates."""
+    from .planner import Piece
+    first = len(pieces)
+    while first > 0 and _locomotion(pieces[first - 1]):
+        first -= 1
+    run = pieces[first:]
+    if len(run) < 2 or run[-1].kind != "goal":
+        return pieces
+    old_cost = sum(p.cost for p in run)
+    for q in range(len(run), max(len(run) - PULL_ENDS, 1) - 1, -1):
+        # Pull to the goal itself, else to where one of the last pieces begins (that piece
+        # and the ones after it are kept, followed on as the same curve).
+        if q == len(run):
+            pts, end_heading, tail = _resampled(planner, run, goal[:2]), float(goal[2]), []
+        else:
+            p_end, end_heading = _entry_state(planner, run[q])
+            pts, tail = _resampled(planner, run[:q], p_end), run[q:]
+        corners = pts[_string_pull(planner.env, pts, planner.env.radius + PULL_CLEARANCE)]
+        parts = _chain(planner, corners, _entry_state(planner, run[0]), end_heading)
+        if parts is None:
+            continue
+        parts += [p.curve if p.curve is not None else planner._segment_curve(p) for p in tail]
+        curve = parts[0]
+        for c in parts[1:]:
+            curve = curves.joined(curve, c)
+        cost = planner._curve_cost(curve, planner._cycles(curve))
+        if cost < old_cost - MIN_GAIN:
+            return pieces[:first] + [Piece("goal", curve=curve, cost=cost)]
+    return pieces
+
+
+def _resampled(planner, run, end):
+    """Ground points of the pieces of ``run`` every ``PULL_SPACING`` metres, then ``end``."""
+    pts = np.concatenate([_ground_points(planner, p) for p in run])
+    s = np.concatenate(([0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))))
+    if s[-1] > PULL_SPACING:
+        at = np.arange(0.0, s[-1], PULL_SPACING)
+        pts = np.column_stack((np.interp(at, s, pts[:, 0]), np.interp(at, s, pts[:, 1])))
+    return np.vstack((pts, np.asarray(end, float)[None]))
+
+
+def _chain(planner, corners, first, goal_heading, budget=60):
+    """Dubins parts from state ``first`` through ``corners[1:]`` (the last is the goal, met
+    facing ``goal_heading``), each corner passed along the bisector of its legs, or along
+    either leg where that does not fit (a depth-first search over those choices, at most
+    ``budget`` parts tried); None when no choice fits."""
+    tries = [0]
+
+    def options(j):
+        if j == len(corners) - 1:
+            return [goal_heading]
+        d_in, d_out = corners[j] - corners[j - 1], corners[j + 1] - corners[j]
+        a_in, a_out = np.arctan2(d_in[1], d_in[0]), np.arctan2(d_out[1], d_out[0])
+        turn = (a_out - a_in + np.pi) % (2 * np.pi) - np.pi
+        return [float(a_in + turn / 2), float(a_out), float(a_in)]
+
+    def solve(j, pa, ha):
+        if j == len(corners):
+            return []
+        for hb in options(j):
+            if tries[0] >= budget:
+                return None
+            tries[0] += 1
+            pb = corners[j]
+            table = planner._dubins_table(pa[None], np.array([ha]), pb[None], np.array([hb]),
+                                          max_length=np.inf)
+            found = planner._first_valid(pa, ha, table, 0)
+            if found is None:
+                continue
+            rest = solve(j + 1, pb, hb)
+            if rest is not None:
+                return [found[0]] + rest
+        return None
+
+    return solve(1, first[0], first[1])
+
+
+def _ground_points(planner, piece):
+    if piece.curve is not None:
+        return piece.curve.pos
+    return planner.patch.path_points()[piece.segment] + np.array(piece.tile, float) * planner.patch.side
+
+
+def _string_pull(env, pts, clearance):
+    """Indices of the corners of the string-pulled polyline through ``pts`` (N, 2): from
+    each corner the farthest point whose chord keeps ``clearance`` from every footprint."""
+    corners, k, n = [0], 0, len(pts)
+    while k < n - 1:
+        m = np.arange(k + 1, n)
+        length = np.linalg.norm(pts[m] - pts[k], axis=1)
+        samples = max(int(np.ceil(length.max() / 0.05)) + 1, 2)
+        t = np.linspace(0.0, 1.0, samples)[None, :, None]
+        chords = pts[k][None, None] + t * (pts[m] - pts[k])[:, None]
+        hit = env.blocked(chords.reshape(-1, 2), radius=clearance).reshape(m.size, -1).any(axis=1)
+        clear = np.flatnonzero(~hit)
+        k = int(m[clear.max()]) if clear.size else k + 1
+        corners.append(k)
+    return corners
