@@ -166,6 +166,7 @@ class Environment:
         self._members = {}      # tile -> set of obstacle names
         self._free = {}         # tile -> uint64 free-cell bitfield (lazy)
         self._solid = {}        # tile -> uint64 bitfield of cells no point of which is free
+        self._pack = None       # footprints as arrays for point queries (:meth:`_packed`)
         self.occlusion_computations = 0
 
     def tile_of(self, xy):
@@ -181,6 +182,7 @@ class Environment:
     def place(self, obstacle):
         """Add or move an obstacle: only tile membership changes (no occlusion work)."""
         self.remove(obstacle.name)
+        self._pack = None
         self.obstacles[obstacle.name] = obstacle
         tiles = self._tiles_overlapping(obstacle)
         self._tiles_of[obstacle.name] = tiles
@@ -190,6 +192,7 @@ class Environment:
             self._solid.pop(t, None)
 
     def remove(self, name):
+        self._pack = None
         for t in self._tiles_of.pop(name, ()):
             self._members[t].discard(name)
             self._free.pop(t, None)
@@ -263,9 +266,48 @@ class Environment:
         near = set()
         for t in tiles:
             near |= self.members(t)
-        for n in near - set(exclude):
-            out |= self.obstacles[n].within(points, radius)
+        near -= set(exclude)
+        if not near:
+            return out
+        if len(near) <= 2 or (self._pack is None and len(self.obstacles) > 50 * len(near)):
+            for n in near:  # a few footprints of a large scene: not worth packing them all
+                out |= self.obstacles[n].within(points, radius)
+            return out
+        index, lo, hi, verts = self._packed()
+        idx = np.fromiter((index[n] for n in near), int, len(near))
+        # Bounding boxes first, for every (point, obstacle) pair at once; then the exact
+        # distance to the convex footprint only for the pairs that pass.
+        box = (np.all(points[:, None] > lo[idx][None] - radius, axis=-1)
+               & np.all(points[:, None] < hi[idx][None] + radius, axis=-1))
+        pi, ci = np.nonzero(box)
+        if pi.size:
+            a = verts[idx[ci]]
+            ab = np.roll(a, -1, axis=1) - a
+            ap = points[pi][:, None] - a
+            t = np.clip(np.sum(ap * ab, -1) / np.maximum(np.sum(ab * ab, -1), 1e-12), 0.0, 1.0)
+            gap = ap - t[..., None] * ab
+            dist = np.sqrt(np.min(np.sum(gap * gap, -1), axis=1))
+            inside = np.all(ab[..., 0] * ap[..., 1] - ab[..., 1] * ap[..., 0] >= 0, axis=1)
+            hit = (dist < radius) | (inside & (radius > 0))  # distance 0 inside, as within()
+            out[pi[hit]] = True
         return out
+
+    def _packed(self):
+        """Every footprint in arrays (cached until an obstacle is placed or removed):
+        {name: row}, bounds lo / hi (M, 2), vertices (M, V, 2) padded by repeating the
+        last one (a zero-length edge changes no distance and no inside test)."""
+        if self._pack is None:
+            names = list(self.obstacles)
+            v = max((len(self.obstacles[n].polygon) for n in names), default=1)
+            verts = np.zeros((len(names), v, 2))
+            for i, n in enumerate(names):
+                poly = self.obstacles[n].polygon
+                verts[i, :len(poly)] = poly
+                verts[i, len(poly):] = poly[-1]
+            self._pack = ({n: i for i, n in enumerate(names)},
+                          np.array([self.obstacles[n].lo for n in names]).reshape(-1, 2),
+                          np.array([self.obstacles[n].hi for n in names]).reshape(-1, 2), verts)
+        return self._pack
 
     def path_blocked(self, paths, spacing):
         """(n,) True where sampled paths (n, M, 2), samples at most ``spacing`` apart,

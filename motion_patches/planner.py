@@ -317,6 +317,21 @@ class SegmentPlanner:
                         f"turn the {what} or move {'it' if len(hit) <= 1 else 'them'}"
                         + (" (or plan with goal facing 'any')" if what == "goal" else ""))
 
+    def _boxed_in(self, what, state):
+        """Why no connector leaves the start (enters the goal), naming the props around."""
+        reach = 2.0 / min(-self.kmin, self.kmax) + self.env.radius
+        p = np.asarray(state[:2], float)
+        names = [n for n in self.env.names_in_box(p - reach, p + reach)
+                 if self.env.obstacles[n].within(p[None], reach)[0]]
+        way = "turn out of it" if what == "start" else "turn into it"
+        facing = ("" if np.isnan(state[2]) else
+                  f" facing {np.degrees(state[2] + self._frame_angle):.0f} degrees")
+        who = ", ".join(repr(n) for n in names[:4]) if names else "nothing near"
+        return (f"the walk cannot {way}{facing} (it turns no tighter than "
+                f"{1 / max(self.kmax, -self.kmin):.2f} m and keeps {self.env.radius:.2f} m from "
+                f"props; within {reach:.1f} m: {who}); move or turn the {what}, or move those props"
+                + (", or plan with goal facing 'any'" if what == "goal" else ""))
+
     @property
     def turn_radii(self):
         """Radii of the Dubins arcs, in the order they are tried: a share of the sharpest
@@ -435,8 +450,7 @@ class SegmentPlanner:
         starts = self.start_connectors(start)
         goals = self.goal_connectors(goal)
         if not starts:
-            raise PlanError("no walkable way out of the start: every connector to the node "
-                            "graph bends too sharply or meets an obstacle")
+            raise PlanError("no walkable way out of the start: " + self._boxed_in("start", start))
         if not goals:
             raise PlanError("no walkable way into the goal: every node around it is too close")
         payloads = {}
@@ -489,8 +503,7 @@ class SegmentPlanner:
             self.corridor, corridor_fallback = None, True
             result, observer = search()
         if not result.found and not any(self.goal_link(k) is not None for k in goals):
-            raise PlanError("no walkable way into the goal: every connector from the node "
-                            "graph bends too sharply or meets an obstacle")
+            raise PlanError("no walkable way into the goal: " + self._boxed_in("goal", goal))
         if not result.found:
             raise PlanError(f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is unreachable: obstacles "
                             f"close every path within {margin_tiles} tiles of start and goal "

@@ -128,7 +128,7 @@ def _fit(planner, a, b, old_cost):
     return best
 
 
-PULL_SPACING = 0.1     # metres between the path points string pulling looks at
+PULL_SPACING = 0.2     # metres between the path points string pulling looks at
 PULL_CLEARANCE = 0.05  # metres kept beyond the radius by pulled chords (room for the turns)
 PULL_ENDS = 3          # where pulling may end: the goal, or the start of one of the last pieces
 
@@ -224,18 +224,24 @@ def _ground_points(planner, piece):
     return planner.patch.path_points()[piece.segment] + np.array(piece.tile, float) * planner.patch.side
 
 
-def _string_pull(env, pts, clearance):
+def _string_pull(env, pts, clearance, chunk=16):
     """Indices of the corners of the string-pulled polyline through ``pts`` (N, 2): from
-    each corner the farthest point whose chord keeps ``clearance`` from every footprint."""
+    each corner the farthest point whose chord keeps ``clearance`` from every footprint
+    (candidates tested farthest first, ``chunk`` chords at a time)."""
     corners, k, n = [0], 0, len(pts)
     while k < n - 1:
-        m = np.arange(k + 1, n)
-        length = np.linalg.norm(pts[m] - pts[k], axis=1)
-        samples = max(int(np.ceil(length.max() / 0.05)) + 1, 2)
-        t = np.linspace(0.0, 1.0, samples)[None, :, None]
-        chords = pts[k][None, None] + t * (pts[m] - pts[k])[:, None]
-        hit = env.blocked(chords.reshape(-1, 2), radius=clearance).reshape(m.size, -1).any(axis=1)
-        clear = np.flatnonzero(~hit)
-        k = int(m[clear.max()]) if clear.size else k + 1
+        nxt = k + 1
+        for hi in range(n - 1, k, -chunk):
+            m = np.arange(max(hi - chunk + 1, k + 1), hi + 1)
+            length = np.linalg.norm(pts[m] - pts[k], axis=1)
+            samples = max(int(np.ceil(length.max() / 0.05)) + 1, 2)
+            t = np.linspace(0.0, 1.0, samples)[None, :, None]
+            chords = pts[k][None, None] + t * (pts[m] - pts[k])[:, None]
+            hit = env.blocked(chords.reshape(-1, 2), radius=clearance).reshape(m.size, -1).any(axis=1)
+            clear = np.flatnonzero(~hit)
+            if clear.size:
+                nxt = int(m[clear.max()])
+                break
+        k = nxt
         corners.append(k)
     return corners

@@ -60,7 +60,9 @@ def test_plan_writes_nla_and_evaluates_onto_the_goal(baked_blend, addon_module):
     tracks = [t.name for t in char.animation_data.nla_tracks]
     assert tracks == ["MP motion", "MP root", "MP foot lock"]
     strips = char.animation_data.nla_tracks["MP motion"].strips
-    assert len(strips) >= 3 and all(s.action_slot is not None for s in strips)
+    # Past four pillars the found path is shortened to one followed curve (one strip);
+    # every strip, however many, has its action slot.
+    assert len(strips) >= 1 and all(s.action_slot is not None for s in strips)
 
     figures = addon_module.api.analyse(bpy.context, char)
     meta, _ = addon_module.api.load_plan_record(char)
