@@ -37,7 +37,7 @@ from motion_patches import bvh, clip as clip_mod, contacts, gait as gait_mod  # 
 from motion_patches import foot_lock, locomotion_patch, metrics  # noqa: E402
 from motion_patches.environment import Environment, Obstacle  # noqa: E402
 from motion_patches.motion import Motion, concatenate  # noqa: E402
-from motion_patches.planner import PlanError, SegmentPlanner, piece_motion  # noqa: E402
+from motion_patches.planner import PlanError, SegmentPlanner, plan_motions  # noqa: E402
 
 PILLAR_SIDES = 12
 
@@ -173,7 +173,7 @@ def bench_plans(patch, args, profiler=None):
                 any_facing = None
             failures.append({"layout": layout, "seconds": dt, "start": start.tolist(),
                              "goal": goal.tolist(), "message": str(e),
-                             "occlusion_computations": env.occlusion_computations,
+                             "occlusion_computations": plan.stats["occlusion_computations"],
                              "any_facing_seconds": any_facing})
             print(f"  layout {layout:3d}: FAILED after {dt * 1000:7.1f} ms: {e}; with any goal "
                   f"facing: " + ("no path" if any_facing is None else
@@ -183,7 +183,7 @@ def bench_plans(patch, args, profiler=None):
         if prof:
             prof.disable()
         t1 = time.perf_counter()
-        motions = [piece_motion(patch, p) for p in plan.pieces]
+        motions = plan_motions(patch, plan)
         m = concatenate(motions)
         synth = time.perf_counter() - t1
         ground = m.ground[:, :2]
@@ -199,7 +199,7 @@ def bench_plans(patch, args, profiler=None):
             "frames": m.frames, "motion_seconds": (m.frames - 1) / fps,
             "metres": float(np.linalg.norm(np.diff(ground, axis=0), axis=1).sum()),
             "straight_line_m": float(np.linalg.norm(goal[:2] - start[:2])),
-            "occlusion_computations": env.occlusion_computations,
+            "occlusion_computations": plan.stats["occlusion_computations"],
             "frames_inside_obstacle": int(env.blocked(ground).sum()),
             "cost": plan.cost, "start": start.tolist(), "goal": goal.tolist(),
             "start_connectors": plan.stats.get("start_connectors"),
@@ -209,7 +209,7 @@ def bench_plans(patch, args, profiler=None):
         print(f"  layout {layout:3d}: {dt * 1000:7.1f} ms, {plan.expansions:6d} nodes, "
               f"{rec['pieces']:3d} pieces, {rec['motion_seconds']:5.1f} s / {rec['metres']:5.1f} m "
               f"of motion ({rec['straight_line_m']:4.1f} m apart), "
-              f"{env.occlusion_computations:4d} tiles occluded, skate "
+              f"{plan.stats['occlusion_computations']:4d} tiles occluded, skate "
               f"{skate['mean_cm_per_frame']:.2f} cm/frame ({skate_locked['mean_cm_per_frame']:.2f} "
               f"locked)")
     return records, failures, count
@@ -364,7 +364,10 @@ def main(argv=None):
     for f in failures:
         k = ("unreachable" if "unreachable" in f["message"] else
              "no way out of the start" if "out of the start" in f["message"] else
-             "no way into the goal" if "into the goal" in f["message"] else "other")
+             "no way into the goal" if "into the goal" in f["message"] else
+             "no walk can arrive facing the goal's way" if "arrive at the goal facing" in f["message"] else
+             "no walk can leave facing the start's way" if "leave the start facing" in f["message"] else
+             "other")
         kinds[k] = kinds.get(k, 0) + 1
     plans = {
         "pillars": pillars, "found": len(records), "failed": len(failures),

@@ -289,11 +289,11 @@ def _arrow(canvas, state, colour, length_m, width_px):
 
 
 def plot_layout(path_png, env, patch, plan, motions, size_px=900, margin_m=1.0,
-                start=None, goal=None, title=None):
+                start=None, goal=None, title=None, searched=None):
     """Write a top-down PNG of ``env`` and a plan on it; returns the image (H, W, 3) floats.
 
     ``plan`` is a :class:`~motion_patches.planner.Plan` (or None to draw only the scene and
-    ``start`` / ``goal``), ``motions`` its per-piece world motions (``planner.piece_motion``;
+    ``start`` / ``goal``), ``motions`` its per-piece world motions (``planner.plan_motions``;
     computed when None). The view is the box around the path, start and goal grown by
     ``margin_m``; ``size_px`` is its longer side. A legend strip is added below the map,
     with a summary of the plan (pieces, seconds of motion, metres, nodes expanded), an
@@ -303,12 +303,15 @@ def plot_layout(path_png, env, patch, plan, motions, size_px=900, margin_m=1.0,
     What is drawn, bottom to top:
 
     * white ground; faint lines of the patch's cells and grey lines of the tile grid
-      (tile (i, j) has its corner at (i * side, j * side));
+      (tile (i, j) has its corner at (i * side, j * side)); a plan is drawn in its plan
+      frame (:mod:`motion_patches.plan_frame`: the start on the left, the goal to its right),
+      so the grid is the lattice the planner searched;
     * occluded cells in light coral: cells whose bit is clear in ``env.free_cells(tile)``
       (bit c is cell (c % cells, c // cells)), i.e. cells within the character's radius of
       a footprint, for every tile in view that holds obstacles. Computing them here is
       lazy occlusion like the planner's; ``env.occlusion_computations`` is left unchanged;
     * obstacle footprints filled dark slate;
+    * ``searched`` (optional motions of the same plan before shortening) as a thin grey line;
     * the planned ground path (``motion.ground[:, :2]``) as a thick line coloured per
       piece: start connector green, motion segments alternating blue and amber, goal
       connector red (a "direct" piece purple);
@@ -316,12 +319,26 @@ def plot_layout(path_png, env, patch, plan, motions, size_px=900, margin_m=1.0,
     * the start (green) and the goal (red) as discs with a dark arrow along their heading.
     """
     if plan is not None and motions is None:
-        from motion_patches.planner import piece_motion
-        motions = [piece_motion(patch, p) for p in plan.pieces]
+        from motion_patches.planner import plan_motions
+        motions = plan_motions(patch, plan)
     motions = motions or []
     if plan is not None:
         start = plan.start if start is None else start
         goal = plan.goal if goal is None else goal
+    frame = plan.stats.get("frame") if plan is not None else None
+    if frame is not None:
+        # Drawn in the plan frame, where the planner laid its tile lattice (anchored at
+        # the start, +x towards the goal): the grid is then the one it searched.
+        from motion_patches import plan_frame
+        c, s_ = np.cos(frame[2]), np.sin(frame[2])
+        shift = -np.array([c * frame[0] + s_ * frame[1], -s_ * frame[0] + c * frame[1]])
+        motions = [m.transformed(shift[0], shift[1], -frame[2]) for m in motions]
+        searched = [m.transformed(shift[0], shift[1], -frame[2]) for m in searched or []]
+        start = None if start is None else plan_frame.state_to_local(frame, np.asarray(start, float))
+        goal = None if goal is None else plan_frame.state_to_local(frame, np.asarray(goal, float))
+        every = np.concatenate([m.ground[:, :2] for m in motions] + [start[None, :2], goal[None, :2]])
+        env = plan_frame.local_environment(env, frame, every.min(0) - margin_m - env.side,
+                                           every.max(0) + margin_m + env.side)
     pts = [m.ground[:, :2] for m in motions]
     pts += [np.asarray(s, float)[None, :2] for s in (start, goal) if s is not None]
     if not pts:
@@ -374,6 +391,8 @@ def plot_layout(path_png, env, patch, plan, motions, size_px=900, margin_m=1.0,
 
     # Path, one colour per piece; the joins are covered by the stitch dots.
     width = max(3.0, size_px / 180.0)
+    for m in searched or []:  # the path as the segment search found it, before shortening
+        cv.polyline(m.ground[:, :2], max(1.5, width / 3), TILE_GRID)
     if plan is not None:
         for m, colour in zip(motions, _piece_colours(plan.pieces)):
             cv.polyline(m.ground[:, :2], width, colour)
@@ -493,7 +512,7 @@ def main(argv=None):
     args = p.parse_args(argv)
     from motion_patches import bvh, gait, locomotion_patch
     from motion_patches.environment import Environment
-    from motion_patches.planner import SegmentPlanner, piece_motion
+    from motion_patches.planner import SegmentPlanner, plan_motions
 
     mocap = Path(args.mocap) / "cmu"
     g = gait.build_gait("walk", bvh.read(mocap / "16_15.bvh"), (bvh.read(mocap / "16_18.bvh"),))
@@ -504,8 +523,10 @@ def main(argv=None):
     for ob in demo_pillars(args.seed):
         env.place(ob)
     plan = SegmentPlanner(patch, env).plan(start, goal)
-    motions = [piece_motion(patch, pc) for pc in plan.pieces]
-    plot_layout(args.output, env, patch, plan, motions, size_px=args.size, margin_m=args.margin)
+    motions = plan_motions(patch, plan)
+    found = SegmentPlanner(patch, env).plan(start, goal, shorten=False)
+    plot_layout(args.output, env, patch, plan, motions, size_px=args.size, margin_m=args.margin,
+                searched=plan_motions(patch, found))
     print(f"wrote {args.output}: {len(plan.pieces)} pieces, {plan.expansions} nodes, "
           f"{len(env.obstacles)} pillars")
     return 0
