@@ -394,9 +394,11 @@ class SegmentPlanner:
         with self.framed(start, goal, margin_tiles) as (ls, lg, frame):
             plan = self._plan_local(ls, lg, margin_tiles, max_expansions, use_corridor)
             searched = len(plan.pieces)
+            t_short = time.perf_counter()
             if shorten:
                 plan.pieces = shortcut.shorten(self, plan.pieces, ls, lg)
                 plan.pieces = shortcut.pull_tail(self, plan.pieces, lg)
+            plan.stats["shortening_seconds"] = time.perf_counter() - t_short
             plan.pieces = self._long_last_piece(plan.pieces)
         plan.stats["pieces_searched"] = searched
         plan.stats["cost_shortened"] = float(sum(p.cost for p in plan.pieces))
@@ -447,6 +449,7 @@ class SegmentPlanner:
                        max(ts[0], tg[0]) + margin_tiles, max(ts[1], tg[1]) + margin_tiles)
         for what, state in (("start", start), ("goal", goal)):
             self._check_turning_room(what, state)
+        t_conn = time.perf_counter()
         starts = self.start_connectors(start)
         goals = self.goal_connectors(goal)
         if not starts:
@@ -497,6 +500,8 @@ class SegmentPlanner:
                                   observer if copies else None)
             return result, observer
 
+        connector_seconds = time.perf_counter() - t_conn
+        t_search = time.perf_counter()
         result, observer = search()
         corridor_fallback = False
         if not result.found and self.corridor is not None:
@@ -539,6 +544,8 @@ class SegmentPlanner:
         return Plan(pieces, float(result.cost), result.expansions, seconds,
                     tuple(start), tuple(goal),
                     {"start_connectors": len(starts), "goal_connectors": len(goals),
+                     "connector_seconds": connector_seconds,
+                     "search_seconds": time.perf_counter() - t_search,
                      "occlusion_computations": self.env.occlusion_computations,
                      "high_level_tiles": len(tiles) if tiles else 0,
                      "corridor_fallback": corridor_fallback,

@@ -139,16 +139,28 @@ def pull_tail(planner, pieces, goal):
     chord keeps the radius and a margin, and so on) and the corners joined by Dubins paths
     through each corner along the bisector of its legs (or along a leg), every part tested
     exactly (:func:`_chain`). It ends at the goal, or where one of the last pieces begins
-    (those are kept, followed on as the same curve). The pulled path stays in the found
-    path's corridor: the search chose the way round the props, pulling only straightens
-    it. Plan frame coordinates."""
-    from .planner import Piece
+    (those are kept, followed on as the same curve); it begins where the walk begins, or
+    where one of the first pieces ends (a start that turns round keeps its turn). The
+    pulled path stays in the found path's corridor: the search chose the way round the
+    props, pulling only straightens it. Plan frame coordinates."""
     first = len(pieces)
     while first > 0 and _locomotion(pieces[first - 1]):
         first -= 1
     run = pieces[first:]
     if len(run) < 2 or run[-1].kind != "goal":
         return pieces
+    for begin in range(0, min(PULL_ENDS, len(run) - 1)):
+        # Pull from the start of the run, else from where one of its first pieces ends
+        # (those are kept: a start that must turn round keeps its turn).
+        found = _pull(planner, run[begin:], goal)
+        if found is not None:
+            return pieces[:first + begin] + [found]
+    return pieces
+
+
+def _pull(planner, run, goal):
+    """One goal piece re-laying ``run`` (see :func:`pull_tail`), or None."""
+    from .planner import Piece
     old_cost = sum(p.cost for p in run)
     for q in range(len(run), max(len(run) - PULL_ENDS, 1) - 1, -1):
         # Pull to the goal itself, else to where one of the last pieces begins (that piece
@@ -168,8 +180,8 @@ def pull_tail(planner, pieces, goal):
             curve = curves.joined(curve, c)
         cost = planner._curve_cost(curve, planner._cycles(curve))
         if cost < old_cost - MIN_GAIN:
-            return pieces[:first] + [Piece("goal", curve=curve, cost=cost)]
-    return pieces
+            return Piece("goal", curve=curve, cost=cost)
+    return None
 
 
 def _resampled(planner, run, end):
