@@ -87,7 +87,9 @@ def import_mocap(paths, scale=mocap.CMU_SCALE, armature=None, name=None):
 
 def bake_locomotion_patch(scene, armature, straight, turns=(), layer="walk", name=None,
                           cells=8, nodes=8, effort_rate=1.0, mirror_turns=True, progress=None):
-    """Bake and store a locomotion patch from a straight action and turn actions."""
+    """Bake and store a locomotion patch from a straight action and turn actions (none
+    needed: the straight stride is bent to turns, see ``gait.STRAIGHT_BEND_RADIUS``).
+    A patch too sparse to connect is refused, saying what to add."""
     if armature is None or armature.type != "ARMATURE":
         raise MotionPatchesError("choose the armature the clips were imported on")
     if straight is None:
@@ -98,11 +100,8 @@ def bake_locomotion_patch(scene, armature, straight, turns=(), layer="walk", nam
         clips = [act_io.clip_from_action(a, armature, fps) for a in (straight,) + tuple(turns)]
         gait = build_gait(layer, clips[0], tuple(clips[1:]), fps=fps, mirror_turns=mirror_turns)
         patch = bake(gait, cells=cells, nodes=nodes, effort_rate=effort_rate, progress=progress)
-    except ValueError as exc:
+    except ValueError as exc:  # SparsePatch included
         raise MotionPatchesError(str(exc)) from None
-    if patch.segment_count == 0:
-        raise MotionPatchesError("every candidate segment was culled: the turn clips do not "
-                                 "turn enough for this patch size")
     name = name or layer
     storage.store_patch(scene, patch, name)
     return BakeResult(name, layer, patch.stats, time.perf_counter() - t0, list(gait.notes))
