@@ -18,8 +18,8 @@ import numpy as np
 
 from .adapter import actions as act_io
 from .adapter import evaluate, mocap, nla, props_io, scene as scene_io, storage
-from .motion_patches import (blocking, contacts, crowd, foot_lock, layout_spec, metrics,
-                             object_patch, validate)
+from .motion_patches import (blocking, causes, contacts, crowd, foot_lock, layout_spec,
+                             metrics, object_patch, validate)
 from .motion_patches.environment import Obstacle
 from .motion_patches.gait import build_gait
 from .motion_patches.locomotion_patch import bake
@@ -36,7 +36,13 @@ class MotionPatchesError(ValueError):
 
 
 class PathNotFound(MotionPatchesError):
-    """The request was fine but the props leave the character no way to its goal."""
+    """The request was fine but no path was found; the message ends with the cause, also
+    given as ``cause``: "props" (named in ``props``), "patch" (its walks turn too wide or
+    connect too sparsely for this start and goal, even on open ground) or "search limit"."""
+
+    def __init__(self, message, cause=None, props=()):
+        super().__init__(message)
+        self.cause, self.props = cause, list(props)
 
 
 @dataclass
@@ -310,10 +316,19 @@ def _check_clear(env, character, endpoints, by_name):
                                  f"{', '.join(repr(n) for n in near[:4])}: move it into the open")
 
 
-def _solve(planner, character, endpoints):
+def _solve(planner, character, endpoints, explain=True):
+    """The plan of one character; :class:`PathNotFound` naming the cause when there is none
+    (``explain=False`` skips finding the cause: a crowd retries such a failure without
+    the others' standing spots)."""
     start_state, goal_state, start_ref, goal_ref = endpoints
     try:
-        plan = planner.plan(start_state, goal_state)
+        if explain:
+            plan = causes.plan_explained(planner, start_state, goal_state)
+        else:
+            plan = planner.plan(start_state, goal_state)
+    except causes.NoPath as exc:
+        raise PathNotFound(f"no path for '{character.name}': {exc}", exc.cause,
+                           exc.props) from None
     except PlanError as exc:
         raise PathNotFound(f"no path for '{character.name}': {exc}") from None
     return with_interactions(plan, start_ref, goal_ref)
@@ -448,7 +463,7 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
                     env.place(spot)
                 try:
                     try:
-                        plan = _solve(planner, character, e)
+                        plan = _solve(planner, character, e, explain=not spots)
                     except PathNotFound:
                         if not spots:
                             raise
