@@ -25,8 +25,9 @@ MIN_ENTRY_SHARE = 0.5
 """Share of entry states (every node, the three inward headings) that need at least one
 segment on for a bake to be kept. Straight walks with turn clips reach 92 % (CMU 16_15 +
 16_18; 100 % at 4x4 cells, 4 or 3 nodes); 16_15 alone 75 % (at its 1 m bend), and 33 %
-when bent to 2 m at most, where a walk can go straight and turn once but no pillar field
-is crossed; 8 % at the 443 m radius it turned to before straight clips could bend."""
+when bent to 2 m at most (or any wider radius), where a walk can go straight and turn once
+but no pillar field is crossed; 8 % with the limits it had before straight clips could
+bend (a 443 m radius one way, no turn the other)."""
 PATH_SAMPLES = 160  # points per segment for exact footprint tests (4 cycles ~ 5.3 m)
 
 
