@@ -5,7 +5,7 @@ import bpy
 import numpy as np
 import pytest
 
-from scene_helpers import empty, walker_from
+from scene_helpers import empty, prop_box, walker_from
 
 
 @pytest.fixture(scope="module")
@@ -21,15 +21,6 @@ def straight_blend(addon_module, mocap_dir, tmp_path_factory):
     path = tmp_path_factory.mktemp("straight") / "straight.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(path))
     return path, bake
-
-
-def wall_box(name, x0, y0, x1, y1, height=2.0):
-    """An axis-aligned box prop from (x0, y0) to (x1, y1), as a user scales a cube."""
-    bpy.ops.mesh.primitive_cube_add(size=1.0, location=((x0 + x1) / 2, (y0 + y1) / 2, height / 2))
-    ob = bpy.context.object
-    ob.name = name
-    ob.scale = (x1 - x0, y1 - y0, height)
-    return ob
 
 
 def walker(addon_module, straight_blend, location=(0.0, 0.0, 0.0)):
@@ -96,7 +87,7 @@ def walled_off(addon_module, straight_blend):
     d = np.array([np.cos(start[2]), np.sin(start[2])])
     across = np.round(np.abs(d[::-1]))  # the rig faces along an axis
     mid = start[:2] + 3.0 * d
-    wall = wall_box("Garden wall", *(mid - 20.0 * across - 0.15), *(mid + 20.0 * across + 0.15))
+    wall = prop_box("Garden wall", *mid, size=(*(40.0 * across + 0.3), 2.0))
     goal = empty("Goal", *(start[:2] + 6.0 * d), start[2])
     bpy.context.view_layer.update()
     return char, goal, wall
