@@ -47,6 +47,13 @@ def timeline(track, delay, horizon):
     return track[t]
 
 
+def timelines(tracks, delays):
+    """Every track's timeline over the crowd's whole length (as :func:`timeline`)."""
+    tracks = [np.asarray(t, float)[:, :2] for t in tracks]
+    horizon = max(len(t) + d for t, d in zip(tracks, delays))
+    return [timeline(t, d, horizon) for t, d in zip(tracks, delays)]
+
+
 def closest_approach(a, b):
     """(frame, distance) where two equally long timelines come closest."""
     d = np.linalg.norm(a - b, axis=1)
@@ -80,8 +87,7 @@ def stagger(tracks, clearance, max_delay, step):
             if close == 0:
                 break
         delays.append(best[1])
-    horizon = max(len(t) + d for t, d in zip(tracks, delays))
-    lines = [timeline(t, d, horizon) for t, d in zip(tracks, delays)]
+    lines = timelines(tracks, delays)
     conflicts = []
     for i in range(len(lines)):
         for j in range(i):
@@ -89,3 +95,51 @@ def stagger(tracks, clearance, max_delay, step):
             if dist < clearance:
                 conflicts.append({"a": j, "b": i, "frame": k, "distance_m": dist})
     return delays, conflicts
+
+
+def ghosts(conflict, lines, spacing, radius, fps, window_seconds=1.5, step_m=0.3):
+    """Discs [(polygon)] where character ``conflict["a"]`` walks around the frame it comes
+    too close to character ``conflict["b"]``: its positions over ``window_seconds`` either
+    side of that frame (``lines``: the crowd's timelines as :func:`stagger` leaves them),
+    every ``step_m`` metres, as obstacles that keep ``spacing`` between the two roots once
+    the planner grows them by ``radius``. Re-planning ``b`` around them routes it round
+    where ``a`` is at that time (a space-time reservation of those frames, made static);
+    what is left is staggered again."""
+    a, k = conflict["a"], conflict["frame"]
+    w = int(round(window_seconds * fps))
+    pts = lines[a][max(k - w, 0):k + w + 1]
+    keep = [pts[0]]
+    for p in pts[1:]:
+        if np.linalg.norm(p - keep[-1]) >= step_m:
+            keep.append(p)
+    grow = max(spacing - radius, 0.05)
+    return [disc(p, grow) for p in keep]
+
+
+def keep_apart(tracks, replan, spacing, radius, fps, max_delay, step, rounds=3):
+    """Delays, conflicts left and the indices re-routed, for tracks [(frames, 2)] in
+    priority order: :func:`stagger` first; then, for each conflict, the later character
+    is re-planned (``replan(index, discs) -> new track or None``) around :func:`ghosts` of
+    the earlier one near the conflict frame (its reserved stretch, added to what it
+    already avoids), and the crowd is staggered again, for at most ``rounds`` rounds.
+    ``tracks`` is updated in place with the re-planned tracks."""
+    delays, conflicts = stagger(tracks, spacing, max_delay, step)
+    reserved = {}
+    rerouted = set()
+    for _ in range(rounds):
+        if not conflicts:
+            break
+        lines = timelines(tracks, delays)
+        changed = False
+        for c in conflicts:
+            b = c["b"]
+            reserved.setdefault(b, []).extend(ghosts(c, lines, spacing, radius, fps))
+            new = replan(b, list(reserved[b]))
+            if new is not None:
+                tracks[b] = np.asarray(new, float)[:, :2]
+                rerouted.add(b)
+                changed = True
+        if not changed:
+            break
+        delays, conflicts = stagger(tracks, spacing, max_delay, step)
+    return delays, conflicts, sorted(rerouted)

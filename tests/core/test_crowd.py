@@ -76,3 +76,24 @@ def test_an_empty_crowd_and_no_spacing_are_handled():
     assert crowd.stagger([], clearance=0.5, max_delay=30, step=3) == ([], [])
     ends = [((0, 0, 0), (10, 0, 0)), ((0, 3, 0), (10, 3, 0))]
     assert crowd.standing_spots(ends, 0, spacing=0.0, radius=0.25) == []
+
+
+def test_keep_apart_reroutes_the_later_walker_when_no_wait_clears_it():
+    """Two walkers that cross head-on in a corridor-free plane: a wait cannot help the
+    second one (the first stands at its goal where the second walks); re-planned round
+    the first's reserved stretch, it passes clear."""
+    from motion_patches import crowd
+    t = np.linspace(0.0, 1.0, 121)[:, None]
+    a = np.array([0.0, 0.0]) + t * np.array([10.0, 0.0])       # west -> east
+    b = np.array([10.0, 0.3]) + t * np.array([-10.0, 0.0])     # east -> west, 0.3 m aside
+
+    def replan(index, discs):
+        assert index == 1 and discs
+        centres = np.array([d.mean(axis=0) for d in discs])
+        assert np.abs(centres[:, 1]).max() < 0.5   # the reserved stretch is on a's line
+        return b + np.array([0.0, 2.0])            # the re-plan goes 2 m round it
+
+    delays, conflicts, rerouted = crowd.keep_apart([a, b], replan, 1.0, 0.25, 30.0, 12, 6)
+    assert rerouted == [1] and conflicts == []
+    delays0, conflicts0 = crowd.stagger([a, b], 1.0, 12, 6)
+    assert conflicts0  # without re-routing the conflict stays
