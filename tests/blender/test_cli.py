@@ -231,7 +231,8 @@ def test_plan_saves_nla_and_analyse_reports_figures(cli, capsys, layout, tmp_pat
     assert doc["goal"]["x"] == pytest.approx(7.5) and doc["goal"]["heading_deg"] == pytest.approx(
         np.degrees(0.6))
     assert doc["frame_start"] == 1 and doc["frames"] == doc["frame_end"]
-    assert doc["pieces"][0] == "start" and doc["pieces"][-1] == "goal"
+    # The found path may be shortened down to one goal piece (one followed curve).
+    assert doc["pieces"][-1] == "goal" and doc["pieces"][0] in ("start", "goal")
     assert doc["length_m"] > np.hypot(7.1, 4.7) and doc["seconds_of_motion"] > 5
     assert doc["saved"] == str(out) and out.is_file()
 
