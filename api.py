@@ -18,8 +18,10 @@ import numpy as np
 
 from .adapter import actions as act_io
 from .adapter import evaluate, mocap, nla, props_io, scene as scene_io, storage
+from .adapter import rig as rig_io
 from .motion_patches import (blocking, causes, contacts, crowd, foot_lock, layout_spec,
                              metrics, object_patch, validate)
+from .motion_patches import scene_rate
 from .motion_patches.environment import Obstacle
 from .motion_patches.gait import build_gait
 from .motion_patches.locomotion_patch import bake
@@ -169,14 +171,16 @@ def import_patch(scene, path, name=None):
         raise MotionPatchesError(f"{path}: {exc}") from None
 
 
-def object_patches(scene, depsgraph, patch):
-    """Core object patches of every tagged prop in the scene."""
+def object_patches(scene, depsgraph, patch, scale=1.0):
+    """Core object patches of every tagged prop in the scene (``scale``: the character's
+    size relative to the patch skeleton, :func:`_size`: props placed in the world the
+    planner sees, shrunk by it)."""
     out = []
     floor = patch.gait.floor()
     for obj in props_io.tagged(scene):
         try:
             out.append(props_io.object_patch(obj, depsgraph, patch.gait.skeleton, patch.gait.fps,
-                                             gait_floor=floor))
+                                             gait_floor=floor, scale=scale))
         except ValueError as exc:
             raise MotionPatchesError(str(exc)) from None
     return out
@@ -216,21 +220,77 @@ def path_length(ground):
 
 
 def _patch_for_planning(scene, patch_name):
+    """The stored patch to plan with. A scene at another frame rate than the patch's is
+    fine: strips play the patch's keys scaled in time (:mod:`motion_patches.scene_rate`)."""
     try:
-        patch = storage.load_patch(scene, patch_name)
+        return storage.load_patch(scene, patch_name)
     except ValueError as exc:
         raise MotionPatchesError(str(exc)) from None
-    if abs(patch.gait.fps - scene_fps(scene)) > 1e-3:
-        raise MotionPatchesError(f"the patch was baked at {patch.gait.fps:g} fps but the scene "
-                                 f"runs at {scene_fps(scene):g} fps; re-bake or change the scene rate")
-    return patch
 
 
 def _check_character(character, patch):
+    """The :class:`~motion_patches.retarget.RigMap` that puts the patch on the character
+    (None: it is the patch's own skeleton); :class:`MotionPatchesError` naming the patch
+    bones its armature cannot play."""
     try:
-        nla.check_rig(character, patch.gait.skeleton)
+        return nla.check_rig(character, patch.gait.skeleton, patch.gait.floor())
     except ValueError as exc:
         raise MotionPatchesError(str(exc)) from None
+
+
+def bone_map(scene, character, patch_name=None):
+    """{patch bone: bone of ``character`` that plays it ('' = none)}: what planning the
+    character with the patch uses (its stored bone map over the names' pairing).
+    :class:`MotionPatchesError` naming the patch bones that cannot be mapped."""
+    patch = _patch_for_planning(scene, patch_name)
+    rig = _check_character(character, patch)
+    names = patch.gait.skeleton.names
+    mapping = {n: n for n in names} if rig is None else rig.mapping
+    return {n: mapping.get(n, "") for n in names}
+
+
+def fill_bone_map(scene, character, patch_name=None):
+    """Store on ``character``'s armature a bone map listing every patch bone with the rig
+    bone the names give ('' where none), for an animator to correct; returns it. Works
+    even when the names leave the legs unmapped (that is what the map is for)."""
+    patch = _patch_for_planning(scene, patch_name)
+    if character is None or character.type != "ARMATURE":
+        raise MotionPatchesError("choose an armature")
+    try:
+        mapping = rig_io.guessed_map(character, patch.gait.skeleton)
+    except ValueError as exc:
+        raise MotionPatchesError(str(exc)) from None
+    rig_io.set_bone_map(character, mapping)
+    return mapping
+
+
+def set_bone_map(character, mapping):
+    """Store ``mapping`` ({patch bone: rig bone, '' = left out}) as the bone map of the
+    armature of ``character`` (shared by every object using that armature); an empty
+    mapping clears it (bones are then paired by their names)."""
+    if character is None or character.type != "ARMATURE":
+        raise MotionPatchesError("choose an armature")
+    bones = {b.name for b in character.data.bones}
+    wrong = [r for r in mapping.values() if r and r not in bones]
+    if wrong:
+        raise MotionPatchesError(f"armature '{character.name}' has no bones "
+                                 f"{', '.join(wrong[:6])}")
+    rig_io.set_bone_map(character, dict(mapping))
+
+
+def _size(rig):
+    """How much larger the character is than the patch's skeleton (its hip-height ratio).
+    The planner works in the world divided by it, where the patch's steps are the
+    character's; its motion is scaled back by :meth:`RigMap.motion`."""
+    return 1.0 if rig is None else float(rig.scale)
+
+
+def _shrunk(state, scale):
+    """A world (x, y, heading) in the planner's world of a character ``scale`` times the
+    patch skeleton's size (and back with ``1 / scale``)."""
+    state = np.array(state, float)
+    state[:2] /= scale
+    return state
 
 
 def _not_obstacles(objects):
@@ -256,12 +316,15 @@ def _goal(goal):
     return state
 
 
-def _endpoints(character, goal, start_prop, by_name, skel, goal_facing="exact"):
+def _endpoints(character, goal, start_prop, by_name, skel, goal_facing="exact", scale=1.0):
     """Start and goal states with the interaction clips that begin / end the path there;
-    ``goal_facing`` "any" leaves the goal heading free (NaN) unless a clip fixes it."""
+    ``goal_facing`` "any" leaves the goal heading free (NaN) unless a clip fixes it.
+    ``skel``: the character's own skeleton; the states are in the planner's world of a
+    character ``scale`` times the patch's size (:func:`_size`)."""
     if goal_facing not in ("exact", "any"):
         raise MotionPatchesError(f"goal facing must be 'exact' or 'any', not {goal_facing!r}")
-    start_state, goal_state = scene_io.character_state(character, skel), _goal(goal)
+    start_state = _shrunk(scene_io.character_state(character, skel), scale)
+    goal_state = _shrunk(_goal(goal), scale)
     if goal_facing == "any":
         goal_state = np.array([goal_state[0], goal_state[1], np.nan])
     start_ref = goal_ref = None
@@ -334,19 +397,38 @@ def _solve(planner, character, endpoints, explain=True):
     return with_interactions(plan, start_ref, goal_ref)
 
 
-def _write(scene, character, patch, patch_name, plan, motions, frame_start, env, radius,
-           lock=True):
-    """NLA strips and the plan record of one planned character (``motions``: its pieces'
-    synthesised motions, :func:`plan_motions`)."""
-    goal_state = np.asarray(plan.goal, float)  # the facing reached when any facing would do
-    skel = patch.gait.skeleton
-    world = concatenate(motions)
+def _placed(scene, patch, rig, motions):
+    """A plan's piece motions (:func:`plan_motions`) put on the character: (its pieces'
+    motions on its skeleton, at the patch's rate; the scene frames where the pieces start
+    and the last ends, from 0; the whole motion on the scene's frames). ``rig``: the
+    character's :class:`~motion_patches.retarget.RigMap` (None: the patch skeleton)."""
+    if rig is not None:
+        motions = [rig.motion(m) for m in motions]
+    patch_bounds, bounds = scene_rate.piece_bounds([m.frames for m in motions],
+                                                   scene_fps(scene) / patch.gait.fps)
+    world = scene_rate.at_scene_rate(concatenate(motions), patch_bounds, bounds)
+    return motions, bounds, world
+
+
+def _write(scene, character, patch, patch_name, plan, placed, frame_start, env, radius,
+           lock=True, rig=None):
+    """NLA strips and the plan record of one planned character (``placed``: its motion,
+    :func:`_placed`; ``env``: the planner's world, shrunk by the character's size)."""
+    scale = _size(rig)
+    goal_state = _shrunk(plan.goal, 1.0 / scale)  # the facing reached when any would do
+    skel = rig.target if rig is not None else patch.gait.skeleton
+    motions, bounds, world = placed
     locked = foot_lock.lock_feet(skel, world) if lock else None
     strips, stashed = nla.write_plan(bpy, character, patch, storage.patch_key(scene, patch_name),
-                                     plan, motions, world, frame_start, locked)
+                                     plan, motions, world, frame_start, locked, rig, bounds)
     wm = world.world_matrices(skel)
     foot = contacts.foot_joints(skel)
     frame_end = frame_start + world.frames - 1
+    if rig is not None:
+        plan.stats["retarget"] = rig.note()
+    if abs(scene_fps(scene) - patch.gait.fps) > 1e-3:
+        plan.stats["frame_rate"] = (f"patch baked at {patch.gait.fps:g} fps, played at the "
+                                    f"scene's {scene_fps(scene):g} fps (strips scaled)")
     _plan_store(character, {
         "ground": world.ground, "root": wm[:, skel.root, :3, 3], "contacts": world.contacts,
         "foot_names": [skel.names[i] for i in foot], "root_name": skel.names[skel.root],
@@ -355,7 +437,7 @@ def _write(scene, character, patch, patch_name, plan, motions, frame_start, env,
         "facing": nla.facing_angle(skel), "foot_lock": bool(lock),
         "traversals": [[s["start"], s["end"]] for s in strips if s["kind"] == "traversal"],
         "interactions": [[s["start"], s["end"]] for s in strips if s["kind"] == "interaction"],
-        "obstacles": {o.name: o.polygon.tolist() for o in env.obstacles.values()},
+        "obstacles": {o.name: (o.polygon * scale).tolist() for o in env.obstacles.values()},
     })
     return PlanResult(character.name, frame_start, frame_end, [p.label for p in plan.pieces],
                       plan.cost, plan.seconds, plan.expansions, strips, stashed, plan.stats,
@@ -380,7 +462,8 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
     context = context or bpy.context
     # Objects moved by a script have stale matrix_world until the view layer updates.
     context.view_layer.update()
-    _check_character(character, patch)
+    rig = _check_character(character, patch)
+    scale = _size(rig)
     if goal is None:
         raise MotionPatchesError("choose a goal object (its location and facing)")
     if goal == character:
@@ -388,18 +471,19 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
     depsgraph = context.evaluated_depsgraph_get()
     goal_obj = goal if isinstance(goal, bpy.types.Object) else None
     env = scene_io.environment(scene, depsgraph, patch, radius,
-                               _not_obstacles((character, goal_obj)))
-    props = object_patches(scene, depsgraph, patch)
+                               _not_obstacles((character, goal_obj)), scale)
+    props = object_patches(scene, depsgraph, patch, scale)
     by_name = {p.name: p for p in props}
-    ends = _endpoints(character, goal, start_prop, by_name, patch.gait.skeleton, goal_facing)
+    ends = _endpoints(character, goal, start_prop, by_name,
+                      rig.target if rig else patch.gait.skeleton, goal_facing, scale)
     _check_clear(env, character, ends, by_name)
     planner = SegmentPlanner(patch, env, alpha, beta, gamma, props=props, mode=stitching)
     plan = _solve(planner, character, ends)
     frame_start = scene.frame_current if frame_start is None else int(frame_start)
     motions = plan_motions(patch, plan)
     plan.stats["glitches"] = validate.count(validate.plan_glitches(patch, plan, motions))
-    return _write(scene, character, patch, patch_name, plan, motions, frame_start, env, radius,
-                  foot_lock)
+    return _write(scene, character, patch, patch_name, plan,
+                  _placed(scene, patch, rig, motions), frame_start, env, radius, foot_lock, rig)
 
 
 def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, radius=0.25,
@@ -427,9 +511,9 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
     spacing = 2 * radius if spacing is None else float(spacing)
     if not (0 <= spacing < np.inf and 0 <= max_wait_seconds < np.inf):
         raise MotionPatchesError("spacing and the longest wait must be numbers >= 0")
-    seen = set()
+    seen, rigs = set(), []
     for character, goal in pairs:
-        _check_character(character, patch)
+        rigs.append(_check_character(character, patch))
         if character.name in seen:
             raise MotionPatchesError(f"'{character.name}' appears twice in the crowd")
         seen.add(character.name)
@@ -441,22 +525,33 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
     depsgraph = context.evaluated_depsgraph_get()
     # Characters are not obstacles of the scene: they are kept apart in time, and only where
     # they stand still (goals of earlier ones, starts of later ones) in space. A goal object
-    # is no obstacle for its own character only.
-    env = scene_io.environment(scene, depsgraph, patch, radius,
-                               _not_obstacles([c for c, _ in pairs]))
-    props = object_patches(scene, depsgraph, patch)
-    by_name = {p.name: p for p in props}
-    ends = [_endpoints(c, g, None, by_name, patch.gait.skeleton, goal_facing) for c, g in pairs]
+    # is no obstacle for its own character only. Characters of another size than the patch
+    # skeleton (retargeted rigs) are planned in the world shrunk by their size, one
+    # environment and planner per size.
+    sizes, worlds = [_size(r) for r in rigs], {}
+
+    def world_of(size):
+        if size not in worlds:
+            env = scene_io.environment(scene, depsgraph, patch, radius,
+                                       _not_obstacles([c for c, _ in pairs]), size)
+            props = object_patches(scene, depsgraph, patch, size)
+            worlds[size] = [env, props, {p.name: p for p in props}, None]
+        return worlds[size]
+    ends = [_endpoints(c, g, None, world_of(sz)[2], r.target if r else patch.gait.skeleton,
+                       goal_facing, sz) for (c, g), r, sz in zip(pairs, rigs, sizes)]
     own_goal = [[o.name for o in _not_obstacles([g])] if isinstance(g, bpy.types.Object) else []
                 for _, g in pairs]
-    for (c, _), e, mine in zip(pairs, ends, own_goal):
-        with _without(env, mine):
-            _check_clear(env, c, e, by_name)
-    planner = SegmentPlanner(patch, env, alpha, beta, gamma, props=props, mode=stitching)
+    for (c, _), e, mine, sz in zip(pairs, ends, own_goal, sizes):
+        with _without(world_of(sz)[0], mine):
+            _check_clear(world_of(sz)[0], c, e, world_of(sz)[2])
+    for w in worlds.values():
+        w[3] = SegmentPlanner(patch, w[0], alpha, beta, gamma, props=w[1], mode=stitching)
+    world_ends = [(_shrunk(e[0], 1.0 / sz), _shrunk(e[1], 1.0 / sz)) for e, sz in zip(ends, sizes)]
     planned, failed = [], []
     for n, ((character, _), e) in enumerate(zip(pairs, ends)):
-        spots = [Obstacle(f"{CROWD_SPOT}{pairs[m][0].name}", polygon) for m, polygon in
-                 crowd.standing_spots([(x[0], x[1]) for x in ends], n, spacing, radius)]
+        env, _, _, planner = world_of(sizes[n])
+        spots = [Obstacle(f"{CROWD_SPOT}{pairs[m][0].name}", polygon / sizes[n]) for m, polygon
+                 in crowd.standing_spots(world_ends, n, spacing, radius)]
         try:
             with _without(env, own_goal[n]):
                 for spot in spots:  # where the others stand still while this one walks
@@ -479,16 +574,18 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
         if progress is not None:
             progress(0.9 * (n + 1) / len(pairs))
     fps = scene_fps(scene)
-    motions = [plan_motions(patch, plan) for _, plan in planned]  # synthesised once
-    tracks = [concatenate(m).ground for m in motions]
+    placed = [_placed(scene, patch, rigs[n], plan_motions(patch, plan))  # synthesised once
+              for n, plan in planned]
+    tracks = [p[2].ground for p in placed]  # on the scene's frames
     delays, conflicts = crowd.stagger(tracks, spacing, round(max_wait_seconds * fps),
                                       max(1, round(0.2 * fps)))
     first = scene.frame_current if frame_start is None else int(frame_start)
     plans = []
-    for (n, plan), m, d in zip(planned, motions, delays):
+    for (n, plan), p, d in zip(planned, placed, delays):
+        env = world_of(sizes[n])[0]
         with _without(env, own_goal[n]):  # the plan record lists what it walked around
-            plans.append(_write(scene, pairs[n][0], patch, patch_name, plan, m, first + d,
-                                env, radius, foot_lock))
+            plans.append(_write(scene, pairs[n][0], patch, patch_name, plan, p, first + d,
+                                env, radius, foot_lock, rigs[n]))
     if progress is not None:
         progress(1.0)
     names = [pairs[n][0].name for n, _ in planned]
@@ -539,8 +636,9 @@ def analyse(context, character):
     }
 
 
-def _resolve(place, what, skel):
-    """(state, object or None) for an object name or [x, y, heading_deg]."""
+def _resolve(place, what, patch):
+    """(state, object or None) for an object name or [x, y, heading_deg]; a start that is
+    an armature starts where its own skeleton stands (it may be retargeted)."""
     if what == "exclude":
         ob = bpy.data.objects.get(place)
         if ob is None:
@@ -553,11 +651,8 @@ def _resolve(place, what, skel):
         raise MotionPatchesError(f"layout spec: no object named '{place}' for a {what} "
                                  f"(have: {_some_names(bpy.data.objects)})")
     if what == "start" and ob.type == "ARMATURE":
-        try:
-            nla.check_rig(ob, skel)
-        except ValueError as exc:
-            raise MotionPatchesError(str(exc)) from None
-        return scene_io.character_state(ob, skel), ob
+        rig = _check_character(ob, patch)
+        return scene_io.character_state(ob, rig.target if rig else patch.gait.skeleton), ob
     return scene_io.ground_state(ob), ob
 
 
@@ -576,7 +671,6 @@ def check_layout(scene, spec, context=None):
         patch = storage.load_patch(scene, spec["patch"])
     except ValueError as exc:
         raise MotionPatchesError(str(exc)) from None
-    skel = patch.gait.skeleton
     s = scene.motion_patches
     w = {k: float(getattr(s, k) if spec[k] is None else spec[k])
          for k in ("alpha", "beta", "gamma", "radius")}
@@ -587,26 +681,30 @@ def check_layout(scene, spec, context=None):
     depsgraph = (context or bpy.context).evaluated_depsgraph_get()
     jobs = []
     for p in spec["pairs"]:
-        start, sob = _resolve(p["start"], "start", skel)
-        goal, gob = _resolve(p["goal"], "goal", skel)
+        start, sob = _resolve(p["start"], "start", patch)
+        goal, gob = _resolve(p["goal"], "goal", patch)
+        # A retargeted character plans in the world shrunk by its size (see _size).
+        size = (_size(_check_character(sob, patch))
+                if sob is not None and sob.type == "ARMATURE" else 1.0)
         # Not obstacles: the start and goal objects with their children (a character's own
         # body mesh) and whatever the spec excludes.
         exclude = {}
-        for ob in [sob, gob] + [_resolve(n, "exclude", skel)[1]
+        for ob in [sob, gob] + [_resolve(n, "exclude", patch)[1]
                                 for n in spec["exclude"] + p["exclude"]]:
             if ob is not None:
                 for o in (ob, *ob.children_recursive):
                     exclude[o.name] = o
-        jobs.append((p, start, sob, goal, gob, exclude))
-    envs, results = {}, []
-    props = object_patches(scene, depsgraph, patch)  # tagged props offer traversals
-    for p, start, sob, goal, gob, exclude in jobs:
+        jobs.append((p, start, sob, goal, gob, exclude, size))
+    envs, results, props = {}, [], {}
+    for p, start, sob, goal, gob, exclude, size in jobs:
         allow = bool(p["limits"]["allow_traversal"])
-        key = (tuple(sorted(exclude)), allow)
+        key = (tuple(sorted(exclude)), allow, size)
         if key not in envs:
             env = scene_io.environment(scene, depsgraph, patch, w["radius"],
-                                       tuple(exclude.values()))
-            usable = [pr for pr in props if pr.name not in exclude] if allow else []
+                                       tuple(exclude.values()), size)
+            if size not in props:  # tagged props offer traversals
+                props[size] = object_patches(scene, depsgraph, patch, size)
+            usable = [pr for pr in props[size] if pr.name not in exclude] if allow else []
             try:
                 planner = SegmentPlanner(patch, env, w["alpha"], w["beta"], w["gamma"],
                                          props=usable)
@@ -622,6 +720,7 @@ def check_layout(scene, spec, context=None):
         r["goal_facing"] = p["goal_facing"]
         if p["goal_facing"] == "any":
             goal = np.array([goal[0], goal[1], np.nan])
+        start, goal = _shrunk(start, size), _shrunk(goal, size)
         try:
             plan = planner.plan(start, goal, margin_tiles=margin)
         except PlanError as exc:
@@ -629,10 +728,11 @@ def check_layout(scene, spec, context=None):
             r["blocked_by"], r["blocked_reason"] = blocking.blocking_props(env, start, goal, margin)
         else:
             world = concatenate(plan_motions(patch, plan))
-            r["goal"] = state_dict(plan.goal, gob and gob.name)
-            r.update(reachable=True, frames=int(world.frames),
-                     seconds=(world.frames - 1) / patch.gait.fps,
-                     length_m=path_length(world.ground), cost=float(plan.cost),
+            r["goal"] = state_dict(_shrunk(plan.goal, 1.0 / size), gob and gob.name)
+            seconds = (world.frames - 1) / patch.gait.fps
+            r.update(reachable=True, frames=int(round(seconds * scene_fps(scene))) + 1,
+                     seconds=seconds,
+                     length_m=path_length(world.ground) * size, cost=float(plan.cost),
                      pieces=len(plan.pieces), expansions=int(plan.expansions),
                      plan_seconds=float(plan.seconds),
                      traversals=sum(pc.kind == "traversal" for pc in plan.pieces))

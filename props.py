@@ -81,10 +81,29 @@ class MOTION_PATCHES_PG_object(bpy.types.PropertyGroup):
     active_clip_index: IntProperty(default=0)
 
 
+class MOTION_PATCHES_PG_bone_pair(bpy.types.PropertyGroup):
+    """One row of a character's bone map: which of its bones plays a patch bone."""
+    patch_bone: StringProperty(name="Patch Bone",
+                               description="Bone of the locomotion patch's skeleton")
+    rig_bone: StringProperty(name="Rig Bone",
+                             description="Bone of this armature that plays the patch bone "
+                                         "(empty: the patch bone is left out)")
+
+
 class MOTION_PATCHES_PG_character(bpy.types.PropertyGroup):
     goal: PointerProperty(type=bpy.types.Object, name="Own Goal",
                           description="Where this character walks to when a crowd is planned "
                                       "(empty: the scene's goal)")
+
+
+class MOTION_PATCHES_PG_rig(bpy.types.PropertyGroup):
+    """Stored on the armature data (``Armature.motion_patches_rig``), so every character
+    made from one rig shares it."""
+    bone_map: CollectionProperty(
+        type=MOTION_PATCHES_PG_bone_pair, name="Bone Map",
+        description="Which bone of this armature plays each bone of the patch skeleton; "
+                    "patch bones not listed are paired by their names (naming conventions)")
+    active_bone_index: IntProperty(default=0)
 
 
 class MOTION_PATCHES_PG_scene(bpy.types.PropertyGroup):
@@ -147,8 +166,8 @@ def preferences(context):
 
 
 classes = (MOTION_PATCHES_PG_patch, MOTION_PATCHES_PG_action_ref, MOTION_PATCHES_PG_patch_clip,
-           MOTION_PATCHES_PG_object, MOTION_PATCHES_PG_character, MOTION_PATCHES_PG_scene,
-           MOTION_PATCHES_AP_preferences)
+           MOTION_PATCHES_PG_object, MOTION_PATCHES_PG_bone_pair, MOTION_PATCHES_PG_rig,
+           MOTION_PATCHES_PG_character, MOTION_PATCHES_PG_scene, MOTION_PATCHES_AP_preferences)
 _register, _unregister = bpy.utils.register_classes_factory(classes)
 
 
@@ -157,9 +176,11 @@ def register():
     bpy.types.Scene.motion_patches = PointerProperty(type=MOTION_PATCHES_PG_scene)
     bpy.types.Object.motion_patch = PointerProperty(type=MOTION_PATCHES_PG_object)
     bpy.types.Object.motion_patches_character = PointerProperty(type=MOTION_PATCHES_PG_character)
+    bpy.types.Armature.motion_patches_rig = PointerProperty(type=MOTION_PATCHES_PG_rig)
 
 
 def unregister():
+    del bpy.types.Armature.motion_patches_rig
     del bpy.types.Object.motion_patches_character
     del bpy.types.Object.motion_patch
     del bpy.types.Scene.motion_patches

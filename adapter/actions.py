@@ -15,7 +15,7 @@ import re
 
 import numpy as np
 
-from ..motion_patches import quat
+from ..motion_patches import keys as key_plan, quat
 from ..motion_patches.clip import Clip
 from ..motion_patches.skeleton import Skeleton, root_location_to_position
 from . import compat
@@ -257,11 +257,25 @@ def rotation_channels(q, mode, first=None):
 
 
 LINEAR = 1  # Keyframe.interpolation enum value of 'LINEAR' (4.5 and 5.0)
+COMPACT = 1e-5  # tolerance of compact keys (metres, radians, quaternion components)
 
 
-def key_curve(action, slot, data_path, index, frames, values, group=None):
-    """Create one F-curve keyed at ``frames`` with ``values`` in one bulk write."""
+def key_curve(action, slot, data_path, index, frames, values, group=None, tol=None):
+    """Create one F-curve keyed at ``frames`` with ``values`` in one bulk write.
+
+    With ``tol`` the curve is stored compactly (:mod:`motion_patches.keys`): one key when
+    constant, linear keys on the frames that need them, or, when those would cost more,
+    one sample per frame (``convert_to_samples``: 16 bytes a frame in the .blend instead
+    of a keyframe's 72; it plays the same values, linear between frames)."""
     fc = compat.new_fcurve(action, slot, data_path, index, group)
+    frames, values = np.asarray(frames, float), np.asarray(values, float)
+    how, kept = ("all", None) if tol is None else key_plan.plan(values, tol)
+    if how == "samples" and not (np.all(np.diff(frames) == 1.0) and frames[0] == int(frames[0])):
+        how = "all"  # samples sit on whole frames, one apart
+    if how == "constant":
+        frames, values = frames[:1], values[:1]
+    elif how == "keys":
+        frames, values = frames[kept], values[kept]
     n = len(frames)
     fc.keyframe_points.add(n)
     co = np.empty(2 * n)
@@ -270,19 +284,31 @@ def key_curve(action, slot, data_path, index, frames, values, group=None):
     fc.keyframe_points.foreach_set("co", co)
     fc.keyframe_points.foreach_set("interpolation", np.full(n, LINEAR, dtype=np.int32))
     fc.update()
+    if how == "samples":
+        fc.convert_to_samples(int(frames[0]), int(frames[-1]) + 1)
     return fc
 
 
-def key_pose(action, slot, skel, frames, root_location, rotations, modes=None):
+def curve_points(fc):
+    """(N, 2) frames and values of an F-curve's keys, or of its samples when it was
+    converted to samples (:func:`key_curve` with ``tol``)."""
+    points = fc.keyframe_points if len(fc.keyframe_points) else fc.sampled_points
+    co = np.empty(2 * len(points))
+    points.foreach_get("co", co)
+    return co.reshape(-1, 2)
+
+
+def key_pose(action, slot, skel, frames, root_location, rotations, modes=None, tol=None):
     """Key the root bone's location and every bone's rotation in the channel its rotation
     mode plays: ``modes`` is {bone name: rotation_mode}, quaternion for bones not in it.
     Quaternion channels are keyed as given (the caller makes them continuous); Euler and
-    axis-angle ones are converted continuous over ``frames`` (:func:`rotation_channels`)."""
+    axis-angle ones are converted continuous over ``frames`` (:func:`rotation_channels`).
+    ``tol``: store the curves compactly (:func:`key_curve`)."""
     modes = modes or {}
     root = skel.names[skel.root]
     for i in range(3):
         key_curve(action, slot, f'pose.bones["{root}"].location', i, frames,
-                  root_location[:, i], group=root)
+                  root_location[:, i], group=root, tol=tol)
     by_mode = {}
     for j, name in enumerate(skel.names):
         by_mode.setdefault(modes.get(name, "QUATERNION"), []).append(j)
@@ -294,20 +320,17 @@ def key_pose(action, slot, skel, frames, root_location, rotations, modes=None):
             name = skel.names[j]
             for i in range(values.shape[-1]):
                 key_curve(action, slot, f'pose.bones["{name}"].{path}', i, frames,
-                          values[:, c, i], group=name)
+                          values[:, c, i], group=name, tol=tol)
 
 
 def read_channels(action, slot, bone, mode, frames):
     """Values (F, 3 or 4) an action gives a bone's ``mode`` channel at (action) ``frames``,
-    linear between keys, the rest value where the channel is not keyed."""
+    linear between keys (or samples), the rest value where the channel is not keyed."""
     path = f'pose.bones["{bone}"].{rotation_path(mode)}'
     rest = rest_channels(mode)
     out = np.tile(rest, (len(frames), 1))
     for fc in compat.fcurves(action, slot):
         if fc.data_path == path and fc.array_index < rest.size:
-            n = len(fc.keyframe_points)
-            co = np.empty(2 * n)
-            fc.keyframe_points.foreach_get("co", co)
-            co = co.reshape(n, 2)
+            co = curve_points(fc)
             out[:, fc.array_index] = np.interp(frames, co[:, 0], co[:, 1])
     return out

@@ -1,8 +1,11 @@
 """Importing motion capture through Blender's bundled BVH importer.
 
-Every file becomes one action on a single armature (the first file's), in metres, with
-keys scaled to the scene frame rate. The importer makes an armature per file; the extra
-ones are ours and are removed once their action is moved across.
+Every file becomes one action on a single armature (the first file's, or the one given),
+in metres, with keys scaled to the scene frame rate. The importer makes an armature per
+file; the extra ones are ours and are removed once their action is moved across. A file
+whose skeleton is not the armature's (another subject: other bone lengths; another naming
+convention: 3ds Max, Mixamo, Rigify...) is retargeted onto it by
+:mod:`motion_patches.retarget`, the rule planning uses too.
 """
 
 from pathlib import Path
@@ -17,7 +20,7 @@ def import_bvh(paths, scale=CMU_SCALE, armature=None, name=None):
     """Import BVH files as actions on one armature; returns (armature object, actions).
 
     Raises ValueError naming the file when a file is missing or the importer fails, or when
-    its joints do not match the armature's bones.
+    its joints cannot be mapped onto the armature's bones (naming the joints).
     """
     paths = [Path(p) for p in paths]
     if not paths:
@@ -50,15 +53,18 @@ def import_bvh(paths, scale=CMU_SCALE, armature=None, name=None):
                 ob.name = name
                 ob.data.name = name
         else:
-            missing = set(b.name for b in ob.data.bones) ^ set(b.name for b in armature.data.bones)
-            if not missing and _same_rest(ob, armature) is False:
-                act = _retargeted(act, ob, armature, p)
-            data = ob.data
-            bpy.data.objects.remove(ob)
-            bpy.data.armatures.remove(data)
-            if missing:
-                raise ValueError(f"{p.name} has joints {sorted(missing)[:5]} that do not match "
-                                 f"armature '{armature.name}'; import it on its own armature")
+            same_names = {b.name for b in ob.data.bones} == {b.name for b in armature.data.bones}
+            try:
+                if not (same_names and _same_rest(ob, armature)):
+                    act = _retargeted(act, ob, armature, p)
+            except ValueError as exc:
+                bpy.data.actions.remove(act)
+                raise ValueError(f"{p.name} cannot go on armature '{armature.name}': {exc}; "
+                                 f"import it on its own armature") from None
+            finally:
+                data = ob.data
+                bpy.data.objects.remove(ob)
+                bpy.data.armatures.remove(data)
         actions.append(act)
     return armature, actions
 
@@ -73,24 +79,31 @@ def _same_rest(a, b, tol=1e-3):
 
 
 def _retargeted(action, source_obj, target_obj, path):
-    """Another subject's clip (same joint names, other bone lengths) moved onto the target
-    rig: rotations kept relative to each bone's rest, root motion scaled by hip height."""
+    """Another skeleton's clip (another subject, or other joint names) moved onto the
+    target rig by :func:`motion_patches.retarget.rig_map` (the target's stored bone map
+    applies): rotations kept relative to each bone's rest, root motion scaled by hip
+    height. ValueError naming the joints that cannot be mapped."""
     import numpy as np
-    from ..motion_patches.clip import retarget
+    from ..motion_patches.retarget import rig_map
     from ..motion_patches.skeleton import root_position_to_location
-    from . import actions as act_io, compat
+    from . import actions as act_io, compat, rig as rig_io
     fps = bpy.context.scene.render.fps / bpy.context.scene.render.fps_base
     src = act_io.clip_from_action(action, source_obj, fps)
     target = act_io.skeleton_of(target_obj)
-    clip = retarget(src, target)
+    stored = {s: t for s, t in rig_io.bone_map(target_obj).items() if s in src.skeleton.names}
+    rm = rig_map(src.skeleton, target, stored, label="clip")
+    clip = rm.clip(src)
+    skel = rm.target
     name = action.name
     action.name = name + " (subject skeleton)"
     new, slot = compat.new_action(name)
     frames = np.arange(clip.frames) * (fps / clip.fps) + 1.0
-    act_io.key_pose(new, slot, target, frames, root_position_to_location(target, clip.root_pos),
-                    clip.rotations)
+    modes = {pb.name: pb.rotation_mode for pb in target_obj.pose.bones}
+    act_io.key_pose(new, slot, skel, frames, root_position_to_location(skel, clip.root_pos),
+                    clip.rotations, modes)
     new[SOURCE_KEY] = str(path.name)
-    new["motion_patches_retargeted"] = f"from the skeleton of {path.name}, root scaled by hip height"
+    new["motion_patches_retargeted"] = (f"from the skeleton of {path.name}, root scaled by "
+                                        f"hip height: {rm.note()}")
     new.use_fake_user = True
     action.use_fake_user = False
     bpy.data.actions.remove(action)

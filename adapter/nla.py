@@ -20,6 +20,7 @@ from ..motion_patches.inplace import rest_facing, to_inplace, to_world
 from ..motion_patches.skeleton import root_position_to_location
 from . import actions as act_io
 from . import compat
+from . import rig as rig_io
 
 TRACK_PREFIX = "MP "
 TRACK_MOTION = TRACK_PREFIX + "motion"
@@ -49,14 +50,13 @@ def inplace_channels(skel, motion):
     return root_position_to_location(skel, local), rot_ip
 
 
-def check_rig(obj, skel):
+def check_rig(obj, skel, floor=0.0):
+    """The :class:`~motion_patches.retarget.RigMap` that puts the patch skeleton ``skel``
+    on the armature ``obj`` (None: the armature holds that skeleton itself). Raises
+    ValueError for an object that is no armature, is scaled or tilted, or whose bones
+    cannot play the patch's hips, legs, feet and toes (naming those patch bones)."""
     if obj is None or obj.type != "ARMATURE":
         raise ValueError("the character must be an armature object")
-    names = {b.name for b in obj.data.bones}
-    missing = [n for n in skel.names if n not in names]
-    if missing:
-        raise ValueError(f"armature '{obj.name}' lacks bones of the patch skeleton: "
-                         f"{', '.join(missing[:6])}")
     if not np.allclose(np.array(obj.scale), 1.0, atol=1e-4):
         raise ValueError(f"armature '{obj.name}' is scaled {tuple(round(s, 3) for s in obj.scale)}; "
                          f"apply its scale first (the patch is in metres)")
@@ -64,6 +64,7 @@ def check_rig(obj, skel):
     if abs(m[2, 2] - 1.0) > 1e-6:
         raise ValueError(f"armature '{obj.name}' is tilted (X/Y rotation); the planned root "
                          f"turns about Z only")
+    return rig_io.rig_for(obj, skel, floor)
 
 
 def remove_owned(obj):
@@ -117,26 +118,36 @@ def rotation_signature(skel, modes):
     return "mixed-" + hashlib.sha1(text.encode()).hexdigest()[:10]
 
 
-def segment_action(bpy, patch, patch_key, seg, skel, modes=None):
+def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None):
     """The shared in-place action of a patch segment for a rig whose bones have rotation
-    ``modes`` ({bone: rotation_mode}; default all quaternion), created on first use.
+    ``modes`` ({bone: rotation_mode}; default all quaternion), created on first use;
+    ``rig`` (a :class:`~motion_patches.retarget.RigMap`) when the rig is another skeleton
+    than the patch's, ``skel`` then being the rig's.
 
-    Shared actions are keyed by patch, segment *and* a signature of the rig's per-bone
-    rotation modes (:func:`rotation_signature`), not made to hold every channel set a rig
-    could need: an action has one ``rotation_euler`` F-curve per bone and axis, so Euler
-    angles can be stored in one order only (the six orders give six different values for
-    the same rotation), and writing the quaternion, Euler and axis-angle channels of every
-    bone would triple the keys of every segment for channels most rigs never play. Rigs
-    whose bones have the same modes (every character copied from one rig, every rig from
-    one importer) still share one action per segment; an all-quaternion rig uses the
-    original key ``patch:seg``, so segment actions of earlier saved files are reused."""
+    Shared actions are keyed by patch, segment, the rig's skeleton (:meth:`RigMap.signature
+    <motion_patches.retarget.RigMap.signature>`: retargeted keys differ per skeleton) *and*
+    a signature of the rig's per-bone rotation modes (:func:`rotation_signature`), not
+    made to hold every channel set a rig could need: an action has one ``rotation_euler``
+    F-curve per bone and axis, so Euler angles can be stored in one order only (the six
+    orders give six different values for the same rotation), and writing the quaternion,
+    Euler and axis-angle channels of every bone would triple the keys of every segment for
+    channels most rigs never play. Rigs of one skeleton whose bones have the same modes
+    (every character copied from one rig, every rig from one importer) still share one
+    action per segment; the patch's own skeleton in all-quaternion mode uses the original
+    key ``patch:seg``, so segment actions of earlier saved files are reused. Keys sit on
+    the patch's frames whatever the scene's rate (strips are scaled, :func:`write_plan`)."""
     sig = rotation_signature(skel, modes or {})
-    key = f"{patch_key}:{seg}" + (f":{sig}" if sig else "")
+    rig_sig = rig.signature() if rig is not None else ""
+    key = (f"{patch_key}:{seg}" + (f":rig-{rig_sig}" if rig_sig else "")
+           + (f":{sig}" if sig else ""))
     for a in bpy.data.actions:
         if a.get(SEGMENT_KEY) == key:
             return a, compat.action_slot(a)
     motion = patch.motion(seg)
-    name = f"MP {patch.layer} seg{seg:04d}" + (f" {sig}" if sig else "")
+    if rig is not None:
+        motion = rig.motion(motion)
+    name = (f"MP {patch.layer} seg{seg:04d}" + (f" rig-{rig_sig[:6]}" if rig_sig else "")
+            + (f" {sig}" if sig else ""))
     return _inplace_action(name, skel, motion, {SEGMENT_KEY: key}, modes)
 
 
@@ -146,19 +157,31 @@ def _inplace_action(name, skel, motion, tags, modes=None):
     for k, v in tags.items():
         action[k] = v
     frames = np.arange(motion.frames, dtype=float)
-    act_io.key_pose(action, slot, skel, frames, loc, quat.make_continuous(rot, axis=0), modes)
+    act_io.key_pose(action, slot, skel, frames, loc, quat.make_continuous(rot, axis=0), modes,
+                    tol=act_io.COMPACT)
     return action, slot
 
 
-def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start, locked=None):
+def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start, locked=None,
+               rig=None, bounds=None):
     """Write a plan's strips and root trajectory on ``obj``; returns strip records.
 
+    ``motions``: each piece's motion at the patch's frame rate, on the rig's skeleton (put
+    there by ``rig``, a :class:`~motion_patches.retarget.RigMap`, when the rig is another
+    skeleton; None: the patch's). ``bounds``: the scene frames (offsets from
+    ``frame_start``, P + 1 integers) where the pieces start and the last one ends; default
+    the patch's own frames. When the scene runs at another rate than the patch, piece ``i``
+    plays its patch-rate keys with strip scale ``(bounds[i+1] - bounds[i]) / (frames - 1)``
+    (:mod:`motion_patches.scene_rate`). ``world``: the whole motion on the scene's frames
+    (``bounds[-1] + 1`` of them), which the per-character root trajectory is keyed from.
     ``locked``: rotation channels (F, J, 4) of ``world`` with the feet pinned
     (:func:`motion_patches.foot_lock.lock_feet`); the difference is written as a
     per-character correction on its own track, combined over the shared segment actions."""
-    skel = patch.gait.skeleton
-    check_rig(obj, skel)
+    skel = rig.target if rig is not None else patch.gait.skeleton
     modes = rig_rotation_modes(obj, skel)
+    if bounds is None:
+        bounds = np.concatenate(([0], np.cumsum([m.frames - 1 for m in motions])))
+    bounds = np.asarray(bounds, int)
     ad = obj.animation_data or obj.animation_data_create()
     stashed = stash_active_action(obj)
     remove_owned(obj)
@@ -166,22 +189,27 @@ def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start, lo
 
     motion_track = ad.nla_tracks.new()
     motion_track.name = TRACK_MOTION
-    strips, frame, played = [], int(frame_start), []
+    strips, played = [], []
+    first = int(frame_start)
     for n, (piece, m) in enumerate(zip(plan.pieces, motions)):
         if piece.kind == "segment":
-            action, slot = segment_action(bpy, patch, patch_key, piece.segment, skel, modes)
+            action, slot = segment_action(bpy, patch, patch_key, piece.segment, skel, modes,
+                                          rig)
         else:
             action, slot = _inplace_action(f"MP {obj.name} {piece.kind}", skel, m,
                                            {CHARACTER_KEY: obj.name}, modes)
-        played.append((action, slot, frame - int(frame_start), m.frames))
-        strip = motion_track.strips.new(f"{n:02d} {piece.label}", frame, action)
+        start, end = first + int(bounds[n]), first + int(bounds[n + 1])
+        scale = (end - start) / float(m.frames - 1)
+        played.append((action, slot, int(bounds[n]), end - start + 1, scale))
+        strip = motion_track.strips.new(f"{n:02d} {piece.label}", start, action)
         compat.set_strip_slot(strip, slot)
+        if abs(scale - 1.0) > 1e-9:
+            strip.scale = scale
         strip.extrapolation = "HOLD" if n == 0 else (
             "HOLD_FORWARD" if n == len(plan.pieces) - 1 else "NOTHING")
         strip.blend_in = strip.blend_out = 0.0
-        strips.append({"name": strip.name, "start": frame, "end": frame + m.frames - 1,
+        strips.append({"name": strip.name, "start": start, "end": end,
                        "action": action.name, "kind": piece.kind})
-        frame += m.frames - 1
 
     root_action, root_slot = compat.new_action(f"MP {obj.name} root")
     root_action[CHARACTER_KEY] = obj.name
@@ -189,7 +217,8 @@ def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start, lo
     frames = np.arange(world.frames, dtype=float)
     z0 = float(obj.location[2])
     for i, v in enumerate((world.ground[:, 0], world.ground[:, 1], np.full(world.frames, z0))):
-        act_io.key_curve(root_action, root_slot, "location", i, frames, v, group="Object Transforms")
+        act_io.key_curve(root_action, root_slot, "location", i, frames, v,
+                         group="Object Transforms", tol=act_io.COMPACT)
     # A turn about Z only: (0, 0, heading) is that turn in every Euler order, (heading, +Z)
     # in axis-angle; the heading is unwrapped, so no channel jumps by a turn.
     zero = np.zeros(world.frames)
@@ -202,10 +231,10 @@ def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start, lo
         rot_path, rot_values = "rotation_euler", (zero, zero, heading)
     for i, v in enumerate(rot_values):
         act_io.key_curve(root_action, root_slot, rot_path, i, frames, v,
-                         group="Object Transforms")
+                         group="Object Transforms", tol=act_io.COMPACT)
     root_track = ad.nla_tracks.new()
     root_track.name = TRACK_ROOT
-    rs = root_track.strips.new(f"{obj.name} root", int(frame_start), root_action)
+    rs = root_track.strips.new(f"{obj.name} root", first, root_action)
     compat.set_strip_slot(rs, root_slot)
     rs.extrapolation = "HOLD"
     rs.blend_in = rs.blend_out = 0.0
@@ -219,15 +248,16 @@ def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start, lo
 
 def _lower_channels(played, bone, mode, n_frames):
     """What the motion track gives a bone's ``mode`` channel on each plan frame, read from
-    the keys of its strips' actions: ``played`` = [(action, slot, first plan frame, frames)]
-    in track order; where two strips meet on a frame the earlier one plays (Blender takes
-    the first strip whose range holds the frame)."""
+    the keys of its strips' actions: ``played`` = [(action, slot, first plan frame, scene
+    frames it spans, strip scale)] in track order; where two strips meet on a frame the
+    earlier one plays (Blender takes the first strip whose range holds the frame). A
+    scaled strip plays action frame ``(frame - start) / scale``, between keys linearly."""
     out = np.tile(act_io.rest_channels(mode), (n_frames, 1))
     done = np.zeros(n_frames, bool)
-    for action, slot, start, frames in played:
+    for action, slot, start, frames, scale in played:
         idx = np.arange(start, min(start + frames, n_frames))
         idx = idx[~done[idx]]
-        out[idx] = act_io.read_channels(action, slot, bone, mode, (idx - start).astype(float))
+        out[idx] = act_io.read_channels(action, slot, bone, mode, (idx - start) / scale)
         done[idx] = True
     return out
 
@@ -271,7 +301,8 @@ def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=(
             delta = act_io.closest_channels(locked[:, j], mode, lower) - lower
         path = f'pose.bones["{name}"].{act_io.rotation_path(mode)}'
         for i in range(delta.shape[1]):
-            act_io.key_curve(action, slot, path, i, frames, delta[:, i], group=name)
+            act_io.key_curve(action, slot, path, i, frames, delta[:, i], group=name,
+                             tol=act_io.COMPACT)
     track = obj.animation_data.nla_tracks.new()
     track.name = TRACK_FOOT
     strip = track.strips.new(f"{obj.name} foot lock", int(frame_start), action)

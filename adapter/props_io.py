@@ -46,10 +46,13 @@ def footprint(obj, depsgraph):
     return hull
 
 
-def object_patch(obj, depsgraph, skeleton, fps, gait_floor=None):
+def object_patch(obj, depsgraph, skeleton, fps, gait_floor=None, scale=1.0):
     """The core ObjectPatch of a tagged object (clips read and copied around it); clips
-    are put down on the walk's floor (``gait_floor``) when given."""
-    patch = op.ObjectPatch(obj.name, footprint(obj, depsgraph), pose=prop_pose(obj))
+    are put down on the walk's floor (``gait_floor``) when given. ``scale``: as
+    :func:`adapter.scene.environment`'s, the prop placed in the world shrunk by it."""
+    x, y, h = prop_pose(obj)
+    patch = op.ObjectPatch(obj.name, footprint(obj, depsgraph) / scale,
+                           pose=(x / scale, y / scale, h))
     for item in obj.motion_patch.clips:
         if item.action is None:
             raise ValueError(f"object patch '{obj.name}' has a clip without an action")

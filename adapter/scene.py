@@ -46,10 +46,14 @@ def obstacles(scene, depsgraph, exclude=()):
     return out
 
 
-def environment(scene, depsgraph, patch, radius, exclude=()):
-    env = Environment(patch.side, patch.cells, radius)
+def environment(scene, depsgraph, patch, radius, exclude=(), scale=1.0):
+    """The scene's obstacles on the patch's tile grid. ``scale``: the character's size
+    relative to the patch's skeleton (a retargeted rig's hip-height ratio); the planner
+    then works in a world shrunk by it (footprints and radius divided by ``scale``), where
+    the patch's steps are the character's steps."""
+    env = Environment(patch.side, patch.cells, radius / scale)
     for ob in obstacles(scene, depsgraph, exclude):
-        env.place(ob)
+        env.place(Obstacle(ob.name, ob.polygon / scale) if scale != 1.0 else ob)
     return env
 
 

@@ -106,28 +106,15 @@ def mirror(clip, name=None):
 
 
 def retarget(clip, target, scale=None, name=None):
-    """The clip on another skeleton with the same bone names (another subject).
+    """The clip on another skeleton (another subject, or another naming convention).
 
-    Each bone keeps its armature-space rotation *relative to its rest orientation*, so
-    differing rest orientations (Blender rolls bones by their offsets) do not twist the
-    pose; the root's motion is scaled by ``scale`` (default: the ratio of the skeletons'
-    root heights in their rest poses, i.e. standing hip heights for BVH rigs).
-    """
-    src = clip.skeleton
-    if sorted(src.names) != sorted(target.names):
-        missing = sorted(set(src.names) ^ set(target.names))
-        raise ValueError(f"cannot retarget '{clip.name}': bones differ ({', '.join(missing[:5])})")
-    if scale is None:
-        def hip_height(sk):
-            return float(sk.rest[sk.root, 2, 3] - sk.rest[:, 2, 3].min())
-        scale = hip_height(target) / hip_height(src)
-    order = [src.names.index(n) for n in target.names]
-    g = clip.global_matrices()[:, order]
-    delta = g[..., :3, :3] @ np.swapaxes(src.rest[order, :3, :3], -1, -2)[None]
-    new_global = delta @ target.rest[:, :3, :3][None]
-    from .skeleton import local_rotations_from_global
-    rot = local_rotations_from_global(target, new_global)
-    pos = clip.root_pos * scale
-    tags = dict(clip.tags)
-    tags["retargeted_from"] = clip.name
-    return Clip(name or clip.name, target, clip.fps, pos, rot, tags)
+    The rule and the bone pairing are :mod:`motion_patches.retarget`'s (one place for
+    clips, patches and plans): each bone keeps its armature-space rotation relative to its
+    (aligned) rest orientation; the root's motion is scaled by ``scale`` (default: the
+    ratio of the skeletons' standing hip heights). Raises ValueError when the skeletons
+    cannot be paired."""
+    from .retarget import rig_map
+    rm = rig_map(clip.skeleton, target)
+    if scale is not None:
+        rm.scale = float(scale)
+    return rm.clip(clip, name)

@@ -20,13 +20,25 @@ STRETCH = 0.985   # the straightest a locked leg gets, as a fraction of thigh + 
 
 
 def leg_chains(skel):
-    """[(hip, knee, ankle, toe) joint indices] per side, left then right."""
+    """[(hip, knee, ankle, toe) joint indices] per side, left then right. The knee is the
+    joint above the ankle and the hip the joint above the knee, skipping limb segments
+    (Rigify's ``DEF-shin.L.001`` under ``DEF-shin.L``)."""
+    from .retarget import segment_parent
     feet = foot_joints(skel)
     out = []
     for ankle, toe in ((feet[0], feet[1]), (feet[2], feet[3])):
-        knee = int(skel.parents[ankle])
-        hip = int(skel.parents[knee])
+        knee = segment_parent(skel, int(ankle))
+        hip = segment_parent(skel, knee)
         out.append((hip, knee, int(ankle), int(toe)))
+    return out
+
+
+def _segments(skel, lower, upper):
+    """Bones strictly between joint ``lower`` and its ancestor ``upper`` (limb segments)."""
+    out, j = [], int(skel.parents[lower])
+    while j >= 0 and j != upper:
+        out.append(j)
+        j = int(skel.parents[j])
     return out
 
 
@@ -157,10 +169,14 @@ def lock_feet(skel, world, blend=BLEND_FRAMES):
         r_shin = np.where(moving[:, None, None], r_shin, eye)
         g[:, hip] = r_thigh @ g[:, hip]
         g[:, knee] = r_shin @ g[:, knee]
+        for j in _segments(skel, knee, hip):  # limb segments turn with their limb
+            g[:, j] = r_thigh @ g[:, j]
+        for j in _segments(skel, ankle, knee):
+            g[:, j] = r_shin @ g[:, j]
         # the foot keeps its world rotation (g[:, ankle] unchanged); its children follow it
     local = local_rotations_from_global(skel, g)
     out = world.rotations.copy()
     for hip, knee, ankle, _ in leg_chains(skel):
-        for j in (hip, knee, ankle):
+        for j in (hip, knee, ankle, *_segments(skel, knee, hip), *_segments(skel, ankle, knee)):
             out[:, j] = local[:, j]
     return quat.make_continuous(out, axis=0)

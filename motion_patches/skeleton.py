@@ -7,7 +7,7 @@ transforms and mirrors without Blender, and lets a test compare against the deps
 """
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -19,6 +19,9 @@ class Skeleton:
     names: list          # bone names, parents before children
     parents: np.ndarray  # (J,) int, -1 for the root
     rest: np.ndarray     # (J, 4, 4) armature-space rest matrices
+    # Other names of bones: a rig a patch is retargeted onto answers to the names of the
+    # patch bones it plays ({patch bone name: index}, motion_patches.retarget).
+    aliases: dict = field(default_factory=dict, repr=False, compare=False)
 
     def index(self, name):
         return self.names.index(name)
@@ -28,11 +31,20 @@ class Skeleton:
         return int(np.flatnonzero(self.parents < 0)[0])
 
     def find(self, *candidates):
-        """Index of the first bone whose name is one of ``candidates`` (case-insensitive)."""
+        """Index of the first bone whose name (or alias) is one of ``candidates``
+        (case-insensitive); failing that, of a bone whose name is one of them after a
+        ``namespace:`` prefix (Mixamo's ``mixamorig:``) or a Rigify ``DEF-`` prefix."""
         lower = [n.lower() for n in self.names]
+        aliases = {k.lower(): v for k, v in self.aliases.items()}
         for c in candidates:
+            if c.lower() in aliases:
+                return int(aliases[c.lower()])
             if c.lower() in lower:
                 return lower.index(c.lower())
+        bare = [re.sub(r"^def-", "", n.rsplit(":", 1)[-1]) for n in lower]
+        for c in candidates:
+            if c.lower() in bare:
+                return bare.index(c.lower())
         raise KeyError(f"none of the bones {candidates} is in the skeleton")
 
     def local_rest(self):

@@ -116,5 +116,50 @@ class MOTION_PATCHES_OT_reset_planning(bpy.types.Operator):
         return {'FINISHED'}
 
 
+def _armature(context):
+    ob = context.active_object
+    return ob if ob is not None and ob.type == 'ARMATURE' else None
+
+
+class MOTION_PATCHES_OT_bone_map_fill(bpy.types.Operator):
+    """List every bone of the patch skeleton in the active armature's bone map with the
+    armature bone its name pairs it with, ready to be corrected"""
+    bl_idname = "motion_patches.bone_map_fill"
+    bl_label = "Fill From Names"
+    bl_options = {'REGISTER', 'UNDO'}
+
+    @classmethod
+    def poll(cls, context):
+        return _armature(context) is not None
+
+    def execute(self, context):
+        try:
+            mapping = api.fill_bone_map(context.scene, _armature(context))
+        except api.MotionPatchesError as exc:
+            self.report({'ERROR'}, str(exc))
+            return {'CANCELLED'}
+        left = [p for p, r in mapping.items() if not r]
+        self.report({'INFO'}, f"{len(mapping) - len(left)} of {len(mapping)} patch bones "
+                              f"paired" + (f"; none for {', '.join(left[:6])}" if left else ""))
+        return {'FINISHED'}
+
+
+class MOTION_PATCHES_OT_bone_map_clear(bpy.types.Operator):
+    """Clear the active armature's bone map: bones are paired by their names again"""
+    bl_idname = "motion_patches.bone_map_clear"
+    bl_label = "Clear Bone Map"
+    bl_options = {'REGISTER', 'UNDO'}
+
+    @classmethod
+    def poll(cls, context):
+        ob = _armature(context)
+        return ob is not None and len(ob.data.motion_patches_rig.bone_map) > 0
+
+    def execute(self, context):
+        api.set_bone_map(_armature(context), {})
+        return {'FINISHED'}
+
+
 classes = (MOTION_PATCHES_OT_plan_path, MOTION_PATCHES_OT_plan_crowd,
-           MOTION_PATCHES_OT_reset_planning)
+           MOTION_PATCHES_OT_reset_planning, MOTION_PATCHES_OT_bone_map_fill,
+           MOTION_PATCHES_OT_bone_map_clear)

@@ -1,5 +1,6 @@
 """Planning panel: the goal (the scene's, and the active character's own for crowds), the
-cost weights α β γ, radius and stitching, and the Plan Path / Plan Crowd buttons."""
+active armature's bone map (when it is another skeleton than the patch's), the cost weights
+α β γ, radius and stitching, and the Plan Path / Plan Crowd buttons."""
 
 import bpy
 
@@ -17,6 +18,7 @@ class MOTION_PATCHES_PT_planning(SidebarPanel, bpy.types.Panel):
         ob = context.active_object
         if ob is not None and ob.type == 'ARMATURE':
             layout.prop(ob.motion_patches_character, "goal", text=f"{ob.name}'s Goal")
+            draw_bone_map(layout, context, ob)
         col = layout.column(align=True)
         col.prop(s, "alpha")
         col.prop(s, "beta")
@@ -31,4 +33,43 @@ class MOTION_PATCHES_PT_planning(SidebarPanel, bpy.types.Panel):
         row.operator("motion_patches.plan_crowd", icon='COMMUNITY')
 
 
-classes = (MOTION_PATCHES_PT_planning,)
+class MOTION_PATCHES_UL_bone_map(bpy.types.UIList):
+    """Bone map rows: the patch bone, and the armature bone that plays it (editable)."""
+
+    def draw_item(self, context, layout, data, item, icon, active_data, active_propname,
+                  index=0):
+        row = layout.row(align=True)
+        row.label(text=item.patch_bone, icon='BONE_DATA')
+        arm = context.active_object
+        if arm is not None and arm.type == 'ARMATURE':
+            row.prop_search(item, "rig_bone", arm.data, "bones", text="")
+        else:
+            row.prop(item, "rig_bone", text="")
+
+
+def draw_bone_map(layout, context, ob):
+    """The active armature's bone map: whether it is the patch's own skeleton or is
+    retargeted (or cannot be, naming the bones), and, unless it is the patch's own, the
+    editable rows (patch bone -> armature bone) with Fill From Names / Clear."""
+    from .. import api
+    from ..adapter import nla, storage
+    rig_props = ob.data.motion_patches_rig
+    try:
+        patch = storage.load_patch(context.scene)
+        rig = nla.check_rig(ob, patch.gait.skeleton, patch.gait.floor())
+        text, icon = (("Bone map: the patch's own skeleton", 'CHECKMARK') if rig is None else
+                      (f"Bone map: retargeted, {len(rig.pairs)} bones, root x{rig.scale:.3f}",
+                       'ARMATURE_DATA'))
+    except (ValueError, api.MotionPatchesError) as exc:
+        rig, text, icon = False, str(exc), 'ERROR'
+    layout.label(text=text, icon=icon)
+    if rig is None and not len(rig_props.bone_map):
+        return
+    layout.template_list("MOTION_PATCHES_UL_bone_map", "", rig_props, "bone_map",
+                         rig_props, "active_bone_index", rows=3)
+    row = layout.row(align=True)
+    row.operator("motion_patches.bone_map_fill", icon='FILE_REFRESH')
+    row.operator("motion_patches.bone_map_clear", icon='X', text="Clear")
+
+
+classes = (MOTION_PATCHES_PT_planning, MOTION_PATCHES_UL_bone_map)

@@ -268,9 +268,10 @@ def planned(request, baked, addon_module, mocap_dir):
     written = {}
     write_plan = nla.write_plan
 
-    def spy(bpy_, obj, patch, key, plan, motions, world, frame_start, locked=None):
+    def spy(bpy_, obj, patch, key, plan, motions, world, frame_start, locked=None, *more):
         written[obj.name] = (patch.gait.skeleton, world, locked)
-        return write_plan(bpy_, obj, patch, key, plan, motions, world, frame_start, locked)
+        return write_plan(bpy_, obj, patch, key, plan, motions, world, frame_start, locked,
+                          *more)
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(nla, "write_plan", spy)
         results = {r.name: api.plan_path(scene, r, goal, frame_start=1,

@@ -1,0 +1,78 @@
+"""Characters on another skeleton than the patch's: the bone map stored on the armature and
+the :class:`~motion_patches.retarget.RigMap` of a character, the glue every writer uses.
+
+The bone map is a property group on the armature *data*, ``Armature.motion_patches_rig``
+(``bone_map``: rows of ``patch_bone`` -> ``rig_bone``), so every character made from one rig
+shares it. It only overrides: patch bones it does not list are paired by their names
+(:func:`motion_patches.retarget.rig_map`). A row with an empty ``rig_bone`` leaves that
+patch bone out. Users edit it in the sidebar (Motion Patches > Planning > Bone Map: *Fill
+From Names* lists every patch bone with the rig bone the names give, then any row can be
+changed), or from Python with :func:`set_bone_map`.
+"""
+
+import numpy as np
+
+from ..motion_patches.retarget import rig_map, same_skeleton
+from . import actions as act_io
+
+
+def bone_map(obj):
+    """{patch bone: rig bone ('' = left out)} stored on the armature ``obj``."""
+    rig = getattr(obj.data, "motion_patches_rig", None)
+    if rig is None:
+        return {}
+    return {row.patch_bone: row.rig_bone for row in rig.bone_map if row.patch_bone}
+
+
+def set_bone_map(obj, mapping):
+    """Replace the armature's stored bone map by ``mapping`` ({patch bone: rig bone})."""
+    rows = obj.data.motion_patches_rig.bone_map
+    rows.clear()
+    for patch_bone, rig_bone in mapping.items():
+        row = rows.add()
+        row.patch_bone, row.rig_bone = patch_bone, rig_bone or ""
+
+
+def _plays_itself(skel, rig_skel):
+    """Whether the rig holds the patch skeleton unchanged (every patch bone, its parent and
+    its rest matrix), extra bones allowed: then no retargeting is needed."""
+    index = {n: i for i, n in enumerate(rig_skel.names)}
+    if any(n not in index for n in skel.names):
+        return False
+    sub = [index[n] for n in skel.names]
+    parents = [rig_skel.names[rig_skel.parents[i]] if rig_skel.parents[i] >= 0 else None
+               for i in sub]
+    want = [skel.names[p] if p >= 0 else None for p in skel.parents]
+    return parents == want and np.allclose(rig_skel.rest[sub], skel.rest, atol=1e-4)
+
+
+def rig_for(obj, skel, floor=0.0):
+    """The RigMap that puts motion of skeleton ``skel`` on armature ``obj``, or None when
+    the armature holds that skeleton itself (and its bone map changes nothing). Raises
+    ValueError (a :class:`~motion_patches.retarget.RetargetError`) naming the patch bones
+    that cannot be mapped."""
+    own = act_io.skeleton_of(obj)
+    stored = {p: r for p, r in bone_map(obj).items() if p in skel.names}
+    if _plays_itself(skel, own) and all(r == p for p, r in stored.items()):
+        return None
+    try:
+        rm = rig_map(skel, own, stored, floor=floor)
+    except ValueError as exc:
+        raise type(exc)(f"armature '{obj.name}': {exc}") from None
+    if same_skeleton(rm.target, skel) and rm.mapping == {n: n for n in skel.names}:
+        return None
+    return rm
+
+
+def guessed_map(obj, skel):
+    """{patch bone: rig bone or ''} that the names give (no stored overrides), for filling
+    the bone map in the UI; ValueError when even the legs cannot be paired."""
+    own = act_io.skeleton_of(obj)
+    try:
+        mapping = rig_map(skel, own).mapping
+    except ValueError:
+        from ..motion_patches.retarget import roles
+        s_roles, t_roles = roles(skel)[1], roles(own)[1]
+        mapping = {skel.names[i]: own.names[t_roles[r]] for r, i in s_roles.items()
+                   if r in t_roles}
+    return {n: mapping.get(n, "") for n in skel.names}

@@ -1,0 +1,40 @@
+"""Playing a plan at the scene's frame rate when the patch was baked at another.
+
+A patch's motion lives on the patch's frames (its gait loops are sampled at the bake's
+rate). In a scene at another rate the pieces of a plan are not re-keyed: each piece's
+strip plays its patch-rate keys scaled in time, so the shared segment actions stay one
+per segment whatever the scene's rate, and a 24 fps patch in a 120 fps scene writes no
+more keys than in a 24 fps scene. Piece ``i`` starts on scene frame ``bounds[i]``, the
+patch's frame count up to it times the rate ratio, rounded: every strip starts and ends
+on a whole frame and its scale is within half a frame of the ratio. What is keyed per
+character on the scene's frames (the root trajectory, the foot lock) is the same motion
+read at the same fractional patch frames (:func:`at_scene_rate`), so body and root play
+in step.
+"""
+
+import numpy as np
+
+from .retime import resample
+
+
+def piece_bounds(frames, ratio):
+    """(patch bounds (P + 1,), scene bounds (P + 1,) ints) of pieces of ``frames`` frames
+    each (joined end to start) played ``ratio`` scene frames per patch frame."""
+    patch = np.concatenate(([0], np.cumsum([int(f) - 1 for f in frames])))
+    scene = np.round(patch * float(ratio)).astype(int)
+    for i in range(1, scene.size):  # a piece never shrinks to nothing
+        scene[i] = max(scene[i], scene[i - 1] + 1)
+    return patch, scene
+
+
+def scene_positions(patch_bounds, scene_bounds):
+    """Fractional patch frame (K,) shown on each scene frame 0 .. scene_bounds[-1]."""
+    return np.interp(np.arange(scene_bounds[-1] + 1), scene_bounds, patch_bounds)
+
+
+def at_scene_rate(motion, patch_bounds, scene_bounds):
+    """``motion`` (on the patch's frames) on the scene's frames: unchanged when they are
+    the same, else resampled at :func:`scene_positions`."""
+    if np.array_equal(patch_bounds, scene_bounds):
+        return motion
+    return resample(motion, scene_positions(patch_bounds, scene_bounds))
