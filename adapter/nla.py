@@ -199,7 +199,7 @@ def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start, lo
             action, slot = _inplace_action(f"MP {obj.name} {piece.kind}", skel, m,
                                            {CHARACTER_KEY: obj.name}, modes)
         start, end = first + int(bounds[n]), first + int(bounds[n + 1])
-        scale = (end - start) / float(m.frames - 1)
+        scale = (end - start) / float(max(m.frames - 1, 1))
         played.append((action, slot, int(bounds[n]), end - start + 1, scale))
         strip = motion_track.strips.new(f"{n:02d} {piece.label}", start, action)
         compat.set_strip_slot(strip, slot)

@@ -177,6 +177,15 @@ def test_the_3ds_max_rig_plays_its_own_bones_and_holds_its_arms_as_the_cmu_rig(p
     assert not any("LeftUpLeg" in p for p in paths)
 
 
+def test_the_layout_check_plans_a_retargeted_start_as_plan_path_does(planned, addon_module):
+    api = addon_module.api
+    res = planned["results"]["Max"]
+    bpy.context.scene.frame_set(1)  # the rig back where the plan started it
+    (check,) = api.check_layout(bpy.context.scene, {"pairs": [{"start": "Max", "goal": "Goal"}]})
+    assert check["reachable"] and check["pieces"] == len(res.pieces)
+    assert check["length_m"] == pytest.approx(res.length_m, rel=1e-3)
+
+
 def test_rigs_of_one_skeleton_share_retargeted_segment_actions(planned, addon_module):
     nla, storage = addon_module.adapter.nla, addon_module.adapter.storage
     scene = bpy.context.scene
