@@ -31,6 +31,7 @@ from .motion_patches.planner import (PlanError, SegmentPlanner, interaction_stat
 
 PLAN_KEY = "motion_patches_plan"
 CROWD_SPOT = "\x00crowd spot "  # obstacle names of other characters' standing spots
+CROWD_GHOST = "\x00crowd ghost "  # where another character walks when two would meet
 
 
 class MotionPatchesError(ValueError):
@@ -79,6 +80,7 @@ class CrowdResult:
     conflicts: list    # [{"a", "b", "frame", "distance_m"}] closer than two radii
     delays: dict       # character name -> frames it waits at its start
     seconds: float
+    rerouted: list = field(default_factory=list)  # names re-planned round others' stretches
 
 
 def scene_fps(scene):
@@ -498,8 +500,11 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
     the given order, each character waits at its start (whole 0.2 s steps, at
     most ``max_wait_seconds``) until it keeps ``spacing`` metres (default: two radii)
     from everyone before it at every frame, standing at the goal afterwards included
-    (:func:`motion_patches.crowd.stagger`). Closer approaches no wait clears are returned
-    as ``conflicts``. Bad input raises
+    (:func:`motion_patches.crowd.stagger`). Where no wait clears two characters, the later
+    one is re-planned round the stretch the earlier one walks around that frame (its
+    reserved stretch as obstacles, :func:`motion_patches.crowd.keep_apart`) and the crowd
+    is staggered again (at most three rounds); those are listed in ``rerouted``. Closer
+    approaches left are returned as ``conflicts``. Bad input raises
     :class:`MotionPatchesError` before anything is planned or written."""
     t0 = time.perf_counter()
     patch = _patch_for_planning(scene, patch_name)
@@ -547,38 +552,63 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
     for w in worlds.values():
         w[3] = SegmentPlanner(patch, w[0], alpha, beta, gamma, props=w[1], mode=stitching)
     world_ends = [(_shrunk(e[0], 1.0 / sz), _shrunk(e[1], 1.0 / sz)) for e, sz in zip(ends, sizes)]
-    planned, failed = [], []
-    for n, ((character, _), e) in enumerate(zip(pairs, ends)):
+    def solve_one(n, ghosts=()):
+        """Plan character n round the standing spots (dropped when they box it in) and,
+        when re-routing, round ``ghosts`` (world polygons; PathNotFound if they box it in)."""
+        character, e = pairs[n][0], ends[n]
         env, _, _, planner = world_of(sizes[n])
         spots = [Obstacle(f"{CROWD_SPOT}{pairs[m][0].name}", polygon / sizes[n]) for m, polygon
                  in crowd.standing_spots(world_ends, n, spacing, radius)]
-        try:
-            with _without(env, own_goal[n]):
-                for spot in spots:  # where the others stand still while this one walks
-                    env.place(spot)
+        own = np.array([e[0][:2], e[1][:2]], float)
+        extra = [Obstacle(f"{CROWD_GHOST}{k}", polygon / sizes[n]) for k, polygon in
+                 enumerate(ghosts)]
+        extra = [g for g in extra if not g.within(own, radius).any()]  # not on its own ends
+        with _without(env, own_goal[n]):
+            for ob in spots + extra:  # where the others stand still while this one walks
+                env.place(ob)
+            try:
                 try:
-                    try:
-                        plan = _solve(planner, character, e, explain=not spots)
-                    except PathNotFound:
-                        if not spots:
-                            raise
-                        for spot in spots:  # boxed in by the others: plan past them
-                            env.remove(spot.name)
-                        plan = _solve(planner, character, e)
-                finally:
-                    for spot in spots:
+                    return _solve(planner, character, e, explain=not (spots or extra))
+                except PathNotFound:
+                    if not spots or extra:
+                        raise
+                    for spot in spots:  # boxed in by the others: plan past them
                         env.remove(spot.name)
-            planned.append((n, plan))
+                    spots = []
+                    return _solve(planner, character, e)
+            finally:
+                for ob in spots + extra:
+                    env.remove(ob.name)
+
+    planned, failed = [], []
+    for n, (character, _) in enumerate(pairs):
+        try:
+            planned.append((n, solve_one(n)))
         except PathNotFound as exc:
             failed.append((character.name, str(exc)))
         if progress is not None:
-            progress(0.9 * (n + 1) / len(pairs))
+            progress(0.8 * (n + 1) / len(pairs))
     fps = scene_fps(scene)
     placed = [_placed(scene, patch, rigs[n], plan_motions(patch, plan))  # synthesised once
               for n, plan in planned]
-    tracks = [p[2].ground for p in placed]  # on the scene's frames
-    delays, conflicts = crowd.stagger(tracks, spacing, round(max_wait_seconds * fps),
-                                      max(1, round(0.2 * fps)))
+    tracks = [p[2].ground[:, :2] for p in placed]  # on the scene's frames
+
+    def replan(k, ghosts):
+        """Character k of the planned ones re-planned round ``ghosts``; its new track."""
+        n = planned[k][0]
+        try:
+            plan = solve_one(n, ghosts)
+        except PathNotFound:
+            return None
+        planned[k] = (n, plan)
+        placed[k] = _placed(scene, patch, rigs[n], plan_motions(patch, plan))
+        return placed[k][2].ground[:, :2]
+
+    delays, conflicts, rerouted = crowd.keep_apart(
+        tracks, replan, spacing, radius, fps, round(max_wait_seconds * fps),
+        max(1, round(0.2 * fps)))
+    if progress is not None:
+        progress(0.9)
     first = scene.frame_current if frame_start is None else int(frame_start)
     plans = []
     for (n, plan), p, d in zip(planned, placed, delays):
@@ -592,7 +622,7 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
     for c in conflicts:
         c["a"], c["b"], c["frame"] = names[c["a"]], names[c["b"]], first + c["frame"]
     return CrowdResult(plans, failed, conflicts, dict(zip(names, delays)),
-                       time.perf_counter() - t0)
+                       time.perf_counter() - t0, [names[k] for k in rerouted])
 
 
 def analyse(context, character):

@@ -499,13 +499,15 @@ def cmd_crowd(args):
     saved = _save(save) if ok else None
     doc = {"characters": len(pairs), "planned": [_plan_doc(p, fps) for p in res.plans],
            "failed": [{"character": c, "error": e} for c, e in res.failed],
-           "conflicts": res.conflicts, "delays_frames": res.delays, "seconds": res.seconds,
+           "conflicts": res.conflicts, "delays_frames": res.delays, "rerouted": res.rerouted,
+           "seconds": res.seconds,
            "patch": args.patch or _active_patch_name(scene), "weights": w, "saved": saved}
     text = [f"crowd: {len(res.plans)} of {len(pairs)} characters planned in "
             f"{res.seconds:.1f} s, {len(res.conflicts)} conflict(s)"]
     for p in res.plans:
         wait = res.delays[p.character]
-        text.append("  " + _plan_line(p, fps) + (f", waits {wait} frames" if wait else ""))
+        text.append("  " + _plan_line(p, fps) + (f", waits {wait} frames" if wait else "")
+                    + (", re-routed round the others" if p.character in res.rerouted else ""))
     for c, e in res.failed:
         text.append(f"  FAILED {e}")
     for c in res.conflicts:

@@ -457,12 +457,20 @@ def crossing(cli, baked, layout, tmp_path, capsys):
 
 def test_crowd_plans_everyone_and_keeps_them_apart(cli, capsys, crossing, tmp_path):
     pairs = ["--pair", "East", "EastGoal", "--pair", "North", "NorthGoal"]
-    # Walking at once, they would come within a metre of each other: a conflict, exit 1.
+    # Walking at once they would come within a metre of each other; with no wait allowed
+    # the second is re-routed round where the first walks at that time.
+    rerouted = tmp_path / "rerouted.blend"
     code, doc, err = call_json(cli, capsys, "crowd", "--blend", crossing, *pairs,
-                               "--spacing", "1", "--max-wait", "0")
-    assert code == 1 and len(doc["conflicts"]) == 1 and doc["saved"] is None
-    c = doc["conflicts"][0]
-    assert (c["a"], c["b"]) == ("East", "North") and c["distance_m"] < 1
+                               "--spacing", "1", "--max-wait", "0", "--frame-start", "1",
+                               "--save", rerouted)
+    assert code == 0 and doc["conflicts"] == [] and doc["rerouted"] == ["North"], err
+    assert doc["delays_frames"] == {"East": 0, "North": 0}
+    open_blend(rerouted)
+    end = max(p["frame_end"] for p in doc["planned"])
+    roots = evaluated_roots(cli, ["East", "North"], range(1, end + 1))
+    gap = np.linalg.norm(roots[0] - roots[1], axis=1)
+    assert gap.min() >= 1.0 - 0.05, f"closest approach {gap.min():.2f} m"
+    assert np.linalg.norm(roots[1, -1] - (4.0, 4.0)) < 0.3
     out = tmp_path / "crowd.blend"
     code, doc, err = call_json(cli, capsys, "crowd", "--blend", crossing, *pairs,
                                "--spacing", "1", "--frame-start", "1", "--save", out)
