@@ -21,7 +21,7 @@ def test_sample_blend_saved_by_blender_4_5_opens_and_replans(addon_module):
     goal.location.x -= 1.0
     res = api.plan_path(scene, walker, goal, frame_start=1)
     f = api.analyse(bpy.context, walker)
-    assert len(res.pieces) >= 3
+    assert len(res.pieces) >= 1 and res.pieces[-1] == "goal"
     assert f["goal_root_position_error_cm"] < 10 and f["goal_heading_error_deg"] < 10
     assert f["frames_root_inside_obstacle"] == 0
     hurried = bpy.data.objects["Hurried"]
