@@ -10,7 +10,7 @@ from an extension repository. So this conftest
   to this working tree, and enables the add-on from there with errors raised, not swallowed.
 
 Fixtures: ``addon_module_name`` / ``addon_module`` (session), ``clean_scene`` (function),
-``mocap_dir`` (session). ``MOCAP_DIR`` and ``REPO_ROOT`` can also be imported from here.
+``mocap_dir`` (session), ``walk_blend`` (session: a .blend with the walk patch baked once). ``MOCAP_DIR`` and ``REPO_ROOT`` can also be imported from here.
 
 Run these tests with ``./dev test``: one process per Blender version (bpy can be imported
 only once per process). Keep ``tests/`` and ``tests/blender/`` without ``__init__.py``: pytest
@@ -157,3 +157,21 @@ def mocap_dir():
             "place shared/mocap beside the repository"
         )
     return MOCAP_DIR
+
+
+@pytest.fixture(scope="session")
+def walk_blend(addon_module, mocap_dir, tmp_path_factory):
+    """A saved .blend with the walk patch baked once per session through the API (CMU
+    16_15 + 16_18 imported on the armature 'Source', the scene's source armature): modules
+    that only plan open it instead of baking again."""
+    api = addon_module.api
+    bpy.ops.wm.read_homefile(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.fps = 30
+    arm, acts = api.import_mocap([mocap_dir / "cmu" / "16_15.bvh", mocap_dir / "cmu" / "16_18.bvh"],
+                                 name="Source")
+    api.bake_locomotion_patch(scene, arm, acts[0], [acts[1]], layer="walk")
+    scene.motion_patches.source_armature = arm
+    path = tmp_path_factory.mktemp("walk") / "baked.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    return path

@@ -9,19 +9,9 @@ from scene_helpers import empty, walker_from
 
 
 @pytest.fixture(scope="module")
-def baked_blend(addon_module, mocap_dir, tmp_path_factory):
-    """A saved .blend with the walk patch baked from CMU 16_15 + 16_18."""
-    api = addon_module.api
-    bpy.ops.wm.read_homefile(use_empty=True)
-    scene = bpy.context.scene
-    scene.render.fps = 30
-    arm, acts = api.import_mocap([mocap_dir / "cmu" / "16_15.bvh", mocap_dir / "cmu" / "16_18.bvh"],
-                                 name="Source")
-    api.bake_locomotion_patch(scene, arm, acts[0], [acts[1]], layer="walk")
-    scene.motion_patches.source_armature = arm
-    path = tmp_path_factory.mktemp("paths") / "baked.blend"
-    bpy.ops.wm.save_as_mainfile(filepath=str(path))
-    return path
+def baked_blend(walk_blend):
+    """The session's walk patch (CMU 16_15 + 16_18, conftest.walk_blend)."""
+    return walk_blend
 
 
 def wall_box(name, x0, y0, x1, y1, height=2.0):

@@ -213,18 +213,9 @@ def test_clips_read_the_same_in_every_rotation_mode(addon_module, mocap_dir, cle
 
 
 @pytest.fixture(scope="module")
-def baked(addon_module, mocap_dir, tmp_path_factory):
-    """A saved .blend with the walk patch baked once for this module (16_15 + 16_18)."""
-    api = addon_module.api
-    bpy.ops.wm.read_homefile(use_empty=True)
-    scene = bpy.context.scene
-    scene.render.fps = 30
-    arm, acts = api.import_mocap([mocap_dir / "cmu" / "16_15.bvh", mocap_dir / "cmu" / "16_18.bvh"],
-                                 name="Source")
-    api.bake_locomotion_patch(scene, arm, acts[0], [acts[1]], layer="walk")
-    path = tmp_path_factory.mktemp("rotation_modes") / "baked.blend"
-    bpy.ops.wm.save_as_mainfile(filepath=str(path))
-    return path
+def baked(walk_blend):
+    """The session's walk patch (CMU 16_15 + 16_18, conftest.walk_blend)."""
+    return walk_blend
 
 
 # The foot lock's changed bones in the mixed rig: an axis-angle thigh and five Euler orders.
