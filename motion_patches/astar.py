@@ -14,6 +14,10 @@ import numpy as np
 
 GOAL = -1  # key of the virtual goal node reached through ``goal_cost``
 START = -2
+# Entries of the open list that are not nodes: a start connector or a goal link whose cost
+# is known only by a lower bound so far (code -3 - 2k: the goal link of node k; -4 - 2k:
+# the start connector of node k).
+_LAZY = -3
 
 
 @dataclass
@@ -24,11 +28,22 @@ class SearchResult:
     expansions: int
 
 
-def search(starts, expand, heuristic, goal_cost, max_expansions=500_000, observer=None):
+def search(starts, expand, heuristic, goal_cost, max_expansions=500_000, observer=None,
+           lazy_starts=(), start_cost=None, goal_bound=None):
     """Cheapest path from any of ``starts`` [(key, cost, payload)] to the virtual goal.
 
     ``expand(key) -> (keys, costs, payloads)``; ``heuristic(keys) -> h`` (admissible);
     ``goal_cost(key) -> (cost, payload) or None`` links a node to the goal.
+
+    Costs that are dear to compute (the planner's connectors: curves sampled and tested)
+    may be known by a lower bound first and computed only when the search gets to them
+    (lazy edge evaluation): ``lazy_starts`` [(key, bound)] go on the open list with
+    f = bound + h, and when one comes off, ``start_cost(key) -> (cost, payload) or None``
+    gives its cost and the node goes on the list with it; with ``goal_bound(key) ->
+    bound or None``, the goal link of an expanded node goes on the list with f = g +
+    bound, and ``goal_cost`` is asked only when it comes off. A bound that is at most the
+    cost keeps the result optimal: every entry that could lead to a cheaper path comes off
+    before the goal does.
 
     ``observer(f, key) -> [(from_key, to_key, cost, payload)]`` may add edges (lazy
     stitching). It is called once for every node taken off the open list, just before
@@ -58,6 +73,13 @@ def search(starts, expand, heuristic, goal_cost, max_expansions=500_000, observe
         for k, h in zip(keys.tolist(), heuristic(keys).tolist()):
             heapq.heappush(heap, (g[k] + h, tie, k))
             tie += 1
+    h_of = {}  # heuristic of the nodes of lazy starts
+    if len(lazy_starts):
+        lazy = np.array([k for k, _ in lazy_starts], np.int64)
+        for (k, bound), h in zip(lazy_starts, heuristic(lazy).tolist()):
+            h_of[k] = h
+            heapq.heappush(heap, (bound + h, tie, _LAZY - 1 - 2 * k))
+            tie += 1
     closed = set()
     expansions = 0
     best_goal = np.inf
@@ -67,6 +89,25 @@ def search(starts, expand, heuristic, goal_cost, max_expansions=500_000, observe
             f, _, key = heapq.heappop(heap)
         else:  # every reachable node expanded: the observer may still open a way
             f, key = np.inf, GOAL
+        if key <= _LAZY:  # a connector known by its bound so far: its cost now
+            k, is_start = divmod(_LAZY - key, 2)
+            if is_start:
+                got = start_cost(k)
+                if got is not None and got[0] < g.get(k, np.inf):
+                    g[k] = got[0]
+                    parent[k] = (START, got[1])
+                    closed.discard(k)
+                    heapq.heappush(heap, (got[0] + h_of[k], tie, k))
+                    tie += 1
+            else:
+                link = goal_cost(k)
+                if link is not None and g[k] + link[0] < best_goal:
+                    best_goal = g[k] + link[0]
+                    g[GOAL] = best_goal
+                    parent[GOAL] = (k, link[1])
+                    heapq.heappush(heap, (best_goal, tie, GOAL))
+                    tie += 1
+            continue
         if key in closed:  # a stale entry: the node was reached more cheaply since
             continue
         added = observer(f, key) if observer is not None else ()
@@ -90,7 +131,14 @@ def search(starts, expand, heuristic, goal_cost, max_expansions=500_000, observe
         if expansions > max_expansions:
             break
         gk = g[key]
-        link = goal_cost(key)
+        if goal_bound is not None:
+            bound = goal_bound(key)
+            if bound is not None and gk + bound < best_goal:
+                heapq.heappush(heap, (gk + bound, tie, _LAZY - 2 * key))
+                tie += 1
+            link = None
+        else:
+            link = goal_cost(key)
         if link is not None and gk + link[0] < best_goal:
             best_goal = gk + link[0]
             g[GOAL] = best_goal

@@ -81,46 +81,70 @@ def turns(lengths, radius):
     return np.einsum("wnk,wk->wn", np.nan_to_num(lengths), arcs) / radius
 
 
-def curve(p0, h0, word, lengths, radius):
-    """The sampled :class:`Curve` of one word from state (p0, h0) with segment
-    ``lengths`` (3,)."""
-    total = float(np.sum(lengths))
-    n = max(int(np.ceil(total / SAMPLE_SPACING)), 2) + 1
-    s = np.linspace(0.0, total, n)
-    bounds = np.concatenate(([0.0], np.cumsum(lengths)))
-    pos = np.empty((n, 2))
-    heading = np.empty(n)
-    kappa = np.empty(n)
+SIGNS = np.array([[SIGN[letter] for letter in w] for w in WORDS])  # (6, 3) turn of each part
+
+
+def _advance(x, y, h, k, length):
+    """State after ``length`` metres of curvature ``k`` from (x, y, h) (arrays): the
+    chord of the arc, ``length`` x sinc(k length / 2) long, runs along the mean heading
+    (exactly ``length`` along ``h`` on a straight)."""
+    half = 0.5 * k * length
+    chord = length * np.sinc(half / np.pi)
+    mid = h + half
+    return x + chord * np.cos(mid), y + chord * np.sin(mid), h + 2.0 * half
+
+
+def samples(p0, h0, word, lengths, radius):
+    """Samples of many words at once: arc length (P,), positions (P, 2), headings (P,),
+    curvatures (P,) and each path's first sample (C + 1,). ``p0`` (C, 2), ``h0``, ``word``
+    (indices into ``WORDS``), ``radius`` (C,), ``lengths`` (C, 3). Each path has
+    ceil(length / ``SAMPLE_SPACING``) + 1 samples (3 at least), evenly spaced from its
+    start to its end."""
+    p0 = np.atleast_2d(np.asarray(p0, float))
+    lengths = np.atleast_2d(np.asarray(lengths, float))
+    c = lengths.shape[0]
+    h0, radius = (np.broadcast_to(np.asarray(a, float), (c,)) for a in (h0, radius))
+    word = np.broadcast_to(np.asarray(word, int), (c,))
+    bounds = np.cumsum(lengths, axis=1)   # ends of the three parts
+    total = bounds[:, 2]
+    n = np.maximum(np.ceil(total / SAMPLE_SPACING).astype(int), 2) + 1
+    first = np.concatenate(([0], np.cumsum(n)))
+    owner = np.repeat(np.arange(c), n)
+    i = np.arange(first[-1]) - first[owner]
+    s = i * (total / (n - 1))[owner]
+    last = i == n[owner] - 1
+    s[last] = total[owner[last]]
     # Which of the three parts each sample lies on; a part of zero length owns none (the
     # last sample belongs to the last part that has a length).
-    part = np.clip(np.searchsorted(bounds, s, side="right") - 1, 0, 2)
-    for k in (2, 1):
-        if lengths[k] <= 0.0:
-            part[part == k] = k - 1
-    x, y, h = float(p0[0]), float(p0[1]), float(h0)
-    for k, letter in enumerate(WORDS[word] if isinstance(word, (int, np.integer)) else word):
-        k_ = SIGN[letter] / radius
-        sel = part == k
-        u = s[sel] - bounds[k]
-        if k_ == 0.0:
-            pos[sel] = np.column_stack((x + u * np.cos(h), y + u * np.sin(h)))
-        else:
-            r = 1.0 / k_
-            pos[sel] = np.column_stack((x + r * (np.sin(h + k_ * u) - np.sin(h)),
-                                        y - r * (np.cos(h + k_ * u) - np.cos(h))))
-        heading[sel] = h + k_ * u
-        kappa[sel] = k_
-        seg = lengths[k]
-        if k_ == 0.0:
-            x, y = x + seg * np.cos(h), y + seg * np.sin(h)
-        else:
-            r = 1.0 / k_
-            x, y = x + r * (np.sin(h + k_ * seg) - np.sin(h)), y - r * (np.cos(h + k_ * seg) - np.cos(h))
-            h = h + k_ * seg
-    return Curve(s, pos, heading, _smoothed(s, kappa))
+    part = np.minimum((bounds[owner, 0] <= s).astype(int) + (bounds[owner, 1] <= s)
+                      + (total[owner] <= s), 2)
+    part = np.where((part == 2) & (lengths[owner, 2] <= 0.0), 1, part)
+    part = np.where((part == 1) & (lengths[owner, 1] <= 0.0), 0, part)
+    kap = SIGNS[word] / radius[:, None]                    # (C, 3)
+    x, y, h = [p0[:, 0]], [p0[:, 1]], [h0]
+    for k in (0, 1):
+        nx, ny, nh = _advance(x[-1], y[-1], h[-1], kap[:, k], lengths[:, k])
+        x.append(nx)
+        y.append(ny)
+        h.append(nh)
+    x, y, h = np.stack(x, 1), np.stack(y, 1), np.stack(h, 1)  # (C, 3) state at each part
+    begin = np.column_stack((np.zeros(c), bounds[:, :2]))[owner, part]
+    u = s - begin
+    px, py, ph = _advance(x[owner, part], y[owner, part], h[owner, part], kap[owner, part], u)
+    return s, np.column_stack((px, py)), ph, kap[owner, part], first
 
 
-def _smoothed(s, kappa):
+def curve(p0, h0, word, lengths, radius):
+    """The sampled :class:`Curve` of one word (an index into ``WORDS``, or its letters)
+    from state (p0, h0) with segment ``lengths`` (3,)."""
+    if not isinstance(word, (int, np.integer)):
+        word = WORDS.index(word)
+    s, pos, heading, kappa, _ = samples(np.asarray(p0, float)[None], h0, word,
+                                        np.asarray(lengths, float)[None], radius)
+    return Curve(s, pos, heading, smoothed(s, kappa))
+
+
+def smoothed(s, kappa):
     """Curvature averaged over a window of ``BLEND_SMOOTHING`` metres (samples are evenly
     spaced in arc length)."""
     if s.size < 3:

@@ -6,6 +6,17 @@ when an obstacle is added or moved, and a free-cell bitfield ``B_t`` computed la
 first time the planner asks (Eq. 8). The character's radius is applied to the footprints
 (a cell is occluded when it comes within the radius of a footprint), so segment masks
 stay one 64-bit word per tile.
+
+Point tests go through a clearance raster, also lazy per tile: ``FINE`` x ``FINE`` raster
+cells per cell, each holding, for its centre, the exact distance to the nearest footprint,
+that footprint's nearest point and the distance to the next footprint (capped at the
+radius + ``CLEARANCE_CAP``). From these, every point gets a lower and an upper bound of
+its own distance to the footprints (:meth:`Environment.decided`); they are exact along a
+footprint's edges, so only points within about a millimetre of the query radius (or by a
+corner, or between two footprints close together) are tested exactly against the
+footprints. The answers are those of the exact test; the raster only spares the work.
+The cell bitfields ``B_t`` are read off the same raster (the cells it leaves undecided are
+tested exactly).
 """
 
 from dataclasses import dataclass
@@ -15,6 +26,11 @@ import numpy as np
 FULL = np.uint64(0xFFFFFFFFFFFFFFFF)
 PATH_MARGIN = 0.002  # metres: sampled paths are tested this much wider (the frames between
                      # samples run on chords a fraction of a millimetre inside the arcs)
+FINE = 8             # clearance raster cells per cell side (4 cm for the CMU walk patch)
+CLEARANCE_CAP = 0.15  # metres beyond the radius up to which the raster holds distances
+RASTER_MIN_POINTS = 24  # fewer points are tested exactly at once (no raster work for them)
+_EPS = 1e-7          # metres: rounding slack of the raster's decisions
+MAX_RASTER_TILES = 1 << 18  # largest area (in tiles) the raster's grid of slots spans
 
 
 @dataclass
@@ -86,6 +102,53 @@ def distance_to_polygon(points, polygon):
     return np.where(inside_convex(points, polygon), 0.0, d)
 
 
+def convex_closest(points, polygon):
+    """Exact distance (N,) from points (N, 2) to a convex polygon (0 inside) and the
+    polygon's point nearest each (N, 2) (the point itself inside), by the edge lines:
+    outside, the nearest point lies on the edge whose line the point is farthest beyond
+    when the point's foot falls within that edge, else it is a vertex. A few (V, N)
+    arrays for many points at once (either winding)."""
+    points = np.asarray(points, float)
+    poly = np.asarray(polygon, float)
+    px, py = points[:, 0], points[:, 1]
+    e = np.roll(poly, -1, axis=0) - poly
+    keep = np.einsum("ij,ij->i", e, e) > 1e-18
+    poly, e = poly[keep], e[keep]
+    if poly.shape[0] < 3:  # a point or a segment: its vertices and edge directly
+        poly = np.asarray(polygon, float)[:max(poly.shape[0], 1)]
+        a, b = poly[0], poly[-1]
+        ab = b - a
+        t = np.clip((points - a) @ ab / max(float(ab @ ab), 1e-18), 0.0, 1.0)
+        q = a + t[:, None] * ab
+        return np.linalg.norm(points - q, axis=1), q
+    if np.sum(poly[:, 0] * e[:, 1] - poly[:, 1] * e[:, 0]) < 0:  # clockwise: turn it round
+        poly = poly[::-1]
+        e = np.roll(poly, -1, axis=0) - poly
+    length2 = np.einsum("ij,ij->i", e, e)
+    nx, ny = e[:, 1] / np.sqrt(length2), -e[:, 0] / np.sqrt(length2)   # outward normals
+    # (V, N): points along the last axis keep numpy's inner loops long.
+    beyond = nx[:, None] * px[None] + ny[:, None] * py[None] - (nx * poly[:, 0] + ny * poly[:, 1])[:, None]
+    i = np.argmax(beyond, axis=0)
+    far = beyond[i, np.arange(px.size)]
+    t = ((px - poly[i, 0]) * e[i, 0] + (py - poly[i, 1]) * e[i, 1]) / length2[i]
+    on_edge = (t >= 0.0) & (t <= 1.0) & (far > 0.0)
+    d = np.where(on_edge, far, 0.0)
+    qx, qy = px - d * nx[i], py - d * ny[i]
+    corner = np.flatnonzero(~on_edge & (far > 0.0))
+    if corner.size:
+        cx, cy = px[corner], py[corner]
+        dist2 = (cx[None] - poly[:, 0:1]) ** 2 + (cy[None] - poly[:, 1:2]) ** 2
+        k = np.argmin(dist2, axis=0)
+        d[corner] = np.sqrt(dist2[k, np.arange(corner.size)])
+        qx[corner], qy[corner] = poly[k, 0], poly[k, 1]
+    return d, np.column_stack((qx, qy))
+
+
+def convex_distance(points, polygon):
+    """(N,) exact distance from points (N, 2) to a convex polygon (0 inside)."""
+    return convex_closest(points, polygon)[0]
+
+
 def _edges_cross(poly_a, poly_b):
     """True when any edge of one polygon properly crosses an edge of the other."""
     a0, a1 = poly_a, np.roll(poly_a, -1, axis=0)
@@ -137,17 +200,6 @@ def cells_within(x0, y0, size, polygon, radius):
     return d < max(radius, 1e-12) if radius > 0 else d <= 0.0
 
 
-def cells_covered(x0, y0, size, polygon, radius):
-    """(K,) True for the square cells lying wholly within ``radius`` of a convex polygon:
-    the polygon grown by the radius is convex, so a cell is inside when its four corners
-    are. No point of such a cell can be walked; a segment crossing it is occluded."""
-    corners = np.stack((np.column_stack((x0, y0)), np.column_stack((x0 + size, y0)),
-                        np.column_stack((x0 + size, y0 + size)),
-                        np.column_stack((x0, y0 + size))), axis=1)
-    d = distance_to_polygon(corners.reshape(-1, 2), polygon).reshape(-1, 4)
-    return np.all(d < radius, axis=1) if radius > 0 else np.all(d <= 0.0, axis=1)
-
-
 def _bits(flags):
     """uint64 with bit c set where ``flags[c]``."""
     idx = np.flatnonzero(flags).astype(np.uint64)
@@ -167,7 +219,22 @@ class Environment:
         self._free = {}         # tile -> uint64 free-cell bitfield (lazy)
         self._solid = {}        # tile -> uint64 bitfield of cells no point of which is free
         self._pack = None       # footprints as arrays for point queries (:meth:`_packed`)
+        self._ob_raster = {}    # obstacle name -> its own distances (:meth:`_obstacle_raster`)
         self.occlusion_computations = 0
+        self.fine = self.cells * FINE              # raster cells per tile side
+        self.fine_size = self.side / self.fine     # metres
+        self.rho = self.fine_size * np.sqrt(0.5) + _EPS  # centre to corner, and slack
+        self.cap = self.radius + CLEARANCE_CAP
+        # Tile rasters (lazy) live in one array, a slot per tile (slot 0: a tile with no
+        # footprint near), found through a grid of slots over the tiles seen so far, so
+        # the points of many tiles are looked up with one gather.
+        self._atlas = np.empty((4, 8, self.fine ** 2))
+        self._atlas[:, 0] = 0.0
+        self._atlas[[0, 3], 0] = self.cap
+        self._slots = {}          # tile -> slot
+        self._spare = list(range(7, 0, -1))
+        self._grid = np.full((1, 1), -1, np.int64)
+        self._grid_origin = (0, 0)
 
     def tile_of(self, xy):
         return (int(np.floor(xy[0] / self.side)), int(np.floor(xy[1] / self.side)))
@@ -190,6 +257,7 @@ class Environment:
             self._members.setdefault(t, set()).add(obstacle.name)
             self._free.pop(t, None)
             self._solid.pop(t, None)
+        self._forget_raster(obstacle)
 
     def remove(self, name):
         self._pack = None
@@ -197,7 +265,28 @@ class Environment:
             self._members[t].discard(name)
             self._free.pop(t, None)
             self._solid.pop(t, None)
-        self.obstacles.pop(name, None)
+        ob = self.obstacles.pop(name, None)
+        if ob is not None:
+            self._forget_raster(ob)
+
+    def _forget_raster(self, obstacle):
+        """Drop the rasters an obstacle's distances reach (only those computed already)."""
+        self._ob_raster.pop(obstacle.name, None)
+        if not self._slots:
+            return
+        lo, hi = obstacle.bounds()
+        i0, j0 = self.tile_of(lo - self.cap)
+        i1, j1 = self.tile_of(hi + self.cap)
+        for i in range(i0, i1 + 1):
+            for j in range(j0, j1 + 1):
+                slot = self._slots.pop((i, j), None)
+                if slot is None:
+                    continue
+                if slot:
+                    self._spare.append(slot)
+                gi, gj = i - self._grid_origin[0], j - self._grid_origin[1]
+                if 0 <= gi < self._grid.shape[0] and 0 <= gj < self._grid.shape[1]:
+                    self._grid[gi, gj] = -1
 
     def members(self, tile):
         return self._members.get(tile, set())
@@ -218,20 +307,163 @@ class Environment:
         return free, self._solid[tile]
 
     def _occlude(self, tile):
+        """(free, solid) bitfields of a tile, read off its clearance raster: a cell with a
+        raster centre nearer than the radius to a footprint is occluded, one whose every
+        raster cell is farther by the lower bounds of :meth:`decided` (taken over the
+        whole raster cell) is free, and the few in between are tested exactly
+        (:func:`cells_within`), so ``B_t`` is the exact Eq. 8 bitfield. A cell whose every
+        raster centre is nearer than the radius - rho (half a raster cell's diagonal) has
+        no free point: solid."""
         self.occlusion_computations += 1
         names = self.members(tile)
         if not names:
             return FULL, np.uint64(0)
-        c = self.side / self.cells
-        ix, iy = np.meshgrid(np.arange(self.cells), np.arange(self.cells), indexing="xy")
-        x0 = tile[0] * self.side + ix.ravel() * c
-        y0 = tile[1] * self.side + iy.ravel() * c
-        occluded = np.zeros(x0.size, bool)
-        solid = np.zeros(x0.size, bool)
-        for n in names:
-            occluded |= cells_within(x0, y0, c, self.obstacles[n].polygon, self.radius)
-            solid |= cells_covered(x0, y0, c, self.obstacles[n].polygon, self.radius)
+        n, k = self.cells, FINE
+        dist, qx, qy, other = self.clearance(tile)
+        # Lowest distance within each raster cell: the footprint's line through q across
+        # the cell (see :meth:`decided`), the other footprints rho nearer than at c.
+        with np.errstate(divide="ignore", invalid="ignore"):
+            slack = np.where(dist > 1e-9, (np.abs(qx) + np.abs(qy)) / dist, 2.0) * (0.5 * self.fine_size)
+        low = np.where(dist < self.cap, np.minimum(dist - slack, other - self.rho), dist - self.rho)
+        near = dist.reshape(n, k, n, k).min(axis=(1, 3)).ravel()   # cell index iy * cells + ix
+        low = low.reshape(n, k, n, k).min(axis=(1, 3)).ravel()
+        far = dist.reshape(n, k, n, k).max(axis=(1, 3)).ravel()
+        occluded = near < self.radius if self.radius > 0 else near <= 0.0
+        unsure = np.flatnonzero(~occluded & (low <= self.radius + _EPS))
+        if unsure.size:
+            c = self.side / n
+            x0 = tile[0] * self.side + (unsure % n) * c
+            y0 = tile[1] * self.side + (unsure // n) * c
+            hit = np.zeros(unsure.size, bool)
+            for name in names:
+                hit |= cells_within(x0, y0, c, self.obstacles[name].polygon, self.radius)
+            occluded[unsure] = hit
+        solid = far < self.radius - self.rho
         return (FULL & ~_bits(occluded)), _bits(solid)
+
+    # -- clearance raster ------------------------------------------------------------------
+    def clearance(self, tile):
+        """The raster of a tile: four (G * G,) arrays (G = cells x ``FINE``; index
+        fy * G + fx) holding at each raster cell's centre c the distance to the nearest
+        footprint, the offset q - c (x, then y) of that footprint's point q nearest c, and
+        the distance to the nearest other footprint (distances capped at the radius +
+        ``CLEARANCE_CAP``; where capped the offset means nothing). Lazy; dropped when an
+        obstacle near the tile moves."""
+        slot = self._slots.get(tile)
+        if slot is None:
+            slot = self._fill(tile)
+        a = self._atlas
+        return a[0, slot], a[1, slot], a[2, slot], a[3, slot]
+
+    def _fill(self, tile):
+        """Compute a tile's raster into a free slot of the atlas; its slot."""
+        g = self.fine
+        lo = np.array(tile, float) * self.side
+        names = self.names_in_box(lo - self.cap, lo + self.side + self.cap)
+        slot = 0
+        if names:
+            if not self._spare:
+                n = self._atlas.shape[1]
+                self._atlas = np.concatenate((self._atlas, np.empty_like(self._atlas)), axis=1)
+                self._spare = list(range(2 * n - 1, n - 1, -1))
+            slot = self._spare.pop()
+            d, qx, qy, d2 = (a.reshape(g, g) for a in self._atlas[:, slot])
+            d[:], d2[:], qx[:], qy[:] = self.cap, self.cap, 0.0, 0.0
+            gx, gy = tile[0] * g, tile[1] * g
+            for name in names:
+                x0, y0, dist, ox, oy = self._obstacle_raster(name)
+                ax, ay = max(x0, gx), max(y0, gy)
+                bx, by = min(x0 + dist.shape[1], gx + g), min(y0 + dist.shape[0], gy + g)
+                if ax >= bx or ay >= by:
+                    continue
+                win = (slice(ay - gy, by - gy), slice(ax - gx, bx - gx))
+                own = (slice(ay - y0, by - y0), slice(ax - x0, bx - x0))
+                do, dw = dist[own], d[win]
+                closer = do < dw
+                d2[win] = np.where(closer, dw, np.minimum(d2[win], do))
+                d[win] = np.where(closer, do, dw)
+                qx[win] = np.where(closer, ox[own], qx[win])
+                qy[win] = np.where(closer, oy[own], qy[win])
+        self._slots[tile] = slot
+        gi, gj = self._grid_cell(*tile)
+        self._grid[gi, gj] = slot
+        return slot
+
+    def _grid_cell(self, i, j):
+        """Index of tile (i, j) in the grid of slots, grown to hold it."""
+        (i0, j0), (n, m) = self._grid_origin, self._grid.shape
+        if not (i0 <= i < i0 + n and j0 <= j < j0 + m):
+            ni0, nj0 = min(i0, i - 4), min(j0, j - 4)
+            ni1, nj1 = max(i0 + n, i + 5), max(j0 + m, j + 5)
+            grid = np.full((ni1 - ni0, nj1 - nj0), -1, np.int64)
+            grid[i0 - ni0:i0 - ni0 + n, j0 - nj0:j0 - nj0 + m] = self._grid
+            self._grid, self._grid_origin = grid, (ni0, nj0)
+            i0, j0 = ni0, nj0
+        return i - i0, j - j0
+
+    def _obstacle_raster(self, name):
+        """(fx0, fy0, distances (h, w), nearest-point offsets x, y (h, w)) of one footprint
+        at the raster centres (global raster indices from fx0, fy0) of the box it can come
+        within the cap of; distances capped."""
+        got = self._ob_raster.get(name)
+        if got is None:
+            ob, h = self.obstacles[name], self.fine_size
+            fx0, fy0 = np.floor((ob.lo - self.cap) / h).astype(int) - 1
+            fx1, fy1 = np.floor((ob.hi + self.cap) / h).astype(int) + 1
+            xs = (np.arange(fx0, fx1 + 1) + 0.5) * h
+            ys = (np.arange(fy0, fy1 + 1) + 0.5) * h
+            px, py = np.meshgrid(xs, ys)
+            centres = np.column_stack((px.ravel(), py.ravel()))
+            d, q = convex_closest(centres, ob.polygon)
+            shape = (ys.size, xs.size)
+            got = self._ob_raster[name] = (int(fx0), int(fy0), np.minimum(d, self.cap).reshape(shape),
+                                           (q[:, 0] - centres[:, 0]).reshape(shape),
+                                           (q[:, 1] - centres[:, 1]).reshape(shape))
+        return got
+
+    def _raster_rows(self, points):
+        """The raster's four values at the cells holding world points (N, 2) (a tuple of
+        (N,) arrays), and the points' offsets x, y from those cells' centres."""
+        g, h = self.fine, self.fine_size
+        fx, fy = np.floor(points[:, 0] / h), np.floor(points[:, 1] / h)
+        ox, oy = points[:, 0] - (fx + 0.5) * h, points[:, 1] - (fy + 0.5) * h
+        fx, fy = fx.astype(np.int64), fy.astype(np.int64)
+        tx, ty = fx // g, fy // g
+        local = (fy - ty * g) * g + (fx - tx * g)
+        (i0, j0), (n, m) = self._grid_origin, self._grid.shape
+        gi, gj = tx - i0, ty - j0
+        inside = (gi >= 0) & (gi < n) & (gj >= 0) & (gj < m)
+        slot = np.full(tx.size, -1, np.int64)
+        slot[inside] = self._grid[gi[inside], gj[inside]]
+        missing = slot < 0
+        if missing.any():
+            for t in set(zip(tx[missing].tolist(), ty[missing].tolist())):
+                self.clearance(t)
+            (i0, j0) = self._grid_origin
+            slot = self._grid[tx - i0, ty - j0]
+        a = self._atlas
+        return (a[0, slot, local], a[1, slot, local], a[2, slot, local], a[3, slot, local]), ox, oy
+
+    def decided(self, rows, ox, oy, radius):
+        """(blocked, unsure) of points at offsets (``ox``, ``oy``) from the centres of raster
+        cells whose values are ``rows``, for ``radius``. With q the nearest footprint point
+        of the centre c and p the point: |p - q| bounds the distance from above; the
+        footprint lies beyond the line through q across c - q (it is convex and q is its
+        point nearest c), so the distance of p past that line bounds the distance to it
+        from below, and every other footprint is at least its distance from c minus
+        |p - c| away. Where the nearest footprint is beyond the cap, the distance at c
+        minus |p - c| bounds the distance from below."""
+        dist, qx, qy, other = rows
+        shift = np.sqrt(ox * ox + oy * oy)
+        vx, vy = ox - qx, oy - qy
+        near = dist < self.cap
+        upper = np.where(near, np.sqrt(vx * vx + vy * vy), np.inf)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            past = np.where(dist > 1e-9, -(qx * vx + qy * vy) / dist, -np.inf)
+        lower = np.where(near, np.minimum(past, other - shift), dist - shift)
+        blocked = upper < radius - _EPS
+        unsure = ~blocked & (lower < radius + _EPS)
+        return blocked, unsure
 
     def names_in_box(self, lo, hi):
         """Names of the obstacles whose bounds overlap the box ``lo``-``hi`` (world)."""
@@ -256,9 +488,31 @@ class Environment:
 
     def blocked(self, points, exclude=(), radius=None):
         """(N,) True where world points come within the radius (or ``radius``, at most a
-        tile side more) of any obstacle."""
+        tile side more) of any obstacle. Many points (``RASTER_MIN_POINTS`` or more) go
+        through the clearance raster first; the answer is the exact test's either way."""
         points = np.atleast_2d(np.asarray(points, float))
         radius = self.radius if radius is None else float(radius)
+        if (len(points) >= RASTER_MIN_POINTS and not exclude and self.obstacles
+                and radius + self.rho <= self.cap and self._rasterable(points)):
+            out, unsure = self.decided(*self._raster_rows(points), radius)
+            if unsure.any():
+                out[unsure] = self._blocked_exact(points[unsure], (), radius)
+            return out
+        return self._blocked_exact(points, exclude, radius)
+
+    def _rasterable(self, points):
+        """The points are finite and span few enough tiles for the raster's grid of slots
+        (a handful of far-flung points is cheaper to test exactly)."""
+        lo, hi = points.min(axis=0), points.max(axis=0)
+        if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
+            return False
+        (i0, j0), (n, m) = self._grid_origin, self._grid.shape
+        span = (np.maximum(hi, (np.array([i0 + n, j0 + m]) * self.side))
+                - np.minimum(lo, np.array([i0, j0]) * self.side)) / self.side
+        return bool(span[0] * span[1] < MAX_RASTER_TILES)
+
+    def _blocked_exact(self, points, exclude, radius):
+        """:meth:`blocked` by the footprints themselves (bounding boxes, then distances)."""
         out = np.zeros(points.shape[0], bool)
         tiles = set(map(tuple, np.floor(points / self.side).astype(int).tolist()))
         if radius > self.radius:  # membership holds footprints grown by self.radius only
@@ -309,21 +563,30 @@ class Environment:
                           np.array([self.obstacles[n].hi for n in names]).reshape(-1, 2), verts)
         return self._pack
 
-    def path_blocked(self, paths, spacing):
-        """(n,) True where sampled paths (n, M, 2), samples at most ``spacing`` apart,
-        come within the radius of an obstacle anywhere between samples (to the precision
-        of the sampling): every fourth sample first, the rest only where those do not
-        settle it (a point farther than radius + 2 x spacing from every footprint clears
-        the stretch around it)."""
+    def path_blocked(self, paths, spacing=None):
+        """(n,) True where sampled paths (n, M, 2) come within the radius of an obstacle
+        anywhere between samples, to the precision of their sampling: every sample is
+        tested ``PATH_MARGIN`` wider (``spacing``, the largest gap between samples, is the
+        caller's to keep small; about 4 cm for the planner's curves)."""
         n, m = paths.shape[:2]
-        r = self.radius + PATH_MARGIN
-        coarse = np.concatenate((paths[:, ::4], paths[:, -1:]), axis=1)
-        hit = self.blocked(coarse.reshape(-1, 2), radius=r).reshape(n, -1).any(axis=1)
-        unsure = np.flatnonzero(~hit)
-        if unsure.size:
-            close = self.blocked(coarse[unsure].reshape(-1, 2), radius=r + 2.0 * spacing)
-            close = close.reshape(unsure.size, -1).any(axis=1)
-            fine = unsure[close]
-            if fine.size:
-                hit[fine] = self.blocked(paths[fine].reshape(-1, 2), radius=r).reshape(fine.size, -1).any(axis=1)
+        hit = self.blocked(paths.reshape(-1, 2), radius=self.radius + PATH_MARGIN)
+        return hit.reshape(n, m).any(axis=1)
+
+    def tile_paths_blocked(self, tile, paths, index, ox, oy):
+        """:meth:`path_blocked` of paths (n, M, 2) lying in one tile, given the raster index
+        (n, M) of each sample within the tile (fy * G + fx) and its offset x, y from that
+        raster cell's centre (n, M each): the planner's segments, whose samples are fixed
+        in the patch."""
+        n, m = index.shape
+        flat = index.ravel()
+        blocked, unsure = self.decided(tuple(a[flat] for a in self.clearance(tile)), ox.ravel(),
+                                       oy.ravel(), self.radius + PATH_MARGIN)
+        blocked, unsure = blocked.reshape(n, m), unsure.reshape(n, m)
+        hit = blocked.any(axis=1)
+        rows = ~hit & unsure.any(axis=1)
+        if rows.any():
+            sel = unsure & rows[:, None]
+            exact = self._blocked_exact(paths[sel], (), self.radius + PATH_MARGIN)
+            owner = np.nonzero(sel)[0]
+            hit[np.unique(owner[exact])] = True
         return hit

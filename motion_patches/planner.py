@@ -23,9 +23,10 @@ from .node_keys import BIAS, LOCAL, NEXT_EDGE, TILE_STEP, pack, unpack
 from .locomotion_patch import (DIRECTIONS, EDGES, INWARD, node_id, node_position,
                                split_node_id)
 from .motion import ease_to, sliced
+from .environment import PATH_MARGIN
 from .plan_frame import IDENTITY, lattice_frame, local_environment, local_prop, state_to_local
 from .stitching import BLEND_FRAMES, stitch
-from .synthesis import cycles_along, follow
+from .synthesis import cycles_along, cycles_along_many, follow
 from .traversal_probability import accessibility, tile_traversal
 
 CONNECTOR_SCALES = np.linspace(0.25, 4.0, 40)  # coarser than the bake: fitted at plan time
@@ -36,6 +37,8 @@ MAX_CONNECTOR_TILES = 2.0     # longest start / goal connector, in tile sides
 MIN_CONNECTOR_CYCLES = 0.5    # shortest start connector (room to ease in from standing)
 START_CONNECTORS = 24         # valid start connectors offered to the search (best f first)
 APPROACH = 0.35               # metres of the way into the goal (out of the start) checked first
+DUBINS_TRIES = 3              # Dubins words of a node sampled and tested together
+START_BATCH = 8               # start nodes whose connectors are tested together
 
 
 class PlanError(ValueError):
@@ -43,6 +46,7 @@ class PlanError(ValueError):
 
 
 STITCH_PAYLOAD = -10  # payloads at or below this are stitched edges: -10 - index
+_NONE = (np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int64))  # no successors
 
 
 @dataclass
@@ -106,11 +110,22 @@ class SegmentPlanner:
         self.max_speed = max(lp.cycle_distance for lp in loops) * patch.gait.fps / patch.gait.frames
         self.kmin, self.kmax = patch.stats.get("curvature_limits", patch.gait.kappa_limits)
         self.corridor = None
+        self._raster_index = None
         e, _, _ = split_node_id(np.arange(LOCAL), patch.nodes)
         step = TILE_STEP[e % EDGES]
         # Tile ids are node keys // LOCAL; a node on edge e of its tile also lies in the
         # tile across that edge, whose id differs by this much.
         self.across = (step[:, 0] * (2 * BIAS) + step[:, 1]).tolist()
+        # Per local entry state: its segments, their cell masks, costs, and the key of the
+        # node each leads to relative to the key of the entry's tile (keys are linear in
+        # the tile coordinates), so an expansion is a few array operations.
+        rel = ((self.step[:, 0] * (2 * BIAS) + self.step[:, 1]) * LOCAL + self.next_local).astype(np.int64)
+        self._out = [None] * LOCAL
+        for local in range(LOCAL):
+            segs = self.order[self.first[local]:self.first[local + 1]]
+            if segs.size:
+                self._out[local] = (segs, patch.seg_mask[segs], rel[segs], self.costs[segs])
+        self._cos, self._sin = np.cos(self.local_heading), np.sin(self.local_heading)
 
     # -- graph -------------------------------------------------------------------------
     def node_pose(self, keys):
@@ -120,25 +135,42 @@ class SegmentPlanner:
 
     def heuristic(self, keys):
         """Eq. 7 plus an effort bound: alpha |G| + beta angle-to-goal + gamma T_min."""
-        p, h = self.node_pose(keys)
-        return self.state_heuristic(p, h)
+        keys = np.asarray(keys, np.int64)
+        local = keys % LOCAL
+        tile = keys // LOCAL
+        side = self.patch.side
+        dx = self.goal[0] - (self.local_pos[local, 0] + (tile // (2 * BIAS) - BIAS) * side)
+        dy = self.goal[1] - (self.local_pos[local, 1] + (tile % (2 * BIAS) - BIAS) * side)
+        dist = np.sqrt(dx * dx + dy * dy)
+        cosang = (dx * self._cos[local] + dy * self._sin[local]) / np.maximum(dist, 1e-9)
+        ang = np.maximum(np.arccos(np.clip(cosang, -1.0, 1.0)) - HEADING_SLACK, 0.0)
+        return self._per_metre * dist + self.beta * ang
 
     def state_heuristic(self, p, h):
+        """:meth:`heuristic` of states: positions (n, 2), headings (n,)."""
         d = self.goal[:2] - p
         dist = np.linalg.norm(d, axis=-1)
         cosang = (d[:, 0] * np.cos(h) + d[:, 1] * np.sin(h)) / np.maximum(dist, 1e-9)
         ang = np.maximum(np.arccos(np.clip(cosang, -1, 1)) - HEADING_SLACK, 0.0)
-        effort = self.patch.effort_rate * dist / self.max_speed
-        return self.alpha * dist + self.beta * ang + self.gamma * effort
+        return self._per_metre * dist + self.beta * ang
+
+    @property
+    def _per_metre(self):
+        """Heuristic cost per metre to the goal: alpha, and gamma x the effort of walking
+        that metre at the gait's fastest (the effort bound)."""
+        return self.alpha + self.gamma * self.patch.effort_rate / self.max_speed
 
     def expand(self, key):
-        i, j, local = unpack(key)
-        segs = self.order[self.first[local]:self.first[local + 1]]
-        if segs.size == 0 or not self.in_region(i, j):
-            return segs, segs, segs
-        tile = (int(i), int(j))
+        local = key % LOCAL
+        out = self._out[local]
+        if out is None:
+            return _NONE
+        t = key // LOCAL
+        tile = (t // (2 * BIAS) - BIAS, t % (2 * BIAS) - BIAS)
+        if not self.in_region(*tile):
+            return _NONE
+        segs, mask, rel, costs = out
         free, solid = self.env.cell_states(tile)
-        mask = self.patch.seg_mask[segs]
         clear = (mask & free) == mask  # Eq. 8
         if not clear.all():
             # Cells only partly occluded: the segment's own path decides (a gap the
@@ -146,27 +178,34 @@ class SegmentPlanner:
             unsure = np.flatnonzero(~clear & ((mask & solid) == 0))
             if unsure.size:
                 clear[unsure] = self._path_clear(tile, segs[unsure])
-        segs = segs[clear]
-        st = self.step[segs]
-        keys = pack(i + st[:, 0], j + st[:, 1], self.next_local[segs])
-        return keys, self.costs[segs], segs
+            return (key - local) + rel[clear], costs[clear], segs[clear]
+        return (key - local) + rel, costs, segs
 
     def _path_clear(self, tile, segs):
         """(n,) True where the paths of segments walked in ``tile`` keep the radius from
-        every footprint (exact test of their sampled curves; cached per plan)."""
-        cache = self._exact.setdefault(tile, {})
-        todo = np.array([s for s in segs.tolist() if s not in cache], int)
-        if todo.size:
-            pts = self.patch.path_points()[todo] + np.array(tile, float) * self.patch.side
-            spacing = float(np.linalg.norm(np.diff(pts[:, :2], axis=1), axis=-1).max())
-            hit = self.env.path_blocked(pts, spacing)
-            cache.update(zip(todo.tolist(), (~hit).tolist()))
-        return np.array([cache[s] for s in segs.tolist()], bool)
+        every footprint: each sample of their curves tested through the tile's clearance
+        raster, exactly where the raster cannot tell (``Environment.tile_paths_blocked``)."""
+        pts = self.patch.path_points()[segs] + np.array(tile, float) * self.patch.side
+        index, ox, oy = self._path_raster()
+        return ~self.env.tile_paths_blocked(tile, pts, index[segs], ox[segs], oy[segs])
+
+    def _path_raster(self):
+        """(S, PATH_SAMPLES) raster index of every segment sample within its tile, and its
+        offset x, y from that raster cell's centre (S, PATH_SAMPLES each; once per planner)."""
+        if self._raster_index is None:
+            g, h = self.env.fine, self.env.fine_size
+            pts = self.patch.path_points()
+            f = np.clip(np.floor(pts / h), 0, g - 1)
+            off = pts - (f + 0.5) * h
+            f = f.astype(np.int32)
+            self._raster_index = (f[..., 1] * g + f[..., 0], off[..., 0].copy(), off[..., 1].copy())
+        return self._raster_index
 
     def in_region(self, i, j):
         if self.corridor is not None:
             return (int(i), int(j)) in self.corridor
-        return self.region[0] <= i <= self.region[2] and self.region[1] <= j <= self.region[3]
+        r = self.region
+        return r[0] <= i <= r[2] and r[1] <= j <= r[3]
 
     # -- connectors ----------------------------------------------------------------------
     def _entries(self, tiles_edges):
@@ -195,12 +234,17 @@ class SegmentPlanner:
         effort = self.patch.effort_rate * frames / self.patch.gait.fps
         return self.alpha * curve.length + self.beta * curve.total_turn() + self.gamma * effort
 
+    def _bends_within(self, curve):
+        """The curve bends within the gait's curvature limits, between samples too."""
+        if curve.kappa.min() < self.kmin or curve.kappa.max() > self.kmax:
+            return False
+        return bool(curves.follows_turn_limits(curve.pos, curves.unit(curve.heading),
+                                               self.kmin, self.kmax))
+
     def _valid(self, curve, exact=False):
         """The curve bends within the gait's limits and keeps the radius from every
         footprint (every sample tested when ``exact``, else every fourth)."""
-        if curve.kappa.min() < self.kmin or curve.kappa.max() > self.kmax:
-            return False
-        if not curves.follows_turn_limits(curve.pos, curves.unit(curve.heading), self.kmin, self.kmax):
+        if not self._bends_within(curve):
             return False
         if not exact:
             return not self.env.blocked(curve.pos[::4]).any()
@@ -235,25 +279,54 @@ class SegmentPlanner:
         return cycles_along(self.patch.gait, pos, vel, acc)
 
     def start_connectors(self, start):
-        """[(key, cost, Piece)]: Dubins paths (:mod:`.dubins`) from the start to the entry
-        nodes of the 3 x 3 tiles around it, the cheapest valid word per node. The motion
-        along one starts at the gait phase that makes it end on the node pose."""
+        """[(key, bound)]: the entry nodes of the 3 x 3 tiles around the start a start
+        connector may join, in the order the search takes them (bound + heuristic), each
+        with a lower bound of its connector's Eq. 5 cost (its cheapest Dubins word's,
+        :meth:`_dubins_table`). The connectors themselves (:meth:`start_link`) are sampled
+        and tested only when the search gets to them."""
         keys, p, h = self._entries(self._block(self.env.tile_of(start[:2])))
         table = self._dubins_table(np.tile(start[:2], (keys.size, 1)),
                                    np.full(keys.size, start[2]), p, h)
-        # The search takes start nodes by cost + heuristic: test them in that order and
-        # keep the first START_CONNECTORS valid ones (the rest would rarely be taken).
-        f = table[0].min(axis=0) + self.heuristic(keys)
-        out = []
+        bound = table[0].min(axis=0)
+        f = bound + self.heuristic(keys)
+        ranked = np.argsort(f, kind="stable")
+        ranked = ranked[np.isfinite(f[ranked])]
+        self._start_table = {"start": start, "table": table, "keys": keys, "ranked": ranked,
+                             "rank": {int(keys[m]): r for r, m in enumerate(ranked)},
+                             "done": 0, "valid": 0, "links": {}}
+        return [(int(keys[m]), float(bound[m])) for m in ranked]
+
+    def start_link(self, key):
+        """(cost, Piece maker) of the start connector joining node ``key``: the Dubins path
+        from the start, its cheapest valid word, the motion along it starting at the gait
+        phase that makes it end on the node pose; None when no word is valid or the node
+        is not among the first ``START_CONNECTORS`` valid ones in the search's order (the
+        rest would rarely be taken). Nodes are tested in that order, ``START_BATCH`` at a
+        time, and cached."""
+        t = self._start_table
+        r = t["rank"].get(key)
+        if r is None:
+            return None
+        start, keys = t["start"], t["keys"]
         shortest = MIN_CONNECTOR_CYCLES * self.patch.gait.cycle_distance
-        for m in np.argsort(f, kind="stable"):
-            if not np.isfinite(f[m]) or len(out) >= START_CONNECTORS:
-                break
-            found = self._first_valid(start[:2], start[2], table, m, shortest)
-            if found is not None:
-                c, cst = found
-                out.append((int(keys[m]), cst, Piece("start", curve=c, cycles=self._cycles(c))))
-        return out
+        while t["done"] <= r:
+            if t["valid"] >= START_CONNECTORS:
+                return None
+            batch = t["ranked"][t["done"]:t["done"] + START_BATCH]
+            n = batch.size
+            found = self._first_valids(np.tile(start[:2], (n, 1)), np.full(n, start[2]),
+                                       t["table"], batch, shortest,
+                                       limit=START_CONNECTORS - t["valid"])
+            for m, got in zip(batch.tolist(), found):
+                link = None
+                if got is not None:
+                    cost, cycles, make = got
+                    link = (cost, lambda make=make, cost=cost, cycles=cycles:
+                            Piece("start", curve=make(), cycles=cycles, cost=cost))
+                    t["valid"] += 1
+                t["links"][int(keys[m])] = link
+            t["done"] += n
+        return t["links"].get(key)
 
     def goal_connectors(self, goal):
         """Goal links of the entry nodes of the 3 x 3 tiles around the goal: for each node
@@ -262,32 +335,43 @@ class SegmentPlanner:
         :meth:`goal_link` for the nodes it expands, and only those are tested."""
         keys, p, h = self._entries(self._block(self.env.tile_of(goal[:2])))
         headings = ANY_FACING if np.isnan(goal[2]) else np.array([goal[2]])
-        tables = [self._dubins_table(p, h, np.tile(goal[:2], (keys.size, 1)),
-                                     np.full(keys.size, gh)) for gh in headings]
-        cost = np.concatenate([t[0] for t in tables])
-        # Any facing: every heading's words in one table, wider turns first throughout.
-        rank = np.concatenate([np.where(np.isfinite(t[0]), t[0] + 1e6 * (t[2] < t[2].max())[:, None],
-                                        np.inf) for t in tables])
-        table = (cost, np.concatenate([t[1] for t in tables]), np.concatenate([t[2] for t in tables]),
-                 np.concatenate([t[3] for t in tables]), np.argsort(rank, axis=0, kind="stable"))
+        n, nh = keys.size, headings.size
+        cost, lens, radii, words, _ = self._dubins_table(
+            np.tile(p, (nh, 1)), np.tile(h, nh), np.tile(goal[:2], (nh * n, 1)),
+            np.repeat(headings, n))
+        # Any facing: every heading's words in one table (rows heading by heading), wider
+        # turns first throughout.
+        rows = cost.shape[0]
+        cost = cost.reshape(rows, nh, n).transpose(1, 0, 2).reshape(nh * rows, n)
+        lens = lens.reshape(rows, nh, n, 3).transpose(1, 0, 2, 3).reshape(nh * rows, n, 3)
+        radii, words = np.tile(radii, nh), np.tile(words, nh)
+        rank = np.where(np.isfinite(cost), cost + 1e6 * (radii < radii.max())[:, None], np.inf)
+        table = (cost, lens, radii, words, np.argsort(rank, axis=0, kind="stable"))
         too_close = np.linalg.norm(p - goal[:2], axis=1) < 0.2 * self.patch.gait.cycle_distance
         self._goal_table = {"index": {int(k): m for m, k in enumerate(keys) if not too_close[m]},
-                            "p": p, "h": h, "table": table}
+                            "p": p, "h": h, "table": table, "bound": cost.min(axis=0)}
         self._goal_links = {}
         return self._goal_table["index"]
 
+    def goal_bound(self, key):
+        """A lower bound of the cost of node ``key``'s goal link (its cheapest Dubins word's
+        Eq. 5 cost, :meth:`_dubins_table`), or None for a node with no link."""
+        m = self._goal_table["index"].get(key)
+        return None if m is None else float(self._goal_table["bound"][m])
+
     def goal_link(self, key):
-        """(cost, Piece) of the cheapest valid connector from node ``key`` into the goal,
-        or None (tested once per node and cached)."""
+        """(cost, Piece maker) of the cheapest valid connector from node ``key`` into the
+        goal, or None (tested once per node and cached)."""
         if key in self._goal_links:
             return self._goal_links[key]
         t = self._goal_table
         m = t["index"].get(key)
         link = None
         if m is not None:
-            found = self._first_valid(t["p"][m], t["h"][m], t["table"], m)
+            found = self._first_valids(t["p"][m][None], t["h"][m:m + 1], t["table"], np.array([m]))[0]
             if found is not None:
-                link = (found[1], Piece("goal", curve=found[0], cost=found[1]))
+                cost, _, make = found
+                link = (cost, lambda: Piece("goal", curve=make(), cost=cost))
         self._goal_links[key] = link
         return link
 
@@ -363,16 +447,75 @@ class SegmentPlanner:
                 np.argsort(key, axis=0, kind="stable"))
 
     def _first_valid(self, p0, h0, table, m, min_length=0.0):
-        """(curve, Eq. 5 cost) of the first valid Dubins word of column ``m`` of a
-        :meth:`_dubins_table` from state (p0, h0), or None."""
+        """(curve, Eq. 5 cost, gait cycles) of the first valid Dubins word of column ``m``
+        of a :meth:`_dubins_table` from state (p0, h0), or None."""
+        found = self._first_valids(np.asarray(p0, float)[None], np.atleast_1d(h0), table,
+                                   np.array([m]), min_length)[0]
+        return None if found is None else (found[2](), found[0], found[1])
+
+    def _first_valids(self, p0, h0, table, columns, min_length=0.0, tries=DUBINS_TRIES,
+                      limit=None):
+        """:meth:`_first_valid` of many columns at once (start states ``p0`` (n, 2),
+        ``h0`` (n,)): per column (Eq. 5 cost, gait cycles, a function making its curve) or
+        None. The words of every column are tried in their order, ``tries`` per column at
+        a time, their samples tested against the footprints together (as
+        ``Environment.path_blocked`` does); the first clear word of a column must bend
+        within the gait's limits (:meth:`_bends_within`; a word at the wider radius does by
+        construction, one at the sharpest turn is checked). With ``limit`` only the first
+        ``limit`` columns that have a valid word get it (the rest None)."""
         cost, lengths, radii, words, order = table
-        for r in order[:, m]:
-            if not np.isfinite(cost[r, m]):
-                return None
-            c = dubins.curve(p0, h0, int(words[r]), lengths[r, m], float(radii[r]))
-            if c.length >= min_length and self._valid(c, exact=True):
-                return c, self._curve_cost(c, self._cycles(c))
-        return None
+        wide = radii.max()
+        chosen = {}                           # column position -> (arc, pos, heading, kappa)
+        rank = np.zeros(len(columns), int)    # how far down its order each column has got
+        todo = list(range(len(columns)))
+        while todo:
+            rows, who = [], []
+            for i in todo:
+                m = columns[i]
+                r = order[rank[i]:rank[i] + tries, m]
+                r = r[np.isfinite(cost[r, m])]
+                rows.append(r)
+                who.append(np.full(r.size, i))
+            rows, who = np.concatenate(rows), np.concatenate(who)
+            if rows.size == 0:
+                break
+            lens = lengths[rows, columns[who]]
+            clear = lens.sum(axis=1) >= min_length
+            k = np.flatnonzero(clear)
+            at = np.full(rows.size, -1)
+            if k.size:
+                arc, pos, heading, kappa, first = dubins.samples(
+                    p0[who[k]], h0[who[k]], words[rows[k]], lens[k], radii[rows[k]])
+                hit = self.env.blocked(pos, radius=self.env.radius + PATH_MARGIN)
+                clear[k] = ~np.logical_or.reduceat(hit, first[:-1])
+                at[k] = np.arange(k.size)
+            more = []
+            for i in todo:
+                mine = np.flatnonzero(who == i)
+                for j in mine[clear[mine]].tolist():
+                    a, b = first[at[j]], first[at[j] + 1]
+                    samples = (arc[a:b], pos[a:b], heading[a:b], kappa[a:b])
+                    if radii[rows[j]] == wide or self._bends_within(_dubins_curve(samples)):
+                        chosen[i] = samples
+                        break
+                else:
+                    if mine.size == tries:  # more words down its order
+                        rank[i] += tries
+                        more.append(i)
+            todo = more
+        found = [None] * len(columns)
+        use = sorted(chosen)[:limit]
+        if use:
+            parts = [chosen[i] for i in use]
+            first = np.concatenate(([0], np.cumsum([p[0].size for p in parts])))
+            cycles = cycles_along_many(self.patch.gait, np.concatenate([p[1] for p in parts]), first)
+            for i, part, n in zip(use, parts, cycles.tolist()):
+                turn = float(np.sum(np.abs(np.diff(part[2]))))
+                frames = n * self.patch.gait.frames
+                effort = self.patch.effort_rate * frames / self.patch.gait.fps
+                c = self.alpha * float(part[0][-1]) + self.beta * turn + self.gamma * effort
+                found[i] = (c, n, lambda part=part: _dubins_curve(part))
+        return found
 
     # -- search ---------------------------------------------------------------------------
     def plan(self, start, goal, margin_tiles=3, max_expansions=400_000, use_corridor=False,
@@ -427,7 +570,6 @@ class SegmentPlanner:
         self.props = [local_prop(p, frame) for p in self.world_props]
         self.goal, self.region = lg, region
         self._frame_angle = frame[2]
-        self._exact = {}
         try:
             yield ls, lg, frame
         finally:
@@ -452,9 +594,12 @@ class SegmentPlanner:
         t_conn = time.perf_counter()
         starts = self.start_connectors(start)
         goals = self.goal_connectors(goal)
-        if not starts:
-            raise PlanError("no walkable way out of the start: " + self._boxed_in("start", start))
+
+        def no_start():
+            return not any(self.start_link(k) is not None for k, _ in starts)
         if not goals:
+            if no_start():
+                raise PlanError("no walkable way out of the start: " + self._boxed_in("start", start))
             raise PlanError("no walkable way into the goal: every node around it is too close")
         payloads = {}
         self.corridor = None
@@ -491,13 +636,17 @@ class SegmentPlanner:
             payloads[key] = link[1]
             return link[0], -1
 
+        def start_cost(key):
+            link = self.start_link(key)
+            return None if link is None else (link[0], -1)
+
         def search():
             copies = self._traversal_estimates(start)
             observer = TraversalObserver(copies, stitch_copy, self.across,
                                          up_front=self.mode == "static")
-            result = astar.search([(k, c, -1) for k, c, _ in starts], self.expand,
-                                  self.heuristic, goal_cost, max_expansions,
-                                  observer if copies else None)
+            result = astar.search([], self.expand, self.heuristic, goal_cost, max_expansions,
+                                  observer if copies else None, lazy_starts=starts,
+                                  start_cost=start_cost, goal_bound=self.goal_bound)
             return result, observer
 
         connector_seconds = time.perf_counter() - t_conn
@@ -507,21 +656,21 @@ class SegmentPlanner:
         if not result.found and self.corridor is not None:
             self.corridor, corridor_fallback = None, True
             result, observer = search()
+        if not result.found and no_start():
+            raise PlanError("no walkable way out of the start: " + self._boxed_in("start", start))
         if not result.found and not any(self.goal_link(k) is not None for k in goals):
             raise PlanError("no walkable way into the goal: " + self._boxed_in("goal", goal))
         if not result.found:
             raise PlanError(f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is unreachable: obstacles "
                             f"close every path within {margin_tiles} tiles of start and goal "
                             f"({result.expansions} nodes searched)")
-        start_piece = {k: p for k, _, p in sorted(starts, key=lambda s: -s[1])}
         pieces = []
         keys = [k for k, _ in result.path]
         first = keys[0]
-        pieces.append(start_piece[first])
-        pieces[0].cost = min(c for k, c, _ in starts if k == first)
+        pieces.append(self.start_link(first)[1]())
         for (k, payload), prev in zip(result.path[1:], keys[:-1]):
             if k == astar.GOAL:
-                pieces.append(payloads[prev])
+                pieces.append(payloads[prev]())
             elif payload <= STITCH_PAYLOAD:
                 st = stitches[STITCH_PAYLOAD - payload]
                 prop = next(p for p in self.props if p.name == st.prop)
@@ -543,7 +692,9 @@ class SegmentPlanner:
             goal = np.array([goal[0], goal[1], pieces[-1].curve.heading[-1]])
         return Plan(pieces, float(result.cost), result.expansions, seconds,
                     tuple(start), tuple(goal),
-                    {"start_connectors": len(starts), "goal_connectors": len(goals),
+                    {"start_connectors": self._start_table["valid"],
+                     "start_nodes_tested": self._start_table["done"], "goal_connectors": len(goals),
+                     "goal_links_tested": len(self._goal_links),
                      "connector_seconds": connector_seconds,
                      "search_seconds": time.perf_counter() - t_search,
                      "occlusion_computations": self.env.occlusion_computations,
@@ -691,6 +842,13 @@ class TraversalObserver:
                 edges += more
                 self.at_goal += n
         return edges
+
+
+def _dubins_curve(samples):
+    """A :class:`~.curves.Curve` of a Dubins word from its samples (arc length, positions,
+    headings, curvatures; :func:`.dubins.samples`), the curvature smoothed for blending."""
+    arc, pos, heading, kappa = samples
+    return curves.Curve(arc, pos, heading, dubins.smoothed(arc, kappa))
 
 
 def _derivs(curve):

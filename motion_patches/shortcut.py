@@ -97,7 +97,7 @@ def _dubins(planner, a, b, old_cost):
     found = planner._first_valid(pa, ha, table, 0)
     if found is None or found[1] >= old_cost - MIN_GAIN:
         return None
-    return found[0], planner._cycles(found[0]), found[1]
+    return found[0], found[2], found[1]
 
 
 def _fit(planner, a, b, old_cost):

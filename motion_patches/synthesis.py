@@ -29,6 +29,35 @@ def cycles_along(gait, pos, vel, acc, eased=(True, True)):
     return np.sum(np.diff(s, axis=-1) / dmid, axis=-1)
 
 
+def cycles_along_many(gait, pos, first, eased=(True, True)):
+    """:func:`cycles_along` of many sampled curves at once, each with the derivatives
+    ``np.gradient`` takes of its samples: ``pos`` (N, 2) holds the curves one after the
+    other, curve c from row ``first[c]`` to ``first[c + 1]`` (at least 3 rows each)."""
+    first = np.asarray(first)
+    start, end = first[:-1], first[1:] - 1
+    counts = first[1:] - first[:-1]
+
+    def gradient(a):
+        g = np.empty_like(a)
+        g[1:-1] = (a[2:] - a[:-2]) / 2.0
+        g[start] = a[start + 1] - a[start]
+        g[end] = a[end] - a[end - 1]
+        return g
+    vel = gradient(pos)
+    acc = gradient(vel)
+    d = np.diff(pos, axis=0)
+    step = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])
+    step[end[:-1]] = 0.0  # from one curve to the next
+    total = np.concatenate(([0.0], np.cumsum(step)))
+    s = total - np.repeat(total[start], counts)
+    ease = _ease(s, np.repeat(s[end], counts), gait.cycle_distance * RAMP, eased)
+    dist = gait.blended_distance(curvature(vel, acc) * ease)
+    ds = np.diff(s)
+    ds[end[:-1]] = 0.0
+    terms = ds / (0.5 * (dist[1:] + dist[:-1]))
+    return np.add.reduceat(np.append(terms, 0.0), start)
+
+
 def _ease(s, length, ramp_len, eased):
     e = np.ones_like(s)
     d = np.clip(s / max(ramp_len, 1e-9), 0, 1)
