@@ -15,30 +15,53 @@ def unit(angle):
     return np.stack((np.cos(angle), np.sin(angle)), axis=-1)
 
 
+def _basis(u):
+    """Hermite basis polynomials at params u (M,) for position, velocity, acceleration:
+    three (4, M) arrays of the weights of p0, m0, p1, m1."""
+    u = np.asarray(u, float)
+    u2, u3 = u * u, u * u * u
+    pos = np.stack((2 * u3 - 3 * u2 + 1, u3 - 2 * u2 + u, -2 * u3 + 3 * u2, u3 - u2))
+    vel = np.stack((6 * u2 - 6 * u, 3 * u2 - 4 * u + 1, -6 * u2 + 6 * u, 3 * u2 - 2 * u))
+    acc = np.stack((12 * u - 6, 6 * u - 4, -12 * u + 6, 6 * u - 2))
+    return pos, vel, acc
+
+
+def _combine(weights, a, b):
+    """(C, M, 2) curves weights[0] x a + weights[1] x b for weights (2, M), points a, b
+    (C, 2), as one matrix product laid out (C, 2, M) so each coordinate is contiguous."""
+    c = a.shape[0]
+    ctrl = np.stack((a, b), axis=-1).reshape(c * 2, 2)     # rows (curve, coordinate)
+    return (ctrl @ weights).reshape(c, 2, -1).transpose(0, 2, 1)
+
+
+def _hermite_parts(p0, d0, p1, d1, u):
+    """Hermite curves (C,) at params u (M,) split by their tangent scale: for position,
+    velocity and acceleration, (fixed, per unit scale) (C, M, 2) arrays, the value at
+    scale s being fixed + s * per unit (the tangents are s x chord x d)."""
+    p0, d0, p1, d1 = (np.atleast_2d(np.asarray(a, float)) for a in (p0, d0, p1, d1))
+    chord = np.linalg.norm(p1 - p0, axis=-1)[:, None]
+    return [(_combine(b[[0, 2]], p0, p1), _combine(b[[1, 3]], d0 * chord, d1 * chord))
+            for b in _basis(u)]
+
+
 def hermite(p0, d0, p1, d1, scale, u):
     """Positions, first and second derivatives (C, M, 2) of Hermite curves at params u (M,).
 
     ``p0, p1`` (C, 2) end points, ``d0, d1`` (C, 2) unit end directions, ``scale`` (C,).
     """
-    p0, d0, p1, d1 = (np.asarray(a, float)[:, None, :] for a in (p0, d0, p1, d1))
-    chord = np.linalg.norm(p1 - p0, axis=-1, keepdims=True)
-    m = np.asarray(scale, float)[:, None, None] * chord
-    m0, m1 = d0 * m, d1 * m
-    u = np.asarray(u, float)[None, :, None]
-    u2, u3 = u * u, u * u * u
-    pos = ((2 * u3 - 3 * u2 + 1) * p0 + (u3 - 2 * u2 + u) * m0
-           + (-2 * u3 + 3 * u2) * p1 + (u3 - u2) * m1)
-    vel = ((6 * u2 - 6 * u) * p0 + (3 * u2 - 4 * u + 1) * m0
-           + (-6 * u2 + 6 * u) * p1 + (3 * u2 - 2 * u) * m1)
-    acc = ((12 * u - 6) * p0 + (6 * u - 4) * m0 + (-12 * u + 6) * p1 + (6 * u - 2) * m1)
-    return pos, vel, acc
+    p0, d0, p1, d1 = (np.atleast_2d(np.asarray(a, float)) for a in (p0, d0, p1, d1))
+    m = np.linalg.norm(p1 - p0, axis=-1)[:, None] * np.asarray(scale, float).reshape(-1, 1)
+    c = p0.shape[0]
+    ctrl = np.stack((p0, d0 * m, p1, d1 * m), axis=-1).reshape(c * 2, 4)
+    return tuple((ctrl @ b).reshape(c, 2, -1).transpose(0, 2, 1) for b in _basis(u))
 
 
 def curvature(vel, acc):
     """Signed curvature (1/m) from derivatives (..., 2); positive turns left."""
-    cross = vel[..., 0] * acc[..., 1] - vel[..., 1] * acc[..., 0]
-    speed = np.linalg.norm(vel, axis=-1)
-    return cross / np.maximum(speed, 1e-9) ** 3
+    vx, vy = vel[..., 0], vel[..., 1]
+    cross = vx * acc[..., 1] - vy * acc[..., 0]
+    speed = np.maximum(np.sqrt(vx * vx + vy * vy), 1e-9)
+    return cross / (speed * speed * speed)
 
 
 def follows_turn_limits(pos, vel, kmin, kmax, slack=0.02):
@@ -56,7 +79,8 @@ def follows_turn_limits(pos, vel, kmin, kmax, slack=0.02):
 
 def arc_lengths(pos):
     """Cumulative chord length along sampled curves (..., M, 2) -> (..., M)."""
-    seg = np.linalg.norm(np.diff(pos, axis=-2), axis=-1)
+    dx, dy = np.diff(pos[..., 0], axis=-1), np.diff(pos[..., 1], axis=-1)
+    seg = np.sqrt(dx * dx + dy * dy)
     return np.concatenate((np.zeros(seg.shape[:-1] + (1,)), np.cumsum(seg, axis=-1)), axis=-1)
 
 
@@ -94,12 +118,18 @@ def joined(a, b):
 
 
 def hermite_curve(p0, d0, p1, d1, scale, samples=257):
-    u = np.linspace(0.0, 1.0, samples)
-    pos, vel, acc = hermite(np.atleast_2d(p0), np.atleast_2d(d0), np.atleast_2d(p1),
-                            np.atleast_2d(d1), np.atleast_1d(scale), u)
-    pos, vel, acc = pos[0], vel[0], acc[0]
-    heading = np.unwrap(np.arctan2(vel[:, 1], vel[:, 0]))
-    return Curve(arc_lengths(pos), pos, heading, curvature(vel, acc))
+    """The :class:`Curve` of one Hermite curve, ``samples`` samples evenly in its parameter."""
+    return hermite_curves(np.atleast_2d(p0), np.atleast_2d(d0), np.atleast_2d(p1),
+                          np.atleast_2d(d1), np.atleast_1d(scale), samples)[0]
+
+
+def hermite_curves(p0, d0, p1, d1, scale, samples=257):
+    """:func:`hermite_curve` of many curves (C,) at once: a list of C curves."""
+    pos, vel, acc = hermite(p0, d0, p1, d1, scale, np.linspace(0.0, 1.0, samples))
+    pos = np.ascontiguousarray(pos)
+    heading = np.unwrap(np.arctan2(vel[..., 1], vel[..., 0]), axis=-1)
+    s, kappa = arc_lengths(pos), curvature(vel, acc)
+    return [Curve(s[i], pos[i], heading[i], kappa[i]) for i in range(pos.shape[0])]
 
 
 def curve_length(pos, vel, acc):
@@ -109,16 +139,22 @@ def curve_length(pos, vel, acc):
 DEFAULT_SCALES = np.linspace(0.25, 4.0, 76)  # below ~0.25 a Hermite curve folds into a corner
 
 
-def tabulate(p0, d0, p1, d1, measure=curve_length, scales=DEFAULT_SCALES, samples=96):
-    """``measure`` and largest |curvature| of curves (C,) at every scale of a grid (C, S)."""
+def tabulate(p0, d0, p1, d1, measure=curve_length, scales=DEFAULT_SCALES, samples=96,
+             shares_curvature=False):
+    """``measure`` and largest |curvature| of curves (C,) at every scale of a grid (C, S).
+    The curves at each scale are their fixed part plus the scale times their tangent part
+    (:func:`_hermite_parts`); with ``shares_curvature`` the measure is called with the
+    curvature this computes anyway, ``measure(pos, vel, acc, kappa)``."""
     c = p0.shape[0]
     u = np.linspace(0.0, 1.0, samples)
     values = np.empty((c, scales.size))
     bend = np.empty((c, scales.size))
+    (pf, pu), (vf, vu), (af, au) = _hermite_parts(p0, d0, p1, d1, u)
     for i, sc in enumerate(scales):
-        pos, vel, acc = hermite(p0, d0, p1, d1, np.full(c, sc), u)
-        values[:, i] = measure(pos, vel, acc)
-        bend[:, i] = np.abs(curvature(vel, acc)).max(axis=1)
+        pos, vel, acc = pf + sc * pu, vf + sc * vu, af + sc * au
+        kappa = curvature(vel, acc)
+        values[:, i] = measure(pos, vel, acc, kappa) if shares_curvature else measure(pos, vel, acc)
+        bend[:, i] = np.abs(kappa).max(axis=1)
     return values, bend
 
 

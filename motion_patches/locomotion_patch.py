@@ -92,6 +92,11 @@ class LocomotionPatch:
         p0, d0, p1, d1 = self.endpoints(np.array([seg]))
         return curves.hermite_curve(p0[0], d0[0], p1[0], d1[0], self.seg_scale[seg])
 
+    def curves(self, segs):
+        """:meth:`curve` of many segments, sampled together."""
+        p0, d0, p1, d1 = self.endpoints(np.asarray(segs))
+        return curves.hermite_curves(p0, d0, p1, d1, self.seg_scale[segs])
+
     def motion(self, seg):
         """Synthesised in-place motion of one segment, in patch coordinates."""
         return follow(self.gait, self.curve(seg), cycles=int(self.seg_cycles[seg]))
@@ -101,6 +106,10 @@ class LocomotionPatch:
         segment's first row (S + 1,): one array to search when stitching (cached)."""
         cache = self.__dict__.get("_all_ground")
         if cache is None:
+            done = self.__dict__.setdefault("_ground_cache", {})
+            todo = [s for s in range(self.segment_count) if s not in done]
+            for seg, c in zip(todo, self.curves(np.array(todo, int)) if todo else ()):
+                self.ground(seg, c)
             parts = [self.ground(s) for s in range(self.segment_count)]
             start = np.concatenate(([0], np.cumsum([p[0].shape[0] for p in parts])))
             cache = (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
@@ -117,16 +126,17 @@ class LocomotionPatch:
             p0, d0, p1, d1 = self.endpoints(np.arange(self.segment_count))
             pts, _, _ = curves.hermite(p0, d0, p1, d1, self.seg_scale,
                                        np.linspace(0.0, 1.0, PATH_SAMPLES))
-            self.__dict__["_path_points"] = pts
+            pts = self.__dict__["_path_points"] = np.ascontiguousarray(pts)
         return pts
 
-    def ground(self, seg):
+    def ground(self, seg, curve=None):
         """(F, 3) ground frames of a segment (patch coordinates) and (F,) arc lengths,
-        without synthesising poses; cached, as stitching looks at many segments."""
+        without synthesising poses; cached, as stitching looks at many segments
+        (``curve``: the segment's curve, when the caller has it)."""
         cache = self.__dict__.setdefault("_ground_cache", {})
         g = cache.get(seg)
         if g is None:
-            c = self.curve(seg)
+            c = self.curve(seg) if curve is None else curve
             _, s, _ = frame_arclengths(self.gait, c, int(self.seg_cycles[seg]))
             x, y, h, _ = c.at(s)
             g = cache[seg] = (np.column_stack((x, y, h)), s)
@@ -196,11 +206,11 @@ def bake(gait, cells=8, nodes=8, side=None, effort_rate=1.0, curvature_margin=1.
     cycles = np.zeros(ncand, int)
     reason = np.full(ncand, "no fit", dtype=object)
 
-    def measure(pos, vel, acc):
-        return cycles_along(gait, pos, vel, acc)
+    def measure(pos, vel, acc, kappa=None):
+        return cycles_along(gait, pos, vel, acc, kappa=kappa)
 
     u = np.linspace(0.0, 1.0, 257)
-    table = curves.tabulate(p0, d0, p1, d1, measure)
+    table = curves.tabulate(p0, d0, p1, d1, measure, shares_curvature=True)
     if progress:
         progress(0.4)
     for n in range(1, MAX_CYCLES + 1):

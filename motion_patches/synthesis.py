@@ -14,18 +14,20 @@ RAMP = 0.25  # of a straight cycle's distance: blend easing length at segment en
 
 
 
-def cycles_along(gait, pos, vel, acc, eased=(True, True)):
+def cycles_along(gait, pos, vel, acc, eased=(True, True), kappa=None):
     """Gait cycles needed to follow sampled curves (..., M, 2) -> (...).
 
     The phase advances by ds / D(w(s)) with D the blended cycle distance at the eased
     curvature, so a curve's "whole number of cycles" accounts for shorter turning strides.
+    ``kappa``: the curves' curvature, when the caller has it already (it is not changed).
     """
     s = arc_lengths(pos)
-    kap = curvature(vel, acc)
+    kap = curvature(vel, acc) if kappa is None else kappa.copy()
     length = s[..., -1:]
-    ease = _ease(s, length, gait.cycle_distance * RAMP, eased)
-    d = gait.blended_distance(kap * ease)
-    dmid = 0.5 * (d[..., 1:] + d[..., :-1])
+    kap *= _ease(s, length, gait.cycle_distance * RAMP, eased)
+    d = gait.blended_distance(kap)
+    dmid = d[..., 1:] + d[..., :-1]
+    dmid *= 0.5
     return np.sum(np.diff(s, axis=-1) / dmid, axis=-1)
 
 
@@ -59,13 +61,13 @@ def cycles_along_many(gait, pos, first, eased=(True, True)):
 
 
 def _ease(s, length, ramp_len, eased):
+    """Easing weights (smoothsteps over ``ramp_len`` from each eased end) at arc lengths."""
     e = np.ones_like(s)
-    d = np.clip(s / max(ramp_len, 1e-9), 0, 1)
-    if eased[0]:
-        e = e * np.where(d < 1, d * d * (3 - 2 * d), 1.0)
-    d = np.clip((length - s) / max(ramp_len, 1e-9), 0, 1)
-    if eased[1]:
-        e = e * np.where(d < 1, d * d * (3 - 2 * d), 1.0)
+    ramp = max(ramp_len, 1e-9)
+    for on, d in ((eased[0], s / ramp), (eased[1], (length - s) / ramp)):
+        if on:
+            np.clip(d, 0.0, 1.0, out=d)
+            e *= d * d * (3.0 - 2.0 * d)  # 1 where d = 1
     return e
 
 
