@@ -412,6 +412,36 @@ def _placed(scene, patch, rig, motions):
     return motions, bounds, world
 
 
+FRAME_RANGE_KEY = "motion_patches_frame_range"  # the scene frame range last set by a plan
+BLENDER_DEFAULT_RANGE = (1, 250)                 # a new scene's: not a range anyone chose
+
+
+def fitted_frame_range(current, plans, ours=None):
+    """The scene's frame range after planning: the span of ``plans`` ((start, end) of every
+    planned character), unless ``current`` is a range the user chose (neither Blender's
+    default 1-250 nor ``ours``, the range planning set last), which is only extended to
+    cover the plans, never shortened."""
+    lo, hi = min(p[0] for p in plans), max(p[1] for p in plans)
+    current = tuple(int(f) for f in current)
+    if current == BLENDER_DEFAULT_RANGE or (ours is not None and current == tuple(ours)):
+        return lo, hi
+    return min(current[0], lo), max(current[1], hi)
+
+
+def _fit_frame_range(scene):
+    """Apply :func:`fitted_frame_range` to ``scene`` when its Fit Frame Range is on."""
+    if not getattr(scene.motion_patches, "fit_frame_range", True):
+        return
+    plans = [(m["frame_start"], m["frame_end"]) for m in
+             (json.loads(ob[PLAN_KEY])["meta"] for ob in scene.objects if PLAN_KEY in ob)]
+    if plans:
+        ours = scene.get(FRAME_RANGE_KEY)
+        start, end = fitted_frame_range((scene.frame_start, scene.frame_end), plans,
+                                        tuple(ours) if ours is not None else None)
+        scene.frame_start, scene.frame_end = start, end
+        scene[FRAME_RANGE_KEY] = [start, end]
+
+
 def _write(scene, character, patch, patch_name, plan, placed, frame_start, env, radius,
            lock=True, rig=None):
     """NLA strips and the plan record of one planned character (``placed``: its motion,
@@ -441,6 +471,7 @@ def _write(scene, character, patch, patch_name, plan, placed, frame_start, env, 
         "interactions": [[s["start"], s["end"]] for s in strips if s["kind"] == "interaction"],
         "obstacles": {o.name: (o.polygon * scale).tolist() for o in env.obstacles.values()},
     })
+    _fit_frame_range(scene)
     return PlanResult(character.name, frame_start, frame_end, [p.label for p in plan.pieces],
                       plan.cost, plan.seconds, plan.expansions, strips, stashed, plan.stats,
                       path_length(world.ground), tuple(goal_state))

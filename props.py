@@ -37,6 +37,11 @@ PLANNING = {  # name -> factory of the bpy property (one fresh definition per cl
     "foot_lock": lambda: BoolProperty(name="Lock Planted Feet", default=True,
                                       description="Pin each planted foot with leg IK (a Combine "
                                                   "track over the walk) so it does not slide"),
+    "fit_frame_range": lambda: BoolProperty(
+        name="Fit Frame Range", default=True,
+        description="After planning, set the scene's frame range to the planned motion "
+                    "(every planned character's); a range you set yourself is only extended, "
+                    "never shortened"),
 }
 BAKE = {
     "cells": lambda **kw: IntProperty(name="Cells", default=8, min=2, max=8, description=
@@ -69,7 +74,7 @@ class MOTION_PATCHES_PG_patch_clip(bpy.types.PropertyGroup):
                           description="Effort of the whole clip, in walking seconds")
     layer_in: StringProperty(name="Layer In", default="walk")
     layer_out: StringProperty(name="Layer Out", default="walk")
-    copy_step: FloatProperty(name="Copies Every", default=10.0, min=0.0, max=180.0,
+    copy_step: FloatProperty(name="Copies Every (°)", default=10.0, min=0.0, max=180.0,
                              description="Copy the clip around the prop every so many "
                                          "degrees (0: no copies)")
 
@@ -127,6 +132,7 @@ class MOTION_PATCHES_PG_scene(bpy.types.PropertyGroup):
     stitching: PLANNING["stitching"]()
     foot_lock: PLANNING["foot_lock"]()
     goal_facing: PLANNING["goal_facing"]()
+    fit_frame_range: PLANNING["fit_frame_range"]()
     show_overlay: BoolProperty(
         name="Show Planner Overlay", default=False,
         description="Draw the tile grid, occluded cells, planned paths, stitches and where "
@@ -144,19 +150,37 @@ class MOTION_PATCHES_AP_preferences(bpy.types.AddonPreferences):
     stitching: PLANNING["stitching"]()
     foot_lock: PLANNING["foot_lock"]()
     goal_facing: PLANNING["goal_facing"]()
+    fit_frame_range: PLANNING["fit_frame_range"]()
     cells: BAKE["cells"]()
     nodes: BAKE["nodes"]()
 
     def draw(self, context):
+        # One headed section each (a column's heading= would only label its first
+        # checkbox, and show nothing before a number field).
         layout = self.layout
-        layout.use_property_split = True
-        col = layout.column(heading="Planning Defaults")
-        for name in PLANNING:
-            col.prop(self, name)
-        col = layout.column(heading="Bake Defaults")
-        col.prop(self, "cells")
-        col.prop(self, "nodes")
-        layout.label(text="Planning > Reset to Preferences copies these into a scene", icon='INFO')
+        for idname, title, names in (("motion_patches_prefs_planning", "Planning Defaults",
+                                      PLANNING),
+                                     ("motion_patches_prefs_bake", "Bake Defaults", BAKE)):
+            body = _section(layout, idname, title)
+            if body is None:  # collapsed
+                continue
+            body.use_property_split = True
+            body.use_property_decorate = False
+            for name in names:
+                body.prop(self, name)
+        layout.label(text="Planning > Reset to Preferences copies the planning defaults into "
+                          "a scene", icon='INFO')
+
+
+def _section(layout, idname, title):
+    """A collapsible section with a header (a layout panel); its body, None when closed."""
+    try:
+        header, body = layout.panel(idname, default_closed=False)
+    except (AttributeError, RuntimeError, TypeError):  # drawn outside a panel
+        layout.label(text=title)
+        return layout.column()
+    header.label(text=title)
+    return body
 
 
 def preferences(context):

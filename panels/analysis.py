@@ -4,7 +4,7 @@ character (stored on it by the operator), in the numbers an animator checks."""
 import bpy
 
 from ..operators.analyse import last_figures
-from .sidebar import SidebarPanel
+from .sidebar import SidebarPanel, wrapped_label
 
 
 def figure_lines(f):
@@ -28,11 +28,12 @@ class MOTION_PATCHES_PT_analysis(SidebarPanel, bpy.types.Panel):
         ob = context.active_object
         figures = last_figures(ob) if ob is not None and ob.type == 'ARMATURE' else None
         if figures is None:
-            layout.label(text="Select a planned character and analyse it", icon='INFO')
+            wrapped_label(layout, context, "Select a planned character and analyse it",
+                          icon='INFO')
             return
         col = layout.column(align=True)
         for line in figure_lines(figures):
-            col.label(text=line)
+            wrapped_label(col, context, line)
 
 
 classes = (MOTION_PATCHES_PT_analysis,)

@@ -5,7 +5,7 @@ import json
 
 import bpy
 
-from .sidebar import SidebarPanel, list_with_buttons
+from .sidebar import SidebarPanel, list_with_buttons, wrapped_label
 
 
 class MOTION_PATCHES_UL_actions(bpy.types.UIList):
@@ -26,6 +26,12 @@ class MOTION_PATCHES_UL_patches(bpy.types.UIList):
         row.label(text=f"{item.layer}, {item.fps:g} fps")
 
 
+# Why the bake culled candidate segments (the keys of its report's "culled_by"), as the
+# panel says it: one line per reason, so no line is cut at the sidebar's width.
+CULL_REASONS = {"curvature": "bend too tight or fold", "outside": "leave the patch",
+                "no fit": "fit no whole cycle", "glitch": "spin, step back or jump"}
+
+
 def patch_summary(item):
     """Lines describing a baked patch for the panel: segments kept and culled, why, fps."""
     st = json.loads(item.stats or "{}")
@@ -33,7 +39,8 @@ def patch_summary(item):
              f"{st.get('kept', '?')} segments kept, {st.get('culled', '?')} culled"]
     by = st.get("culled_by") or {}
     if by:
-        lines.append("Culled: " + ", ".join(f"{n} {why}" for why, n in by.items()))
+        lines.append("Culled:")
+        lines += [f"    {n:,} {CULL_REASONS.get(why, why)}" for why, n in by.items()]
     return lines
 
 
@@ -45,8 +52,13 @@ class MOTION_PATCHES_PT_locomotion(SidebarPanel, bpy.types.Panel):
         s = context.scene.motion_patches
         layout = self.layout
         layout.operator("motion_patches.import_mocap", icon='IMPORT')
-        layout.prop(s, "source_armature")
-        layout.prop(s, "straight_action")
+        # Labels above their fields: beside them "Source Armature" is cut to "Source ...".
+        col = layout.column(align=True)
+        col.label(text="Source Armature")
+        col.prop(s, "source_armature", text="")
+        col = layout.column(align=True)
+        col.label(text="Straight Clip")
+        col.prop(s, "straight_action", text="")
         layout.label(text="Turn Clips")
         list_with_buttons(layout, "MOTION_PATCHES_UL_actions", s, "turn_actions",
                           "active_turn_index", "motion_patches.turn_add",
@@ -64,7 +76,7 @@ class MOTION_PATCHES_PT_locomotion(SidebarPanel, bpy.types.Panel):
         if 0 <= s.active_patch_index < len(s.patches):
             col = layout.column(align=True)
             for line in patch_summary(s.patches[s.active_patch_index]):
-                col.label(text=line)
+                wrapped_label(col, context, line)
 
 
 classes = (MOTION_PATCHES_UL_actions, MOTION_PATCHES_UL_patches, MOTION_PATCHES_PT_locomotion)

@@ -62,9 +62,9 @@ class MOTION_PATCHES_PT_object_patch(SidebarPanel, bpy.types.Panel):
         n, area = footprint_info(ob)
         layout.label(text=f"{n} vertices" + (f", footprint {area:.2f} m²" if area is not None
                                              else ""), icon='MESH_DATA')
-        row = layout.row(align=True)
-        row.operator("motion_patches.tag_object_patch", icon='CHECKMARK')
-        row.operator("motion_patches.untag_object_patch", icon='X')
+        row = layout.row(align=True)  # short texts: half the sidebar each
+        row.operator("motion_patches.tag_object_patch", text="Tag", icon='CHECKMARK')
+        row.operator("motion_patches.untag_object_patch", text="Untag", icon='X')
 
 
 classes = (MOTION_PATCHES_UL_clips, MOTION_PATCHES_PT_object_patch)

@@ -17,14 +17,22 @@ import numpy as np
 from .. import api
 from ..adapter import storage
 from ..motion_patches.environment import Environment, Obstacle
-from .sidebar import SidebarPanel
+from ..motion_patches.plan_frame import lattice_frame, local_environment, to_local, to_world
+from .sidebar import SidebarPanel, wrapped_label
 
 COLOURS = {"segment": ((0.16, 0.45, 0.85, 1.0), (0.95, 0.6, 0.1, 1.0)),
            "part": ((0.16, 0.45, 0.85, 1.0), (0.95, 0.6, 0.1, 1.0)),
            "traversal": ((0.85, 0.15, 0.15, 1.0),), "interaction": ((0.1, 0.7, 0.3, 1.0),),
            "start": ((0.6, 0.6, 0.6, 1.0),), "goal": ((0.6, 0.6, 0.6, 1.0),)}
 GRID = (0.5, 0.5, 0.5, 0.35)
-OCCLUDED = (0.9, 0.35, 0.3, 0.35)
+BLOCKED = (0.9, 0.35, 0.3, 0.35)    # fill: a prop's footprint grown by the radius
+OCCLUDED = (0.9, 0.35, 0.3, 0.6)    # outline: a cell the planner's bitmask (B_t) occludes
+ARC_STEP = np.radians(15.0)         # the grown footprint's rounded corners, in steps
+LEGEND = ("Path: segments blue / orange, traversals red, interactions green",
+          "Red fill: where the root cannot go (each prop grown by the radius); red squares: "
+          "cells the planner marks occluded",
+          "White points: stitches between pieces",
+          "Props: green = a clip starts, red = it ends (tick: heading)")
 STITCH = (1.0, 1.0, 1.0, 1.0)
 ENTRY = (0.2, 0.9, 0.3, 1.0)
 EXIT = (0.95, 0.2, 0.2, 1.0)
@@ -77,12 +85,51 @@ def marker_buffers(scene, depsgraph=None):
     return {"markers": (_arr(points, 3), _arr(pcol, 4)), "ticks": (_arr(ticks, 3), _arr(tcol, 4))}
 
 
+def grown(polygon, radius, step=ARC_STEP):
+    """(K, 2) outline of a convex footprint (3 or more points) grown by ``radius``: the
+    points within the radius of it, edges pushed out and corners rounded; K is even."""
+    poly = np.asarray(polygon, float)
+    area2 = np.sum(poly[:, 0] * np.roll(poly[:, 1], -1) - np.roll(poly[:, 0], -1) * poly[:, 1])
+    if area2 < 0:  # counter-clockwise, so the edges' outward normals point right
+        poly = poly[::-1]
+    out = poly
+    if radius > 0 and len(poly) >= 3:
+        out = []
+        for i in range(len(poly)):
+            e0 = poly[i] - poly[i - 1]
+            e1 = poly[(i + 1) % len(poly)] - poly[i]
+            a0 = np.arctan2(-e0[0], e0[1])  # outward normal of the edge in, and out
+            a1 = a0 + np.mod(np.arctan2(-e1[0], e1[1]) - a0, 2 * np.pi)
+            for a in np.linspace(a0, a1, max(1, int(np.ceil((a1 - a0) / step))) + 1):
+                out.append(poly[i] + radius * np.array([np.cos(a), np.sin(a)]))
+        out = np.array(out)
+    if len(out) % 2:  # fills are drawn as quads (pairs of triangles)
+        out = np.vstack((out, out[-1:]))
+    return out
+
+
+def _fan_quads(outline, z):
+    """Triangles (pairs per quad) filling a convex outline from its centre."""
+    c = outline.mean(axis=0)
+    tris = []
+    n = len(outline)
+    for i in range(0, n, 2):
+        a, b, d = outline[i], outline[(i + 1) % n], outline[(i + 2) % n]
+        for p, q in ((a, b), (b, d)):
+            tris += [(c[0], c[1], z), (p[0], p[1], z), (q[0], q[1], z)]
+    return tris
+
+
 def _tagged(scene):
     return (ob for ob in scene.objects if ob.type == "MESH" and ob.motion_patch.enabled)
 
 
 def plan_buffers(scene):
-    """{"lines", "points", "tris"} of every planned character (see :func:`buffers`)."""
+    """{"lines", "points", "tris"} of every planned character (see :func:`buffers`): the
+    props it walked around grown by its radius are filled ("tris"): where its root cannot
+    go; the cells the planner's bitmask marks occluded are outlined ("lines"): a 0.33 m
+    cell touched by the grown footprint counts as occluded there, though a segment through
+    a partly covered cell is then tested exactly against the footprint."""
     lines, lcol, points, pcol, tris, tcol = [], [], [], [], [], []
     try:
         patch = storage.load_patch(scene)
@@ -116,28 +163,45 @@ def plan_buffers(scene):
         env = Environment(patch.side, patch.cells, meta["radius"])
         for name, poly in meta["obstacles"].items():
             env.place(Obstacle(name, np.array(poly)))
-        lo = np.floor(g[:, :2].min(axis=0) / patch.side).astype(int) - 1
-        hi = np.floor(g[:, :2].max(axis=0) / patch.side).astype(int) + 1
+        # The plan's own lattice (motion_patches.plan_frame): anchored at the start, +x
+        # towards the goal, as the planner laid it.
+        frame = lattice_frame(g[0], meta["goal"], patch.side, patch.nodes)
+        local = to_local(frame, g[:, :2])
+        lo = np.floor(local.min(axis=0) / patch.side).astype(int) - 1
+        hi = np.floor(local.max(axis=0) / patch.side).astype(int) + 1
+        lenv = local_environment(env, frame, lo * patch.side, (hi + 1) * patch.side)
         c = patch.cell_size
+
+        def world(*pts):
+            w = to_world(frame, np.array(pts, float))
+            return [(float(x), float(y), Z) for x, y in w]
         for i in range(lo[0], hi[0] + 2):
             x = i * patch.side
-            lines += [(x, lo[1] * patch.side, Z), (x, (hi[1] + 1) * patch.side, Z)]
+            lines += world((x, lo[1] * patch.side), (x, (hi[1] + 1) * patch.side))
             lcol += [GRID, GRID]
         for j in range(lo[1], hi[1] + 2):
             y = j * patch.side
-            lines += [(lo[0] * patch.side, y, Z), ((hi[0] + 1) * patch.side, y, Z)]
+            lines += world((lo[0] * patch.side, y), ((hi[0] + 1) * patch.side, y))
             lcol += [GRID, GRID]
         for i in range(lo[0], hi[0] + 1):
             for j in range(lo[1], hi[1] + 1):
-                free = int(env.free_cells((i, j)))
+                free = int(lenv.free_cells((i, j)))
                 for cell in range(patch.cells * patch.cells):
                     if not free >> cell & 1:
                         x0 = i * patch.side + (cell % patch.cells) * c
                         y0 = j * patch.side + (cell // patch.cells) * c
-                        quad = [(x0, y0, Z), (x0 + c, y0, Z), (x0 + c, y0 + c, Z),
-                                (x0, y0, Z), (x0 + c, y0 + c, Z), (x0, y0 + c, Z)]
-                        tris += quad
-                        tcol += [OCCLUDED] * 6
+                        corners = world((x0, y0), (x0 + c, y0), (x0 + c, y0 + c), (x0, y0 + c))
+                        for k in range(4):
+                            lines += [corners[k], corners[(k + 1) % 4]]
+                        lcol += [OCCLUDED] * 8
+        for poly in meta["obstacles"].values():
+            outline = grown(np.array(poly), meta["radius"])
+            tris += _fan_quads(outline, Z)
+            tcol += [BLOCKED] * (3 * len(outline))
+            for k in range(len(outline)):
+                a, b = outline[k], outline[(k + 1) % len(outline)]
+                lines += [(a[0], a[1], Z), (b[0], b[1], Z)]
+                lcol += [OCCLUDED, OCCLUDED]
 
     return {"lines": (_arr(lines, 3), _arr(lcol, 4)), "points": (_arr(points, 3), _arr(pcol, 4)),
             "tris": (_arr(tris, 3), _arr(tcol, 4))}
@@ -180,6 +244,10 @@ def draw():
     buf.update(_cached("markers", _markers_key(scene), lambda: marker_buffers(scene, depsgraph)))
     flat = gpu.shader.from_builtin("FLAT_COLOR")
     gpu.state.blend_set("ALPHA")
+    # Depth-tested against the scene (a prop in front hides what lies behind it), drawn
+    # without writing depth (the fills are see-through; the lines sit on the same plane).
+    gpu.state.depth_test_set("LESS_EQUAL")
+    gpu.state.depth_mask_set(False)
     for prim, name, size in (("TRIS", "tris", 0), ("LINES", "lines", 0), ("LINES", "ticks", 0),
                              ("POINTS", "points", 6.0), ("POINTS", "markers", 9.0)):
         pos, col = buf[name]
@@ -193,6 +261,7 @@ def draw():
             except (ValueError, KeyError):
                 gpu.state.point_size_set(size)
         batch_for_shader(shader, prim, {"pos": pos, "color": col}).draw(shader)
+    gpu.state.depth_test_set("NONE")
     gpu.state.blend_set("NONE")
 
 
@@ -223,10 +292,8 @@ class MOTION_PATCHES_PT_overlay(SidebarPanel, bpy.types.Panel):
         layout.prop(context.scene.motion_patches, "show_overlay")
         col = layout.column(align=True)
         col.active = context.scene.motion_patches.show_overlay
-        for text in ("Path: segments blue / orange, traversals red, interactions green",
-                     "White points: stitches between pieces",
-                     "Props: green = a clip starts, red = it ends (tick: heading)"):
-            col.label(text=text)
+        for text in LEGEND:
+            wrapped_label(col, context, text)
 
 
 classes = (MOTION_PATCHES_PT_overlay,)

@@ -4,7 +4,7 @@ active armature's bone map (when it is another skeleton than the patch's), the c
 
 import bpy
 
-from .sidebar import SidebarPanel
+from .sidebar import SidebarPanel, wrapped_label
 
 
 class MOTION_PATCHES_PT_planning(SidebarPanel, bpy.types.Panel):
@@ -17,7 +17,10 @@ class MOTION_PATCHES_PT_planning(SidebarPanel, bpy.types.Panel):
         layout.prop(s, "goal")
         ob = context.active_object
         if ob is not None and ob.type == 'ARMATURE':
-            layout.prop(ob.motion_patches_character, "goal", text=f"{ob.name}'s Goal")
+            # The character's name over the field: beside it, "Walker's Goal" is cut.
+            col = layout.column(align=True)
+            wrapped_label(col, context, f"{ob.name}'s Own Goal (crowds)")
+            col.prop(ob.motion_patches_character, "goal", text="")
             draw_bone_map(layout, context, ob)
         col = layout.column(align=True)
         col.prop(s, "alpha")
@@ -26,7 +29,8 @@ class MOTION_PATCHES_PT_planning(SidebarPanel, bpy.types.Panel):
         layout.prop(s, "radius")
         layout.prop(s, "stitching")
         layout.prop(s, "foot_lock")
-        layout.prop(s, "goal_facing")
+        layout.prop(s, "fit_frame_range")
+        layout.prop(s, "goal_facing", text="Facing")  # "Goal Facing" does not fit beside
         layout.operator("motion_patches.reset_planning", icon='LOOP_BACK')
         row = layout.row(align=True)
         row.operator("motion_patches.plan_path", icon='PLAY')
@@ -62,7 +66,7 @@ def draw_bone_map(layout, context, ob):
                        'ARMATURE_DATA'))
     except (ValueError, api.MotionPatchesError) as exc:
         rig, text, icon = False, str(exc), 'ERROR'
-    layout.label(text=text, icon=icon)
+    wrapped_label(layout, context, text, icon=icon)
     if rig is None and not len(rig_props.bone_map):
         return
     layout.template_list("MOTION_PATCHES_UL_bone_map", "", rig_props, "bone_map",
