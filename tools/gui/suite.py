@@ -1,0 +1,773 @@
+"""The GUI suite: the extension in a real, windowed Blender, used as an animator would.
+
+Run by ``./dev gui`` inside the GUI root (tools/gui/gui-root), with Xvfb and Mesa's software
+OpenGL. It builds the extension zip with that Blender's ``--command extension build``,
+installs it with ``extension install-file -r user_default -e``, starts Blender with its window
+and drives one scene through the sidebar:
+
+* real input (xdotool): open the sidebar (N), pick the Motion Patches tab (a click on it),
+  + on the turn list, Bake, collapse the Locomotion panel (a click on its header), + on the
+  prop's clip list, Tag Object Patch, Plan Path, Analyse Motion, Show Planner Overlay, top
+  view (numpad 7);
+* Python, where input cannot reach (tools/gui/agent.py): importing the mocap (a file
+  browser), making the walker, the goal and the chair, choosing actions in the lists,
+  placing the perspective view, opening the preferences at the add-on.
+
+Buttons are found on screen by their identity, not by coordinates written here: the pointer
+is moved over the sidebar and Ctrl+C (an operator button copies its Python command) or
+Ctrl+Shift+C (a property copies its data path) says what is under it.
+
+Checks: each operator did its job (read back from the scene: a patch with kept segments,
+the prop tagged, NLA tracks and a plan record on the walker, the scene's frame range
+covering the plan, analysis figures stored, the overlay on); no screenshot is blank;
+overlay pixels: where the planned path must be (projected by Blender) the overlay's path
+colours appear, and inside the chair's outline nothing of the overlay shows (depth test);
+and Blender's log has no traceback and no error line. Screenshots of every state go to
+``--out``; ``--docs DIR`` also writes the README's small ones.
+
+Exit status: 0 all passed, 1 something failed (the summary says what).
+"""
+
+import argparse
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+import traceback
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from session import GuiError, Session  # noqa: E402
+
+REPO = Path(__file__).resolve().parents[2]
+EXT_ID = "motion_patches"
+MODULE = f"bl_ext.user_default.{EXT_ID}"
+TAB = "Motion Patches"
+# The overlay's path colours (panels/overlay.py COLOURS), 0-255: segments, traversal, connector.
+PATH_COLOURS = np.array([(41, 115, 217), (242, 153, 25), (217, 38, 38), (153, 153, 153),
+                         (26, 178, 77)], float)
+COLOUR_TOLERANCE = 40  # per channel (anti-aliasing, blending with what is below)
+# Blender's log: lines that fail the run. Debian's build and Mesa print a few harmless lines.
+LOG_BAD = re.compile(r"Traceback|^Error\b|\| Error\b|\bERROR\b|Exception|Segmentation fault|"
+                     r"Cancelled: bpy\.ops\.motion_patches|[Uu]nable to load|[Ff]ailed to")
+LOG_ALLOWED = re.compile(r"Color management: .*|.*libdecor.*|.*pipewire.*|.*ALSA.*|"
+                         r".*Warning: .*|.*failed to open .*\.(ttf|otf).*", re.I)
+
+
+class Step:
+    """Record of one step of the scenario: name, status and detail."""
+
+    def __init__(self, name):
+        self.name, self.ok, self.detail, self.seconds = name, None, "", 0.0
+
+
+class Suite:
+    def __init__(self, args):
+        self.args = args
+        self.out = Path(args.out).resolve()
+        self.steps = []
+        self.shots = {}
+        self.facts = {}
+        self.t0 = time.monotonic()
+        self.cache = {}  # identity -> (x, y) of a button last found there
+        self.doc_boxes = {}  # screenshot name -> (x0, y0, x1, y1) of the README's cut
+        self.sidebar_panel_width = 270
+        self.probes = 0
+
+    # --- bookkeeping --------------------------------------------------------------------
+
+    def log(self, msg):
+        print(f"[gui {time.monotonic() - self.t0:6.1f}s] {msg}", flush=True)
+
+    def step(self, name, fn):
+        st = Step(name)
+        self.steps.append(st)
+        t = time.monotonic()
+        self.log(f"{name} ...")
+        try:
+            st.detail = fn() or ""
+            st.ok = True
+        except (GuiError, AssertionError) as exc:
+            st.ok, st.detail = False, str(exc) or type(exc).__name__
+        except Exception:
+            st.ok, st.detail = False, traceback.format_exc()
+        st.seconds = time.monotonic() - t
+        self.log(f"{name}: {'ok' if st.ok else 'FAILED'} ({st.seconds:.1f} s)"
+                 + (f" {st.detail}" if st.detail else ""))
+        return st.ok
+
+    def check(self, cond, msg):
+        if not cond:
+            raise AssertionError(msg)
+
+    # --- blender outside the window: build, install -------------------------------------
+
+    def blender_cmd(self, *args, timeout=300):
+        env = dict(os.environ, BLENDER_USER_RESOURCES=str(self.user_dir),
+                   HOME=str(self.work / "home"))
+        r = subprocess.run(["blender", *args], env=env, capture_output=True, text=True,
+                           timeout=timeout, stdin=subprocess.DEVNULL)
+        text = r.stdout + r.stderr
+        (self.work / "blender-commands.log").open("a").write(f"$ blender {' '.join(args)}\n{text}\n")
+        if r.returncode or LOG_BAD.search(_without_allowed(text)):
+            raise GuiError(f"blender {' '.join(args)} failed (exit {r.returncode}):\n{text[-2000:]}")
+        return text
+
+    def build_and_install(self):
+        version = self.blender_cmd("--background", "--factory-startup", "--version")
+        self.facts["blender"] = re.search(r"Blender (\S+.*)", version).group(1).strip()
+        dist = self.work / "dist"
+        dist.mkdir()
+        src = self.work / "src"
+        # The extension's files as the builder sees them in a fresh clone (no caches, no venvs).
+        shutil.copytree(REPO, src, ignore=shutil.ignore_patterns(
+            ".git", ".venv", "__pycache__", ".pytest_cache", "dist", "sample_blends",
+            "bench", "tests", "tools", "docs", "examples"))
+        self.blender_cmd("--command", "extension", "build", "--source-dir", str(src),
+                         "--output-dir", str(dist))
+        zips = list(dist.glob("*.zip"))
+        self.check(len(zips) == 1, f"extension build made {len(zips)} zips in {dist}")
+        self.facts["zip"] = f"{zips[0].name}, {zips[0].stat().st_size // 1024} KiB"
+        self.blender_cmd("--command", "extension", "install-file", "-r", "user_default", "-e",
+                         str(zips[0]))
+        # No splash over the window; the add-on must be enabled in the saved preferences.
+        out = self.blender_cmd("--background", "--python-expr",
+                               "import bpy, addon_utils\n"
+                               "bpy.context.preferences.view.show_splash = False\n"
+                               "bpy.ops.wm.save_userpref()\n"
+                               f"print('ENABLED', addon_utils.check({MODULE!r}))\n")
+        self.check("ENABLED (True, True)" in out,
+                   f"{MODULE} is not enabled after install-file -e: {out[-500:]}")
+        return f"Blender {self.facts['blender']}; {self.facts['zip']} installed and enabled"
+
+    # --- screen helpers -----------------------------------------------------------------
+
+    def sidebar(self):
+        """(left, top, width, height) of the 3D view's sidebar, and the panels' x range."""
+        r = self.s.py('result = rect(region("VIEW_3D", "UI"))')
+        x, y, w, h = r
+        self.sidebar_panel_width = w - 22  # without the tabs
+        return r, (x + 8, x + w - 31)
+
+    def settle(self):
+        """Let a panel that grew after a scripted change be laid out again: Blender does it
+        on the next redraw, which moving the pointer over the sidebar brings."""
+        (x, y, w, h), (l, r) = self.sidebar()
+        self.s.py("redraw_all(); result = 1")
+        self.s.move(l + 5, y + h // 2)
+        self.s.move(l + 6, y + h // 2 + 3)
+        self.s.wait_idle()
+        time.sleep(0.2)
+        self.s.wait_idle()
+
+    def probe(self, x, y, kind):
+        """What is under (x, y): an operator ("motion_patches.bake_locomotion_patch") for
+        kind "op" (Ctrl+C), a data path ("motion_patches.show_overlay") for "prop"
+        (Ctrl+Shift+C), or ""."""
+        self.probes += 1
+        self.s.move(x, y)
+        self.s.xdo("key", "ctrl+c" if kind == "op" else "ctrl+shift+c")
+        text = self.s.py("result = take_clipboard()") or ""
+        if kind == "op":
+            return text[len("bpy.ops."):].split("(")[0] if text.startswith("bpy.ops.") else ""
+        return text if re.fullmatch(r"[A-Za-z_][\w.\[\]\"']*", text) else ""
+
+    def find(self, ident, kind="op", cols=(0.3, 0.7), step=9, below=None):
+        """Screen position of the button ``ident`` in the sidebar, found by probing: first
+        where it was last seen and outwards from there; else down from the button
+        ``below`` (one drawn above it) when that was seen, else from the top. ``cols``:
+        fractions of the panels' width, or (> 1) pixels from their right edge."""
+        (x, top, w, h), (left, right) = self.sidebar()
+        xs = [int(left + f * (right - left)) if f <= 1 else int(right - f) for f in cols]
+        ys = list(range(top + 6, top + h - 6, step))
+        if ident in self.cache:
+            y0 = self.cache[ident][1]
+            ys.sort(key=lambda y: abs(y - y0))
+        elif below in self.cache:
+            y0 = self.cache[below][1]
+            ys = [y for y in ys if y > y0] + [y for y in ys if y <= y0]
+        for y in ys:
+            for px in xs:
+                got = self.probe(px, y, kind)
+                if got:
+                    self.cache.setdefault(got, (px, y))
+                    if got == ident:
+                        self.cache[got] = (px, y)
+                        return px, y
+        raise GuiError(f"no button '{ident}' found in the sidebar (probed {len(ys) * len(xs)} "
+                       f"places with {'Ctrl+C' if kind == 'op' else 'Ctrl+Shift+C'})")
+
+    def press(self, ident, kind="op", cols=(0.3, 0.7), timeout=180, below=None):
+        t = time.monotonic()
+        n = self.probes
+        x, y = self.find(ident, kind, cols, below=below)
+        self.log(f"  {ident} found at ({x}, {y}) after {self.probes - n} probes, "
+                 f"{time.monotonic() - t:.1f} s")
+        since = len(self.log_lines())
+        self.s.click(x, y)
+        self.s.wait_idle(timeout=timeout)  # a long operator blocks Blender's loop until done
+        if kind == "op":
+            self.operator_ran(ident, since)
+        return x, y
+
+    def grab_checked(self, name, crop=None, min_colours=24):
+        """A screenshot (the screen or a crop) saved as ``name``.png; fails when blank."""
+        img = self.s.grab()
+        part = img if crop is None else img[crop[1]:crop[1] + crop[3], crop[0]:crop[0] + crop[2]]
+        flat = part.reshape(-1, 3)
+        colours = len(np.unique(flat[:: max(1, len(flat) // 200000)], axis=0))
+        self.check(colours >= min_colours and float(flat.std()) > 4.0,
+                   f"screenshot '{name}' is blank ({colours} colours, std {flat.std():.1f})")
+        path = self.out / f"{name}.png"
+        self.s.save(img, path, crop)
+        self.shots[name] = (path, crop, img)
+        return img
+
+    def sidebar_shot(self, name, y_range=None):
+        (x, top, w, h), _ = self.sidebar()
+        y0, y1 = y_range or (top, top + h)
+        return self.grab_checked(name, (x, y0, w, y1 - y0))
+
+    def reports(self):
+        """Every report Blender showed in its window so far (the Info editor's text, types
+        not included): the status bar's messages, errors included."""
+        return self.s.py('''
+a = area("DOPESHEET_EDITOR")
+old = a.type, a.ui_type
+a.type = "INFO"
+with bpy.context.temp_override(window=window(), area=a,
+                               region=next(r for r in a.regions if r.type == "WINDOW")):
+    bpy.ops.info.select_all(action="SELECT")
+    bpy.ops.info.report_copy()
+text = take_clipboard()
+a.type, a.ui_type = old
+result = text.splitlines()''')
+
+    def log_lines(self):
+        return (self.work / "blender.log").read_text(errors="replace").splitlines()
+
+    def operator_ran(self, ident, since):
+        """Blender's log (--log-level info) since line ``since``: fails unless ``ident``
+        was started and finished (a Cancelled operator reported an error in the window)."""
+        lines = self.log_lines()[since:]
+        op = f"bpy.ops.{ident}("
+        started = [ln for ln in lines if "Started" in ln and op in ln]
+        bad = [ln for ln in lines if "Cancelled" in ln and op in ln]
+        if bad or not started:
+            why = self.reports()[-3:]
+            raise GuiError(f"{ident} {'was cancelled' if bad else 'never started'} after the "
+                           f"click; last reports: {why}")
+
+    # --- the scenario -------------------------------------------------------------------
+
+    def run(self):
+        self.work = Path(tempfile.mkdtemp(prefix="motion_patches-gui-", dir="/tmp"))
+        self.user_dir = self.work / "user"
+        (self.work / "home").mkdir(parents=True)
+        if self.out.exists():
+            for old in self.out.glob("*.png"):
+                old.unlink()
+        self.out.mkdir(parents=True, exist_ok=True)
+        try:
+            if not self.step("build and install the extension zip", self.build_and_install):
+                return
+            self.s = Session(self.work, self.user_dir, size=(1920, 1200), log=self.log)
+            try:
+                for name, fn in self.scenario():
+                    # A failed check of the scene alone does not stop the scenario; a step
+                    # that could not do what the next ones build on does.
+                    if not self.step(name, fn) and fn not in self.non_blocking:
+                        break
+            finally:
+                try:  # what the window showed as reports, for whoever reads a failure
+                    (self.out / "reports.txt").write_text("\n".join(self.reports()) + "\n")
+                except Exception as exc:
+                    self.log(f"could not read the reports: {exc}")
+                self.s.stop()
+                self.step("Blender's log: no traceback, no error", self.check_log)
+        finally:
+            self.write_docs()
+            self.summary()
+            if not self.args.keep:
+                shutil.rmtree(self.work, ignore_errors=True)
+
+    def scenario(self):
+        return [
+            ("start Blender under Xvfb (llvmpipe)", self.start),
+            ("scene: mocap, walker, goal, chair (Python)", self.make_scene),
+            ("sidebar: N, then a click on the Motion Patches tab", self.open_tab),
+            ("Locomotion Patches: + turn clip, Bake", self.bake),
+            ("Object Patch: + clip, Tag Object Patch", self.tag),
+            ("Planning: Plan Path", self.plan),
+            ("scene frame range follows the plan", self.frame_range),
+            ("Analysis: Analyse Motion", self.analyse),
+            ("Overlay: Show Planner Overlay, top view", self.overlay_top),
+            ("Overlay: perspective view, depth", self.overlay_perspective),
+            ("Preferences: the add-on's defaults", self.preferences),
+        ]
+
+    @property
+    def non_blocking(self):
+        """Steps whose failure leaves the scene as the next steps need it."""
+        return (self.frame_range, self.overlay_top, self.overlay_perspective)
+
+    def start(self):
+        self.s.start()
+        info = self.s.py('''
+import addon_utils, gpu, sys
+result = dict(enabled=addon_utils.check(%r), gpu=gpu.platform.renderer_get(),
+              version=bpy.app.version_string, size=[window().width, window().height])''' % MODULE)
+        self.check(info["enabled"] == [True, True], f"add-on not enabled in the window: {info}")
+        self.check(info["size"] == [1920, 1200], f"window is {info['size']}, not 1920x1200")
+        self.facts["gpu"] = info["gpu"]
+        self.s.py(f'import sys\nmp = sys.modules["{MODULE}"]\nresult = 1')
+        return f"{info['version']}, {info['gpu']}, window {info['size'][0]}x{info['size'][1]}"
+
+    def make_scene(self):
+        mocap = Path(os.environ.get("MOTION_PATCHES_MOCAP") or REPO.parent / "shared" / "mocap")
+        cmu = mocap / "cmu"
+        for f in ("16_15", "16_18", "16_06"):
+            self.check((cmu / f"{f}.bvh").exists(), f"mocap {cmu}/{f}.bvh not found")
+        self.s.py(f'''
+import numpy as np
+scene = bpy.context.scene
+for ob in list(scene.objects):
+    if ob.type in ("MESH", "LIGHT"):  # the startup cube and light (its icon in the views)
+        bpy.data.objects.remove(ob)
+scene.render.fps = 30
+arm, acts = mp.api.import_mocap([{str(cmu / "16_15.bvh")!r}, {str(cmu / "16_18.bvh")!r},
+                                 {str(cmu / "16_06.bvh")!r}], name="Source")
+s = scene.motion_patches
+s.source_armature, s.straight_action = arm, acts[0]
+arm.hide_set(True)
+walker = arm.copy()
+walker.name = "Walker"
+walker.animation_data_clear()
+scene.collection.objects.link(walker)
+walker.location = (0.5, 1.5, 0.0)  # off the world's axes (red and green lines)
+walker.rotation_euler = (0, 0, np.pi / 2)  # the rig's rest faces -Y: face +X
+goal = bpy.data.objects.new("Goal", None)
+goal.empty_display_type = "SINGLE_ARROW"
+scene.collection.objects.link(goal)
+goal.location = (6.5, 1.5, 0.0)
+goal.rotation_euler = (0, 0, np.pi / 2)  # its -Y (the facing) along +X
+s.goal = goal
+bpy.ops.mesh.primitive_cube_add(size=1.0, location=(3.5, 1.5, 0.25))
+chair = bpy.context.active_object
+chair.name = "Chair"
+chair.scale = (0.4, 0.44, 0.5)
+for ob in scene.objects:
+    ob.select_set(False)
+bpy.context.view_layer.objects.active = None
+result = 1''')
+        return ("Source (16_15, 16_18, 16_06 at 30 fps), Walker facing +X, Goal 6 m ahead, "
+                "Chair 0.4 m half way")
+
+    def open_tab(self):
+        view = self.s.py('result = rect(region("VIEW_3D", "WINDOW"))')
+        self.s.key("n", at=(view[0] + view[2] // 2, view[1] + view[3] // 2))
+        self.s.wait_idle()
+        ok = self.s.py('result = area("VIEW_3D").spaces[0].show_region_ui')
+        self.check(ok, "N over the viewport did not open the sidebar")
+        (x, top, w, h), _ = self.sidebar()
+        # The tabs run down the sidebar's outer edge; click down it until ours is active.
+        for y in range(top + 10, top + h, 24):  # a tab is at least ~35 px long
+            self.s.click(x + w - 13, y)
+            cat = self.s.py('result = region("VIEW_3D", "UI").active_panel_category')
+            if cat == TAB:
+                break
+        else:
+            raise GuiError(f"clicking down the sidebar's tabs never made '{TAB}' active")
+        self.settle()
+        self.sidebar_shot("01-sidebar")
+        return f"tab clicked at y={y}"
+
+    def bake(self):
+        self.press("motion_patches.turn_add", cols=(12,))
+        n = self.s.py('result = len(bpy.context.scene.motion_patches.turn_actions)')
+        self.check(n == 1, f"+ beside the turn list left {n} rows (want 1)")
+        self.s.py('s = bpy.context.scene.motion_patches\n'
+                  's.turn_actions[0].action = bpy.data.actions["16_18"]\nresult = 1')
+        self.settle()
+        t = time.monotonic()
+        self.press("motion_patches.bake_locomotion_patch", timeout=300,
+                   below="motion_patches.turn_add")
+        secs = time.monotonic() - t
+        stats = self.s.py('''
+import json
+s = bpy.context.scene.motion_patches
+result = [len(s.patches), json.loads(s.patches[0].stats) if len(s.patches) else None]''')
+        self.check(stats[0] == 1 and stats[1]["kept"] > 100,
+                   f"Bake did not leave a patch with kept segments: {stats}")
+        self.settle()
+        self.sidebar_shot("02-locomotion-baked")
+        # Collapse the Locomotion panel (a click on its header, the sidebar's first) so the
+        # others fit below it.
+        (x, top, w, h), (left, right) = self.sidebar()
+        self.s.click(left + 60, top + 13)
+        self.settle()
+        return f"{stats[1]['kept']} segments kept, {stats[1]['culled']} culled, {secs:.0f} s"
+
+    def tag(self):
+        self.s.py('''
+chair = bpy.data.objects["Chair"]
+chair.select_set(True)
+bpy.context.view_layer.objects.active = chair
+result = 1''')
+        self.settle()
+        self.press("motion_patches.clip_add", cols=(12,))
+        n = self.s.py('result = len(bpy.data.objects["Chair"].motion_patch.clips)')
+        self.check(n == 1, f"+ beside the clip list left {n} rows (want 1)")
+        self.s.py('c = bpy.data.objects["Chair"].motion_patch.clips[0]\n'
+                  'c.action = bpy.data.actions["16_06"]\nc.kind = "TRAVERSAL"\nresult = 1')
+        self.settle()
+        self.press("motion_patches.tag_object_patch", below="motion_patches.clip_add")
+        ok = self.s.py('result = bpy.data.objects["Chair"].motion_patch.enabled')
+        self.check(ok, "Tag Object Patch did not tag the chair")
+        self.settle()
+        self.sidebar_shot("03-object-patch")
+
+    def plan(self):
+        self.s.py('''
+for ob in bpy.context.scene.objects:
+    ob.select_set(False)
+w = bpy.data.objects["Walker"]
+w.select_set(True)
+bpy.context.view_layer.objects.active = w
+result = 1''')
+        self.settle()
+        self.press("motion_patches.plan_path", cols=(0.25,))
+        res = self.s.py('''
+import json
+w = bpy.data.objects["Walker"]
+ad = w.animation_data
+tracks = [t.name for t in ad.nla_tracks] if ad else []
+meta, arrays = mp.api.load_plan_record(w) if mp.api.PLAN_KEY in w else (None, None)
+sc = bpy.context.scene
+result = dict(tracks=tracks, strips=sum(len(t.strips) for t in ad.nla_tracks) if ad else 0,
+              plan=[meta["frame_start"], meta["frame_end"]] if meta else None,
+              traversals=meta.get("traversals") if meta else None,
+              scene=[sc.frame_start, sc.frame_end])''')
+        self.check(res["plan"] is not None, "Plan Path left no plan record on the Walker")
+        self.check("MP motion" in res["tracks"] and res["strips"] > 0,
+                   f"Plan Path wrote no NLA strips on the Walker: {res}")
+        self.facts["plan"] = res
+        self.settle()
+        self.sidebar_shot("04-planning")
+        return (f"tracks {res['tracks']}, frames {res['plan'][0]}-{res['plan'][1]}, scene range "
+                f"{res['scene'][0]}-{res['scene'][1]}, traversals {res['traversals']}")
+
+    def frame_range(self):
+        res = self.facts["plan"]
+        self.check(res["scene"] == res["plan"],
+                   f"the scene's frame range {res['scene']} does not follow the plan "
+                   f"{res['plan']} (the scene's was Blender's default 1-250)")
+        return f"{res['scene'][0]}-{res['scene'][1]}"
+
+    def analyse(self):
+        self.press("motion_patches.analyse_motion", timeout=300, below="motion_patches.plan_path")
+        fig = self.s.py('''
+import json
+w = bpy.data.objects["Walker"]
+raw = w.get("motion_patches_analysis")
+result = json.loads(raw) if raw else None''')
+        self.check(fig is not None and "foot_skate" in fig,
+                   "Analyse Motion stored no figures on the Walker")
+        self.settle()
+        self.sidebar_shot("05-analysis")
+        return (f"foot skate {fig['foot_skate']['mean_cm_per_frame']:.2f} cm/frame, goal error "
+                f"{fig['goal_position_error_cm']:.1f} cm")
+
+    # --- overlay ------------------------------------------------------------------------
+
+    def view_state(self):
+        """Projection of the planned path and of the chair into screen pixels, from Blender:
+        {"path": [[x, y, hidden]], "chair": [[x, y]] (inside its outline), "view": rect}."""
+        return self.s.py('''
+import numpy as np
+from bpy_extras.view3d_utils import location_3d_to_region_2d, region_2d_to_origin_3d
+from mathutils import Vector
+reg = region("VIEW_3D", "WINDOW")
+r3d = area("VIEW_3D").spaces[0].region_3d
+rx, ry, rw, rh = rect(reg)
+w = bpy.data.objects["Walker"]
+meta, arrays = mp.api.load_plan_record(w)
+g = arrays["ground"]
+dg = bpy.context.evaluated_depsgraph_get()
+chair = bpy.data.objects["Chair"]
+def screen(p):
+    v = location_3d_to_region_2d(reg, r3d, Vector(p))
+    return None if v is None else (rx + v.x, ry + rh - v.y)
+def hidden(p):
+    """True when something (the chair) lies between the eye and p."""
+    p = Vector(p)
+    v = location_3d_to_region_2d(reg, r3d, p)
+    eye = region_2d_to_origin_3d(reg, r3d, v) if v is not None else None
+    if eye is None:
+        return True
+    d = p - eye
+    hit, loc, *_ = bpy.context.scene.ray_cast(dg, eye, d.normalized(), distance=d.length - 0.02)
+    return bool(hit)
+# What covers the viewport: the other regions of its area (the sidebar overlaps it), and
+# the walker's bones at the start, the goal's arrow at the end (drawn over the ground).
+covers = [rect(r) for r in area("VIEW_3D").regions if r.type != "WINDOW" and r.width > 1
+          and r.height > 1]
+def covered(x, y):
+    return any(cx - 6 <= x < cx + cw + 6 and cy - 6 <= y < cy + ch + 6 for cx, cy, cw, ch in covers)
+ends = [Vector(w.matrix_world.translation), Vector(bpy.data.objects["Goal"].matrix_world.translation)]
+path = []
+for k in np.linspace(0, len(g) - 1, 80).astype(int):
+    p = (float(g[k, 0]), float(g[k, 1]), 0.01)
+    s = screen(p)
+    if (s and rx + 4 <= s[0] < rx + rw - 4 and ry + 4 <= s[1] < ry + rh - 4
+            and not covered(*s) and min((Vector(p) - e).xy.length for e in ends) > 0.6):
+        path.append([s[0], s[1], hidden(p)])
+m = chair.matrix_world
+inside = []
+for u in np.linspace(-0.35, 0.35, 7):   # points on the chair's faces the eye sees
+    for v in np.linspace(-0.35, 0.35, 7):
+        for local, normal in (((u, v, 0.5), (0, 0, 1)), ((u, -0.5, 0.5 + v), (0, -1, 0)),
+                              ((-0.5, u, 0.5 + v), (-1, 0, 0)), ((0.5, u, 0.5 + v), (1, 0, 0)),
+                              ((u, 0.5, 0.5 + v), (0, 1, 0))):
+            p = m @ Vector(local)
+            s = screen(p)
+            v2 = location_3d_to_region_2d(reg, r3d, p)
+            eye = region_2d_to_origin_3d(reg, r3d, v2) if v2 is not None else None
+            n = (m.to_3x3() @ Vector(normal)).normalized()
+            if (s and eye is not None and n.dot((eye - p).normalized()) > 0.3
+                    and not hidden(p) and not covered(*s)):
+                inside.append(list(s))
+result = dict(path=path, chair=inside, view=[rx, ry, rw, rh], covers=covers,
+              ends=[list(p) for p in (screen(e) for e in ends) if p])''')
+
+    def overlay_pixels(self, img_off, img_on, st, name):
+        """The overlay is where it must be and nowhere it must not: along the visible
+        planned path a path colour appears (with the overlay, not without it), behind the
+        chair and inside its outline the picture does not change with the overlay."""
+        def near_colour(img, x, y, r=3):
+            patch = img[max(0, y - r):y + r + 1, max(0, x - r):x + r + 1].reshape(-1, 3).astype(float)
+            d = np.abs(patch[:, None, :] - PATH_COLOURS[None]).max(axis=2)
+            return bool((d <= COLOUR_TOLERANCE).any())
+        visible = [(int(round(x)), int(round(y))) for x, y, hid in st["path"] if not hid]
+        hidden = [(int(round(x)), int(round(y))) for x, y, hid in st["path"] if hid]
+        self.check(len(visible) >= 10, f"{name}: only {len(visible)} path points in view")
+        hits = [near_colour(img_on, x, y) for x, y in visible]
+        before = [near_colour(img_off, x, y) for x, y in visible]
+        frac = float(np.mean(hits))
+        changed = float(np.mean([hits[i] and not before[i] for i in range(len(hits))]))
+        self.check(frac >= 0.8, f"{name}: the path colour shows at only {frac:.0%} of "
+                                f"{len(visible)} visible path points (want >= 80 %)")
+        self.check(changed >= 0.6, f"{name}: the path colour was already there without the "
+                                   f"overlay at {1 - changed:.0%} of the points")
+        diff = [float(np.abs(img_on[y, x].astype(int) - img_off[y, x].astype(int)).max())
+                for x, y in (tuple(map(int, map(round, p))) for p in st["chair"])]
+        self.check(diff and max(diff) <= 12,
+                   f"{name}: the overlay shows through the chair (largest change inside its "
+                   f"outline {max(diff) if diff else 'n/a'} of 255; depth test?)")
+        through = [p for p in hidden if near_colour(img_on, *p, r=1)
+                   and not near_colour(img_off, *p, r=1)]
+        self.check(len(through) <= max(1, len(hidden) // 5),
+                   f"{name}: {len(through)} of {len(hidden)} path points behind the chair "
+                   f"show the path colour")
+        return (f"path colour at {frac:.0%} of {len(visible)} visible points; chair outline "
+                f"unchanged (max {max(diff):.0f}); {len(hidden)} hidden points, "
+                f"{len(through)} showing")
+
+    def overlay_top(self):
+        self.press("motion_patches.show_overlay", kind="prop", cols=(0.1, 0.3),
+                   below="motion_patches.analyse_motion")
+        on = self.s.py('result = bpy.context.scene.motion_patches.show_overlay')
+        self.check(on, "the Show Planner Overlay checkbox did not turn the overlay on")
+        self.settle()
+        self.sidebar_shot("06-overlay-panel")
+        # Nothing selected: a selected object's orange outline would pass for the path.
+        self.s.py('for ob in bpy.context.scene.objects:\n    ob.select_set(False)\nresult = 1')
+        view = self.s.py('result = rect(region("VIEW_3D", "WINDOW"))')
+        self.s.key("KP_7", at=(view[0] + view[2] // 3, view[1] + view[3] // 2))
+        self.s.wait_idle()
+        top = self.s.py('''
+r3d = area("VIEW_3D").spaces[0].region_3d
+r3d.view_perspective = "ORTHO"
+r3d.view_location = (4.2, 1.5, 0.0)  # the whole path left of the sidebar
+r3d.view_distance = 6.4
+redraw_all()
+result = r3d.view_rotation.to_euler()[:]''')
+        self.check(max(abs(a) for a in top) < 1e-3, f"numpad 7 did not give the top view ({top})")
+        return self.overlay_pair("07-overlay-top")
+
+    def overlay_pair(self, name):
+        """Screenshots of the viewport with the overlay off, then on; pixel checks."""
+        self.s.move(5, 5)
+        self.s.py('bpy.context.scene.motion_patches.show_overlay = False\nredraw_all()\nresult=1')
+        self.s.wait_idle()
+        time.sleep(0.3)
+        view = self.s.py('result = rect(region("VIEW_3D", "WINDOW"))')
+        img_off = self.s.grab()
+        self.s.py('bpy.context.scene.motion_patches.show_overlay = True\nredraw_all()\nresult=1')
+        self.s.wait_idle()
+        time.sleep(0.3)
+        st = self.view_state()
+        img_on = self.grab_checked(name, crop=tuple(view))
+        (self.out / f"{name}.json").write_text(json.dumps(st))
+        pts = np.array([p[:2] for p in st["path"]] + st["chair"] + st["ends"]) - np.array(view[:2])
+        if len(pts):  # the README's cut: the plan with a margin, between toolbar and sidebar
+            lo, hi = pts.min(axis=0) - 110, pts.max(axis=0) + 110
+            left, right = 0, view[2]
+            for cx, cy, cw, ch in st["covers"]:
+                if ch > view[3] // 2:  # a region down the side: the toolbar or the sidebar
+                    if cx - view[0] < view[2] // 2:
+                        left = max(left, cx - view[0] + cw)
+                    else:
+                        right = min(right, cx - view[0])
+            self.doc_boxes[name] = (max(int(lo[0]), left), max(int(lo[1]), 0),
+                                    min(int(hi[0]), right), min(int(hi[1]), view[3]))
+        self.s.save(img_off, self.out / f"{name}-off.png", crop=tuple(view))
+        return self.overlay_pixels(img_off, img_on, st, name)
+
+    def overlay_perspective(self):
+        # From the side, low, the path running across the view behind the chair: what
+        # lies on the ground behind it (the far half of its blocked area, clip markers, the
+        # traversal's ground line) must be hidden by it.
+        self.s.py('''
+from mathutils import Euler
+import math
+r3d = area("VIEW_3D").spaces[0].region_3d
+r3d.view_perspective = "PERSP"
+r3d.view_location = (3.9, 1.6, 0.2)
+r3d.view_rotation = Euler((math.radians(72), 0.0, math.radians(-12)), "XYZ").to_quaternion()
+r3d.view_distance = 3.6
+redraw_all()
+result = 1''')
+        return self.overlay_pair("08-overlay-perspective")
+
+    # --- preferences --------------------------------------------------------------------
+
+    def preferences(self):
+        self.s.py(f'''
+bpy.context.preferences.active_section = "ADDONS"
+bpy.context.window_manager.addon_search = "Motion"
+with override("VIEW_3D"):
+    bpy.ops.screen.userpref_show()
+result = 1''')
+        self.s.wait_idle()
+        time.sleep(0.5)
+        win = self.s.py(f'''
+import addon_utils
+wins = bpy.context.window_manager.windows
+pw = wins[-1]
+result = None
+if len(wins) > 1:
+    with bpy.context.temp_override(window=pw, area=pw.screen.areas[0]):
+        bpy.ops.preferences.addon_expand(module={MODULE!r})
+    for a in pw.screen.areas:
+        a.tag_redraw()
+    result = [pw.x, pw.y, pw.width, pw.height, pw.screen.areas[0].type]''')
+        self.check(win is not None and win[4] == "PREFERENCES",
+                   f"the Preferences window did not open: {win}")
+        self.s.wait_idle()
+        # The window's own position on the X screen (Blender's x, y are from the bottom).
+        x, y, w, h = win[:4]
+        x, y = max(0, x), max(0, 1200 - (y + h))
+        self.s.move(x + w // 2, y + h // 2)
+        self.s.move(x + w // 2 + 5, y + h // 2 + 5)
+        self.s.wait_idle()
+        # Scroll (the wheel, over the add-on list) down to the add-on's own preferences.
+        for _ in range(4):
+            self.s.xdo("click", 5)
+            self.s.wait_idle()
+        time.sleep(0.5)
+        self.grab_checked("09-preferences", crop=(x, y, min(w, 1920 - x), min(h, 1200 - y)))
+        return f"window {w}x{h} at {x},{y}"
+
+    # --- log, docs, summary -------------------------------------------------------------
+
+    def check_log(self):
+        text = (self.work / "blender.log").read_text(errors="replace")
+        shutil.copy(self.work / "blender.log", self.out / "blender.log")
+        bad = [ln for ln in text.splitlines() if LOG_BAD.search(ln) and not LOG_ALLOWED.fullmatch(ln)]
+        self.check(not bad, "Blender's log has errors:\n  " + "\n  ".join(bad[:20]))
+        return f"{len(text.splitlines())} lines, clean"
+
+    def write_docs(self):
+        """The README's screenshots (docs/gui): the sidebar in three states side by side,
+        the overlay from the top and in perspective (cut to the plan), the preferences;
+        256-colour PNGs, a few hundred KB in all."""
+        if not self.args.docs or not hasattr(self, "s"):
+            return
+        need = ("02-locomotion-baked", "03-object-patch", "05-analysis", "07-overlay-top",
+                "08-overlay-perspective", "09-preferences")
+        if not all(n in self.shots for n in need):
+            self.log("docs not written: the suite did not get as far as every screenshot")
+            return
+        docs = Path(self.args.docs)
+        docs.mkdir(parents=True, exist_ok=True)
+
+        def cut(name, w=None):
+            path, crop, img = self.shots[name]
+            x, y, cw, ch = crop
+            return img[y:y + ch, x:x + (w or cw)]
+        panel_w = self.sidebar_panel_width
+        parts = [cut(n, panel_w) for n in need[:3]]
+        h = max(p.shape[0] for p in parts)
+        gap = np.full((h, 6, 3), 255, np.uint8)
+        row = [np.pad(p, ((0, h - p.shape[0]), (0, 0), (0, 0)), constant_values=255) for p in parts]
+        sidebar = np.hstack([row[0], gap, row[1], gap, row[2]])
+        written = [self.s.save(sidebar, docs / "sidebar.png", palette=True)]
+        for name, out in (("07-overlay-top", "overlay-top.png"),
+                          ("08-overlay-perspective", "overlay-perspective.png")):
+            img = cut(name)
+            box = self.doc_boxes.get(name)
+            if box:
+                x0, y0, x1, y1 = box
+                img = img[max(0, y0):y1, max(0, x0):x1]
+            written.append(self.s.save(img, docs / out, scale=0.75, palette=True))
+        written.append(self.s.save(cut("09-preferences"), docs / "preferences.png", palette=True))
+        sizes = ", ".join(f"{p.name} {p.stat().st_size // 1024} KiB" for p in written)
+        self.log(f"docs: {sizes}")
+
+    def summary(self):
+        ok = all(st.ok for st in self.steps) and self.steps
+        total = time.monotonic() - self.t0
+        print("\n== GUI suite summary" + (f" (Blender {self.facts['blender']})"
+                                          if "blender" in self.facts else ""))
+        for st in self.steps:
+            mark = "PASS" if st.ok else "FAIL"
+            first = (st.detail.splitlines() or [""])[0]
+            print(f"  {mark}  {st.name} ({st.seconds:.1f} s){': ' + first if first else ''}")
+            if not st.ok and len(st.detail.splitlines()) > 1:
+                print("        " + "\n        ".join(st.detail.splitlines()[1:40]))
+        print(f"  screenshots: {self.out}")
+        passed = sum(1 for st in self.steps if st.ok)
+        print(f"\ngui: {passed} passed, {len(self.steps) - passed} failed")
+        print(f"GUI suite: {'PASS' if ok else 'FAIL'} ({total:.0f} s)")
+        (self.out / "summary.json").write_text(json.dumps({
+            "ok": bool(ok), "seconds": round(total, 1), "facts": self.facts,
+            "steps": [{"name": s.name, "ok": s.ok, "detail": s.detail, "seconds": round(s.seconds, 1)}
+                      for s in self.steps]}, indent=1, default=str))
+        self.ok = bool(ok)
+
+
+def _without_allowed(text):
+    return "\n".join(ln for ln in text.splitlines() if not LOG_ALLOWED.fullmatch(ln))
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", default=str(REPO / "dist" / "gui"),
+                    help="where the screenshots, Blender's log and summary.json go")
+    ap.add_argument("--docs", default=None, help="also write the README's screenshots here")
+    ap.add_argument("--keep", action="store_true", help="keep the temporary Blender home")
+    args = ap.parse_args(argv)
+    suite = Suite(args)
+    suite.run()
+    return 0 if suite.ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
