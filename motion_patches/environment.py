@@ -488,15 +488,19 @@ class Environment:
 
     def blocked(self, points, exclude=(), radius=None):
         """(N,) True where world points come within the radius (or ``radius``, at most a
-        tile side more) of any obstacle. Many points (``RASTER_MIN_POINTS`` or more) go
-        through the clearance raster first; the answer is the exact test's either way."""
+        tile side more) of any obstacle but those named in ``exclude``. Many points
+        (``RASTER_MIN_POINTS`` or more) go through the clearance raster first; the answer
+        is the exact test's either way."""
         points = np.atleast_2d(np.asarray(points, float))
         radius = self.radius if radius is None else float(radius)
-        if (len(points) >= RASTER_MIN_POINTS and not exclude and self.obstacles
+        if (len(points) >= RASTER_MIN_POINTS and self.obstacles
                 and radius + self.rho <= self.cap and self._rasterable(points)):
             out, unsure = self.decided(*self._raster_rows(points), radius)
+            if exclude:  # the raster holds every footprint: it can only clear a point
+                unsure |= out
+                out[:] = False
             if unsure.any():
-                out[unsure] = self._blocked_exact(points[unsure], (), radius)
+                out[unsure] = self._blocked_exact(points[unsure], exclude, radius)
             return out
         return self._blocked_exact(points, exclude, radius)
 

@@ -43,10 +43,19 @@ class PatchClip:
         return self.motion.ground[-1]
 
     def length(self):
-        return float(np.linalg.norm(np.diff(self.motion.ground[:, :2], axis=0), axis=1).sum())
+        """Metres the ground frame travels (computed once: a clip's motion is fixed)."""
+        got = self.__dict__.get("_length")
+        if got is None:
+            got = self.__dict__["_length"] = float(
+                np.linalg.norm(np.diff(self.motion.ground[:, :2], axis=0), axis=1).sum())
+        return got
 
     def turn(self):
-        return float(np.abs(np.diff(np.unwrap(self.motion.ground[:, 2]))).sum())
+        """Radians the ground frame turns in all (computed once)."""
+        got = self.__dict__.get("_turn")
+        if got is None:
+            got = self.__dict__["_turn"] = float(np.abs(np.diff(np.unwrap(self.motion.ground[:, 2]))).sum())
+        return got
 
     def rotated(self, angle):
         m = self.motion.transformed(0.0, 0.0, angle)

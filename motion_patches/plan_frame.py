@@ -70,6 +70,6 @@ def local_prop(prop, frame):
     x, y, h = prop.pose
     p = to_local(frame, np.array([x, y]))
     out = replace(prop, pose=(float(p[0]), float(p[1]), float(h - frame[2])))
-    if "_bins" in prop.__dict__:  # density bins are in prop coordinates: still valid
-        out.__dict__["_bins"] = prop.__dict__["_bins"]
+    prop.density_bins()  # in prop coordinates: computed once, on the prop itself, and shared
+    out.__dict__["_bins"] = prop.__dict__["_bins"]
     return out

@@ -725,28 +725,40 @@ class SegmentPlanner:
         the tile of the copy's entry keyframe, where its stitched edges start."""
         out = []
         self.bin_culled = 0
+        per_metre = self._per_metre
         for pi, prop in enumerate(self.props):
-            x, y = prop.pose[0], prop.pose[1]
+            x, y, heading = prop.pose
             if not self.in_region(*self.env.tile_of((x, y))):
                 continue
-            occluded = prop.occluded_bins(self.env.obstacles.values())
+            which = np.array([ci for ci, clip in enumerate(prop.clips) if clip.kind == "traversal"], int)
+            if which.size == 0:
+                continue
+            # Density bins: another prop there culls the copies starting or ending in them.
+            lo, hi = prop.extended_bounds()
+            box = prop.to_world(np.array([[lo[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]], [hi[0], lo[1]]]))
+            near = [self.env.obstacles[n] for n in self.env.names_in_box(box.min(axis=0), box.max(axis=0))]
+            occluded = prop.occluded_bins(near)
             _, clip_bins = prop.density_bins()
-            for ci, clip in enumerate(prop.clips):
-                if clip.kind != "traversal":
-                    continue
-                if occluded[clip_bins[ci]].any():  # density bins: another prop is there
-                    self.bin_culled += 1
-                    continue
-                w = prop.world_clip(clip)
-                e, xg = w.ground[0], w.ground[-1]
-                d = float(np.linalg.norm(e[:2] - start[:2]))
-                approach = (self.alpha * d
-                            + self.gamma * self.patch.effort_rate * d / self.max_speed)
-                cost = (self.alpha * clip.length() + self.beta * clip.turn()
-                        + self.gamma * clip.effort)
-                h = float(self.state_heuristic(xg[None, :2], np.array([xg[2]]))[0])
-                ti, tj = self.env.tile_of(e[:2])  # the tile stitching indexes for the entry
-                out.append((approach + cost + h, pi, ci, int(pack(ti, tj, 0)) // LOCAL))
+            keep = ~occluded[clip_bins[which]].any(axis=1)
+            self.bin_culled += int(np.count_nonzero(~keep))
+            which = which[keep]
+            if which.size == 0:
+                continue
+            c, s = np.cos(heading), np.sin(heading)
+            ends = np.array([(prop.clips[ci].entry, prop.clips[ci].exit) for ci in which.tolist()])
+            wx = c * ends[..., 0] - s * ends[..., 1] + x   # as ObjectPatch.world_clip moves them
+            wy = s * ends[..., 0] + c * ends[..., 1] + y
+            wh = ends[..., 2] + heading
+            approach = per_metre * np.hypot(wx[:, 0] - start[0], wy[:, 0] - start[1])
+            cost = np.array([self.alpha * prop.clips[ci].length() + self.beta * prop.clips[ci].turn()
+                             + self.gamma * prop.clips[ci].effort for ci in which.tolist()])
+            h = self.state_heuristic(np.column_stack((wx[:, 1], wy[:, 1])), wh[:, 1])
+            # The tile stitching indexes for the entry, as a node key's tile id.
+            ti = np.floor(wx[:, 0] / self.env.side).astype(np.int64)
+            tj = np.floor(wy[:, 0] / self.env.side).astype(np.int64)
+            tiles = pack(ti, tj, 0) // LOCAL
+            out += list(zip((approach + cost + h).tolist(), [pi] * which.size, which.tolist(),
+                            tiles.tolist()))
         return out
 
 

@@ -17,7 +17,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import poses
-from .environment import distance_to_polygon
 from .node_keys import next_entry, pack
 
 POSITION_TOLERANCE = 0.2            # metres between the segment frame and the keyframe
@@ -50,15 +49,52 @@ class Stitch:
 
 
 def phase_pose_distance(gait, motion_frame_root, motion_frame_rot):
-    """(N,) pose distance of every phase of the straight loop to one pose."""
+    """(N,) pose distance of every phase of the straight loop to one pose (remembered per
+    loop and pose: every copy of a clip has the same keyframe poses)."""
     lp = gait.straight
-    f = poses.pose_features(lp.root_local, lp.rotations)
-    t = poses.pose_features(motion_frame_root[None], motion_frame_rot[None])[0]
-    return np.sqrt(((f - t) ** 2).sum(axis=1))
+    memo = lp.__dict__.setdefault("_pose_distances", {})
+    key = (np.asarray(motion_frame_root).tobytes(), np.asarray(motion_frame_rot).tobytes())
+    got = memo.get(key)
+    if got is None:
+        f = lp.__dict__.get("_pose_features")
+        if f is None:
+            f = lp.__dict__["_pose_features"] = poses.pose_features(lp.root_local, lp.rotations)
+        t = poses.pose_features(motion_frame_root[None], motion_frame_rot[None])[0]
+        got = memo[key] = np.sqrt(((f - t) ** 2).sum(axis=1))
+    return got
+
+
+def _cell_frames(patch):
+    """Per cell of the patch, the rows of ``patch.all_ground()`` (ascending) whose frame
+    lies within ``POSITION_TOLERANCE`` of the cell, and the segment of each row (cached
+    on the patch): a keyframe in the cell can only be matched by these frames."""
+    got = patch.__dict__.get("_stitch_cells")
+    if got is None:
+        ground, _, first = patch.all_ground()
+        owner = np.repeat(np.arange(first.size - 1), np.diff(first))
+        c, n = patch.cell_size, patch.cells
+        lo = np.clip(np.floor((ground[:, :2] - POSITION_TOLERANCE) / c), 0, n - 1).astype(int)
+        hi = np.clip(np.floor((ground[:, :2] + POSITION_TOLERANCE) / c), 0, n - 1).astype(int)
+        cells, rows = [], []
+        for dy in range(3):
+            for dx in range(3):
+                cx, cy = lo[:, 0] + dx, lo[:, 1] + dy
+                ok = np.flatnonzero((cx <= hi[:, 0]) & (cy <= hi[:, 1]))
+                cells.append(cy[ok] * n + cx[ok])
+                rows.append(ok)
+        cells, rows = np.concatenate(cells), np.concatenate(rows)
+        order = np.lexsort((rows, cells))
+        cells, rows = cells[order], rows[order]
+        start = np.searchsorted(cells, np.arange(n * n + 1))
+        got = patch.__dict__["_stitch_cells"] = [(rows[a:b], owner[rows[a:b]])
+                                                 for a, b in zip(start[:-1], start[1:])]
+    return got
 
 
 def _candidates(patch, env, state, phase_ok, exclude, at_entry, alpha, beta, gamma):
-    """Segments crossing the keyframe's cell with a frame close to ``state``."""
+    """Segments crossing the keyframe's cell with a frame close to ``state``: of each the
+    frame nearest the keyframe (the first, of equally near ones), kept when it is within
+    the position, heading and pose tolerances."""
     tile = env.tile_of(state[:2])
     origin = np.array(tile, float) * patch.side
     local = state[:2] - origin
@@ -66,55 +102,75 @@ def _candidates(patch, env, state, phase_ok, exclude, at_entry, alpha, beta, gam
     cell = int(np.clip(local[1] // c, 0, patch.cells - 1) * patch.cells
                + np.clip(local[0] // c, 0, patch.cells - 1))
     bit = np.uint64(1) << np.uint64(cell)
-    segs = np.flatnonzero((patch.seg_mask & bit) != 0)
-    if segs.size == 0:
-        return []
     ground, arc, first = patch.all_ground()
+    # Only the frames near the cell can lie within the tolerance of the keyframe, so the
+    # nearest frame of a segment crossing the cell is among them whenever it matters.
+    rows, owner = _cell_frames(patch)[cell]
+    keep = (patch.seg_mask[owner] & bit) != 0
+    rows, owner = rows[keep], owner[keep]
+    if rows.size == 0:
+        return []
+    d = np.hypot(ground[rows, 0] - local[0], ground[rows, 1] - local[1])
+    offs = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
+    segs = owner[offs]
     lens = first[segs + 1] - first[segs]
-    rows = np.repeat(first[segs] - np.concatenate(([0], np.cumsum(lens)[:-1])), lens) + np.arange(lens.sum())
-    d = np.linalg.norm(ground[rows, :2] - local, axis=1)
-    offs = np.concatenate(([0], np.cumsum(lens)[:-1]))
     best = np.minimum.reduceat(d, offs)
     # first index of the minimum within each segment's run
-    is_min = d == np.repeat(best, lens)
-    idx = np.flatnonzero(is_min)
-    owner = np.searchsorted(offs, idx, side="right") - 1
+    idx = np.flatnonzero(d == np.repeat(best, np.diff(np.r_[offs, d.size])))
+    run = np.searchsorted(offs, idx, side="right") - 1
+    mine, at = np.unique(run, return_index=True)
     firsts = np.full(segs.size, -1)
-    for o, i in zip(owner[::-1], idx[::-1]):
-        firsts[o] = i
-    f = firsts - offs                      # frame within the segment
+    firsts[mine] = idx[at]
+    f = rows[firsts] - first[segs]         # frame within the segment
     gr = ground[rows[firsts]]
     dh = np.abs((gr[:, 2] - state[2] + np.pi) % (2 * np.pi) - np.pi)
     n = patch.gait.frames
     ok = ((f >= 2) & (f <= lens - 3) & (best <= POSITION_TOLERANCE) & (dh <= HEADING_TOLERANCE)
           & phase_ok[f % n])
-    out = []
-    for k in np.flatnonzero(ok):
-        seg, fk = int(segs[k]), int(f[k])
-        g, s = patch.ground(seg)
-        used = g[:fk + 1] if at_entry else g[fk:]
-        if env.blocked(used[::2, :2] + origin, exclude=(exclude,)).any():
-            continue
-        length = s[fk] if at_entry else s[-1] - s[fk]
-        turn = float(np.abs(np.diff(used[:, 2])).sum())
-        frames = fk if at_entry else g.shape[0] - 1 - fk
-        effort = patch.effort_rate * frames / patch.gait.fps
-        # The eased stitch walks the position gap and turns the heading gap: pay for both,
-        # which also keeps the A* heuristic consistent across stitched edges.
-        cost = alpha * (length + best[k]) + beta * (turn + dh[k]) + gamma * effort
-        err = best[k] / POSITION_TOLERANCE + dh[k] / HEADING_TOLERANCE
-        out.append(Connection(tile, seg, fk, float(err), float(cost)))
-    out.sort(key=lambda cn: cn.cost)
-    return out[:MAX_PER_END]
+    ks = np.flatnonzero(ok)
+    if ks.size == 0:
+        return []
+    seg, fk, start = segs[ks], f[ks], first[segs[ks]]
+    end = first[seg + 1] - 1                  # last row of each segment
+    lo, hi = (start, start + fk) if at_entry else (start + fk, end)   # the used rows
+    # The used parts (every other frame) keep the radius from the other props: one test.
+    counts = (hi - lo) // 2 + 1
+    owner = np.repeat(np.arange(ks.size), counts)
+    tested = lo[owner] + 2 * (np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts))
+    hit = env.blocked(ground[tested, :2] + origin, exclude=(exclude,))
+    clear = ~np.logical_or.reduceat(hit, np.cumsum(counts) - counts)
+    length = arc[hi] - arc[lo]
+    turn = _turned(patch)[hi] - _turned(patch)[lo]
+    frames = hi - lo
+    effort = patch.effort_rate * frames / patch.gait.fps
+    # The eased stitch walks the position gap and turns the heading gap: pay for both,
+    # which also keeps the A* heuristic consistent across stitched edges.
+    cost = alpha * (length + best[ks]) + beta * (turn + dh[ks]) + gamma * effort
+    err = best[ks] / POSITION_TOLERANCE + dh[ks] / HEADING_TOLERANCE
+    keep = np.flatnonzero(clear)
+    keep = keep[np.argsort(cost[keep], kind="stable")][:MAX_PER_END]
+    return [Connection(tile, int(seg[k]), int(fk[k]), float(err[k]), float(cost[k])) for k in keep]
+
+
+def _turned(patch):
+    """(T,) radians turned along ``patch.all_ground()`` from each segment's first frame
+    to each row (cached on the patch): the turn between two frames of a segment is a
+    difference."""
+    got = patch.__dict__.get("_stitch_turned")
+    if got is None:
+        ground, _, first = patch.all_ground()
+        step = np.abs(np.diff(ground[:, 2]))
+        step[first[1:-1] - 1] = 0.0  # from one segment's last frame to the next's first
+        total = np.concatenate(([0.0], np.cumsum(step)))
+        got = patch.__dict__["_stitch_turned"] = total
+    return got
 
 
 def stitch(patch, env, prop, clip_index, alpha, beta, gamma):
     """Every edge a traversal copy adds to the low-level graph (maybe none)."""
     clip = prop.clips[clip_index]
     world = prop.world_clip(clip)
-    others = [env.obstacles[n] for n in env.obstacles if n != prop.name]
-    if any(np.any(distance_to_polygon(world.ground[:, :2], o.polygon) < CLIP_CLEARANCE)
-           for o in others if _near(o, world.ground[:, :2])):
+    if env.blocked(world.ground[:, :2], exclude=(prop.name,), radius=CLIP_CLEARANCE).any():
         return []  # another prop stands in the way of the jump itself
     gait = patch.gait
     d_in = phase_pose_distance(gait, clip.motion.root_local[0], clip.motion.rotations[0])
@@ -126,17 +182,11 @@ def stitch(patch, env, prop, clip_index, alpha, beta, gamma):
     outs = _candidates(patch, env, world.ground[-1], d_out <= POSE_TOLERANCE * d_out.min(),
                        prop.name, False, alpha, beta, gamma)
     clip_cost = alpha * clip.length() + beta * clip.turn() + gamma * clip.effort
+    to_keys = [int(pack(*next_entry(patch, b.tile, b.segment))) for b in outs]
     result = []
     for a in ins:
         from_key = int(pack(a.tile[0], a.tile[1], patch.seg_entry[a.segment]))
-        for b in outs:
-            i, j, local = next_entry(patch, b.tile, b.segment)
-            to_key = int(pack(i, j, local))
+        for b, to_key in zip(outs, to_keys):
             result.append(Stitch(prop.name, clip_index, a, b, a.cost + clip_cost + b.cost,
                                  from_key, to_key))
     return result
-
-
-def _near(obstacle, points, margin=1.0):
-    lo, hi = obstacle.bounds()
-    return bool(np.all(points.min(axis=0) < hi + margin) and np.all(points.max(axis=0) > lo - margin))
