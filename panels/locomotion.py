@@ -40,7 +40,7 @@ def patch_summary(item):
     by = st.get("culled_by") or {}
     if by:
         lines.append("Culled:")
-        lines += [f"    {n:,} {CULL_REASONS.get(why, why)}" for why, n in by.items()]
+        lines += [f"{n:,} {CULL_REASONS.get(why, why)}" for why, n in by.items()]
     return lines
 
 
