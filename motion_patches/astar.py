@@ -153,13 +153,15 @@ def search(starts, expand, heuristic, goal_cost, max_expansions=500_000, observe
             payloads = np.concatenate((payloads, np.array([m[2] for m in more], np.int64)))
         if len(nkeys) == 0:
             continue
-        ng = gk + ncosts
-        better = np.array([c < g.get(k, np.inf) for k, c in zip(nkeys.tolist(), ng.tolist())], bool)
-        if not better.any():
+        ng = (gk + ncosts).tolist()
+        better = [i for i, (k, c) in enumerate(zip(nkeys.tolist(), ng)) if c < g.get(k, np.inf)]
+        if not better:
             continue
-        nkeys, ng, payloads = nkeys[better], ng[better], payloads[better]
+        if len(better) < len(ng):
+            nkeys, payloads = nkeys[better], payloads[better]
+            ng = [ng[i] for i in better]
         hs = heuristic(nkeys)
-        for k, c, h, p in zip(nkeys.tolist(), ng.tolist(), hs.tolist(), payloads.tolist()):
+        for k, c, h, p in zip(nkeys.tolist(), ng, hs.tolist(), payloads.tolist()):
             if c >= g.get(k, np.inf):  # parallel edges: keep the cheapest
                 continue
             g[k] = c

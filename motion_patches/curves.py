@@ -137,6 +137,7 @@ def curve_length(pos, vel, acc):
 
 
 DEFAULT_SCALES = np.linspace(0.25, 4.0, 76)  # below ~0.25 a Hermite curve folds into a corner
+TABULATE_BATCH = 100_000  # samples evaluated together when tabulating few curves
 
 
 def tabulate(p0, d0, p1, d1, measure=curve_length, scales=DEFAULT_SCALES, samples=96,
@@ -150,11 +151,16 @@ def tabulate(p0, d0, p1, d1, measure=curve_length, scales=DEFAULT_SCALES, sample
     values = np.empty((c, scales.size))
     bend = np.empty((c, scales.size))
     (pf, pu), (vf, vu), (af, au) = _hermite_parts(p0, d0, p1, d1, u)
-    for i, sc in enumerate(scales):
-        pos, vel, acc = pf + sc * pu, vf + sc * vu, af + sc * au
+    # Few curves: several scales in one call (as one batch of curves); many: one at a time.
+    step = max(1, TABULATE_BATCH // (c * samples))
+    for i in range(0, scales.size, step):
+        sc = scales[i:i + step, None, None, None]
+        pos, vel, acc = ((f[None] + sc * t[None]).reshape(-1, samples, 2)
+                         for f, t in ((pf, pu), (vf, vu), (af, au)))
         kappa = curvature(vel, acc)
-        values[:, i] = measure(pos, vel, acc, kappa) if shares_curvature else measure(pos, vel, acc)
-        bend[:, i] = np.abs(kappa).max(axis=1)
+        got = measure(pos, vel, acc, kappa) if shares_curvature else measure(pos, vel, acc)
+        values[:, i:i + step] = got.reshape(-1, c).T
+        bend[:, i:i + step] = np.abs(kappa).max(axis=1).reshape(-1, c).T
     return values, bend
 
 

@@ -27,9 +27,11 @@ def _mod2pi(a):
 
 def words(p0, h0, p1, h1, radius):
     """(W, N, 3) segment lengths (metres) of the six words for N state pairs (NaN where
-    a word does not exist). ``p0, p1`` (N, 2), ``h0, h1`` (N,)."""
+    a word does not exist). ``p0, p1`` (N, 2), ``h0, h1`` (N,), ``radius`` a number or
+    one per pair (N,)."""
     p0, p1 = np.atleast_2d(p0).astype(float), np.atleast_2d(p1).astype(float)
     h0, h1 = np.broadcast_to(np.asarray(h0, float), p0.shape[:1]), np.broadcast_to(np.asarray(h1, float), p1.shape[:1])
+    radius = np.asarray(radius, float)
     dx, dy = p1[:, 0] - p0[:, 0], p1[:, 1] - p0[:, 1]
     d = np.hypot(dx, dy) / radius
     th = _mod2pi(np.arctan2(dy, dx))
@@ -72,11 +74,12 @@ def words(p0, h0, p1, h1, radius):
         p = _mod2pi(2 * np.pi - np.arccos(np.clip(tmp, -1, 1)))
         t = _mod2pi(-a - np.arctan2(ca - cb, d + sa - sb) + p / 2)
         out[5] = np.where(ok[:, None], np.stack((t, p, _mod2pi(_mod2pi(b) - a - t + p)), -1), np.nan)
-    return out * radius
+    return out * (radius[:, None] if radius.ndim else radius)
 
 
 def turns(lengths, radius):
-    """(W, N) total |heading change| of each word: its arcs' lengths over the radius."""
+    """(W, N) total |heading change| of each word: its arcs' lengths over the radius (a
+    number, or one per pair (N,))."""
     arcs = np.array([[w[0] != "S", w[1] != "S", w[2] != "S"] for w in WORDS], float)
     return np.einsum("wnk,wk->wn", np.nan_to_num(lengths), arcs) / radius
 

@@ -26,7 +26,8 @@ import numpy as np
 FULL = np.uint64(0xFFFFFFFFFFFFFFFF)
 PATH_MARGIN = 0.002  # metres: sampled paths are tested this much wider (the frames between
                      # samples run on chords a fraction of a millimetre inside the arcs)
-FINE = 8             # clearance raster cells per cell side (4 cm for the CMU walk patch)
+FINE = 4             # clearance raster cells per cell side (4 cm for the CMU walk patch)
+SUB = 4              # sub-cells per cell side of the sub-cell bitfields (a divisor of FINE)
 CLEARANCE_CAP = 0.15  # metres beyond the radius up to which the raster holds distances
 RASTER_MIN_POINTS = 24  # fewer points are tested exactly at once (no raster work for them)
 _EPS = 1e-7          # metres: rounding slack of the raster's decisions
@@ -232,6 +233,7 @@ class Environment:
         self._atlas[:, 0] = 0.0
         self._atlas[[0, 3], 0] = self.cap
         self._slots = {}          # tile -> slot
+        self._sub = {}            # (tile, radius) -> (slot, free, solid) sub-cell bitfields
         self._spare = list(range(7, 0, -1))
         self._grid = np.full((1, 1), -1, np.int64)
         self._grid_origin = (0, 0)
@@ -319,12 +321,8 @@ class Environment:
         if not names:
             return FULL, np.uint64(0)
         n, k = self.cells, FINE
-        dist, qx, qy, other = self.clearance(tile)
-        # Lowest distance within each raster cell: the footprint's line through q across
-        # the cell (see :meth:`decided`), the other footprints rho nearer than at c.
-        with np.errstate(divide="ignore", invalid="ignore"):
-            slack = np.where(dist > 1e-9, (np.abs(qx) + np.abs(qy)) / dist, 2.0) * (0.5 * self.fine_size)
-        low = np.where(dist < self.cap, np.minimum(dist - slack, other - self.rho), dist - self.rho)
+        dist = self.clearance(tile)[0]
+        low = self._lowest(tile)
         near = dist.reshape(n, k, n, k).min(axis=(1, 3)).ravel()   # cell index iy * cells + ix
         low = low.reshape(n, k, n, k).min(axis=(1, 3)).ravel()
         far = dist.reshape(n, k, n, k).max(axis=(1, 3)).ravel()
@@ -336,10 +334,50 @@ class Environment:
             y0 = tile[1] * self.side + (unsure // n) * c
             hit = np.zeros(unsure.size, bool)
             for name in names:
-                hit |= cells_within(x0, y0, c, self.obstacles[name].polygon, self.radius)
+                ob = self.obstacles[name]
+                near = np.flatnonzero(~hit & (x0 < ob.hi[0] + self.radius) & (x0 + c > ob.lo[0] - self.radius)
+                                      & (y0 < ob.hi[1] + self.radius) & (y0 + c > ob.lo[1] - self.radius))
+                if near.size:
+                    hit[near] = cells_within(x0[near], y0[near], c, ob.polygon, self.radius)
             occluded[unsure] = hit
         solid = far < self.radius - self.rho
         return (FULL & ~_bits(occluded)), _bits(solid)
+
+    def _lowest(self, tile):
+        """(G * G,) a lower bound of the distance to the footprints over each whole raster
+        cell of a tile: the footprint's line through q across the cell (see
+        :meth:`decided`), the other footprints rho nearer than at the centre."""
+        dist, qx, qy, other = self.clearance(tile)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            slack = np.where(dist > 1e-9, (np.abs(qx) + np.abs(qy)) / dist, 2.0) * (0.5 * self.fine_size)
+        return np.where(dist < self.cap, np.minimum(dist - slack, other - self.rho), dist - self.rho)
+
+    def sub_states(self, tile, radius):
+        """(free, solid) bitfields of the tile's sub-cells (``SUB`` x ``SUB`` per cell; bit b
+        of word w for sub-cell 64 w + b, sub-cell index sy * cells * SUB + sx), each (W,)
+        uint64: a free sub-cell has no point within ``radius`` of a footprint, a solid one
+        no point farther, by the raster's bounds (the rest is neither). Cached per tile and
+        radius while the raster stands."""
+        key = (tile, radius)
+        got = self._sub.get(key)
+        if got is None or got[0] != self._slots.get(tile):
+            m, k = self.cells * SUB, FINE // SUB
+            low = self._lowest(tile).reshape(m, k, m, k).min(axis=(1, 3)).ravel()
+            high = self.clearance(tile)[0].reshape(m, k, m, k).max(axis=(1, 3)).ravel() + self.rho
+            free = np.packbits(low >= radius + _EPS, bitorder="little").view(np.uint64)
+            solid = np.packbits(high < radius - _EPS, bitorder="little").view(np.uint64)
+            got = self._sub[key] = (self._slots.get(tile), free, solid)
+        return got[1], got[2]
+
+    def sub_mask(self, points):
+        """(n, W) uint64 sub-cell bitmasks of point sets (n, M, 2) given in tile
+        coordinates (0 .. side): the sub-cells the points lie in (as :meth:`sub_states`)."""
+        m = self.cells * SUB
+        f = np.clip(np.floor(points / (self.side / m)), 0, m - 1).astype(np.int64)
+        index = f[..., 1] * m + f[..., 0]
+        bits = np.zeros((points.shape[0], m * m), bool)
+        np.put_along_axis(bits, index, True, axis=1)
+        return np.packbits(bits, axis=1, bitorder="little").view(np.uint64)
 
     # -- clearance raster ------------------------------------------------------------------
     def clearance(self, tile):

@@ -23,7 +23,7 @@ from .node_keys import BIAS, LOCAL, NEXT_EDGE, TILE_STEP, pack, unpack
 from .locomotion_patch import (DIRECTIONS, EDGES, INWARD, node_id, node_position,
                                split_node_id)
 from .motion import ease_to, sliced
-from .environment import PATH_MARGIN
+from .environment import PATH_MARGIN, SUB
 from .plan_frame import IDENTITY, lattice_frame, local_environment, local_prop, state_to_local
 from .stitching import BLEND_FRAMES, stitch
 from .synthesis import cycles_along, cycles_along_many, follow
@@ -38,7 +38,8 @@ MIN_CONNECTOR_CYCLES = 0.5    # shortest start connector (room to ease in from s
 START_CONNECTORS = 24         # valid start connectors offered to the search (best f first)
 APPROACH = 0.35               # metres of the way into the goal (out of the start) checked first
 DUBINS_TRIES = 3              # Dubins words of a node sampled and tested together
-START_BATCH = 8               # start nodes whose connectors are tested together
+START_BATCH = 24              # start nodes whose connectors are tested together
+GOAL_BATCH = 8                # goal links tested together
 
 
 class PlanError(ValueError):
@@ -110,7 +111,6 @@ class SegmentPlanner:
         self.max_speed = max(lp.cycle_distance for lp in loops) * patch.gait.fps / patch.gait.frames
         self.kmin, self.kmax = patch.stats.get("curvature_limits", patch.gait.kappa_limits)
         self.corridor = None
-        self._raster_index = None
         e, _, _ = split_node_id(np.arange(LOCAL), patch.nodes)
         step = TILE_STEP[e % EDGES]
         # Tile ids are node keys // LOCAL; a node on edge e of its tile also lies in the
@@ -126,6 +126,7 @@ class SegmentPlanner:
             if segs.size:
                 self._out[local] = (segs, patch.seg_mask[segs], rel[segs], self.costs[segs])
         self._cos, self._sin = np.cos(self.local_heading), np.sin(self.local_heading)
+        self._lx, self._ly = self.local_pos[:, 0].copy(), self.local_pos[:, 1].copy()
 
     # -- graph -------------------------------------------------------------------------
     def node_pose(self, keys):
@@ -138,13 +139,14 @@ class SegmentPlanner:
         keys = np.asarray(keys, np.int64)
         local = keys % LOCAL
         tile = keys // LOCAL
-        side = self.patch.side
-        dx = self.goal[0] - (self.local_pos[local, 0] + (tile // (2 * BIAS) - BIAS) * side)
-        dy = self.goal[1] - (self.local_pos[local, 1] + (tile % (2 * BIAS) - BIAS) * side)
+        # Goal relative to each node: goal - tile corner - node's place in the tile.
+        gx, gy = self.goal[0] + BIAS * self.patch.side, self.goal[1] + BIAS * self.patch.side
+        dx = (gx - self._lx[local]) - (tile // (2 * BIAS)) * self.patch.side
+        dy = (gy - self._ly[local]) - (tile % (2 * BIAS)) * self.patch.side
         dist = np.sqrt(dx * dx + dy * dy)
         cosang = (dx * self._cos[local] + dy * self._sin[local]) / np.maximum(dist, 1e-9)
-        ang = np.maximum(np.arccos(np.clip(cosang, -1.0, 1.0)) - HEADING_SLACK, 0.0)
-        return self._per_metre * dist + self.beta * ang
+        ang = np.arccos(np.clip(cosang, -1.0, 1.0)) - HEADING_SLACK
+        return self._per_metre * dist + self.beta * np.maximum(ang, 0.0)
 
     def state_heuristic(self, p, h):
         """:meth:`heuristic` of states: positions (n, 2), headings (n,)."""
@@ -174,12 +176,26 @@ class SegmentPlanner:
         clear = (mask & free) == mask  # Eq. 8
         if not clear.all():
             # Cells only partly occluded: the segment's own path decides (a gap the
-            # character fits through stays open however the cells fall on it).
+            # character fits through stays open however the cells fall on it), first by
+            # the sub-cells its samples lie in, then, where those are partly occluded too,
+            # sample by sample.
             unsure = np.flatnonzero(~clear & ((mask & solid) == 0))
             if unsure.size:
-                clear[unsure] = self._path_clear(tile, segs[unsure])
+                sub = self._sub_masks()[segs[unsure]]
+                sfree, ssolid = self.env.sub_states(tile, self.env.radius + PATH_MARGIN)
+                ok = ((sub & sfree) == sub).all(axis=1)
+                test = ~ok & ((sub & ssolid) == 0).all(axis=1)
+                clear[unsure[ok]] = True
+                if test.any():
+                    clear[unsure[test]] = self._path_clear(tile, segs[unsure[test]])
             return (key - local) + rel[clear], costs[clear], segs[clear]
         return (key - local) + rel, costs, segs
+
+    def _sub_masks(self):
+        """(S, W) sub-cell bitmasks of the segments' sampled paths."""
+        env = self.env
+        return _patch_cache(self.patch, ("sub", env.cells, SUB),
+                            lambda: env.sub_mask(self.patch.path_points()))
 
     def _path_clear(self, tile, segs):
         """(n,) True where the paths of segments walked in ``tile`` keep the radius from
@@ -191,15 +207,16 @@ class SegmentPlanner:
 
     def _path_raster(self):
         """(S, PATH_SAMPLES) raster index of every segment sample within its tile, and its
-        offset x, y from that raster cell's centre (S, PATH_SAMPLES each; once per planner)."""
-        if self._raster_index is None:
-            g, h = self.env.fine, self.env.fine_size
+        offset x, y from that raster cell's centre (S, PATH_SAMPLES each)."""
+        g, h = self.env.fine, self.env.fine_size
+
+        def make():
             pts = self.patch.path_points()
             f = np.clip(np.floor(pts / h), 0, g - 1)
             off = pts - (f + 0.5) * h
             f = f.astype(np.int32)
-            self._raster_index = (f[..., 1] * g + f[..., 0], off[..., 0].copy(), off[..., 1].copy())
-        return self._raster_index
+            return f[..., 1] * g + f[..., 0], off[..., 0].copy(), off[..., 1].copy()
+        return _patch_cache(self.patch, ("raster", g, h), make)
 
     def in_region(self, i, j):
         if self.corridor is not None:
@@ -351,29 +368,41 @@ class SegmentPlanner:
         self._goal_table = {"index": {int(k): m for m, k in enumerate(keys) if not too_close[m]},
                             "p": p, "h": h, "table": table, "bound": cost.min(axis=0)}
         self._goal_links = {}
+        self._goal_asked = []   # nodes whose bound the search asked for (it expanded them)
         return self._goal_table["index"]
 
     def goal_bound(self, key):
         """A lower bound of the cost of node ``key``'s goal link (its cheapest Dubins word's
         Eq. 5 cost, :meth:`_dubins_table`), or None for a node with no link."""
         m = self._goal_table["index"].get(key)
-        return None if m is None else float(self._goal_table["bound"][m])
+        if m is None:
+            return None
+        self._goal_asked.append(key)
+        return float(self._goal_table["bound"][m])
 
     def goal_link(self, key):
         """(cost, Piece maker) of the cheapest valid connector from node ``key`` into the
-        goal, or None (tested once per node and cached)."""
+        goal, or None (tested once per node and cached). The links of up to
+        ``GOAL_BATCH - 1`` other nodes the search has expanded are tested with it (they
+        are likely asked for next)."""
         if key in self._goal_links:
             return self._goal_links[key]
         t = self._goal_table
-        m = t["index"].get(key)
-        link = None
-        if m is not None:
-            found = self._first_valids(t["p"][m][None], t["h"][m:m + 1], t["table"], np.array([m]))[0]
-            if found is not None:
-                cost, _, make = found
-                link = (cost, lambda: Piece("goal", curve=make(), cost=cost))
-        self._goal_links[key] = link
-        return link
+        if key not in t["index"]:
+            return None
+        batch = [key]
+        while self._goal_asked and len(batch) < GOAL_BATCH:
+            k = self._goal_asked.pop()
+            if k not in self._goal_links and k not in batch:
+                batch.append(k)
+        m = np.array([t["index"][k] for k in batch])
+        found = self._first_valids(t["p"][m], t["h"][m], t["table"], m)
+        for k, got in zip(batch, found):
+            link = None
+            if got is not None:
+                link = (got[0], lambda cost=got[0], make=got[2]: Piece("goal", curve=make(), cost=cost))
+            self._goal_links[k] = link
+        return self._goal_links[key]
 
     def _check_turning_room(self, what, state):
         """Refuse at once a start (goal) where no walk can leave (arrive) facing the given
@@ -428,22 +457,24 @@ class SegmentPlanner:
         """Approximate Eq. 5 cost (R*6, M), lengths (R*6, M, 3), radius (R*6,), word (R*6,)
         and the order to try them (R*6, M) of the Dubins words between state pairs at each
         radius; too-long and missing words cost inf. Wider turns are tried first."""
-        costs, lens, radii, words, keys = [], [], [], [], []
-        for rank, r in enumerate(self.turn_radii):
-            lengths = dubins.words(p0, h0, p1, h1, r)
-            total = lengths.sum(axis=-1)
-            turn = dubins.turns(lengths, r)
-            effort = self.patch.effort_rate * total / self.max_speed
-            cost = self.alpha * total + self.beta * turn + self.gamma * effort
-            longest = MAX_CONNECTOR_TILES * self.patch.side if max_length is None else max_length
-            cost = np.where(np.isfinite(total) & (total <= longest), cost, np.inf)
-            costs.append(cost)
-            lens.append(lengths)
-            radii += [r] * len(dubins.WORDS)
-            words += list(range(len(dubins.WORDS)))
-            keys.append(np.where(np.isfinite(cost), cost + 1e6 * rank, np.inf))
-        cost, key = np.concatenate(costs), np.concatenate(keys)
-        return (cost, np.concatenate(lens), np.array(radii), np.array(words),
+        p0, p1 = np.atleast_2d(p0), np.atleast_2d(p1)
+        n, w, r = p0.shape[0], len(dubins.WORDS), np.array(self.turn_radii)
+        # Every radius in one call: pairs repeated radius by radius.
+        radius = np.repeat(r, n)
+        lengths = dubins.words(np.tile(p0, (r.size, 1)), np.tile(h0, r.size), np.tile(p1, (r.size, 1)),
+                               np.tile(h1, r.size), radius)
+        total = lengths.sum(axis=-1)
+        turn = dubins.turns(lengths, radius)
+        effort = self.patch.effort_rate * total / self.max_speed
+        cost = self.alpha * total + self.beta * turn + self.gamma * effort
+        longest = MAX_CONNECTOR_TILES * self.patch.side if max_length is None else max_length
+        cost = np.where(np.isfinite(total) & (total <= longest), cost, np.inf)
+        # Rows radius by radius, word by word; columns the pairs.
+        cost = cost.reshape(w, r.size, n).transpose(1, 0, 2).reshape(r.size * w, n)
+        lens = lengths.reshape(w, r.size, n, 3).transpose(1, 0, 2, 3).reshape(r.size * w, n, 3)
+        rank = np.repeat(np.arange(r.size), w)[:, None]
+        key = np.where(np.isfinite(cost), cost + 1e6 * rank, np.inf)
+        return (cost, lens, np.repeat(r, w), np.tile(np.arange(w), r.size),
                 np.argsort(key, axis=0, kind="stable"))
 
     def _first_valid(self, p0, h0, table, m, min_length=0.0):
@@ -854,6 +885,16 @@ class TraversalObserver:
                 edges += more
                 self.at_goal += n
         return edges
+
+
+def _patch_cache(patch, key, make):
+    """What ``make()`` returns, computed once per patch (and key): arrays the planner
+    derives from a baked patch, kept with the patch's own caches."""
+    cache = patch.__dict__.setdefault("_planner_cache", {})
+    got = cache.get(key)
+    if got is None:
+        got = cache[key] = make()
+    return got
 
 
 def _dubins_curve(samples):

@@ -212,19 +212,23 @@ def _chain(planner, corners, first, goal_heading, budget=60):
     def solve(j, pa, ha):
         if j == len(corners):
             return []
-        for hb in options(j):
-            if tries[0] >= budget:
-                return None
+        heads = options(j)[:max(budget - tries[0], 0)]
+        if not heads:
+            return None
+        # The options of a corner are sampled and tested together, tried in order.
+        n, pb = len(heads), corners[j]
+        table = planner._dubins_table(np.tile(pa, (n, 1)), np.full(n, ha), np.tile(pb, (n, 1)),
+                                      np.array(heads), max_length=np.inf)
+        found = planner._first_valids(np.tile(pa, (n, 1)), np.full(n, ha), table, np.arange(n))
+        for hb, got in zip(heads, found):
             tries[0] += 1
-            pb = corners[j]
-            table = planner._dubins_table(pa[None], np.array([ha]), pb[None], np.array([hb]),
-                                          max_length=np.inf)
-            found = planner._first_valid(pa, ha, table, 0)
-            if found is None:
+            if got is None:
                 continue
             rest = solve(j + 1, pb, hb)
             if rest is not None:
-                return [found[0]] + rest
+                return [got[2]()] + rest
+            if tries[0] >= budget:
+                return None
         return None
 
     return solve(1, first[0], first[1])
