@@ -26,7 +26,7 @@ import numpy as np
 FULL = np.uint64(0xFFFFFFFFFFFFFFFF)
 PATH_MARGIN = 0.002  # metres: sampled paths are tested this much wider (the frames between
                      # samples run on chords a fraction of a millimetre inside the arcs)
-FINE = 4             # clearance raster cells per cell side (4 cm for the CMU walk patch)
+FINE = 4             # clearance raster cells per cell side (8 cm for the CMU walk patch)
 SUB = 4              # sub-cells per cell side of the sub-cell bitfields (a divisor of FINE)
 CLEARANCE_CAP = 0.15  # metres beyond the radius up to which the raster holds distances
 RASTER_MIN_POINTS = 24  # fewer points are tested exactly at once (no raster work for them)
