@@ -107,8 +107,8 @@ def convex_closest(points, polygon):
     """Exact distance (N,) from points (N, 2) to a convex polygon (0 inside) and the
     polygon's point nearest each (N, 2) (the point itself inside), by the edge lines:
     outside, the nearest point lies on the edge whose line the point is farthest beyond
-    when the point's foot falls within that edge, else it is a vertex. A few (V, N)
-    arrays for many points at once (either winding)."""
+    when the point's foot falls within that edge, else it is a vertex. One matrix product
+    and a few (N, V) arrays for many points at once (either winding)."""
     points = np.asarray(points, float)
     poly = np.asarray(polygon, float)
     px, py = points[:, 0], points[:, 1]
@@ -126,11 +126,11 @@ def convex_closest(points, polygon):
         poly = poly[::-1]
         e = np.roll(poly, -1, axis=0) - poly
     length2 = np.einsum("ij,ij->i", e, e)
-    nx, ny = e[:, 1] / np.sqrt(length2), -e[:, 0] / np.sqrt(length2)   # outward normals
-    # (V, N): points along the last axis keep numpy's inner loops long.
-    beyond = nx[:, None] * px[None] + ny[:, None] * py[None] - (nx * poly[:, 0] + ny * poly[:, 1])[:, None]
-    i = np.argmax(beyond, axis=0)
-    far = beyond[i, np.arange(px.size)]
+    normal = np.column_stack((e[:, 1], -e[:, 0])) / np.sqrt(length2)[:, None]   # outward
+    nx, ny = normal[:, 0], normal[:, 1]
+    beyond = points @ normal.T - np.einsum("ij,ij->i", normal, poly)[None]   # (N, V)
+    i = np.argmax(beyond, axis=1)
+    far = np.take_along_axis(beyond, i[:, None], axis=1)[:, 0]
     t = ((px - poly[i, 0]) * e[i, 0] + (py - poly[i, 1]) * e[i, 1]) / length2[i]
     on_edge = (t >= 0.0) & (t <= 1.0) & (far > 0.0)
     d = np.where(on_edge, far, 0.0)
@@ -138,9 +138,10 @@ def convex_closest(points, polygon):
     corner = np.flatnonzero(~on_edge & (far > 0.0))
     if corner.size:
         cx, cy = px[corner], py[corner]
-        dist2 = (cx[None] - poly[:, 0:1]) ** 2 + (cy[None] - poly[:, 1:2]) ** 2
-        k = np.argmin(dist2, axis=0)
-        d[corner] = np.sqrt(dist2[k, np.arange(corner.size)])
+        gx, gy = cx[:, None] - poly[None, :, 0], cy[:, None] - poly[None, :, 1]
+        dist2 = gx * gx + gy * gy                      # (Nc, V)
+        k = np.argmin(dist2, axis=1)
+        d[corner] = np.sqrt(np.take_along_axis(dist2, k[:, None], axis=1)[:, 0])
         qx[corner], qy[corner] = poly[k, 0], poly[k, 1]
     return d, np.column_stack((qx, qy))
 
