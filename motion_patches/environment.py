@@ -146,11 +146,6 @@ def convex_closest(points, polygon):
     return d, np.column_stack((qx, qy))
 
 
-def convex_distance(points, polygon):
-    """(N,) exact distance from points (N, 2) to a convex polygon (0 inside)."""
-    return convex_closest(points, polygon)[0]
-
-
 def _edges_cross(poly_a, poly_b):
     """True when any edge of one polygon properly crosses an edge of the other."""
     a0, a1 = poly_a, np.roll(poly_a, -1, axis=0)
@@ -606,11 +601,11 @@ class Environment:
                           np.array([self.obstacles[n].hi for n in names]).reshape(-1, 2), verts)
         return self._pack
 
-    def path_blocked(self, paths, spacing=None):
+    def path_blocked(self, paths):
         """(n,) True where sampled paths (n, M, 2) come within the radius of an obstacle
         anywhere between samples, to the precision of their sampling: every sample is
-        tested ``PATH_MARGIN`` wider (``spacing``, the largest gap between samples, is the
-        caller's to keep small; about 4 cm for the planner's curves)."""
+        tested ``PATH_MARGIN`` wider (the samples are the caller's to keep close: about
+        4 cm apart for the planner's curves)."""
         n, m = paths.shape[:2]
         hit = self.blocked(paths.reshape(-1, 2), radius=self.radius + PATH_MARGIN)
         return hit.reshape(n, m).any(axis=1)

@@ -259,15 +259,10 @@ class SegmentPlanner:
         return bool(curves.follows_turn_limits(curve.pos, curves.unit(curve.heading),
                                                self.kmin, self.kmax))
 
-    def _valid(self, curve, exact=False):
+    def _valid(self, curve):
         """The curve bends within the gait's limits and keeps the radius from every
-        footprint (every sample tested when ``exact``, else every fourth)."""
-        if not self._bends_within(curve):
-            return False
-        if not exact:
-            return not self.env.blocked(curve.pos[::4]).any()
-        spacing = float(np.diff(curve.s).max()) if curve.s.size > 1 else 0.0
-        return not self.env.path_blocked(curve.pos[None], spacing)[0]
+        footprint (every sample tested)."""
+        return self._bends_within(curve) and not self.env.path_blocked(curve.pos[None])[0]
 
     def _long_last_piece(self, pieces):
         """The pieces with a goal connector shorter than a gait cycle merged with the

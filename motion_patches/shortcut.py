@@ -120,7 +120,7 @@ def _fit(planner, a, b, old_cost):
         if np.isnan(sc):
             continue
         c = curves.hermite_curve(pa, curves.unit(ha), pb, curves.unit(hb), sc)
-        if not planner._valid(c, exact=True):
+        if not planner._valid(c):
             continue
         cost = planner._curve_cost(c, n)
         if cost < old_cost - MIN_GAIN and (best is None or cost < best[2]):
