@@ -114,10 +114,7 @@ def stats(values):
 
 def copy_env(env):
     """A fresh environment holding the same obstacles (no cached occlusion)."""
-    out = Environment(env.side, env.cells, env.radius)
-    for ob in env.obstacles.values():
-        out.place(ob)
-    return out
+    return environment(env, env.obstacles.values(), env.radius)
 
 
 def timed_plan(patch, env, start, goal, args, repeat=None, **kw):
@@ -143,24 +140,23 @@ def search_connectors(plan):
 
 
 def bench_layouts(patch, args):
-    """bench_core's random layouts (same seed, same order): [(obstacles, start, goal)]."""
+    """bench_core's random layouts (same calls, same seed: the same layouts):
+    [(obstacles, start, goal)]."""
     rng = np.random.default_rng(args.seed)
     count = int(round(args.density * args.field ** 2))
     out = []
     for _ in range(args.layouts):
         env = Environment(patch.side, patch.cells, args.radius)
-        obstacles = []
-        for n in range(count):
-            x, y = rng.uniform(0.0, args.field, 2)
-            obstacles.append(core.pillar(f"p{n}", x, y, rng.uniform(0.2, 0.4)))
-            env.place(obstacles[-1])
+        core.pillar_field(env, rng, count, 0.0, args.field)
         start, goal = core.start_goal(env, rng, args.field)
-        out.append((obstacles, start, goal))
+        out.append((list(env.obstacles.values()), start, goal))
     return out
 
 
-def environment(patch, obstacles, radius):
-    env = Environment(patch.side, patch.cells, radius)
+def environment(like, obstacles, radius):
+    """An environment of the tile size of ``like`` (a patch or an environment) holding
+    ``obstacles``."""
+    env = Environment(like.side, like.cells, radius)
     for ob in obstacles:
         env.place(ob)
     return env

@@ -4,10 +4,12 @@ Nodes are tile entry states packed into one integer: tile (i, j) and the local e
 (edge, slot, heading) of the locomotion patch. Expanding a node looks up the segments of
 that entry state, drops those whose cell mask is occluded in the tile (Eq. 8), and maps
 each exit to the entry state of the neighbouring tile. The character's start and goal are
-joined to the node graph by connectors: Hermite curves fitted on the fly, the start ones
-to a whole number of cycles (so they end on the node pose), the goal ones to the exact
-goal position and heading. Traversal clips of object patches join the graph as stitched
-edges, lazily, through a per-tile observer of the search (:class:`TraversalObserver`).
+joined to the node graph by Dubins connectors (:mod:`.dubins`), known to the search by a
+lower bound of their cost and sampled and tested only when it gets to them (the start
+ones played from the phase that makes them end on the node pose, the goal ones ending
+on the exact goal position and heading). Traversal clips of object patches join the
+graph as stitched edges, lazily, through a per-tile observer of the search
+(:class:`TraversalObserver`).
 """
 
 import contextlib
