@@ -37,7 +37,8 @@ HEADING_SLACK = 0.02  # radians, for sampling error in precomputed turn sums
 DUBINS_CURVATURE_SHARE = 0.8  # connectors turn at this share of the gait's sharpest turn
 MAX_CONNECTOR_TILES = 2.0     # longest start / goal connector, in tile sides
 MIN_CONNECTOR_CYCLES = 0.5    # shortest start connector (room to ease in from standing)
-START_CONNECTORS = 24         # valid start connectors offered to the search (best f first)
+KAPPA_ROUNDING = 1e-9         # relative slack on the curvature limits (floating point only)
+START_CONNECTORS = 48         # valid start connectors offered to the search (best f first)
 APPROACH = 0.35               # metres of the way into the goal (out of the start) checked first
 DUBINS_TRIES = 3              # Dubins words of a node sampled and tested together
 START_BATCH = 24              # start nodes whose connectors are tested together
@@ -256,7 +257,10 @@ class SegmentPlanner:
 
     def _bends_within(self, curve):
         """The curve bends within the gait's curvature limits, between samples too."""
-        if curve.kappa.min() < self.kmin or curve.kappa.max() > self.kmax:
+        # A curve turning at exactly the sharpest limit (a Dubins arc of that radius) reads
+        # a hair over it in floating point: allow for rounding, not for more.
+        tol = KAPPA_ROUNDING * max(-self.kmin, self.kmax)
+        if curve.kappa.min() < self.kmin - tol or curve.kappa.max() > self.kmax + tol:
             return False
         return bool(curves.follows_turn_limits(curve.pos, curves.unit(curve.heading),
                                                self.kmin, self.kmax))

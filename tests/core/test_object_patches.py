@@ -145,21 +145,21 @@ def test_per_tile_observer_stitches_the_chair_line_lazily(walk_patch, hurdle_cli
 def test_goal_backstop_is_what_keeps_dynamic_stitching_optimal(walk_patch, hurdle_clip,
                                                                monkeypatch):
     """On this layout the per-tile rule alone never fires for the jump of the cheapest
-    path: without the backstop at the goal the walker takes a 14 % costlier way."""
+    path: without the backstop at the goal the walker takes a 6 % costlier way."""
     from motion_patches import planner as planner_mod
     args = ((0.5, 0.0, 0.0), (10.0, 0.5, 0.0))
     costs = {}
     for mode in ("dynamic", "static"):
-        env, props = scattered_chairs(walk_patch, hurdle_clip, 11, 22)
+        env, props = scattered_chairs(walk_patch, hurdle_clip, 39, 14)
         plan = SegmentPlanner(walk_patch, env, 4.2, 0.5, 0.75, props=props, mode=mode).plan(*args)
         costs[mode] = plan.cost
         if mode == "dynamic":
             assert plan.stats["copies_stitched_at_goal"] > 0 and plan.stats["traversals_used"] >= 1
     assert np.isclose(costs["dynamic"], costs["static"])
     monkeypatch.setattr(planner_mod.TraversalObserver, "_backstop", lambda self, f: [])
-    env, props = scattered_chairs(walk_patch, hurdle_clip, 11, 22)
+    env, props = scattered_chairs(walk_patch, hurdle_clip, 39, 14)
     rule_only = SegmentPlanner(walk_patch, env, 4.2, 0.5, 0.75, props=props).plan(*args)
-    assert rule_only.cost > 1.1 * costs["static"]
+    assert rule_only.cost > 1.03 * costs["static"]
 
 
 def test_moving_a_prop_changes_the_path(walk_patch, hurdle_clip):
