@@ -89,6 +89,28 @@ def start_goal(env, rng, field, dmin=8.0, dmax=20.0, inset=1.0, tries=10_000):
     raise RuntimeError("no clear start/goal pair found; lower --density")
 
 
+def layouts(patch, args):
+    """The random layouts, in order: (environment, start, goal) per layout, ``args.layouts``
+    of them from ``args.seed``. Every bench that says "bench_core's layouts" takes them
+    from here, so the same seed gives the same layouts everywhere."""
+    rng = np.random.default_rng(args.seed)
+    count = int(round(args.density * args.field ** 2))
+    for _ in range(args.layouts):
+        env = Environment(patch.side, patch.cells, args.radius)
+        pillar_field(env, rng, count, 0.0, args.field)
+        start, goal = start_goal(env, rng, args.field)
+        yield env, start, goal
+
+
+def missing_mocap(mocap, names=("16_15", "16_18")):
+    """The message for a missing clip of the walk patch, or None when all are there."""
+    for name in names:
+        path = Path(mocap) / "cmu" / f"{name}.bvh"
+        if not path.is_file():
+            return f"bench: {path} not found (use --mocap or MOTION_PATCHES_MOCAP)"
+    return None
+
+
 def stats(values):
     v = np.asarray(values, float)
     if v.size == 0:
@@ -145,15 +167,11 @@ def bench_source_skate(straight, fps):
 
 
 def bench_plans(patch, args, profiler=None):
-    rng = np.random.default_rng(args.seed)
     count = int(round(args.density * args.field ** 2))
     alpha, beta, gamma = args.weights
     skel, fps = patch.gait.skeleton, patch.gait.fps
     records, failures = [], []
-    for layout in range(args.layouts):
-        env = Environment(patch.side, patch.cells, args.radius)
-        pillar_field(env, rng, count, 0.0, args.field)
-        start, goal = start_goal(env, rng, args.field)
+    for layout, (env, start, goal) in enumerate(layouts(patch, args)):
         planner = SegmentPlanner(patch, env, alpha, beta, gamma)
         prof = profiler if profiler is not None and layout < args.profile else None
         if prof:
@@ -352,11 +370,10 @@ def markdown(res):
 def main(argv=None):
     args = parse_args(argv)
     mocap = Path(args.mocap)
-    for name in ("16_15", "16_18"):
-        if not (mocap / "cmu" / f"{name}.bvh").is_file():
-            print(f"bench: {mocap / 'cmu' / (name + '.bvh')} not found "
-                  f"(use --mocap or MOTION_PATCHES_MOCAP)", file=sys.stderr)
-            return 2
+    missing = missing_mocap(mocap)
+    if missing:
+        print(missing, file=sys.stderr)
+        return 2
     t_all = time.perf_counter()
     print("bake ...", flush=True)
     patch, straight, bake = bench_bake(mocap)

@@ -412,8 +412,8 @@ def build_scenes(radius, seed):
                        straight=True))
     for width in (1.0, 0.8):
         c, x = 1.0, 6.0
-        obs = [wall(f"wall_lo", at(x, -10), at(x, c - width / 2)),
-               wall(f"wall_hi", at(x, c + width / 2), at(x, 10))]
+        obs = [wall("wall_lo", at(x, -10), at(x, c - width / 2)),
+               wall("wall_hi", at(x, c + width / 2), at(x, 10))]
         S.append(Scene(f"gap_{width:.1f}", "scenes", obs, at(0, 0), at(12, 0),
                        probe=gap_probe(x, c, width)))
     rng = np.random.default_rng(seed + 1000)
@@ -450,13 +450,8 @@ def build_scenes(radius, seed):
 
 def random_scenes(patch, args):
     """The random pillar fields of bench_core (same calls, same seed: same layouts)."""
-    rng = np.random.default_rng(args.seed)
-    count = int(round(args.density * args.field ** 2))
     out = []
-    for layout in range(args.layouts):
-        env = Environment(patch.side, patch.cells, args.radius)
-        core.pillar_field(env, rng, count, 0.0, args.field)
-        s, g = core.start_goal(env, rng, args.field)
+    for layout, (env, s, g) in enumerate(core.layouts(patch, args)):
         out.append(Scene(f"random_{layout:02d}", "random", list(env.obstacles.values()),
                          s[:2], g[:2], notes={"bench_core_headings": [s[2], g[2]]}))
     return out
@@ -821,11 +816,10 @@ def jsonable(o):
 def main(argv=None):
     args = parse_args(argv)
     mocap = Path(args.mocap)
-    for name in ("16_15", "16_18"):
-        if not (mocap / "cmu" / f"{name}.bvh").is_file():
-            print(f"bench: {mocap / 'cmu' / (name + '.bvh')} not found "
-                  f"(use --mocap or MOTION_PATCHES_MOCAP)", file=sys.stderr)
-            return 2
+    missing = core.missing_mocap(mocap)
+    if missing:
+        print(missing, file=sys.stderr)
+        return 2
     t_all = time.perf_counter()
     print("bake ...", flush=True)
     patch, _, bake = core.bench_bake(mocap)

@@ -58,7 +58,7 @@ import bench_core as core  # noqa: E402
 from motion_patches import astar, object_patch as op  # noqa: E402
 from motion_patches.environment import Environment, Obstacle  # noqa: E402
 from motion_patches.motion import concatenate  # noqa: E402
-from motion_patches.node_keys import LOCAL, pack  # noqa: E402
+from motion_patches.node_keys import pack  # noqa: E402
 from motion_patches.planner import (PlanError, SegmentPlanner, interaction_states,  # noqa: E402
                                     plan_motions, with_interactions)
 
@@ -142,15 +142,8 @@ def search_connectors(plan):
 def bench_layouts(patch, args):
     """bench_core's random layouts (same calls, same seed: the same layouts):
     [(obstacles, start, goal)]."""
-    rng = np.random.default_rng(args.seed)
-    count = int(round(args.density * args.field ** 2))
-    out = []
-    for _ in range(args.layouts):
-        env = Environment(patch.side, patch.cells, args.radius)
-        core.pillar_field(env, rng, count, 0.0, args.field)
-        start, goal = core.start_goal(env, rng, args.field)
-        out.append((list(env.obstacles.values()), start, goal))
-    return out
+    return [(list(env.obstacles.values()), start, goal)
+            for env, start, goal in core.layouts(patch, args)]
 
 
 def environment(like, obstacles, radius):

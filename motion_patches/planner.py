@@ -241,11 +241,6 @@ class SegmentPlanner:
         p, h = self.node_pose(keys)
         return keys, p, h
 
-    def _exits_of(self, tile):
-        """Entry states of the neighbours across the edges of ``tile`` (leaving it)."""
-        i, j = tile
-        return [((i, j - 1), [2]), ((i + 1, j), [3]), ((i, j + 1), [0]), ((i - 1, j), [1])]
-
     def _block(self, tile):
         every = list(range(EDGES))
         return [((tile[0] + di, tile[1] + dj), every) for di in (-1, 0, 1) for dj in (-1, 0, 1)]

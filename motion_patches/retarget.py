@@ -357,8 +357,6 @@ def rig_map(source, target, overrides=None, floor=0.0, label="patch"):
             pairs[si] = target.names.index(t)
         else:
             pairs.pop(si, None)
-    # Roles of the source by bone, to name what is missing.
-    role_of = {i: r for r, i in s_roles.items()}
     required = []
     for role in REQUIRED:
         si = s_roles.get(role)
