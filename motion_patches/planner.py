@@ -24,7 +24,7 @@ from .high_level import TilePlanner
 from .node_keys import BIAS, LOCAL, NEXT_EDGE, TILE_STEP, pack, unpack
 from .locomotion_patch import (DIRECTIONS, EDGES, INWARD, node_id, node_position,
                                split_node_id)
-from .motion import ease_to, sliced
+from .motion import Motion, ease_to, sliced
 from .environment import PATH_MARGIN, SUB
 from .plan_frame import IDENTITY, lattice_frame, local_environment, local_prop, state_to_local
 from .stitching import BLEND_FRAMES, stitch
@@ -924,6 +924,8 @@ def plan_motions(patch, plan, standing=True):
         else:
             ms[0] = retime.eased(ms[0], ease_in=first_walks, ramp=ramp)
             ms[-1] = retime.eased(ms[-1], ease_out=last_walks, ramp=ramp)
+        if last_walks and np.isfinite(np.asarray(plan.goal[:2], float)).all():
+            ms[-1] = hips_to(ms[-1], plan.goal[:2])
     for i, p in enumerate(plan.pieces):
         if p.kind in clips:
             continue
@@ -932,6 +934,29 @@ def plan_motions(patch, plan, standing=True):
         if i > 0 and plan.pieces[i - 1].kind in clips:
             ms[i] = ease_to(ms[i], ms[i - 1], BLEND_FRAMES, at_end=False)
     return ms
+
+
+def hips_to(motion, xy):
+    """The motion with its root (the hips) brought onto the ground point ``xy`` on its last
+    frame: a walk stops wherever its stride ends, so the hips stand a few centimetres
+    beside the ground path's end (up to ~9 cm); the root's offset from the ground frame is
+    eased over the whole motion (smoothstep in frames, zero at its start) so the body ends
+    standing over the goal while the ground path (the object) is unchanged. Planted feet
+    move with the body by at most that offset over the stop; foot locking pins them."""
+    n = motion.frames
+    if n < 2:
+        return motion
+    g = motion.ground
+    c, s = np.cos(g[-1, 2]), np.sin(g[-1, 2])
+    r = motion.root_local[-1]
+    d = np.asarray(xy, float) - (g[-1, :2] + np.array([c * r[0] - s * r[1], s * r[0] + c * r[1]]))
+    t = np.linspace(0.0, 1.0, n)
+    w = t * t * (3.0 - 2.0 * t)
+    c, s = np.cos(g[:, 2]), np.sin(g[:, 2])
+    root = motion.root_local.copy()
+    root[:, 0] += w * (c * d[0] + s * d[1])    # d in each frame's ground coordinates
+    root[:, 1] += w * (-s * d[0] + c * d[1])
+    return Motion(g, root, motion.rotations, motion.contacts)
 
 
 def with_interactions(plan, start=None, goal=None):

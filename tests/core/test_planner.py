@@ -4,7 +4,8 @@ import pytest
 from motion_patches import contacts, metrics
 from motion_patches.environment import Environment, Obstacle
 from motion_patches.motion import concatenate
-from motion_patches.planner import PlanError, SegmentPlanner, piece_motion
+from motion_patches.inplace import to_world
+from motion_patches.planner import PlanError, SegmentPlanner, piece_motion, plan_motions
 
 
 def pillar(name, x, y, r=0.25):
@@ -39,6 +40,26 @@ def test_plan_on_open_ground_ends_exactly_on_the_goal(walk_patch, open_ground):
     m = planned_motion(walk_patch, searched)
     assert np.allclose(m.ground[-1, :2], (9.0, 3.0), atol=1e-6)
     assert np.allclose(m.ground[0], (0.5, 0.5, 0.0), atol=1e-6)
+
+
+def test_the_hips_stop_over_the_goal_point(walk_patch, open_ground):
+    """The stop ends wherever the stride does; the body is brought over the goal point
+    (the ground path still ends on it, the hips too, the last steps still slow)."""
+    skel, fps = walk_patch.gait.skeleton, walk_patch.gait.fps
+    off_by_itself = []
+    for goal in [(9.0, 3.0, 0.8), (6.0, -4.0, -2.5), (11.0, 0.7, 0.0), (3.0, 7.0, 2.0)]:
+        plan = SegmentPlanner(walk_patch, open_ground).plan((0.5, 0.5, 0.0), goal)
+        m = concatenate(plan_motions(walk_patch, plan))
+        raw = concatenate(plan_motions(walk_patch, plan, standing=False))
+        hips = to_world(skel, m.ground, m.root_local, m.rotations)[0]
+        hips_raw = to_world(skel, raw.ground, raw.root_local, raw.rotations)[0]
+        assert np.allclose(m.ground[-1, :2], goal[:2], atol=1e-6)
+        assert np.linalg.norm(hips[-1, :2] - goal[:2]) < 1e-6
+        assert np.linalg.norm(hips[-1, :2] - hips[-2, :2]) * fps < 0.2
+        assert np.linalg.norm(np.diff(hips[:, :2], axis=0), axis=1).max() < 0.08
+        off_by_itself.append(np.linalg.norm(hips_raw[-1, :2] - goal[:2]))
+    # Not so by itself: where the stride ends leaves the hips off the goal point.
+    assert max(off_by_itself) > 0.01
 
 
 def test_planned_ground_path_is_continuous(walk_patch, open_ground):
