@@ -18,9 +18,10 @@ import numpy as np
 
 from .adapter import actions as act_io
 from .adapter import evaluate, mocap, nla, props_io, scene as scene_io, storage
+from .adapter import moving as moving_io
 from .adapter import rig as rig_io
 from .motion_patches import (blocking, causes, contacts, crowd, foot_lock, layout_spec,
-                             metrics, object_patch, validate)
+                             metrics, moving_props, object_patch, validate)
 from .motion_patches import scene_rate
 from .motion_patches.environment import Obstacle
 from .motion_patches.gait import build_gait
@@ -41,7 +42,8 @@ class MotionPatchesError(ValueError):
 class PathNotFound(MotionPatchesError):
     """The request was fine but no path was found; the message ends with the cause, also
     given as ``cause``: "props" (named in ``props``), "patch" (its walks turn too wide or
-    connect too sparsely for this start and goal, even on open ground) or "search limit"."""
+    connect too sparsely for this start and goal, even on open ground), "search limit" or
+    "moving" (props keyframed across the path, named in ``props``)."""
 
     def __init__(self, message, cause=None, props=()):
         super().__init__(message)
@@ -477,6 +479,27 @@ def _write(scene, character, patch, patch_name, plan, placed, frame_start, env, 
                       path_length(world.ground), tuple(goal_state))
 
 
+def _avoid_moving(planner, patch, plan, tracks, character, frame_start, fps):
+    """(plan, seconds to wait at the start) clear of the props that move during it
+    (:mod:`moving_props`: a wait or a repaired run); :class:`PathNotFound` naming the prop
+    and the frame when neither keeps clear of it. ``fps``: the scene's rate."""
+    scene_fps_ratio = fps / patch.gait.fps
+    plan, wait, repairs, left = moving_props.avoid(planner, patch, plan, tracks,
+                                                   lambda p: plan_motions(patch, p))
+    if left:
+        raise PathNotFound(f"no path for '{character.name}' clear of moving props: "
+                           + "; ".join(c.describe(patch.gait.fps, frame_start, fps) for c in left)
+                           + " (move the prop's keyframes, or start later with Frame Start)",
+                           "moving", [c.prop for c in left])
+    plan.stats["moving_props"] = {
+        "props": [t.name for t in tracks],
+        "awake_at_start": [t.name for t in tracks if t.awake_at(0.0)],
+        "wait_s": wait,
+        "repairs": [dict(r, frame=frame_start + int(round(r["frame"] * scene_fps_ratio)))
+                    for r in repairs]}
+    return plan, wait
+
+
 def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2,
               radius=0.25, frame_start=None, context=None, stitching="dynamic", start_prop=None,
               foot_lock=True, goal_facing="exact"):
@@ -509,10 +532,20 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
     by_name = {p.name: p for p in props}
     ends = _endpoints(character, goal, start_prop, by_name,
                       rig.target if rig else patch.gait.skeleton, goal_facing, scale)
-    _check_clear(env, character, ends, by_name)
-    planner = SegmentPlanner(patch, env, alpha, beta, gamma, props=props, mode=stitching)
-    plan = _solve(planner, character, ends)
     frame_start = scene.frame_current if frame_start is None else int(frame_start)
+    tracks = moving_io.tracks(scene, depsgraph, list(env.obstacles), frame_start, scale)
+    awake = [t.name for t in tracks if t.awake_at(0.0)]
+    for t in tracks:  # where each stands at the first frame (the scene may show another)
+        env.remove(t.name)
+        env.place(Obstacle(t.name, t.polygon_at(t.pose_at(0.0)[0])))
+    with _without(env, awake):  # awake props are avoided locally, after (Sec. 4.4)
+        _check_clear(env, character, ends, by_name)
+        planner = SegmentPlanner(patch, env, alpha, beta, gamma, props=props, mode=stitching)
+        plan = _solve(planner, character, ends)
+    if tracks:
+        plan, wait = _avoid_moving(planner, patch, plan, tracks, character, frame_start,
+                                   scene_fps(scene))
+        frame_start += int(round(wait * scene_fps(scene)))
     motions = plan_motions(patch, plan)
     plan.stats["glitches"] = validate.count(validate.plan_glitches(patch, plan, motions))
     return _write(scene, character, patch, patch_name, plan,

@@ -25,8 +25,9 @@ from .node_keys import BIAS, LOCAL, NEXT_EDGE, TILE_STEP, pack, unpack
 from .locomotion_patch import (DIRECTIONS, EDGES, INWARD, node_id, node_position,
                                split_node_id)
 from .motion import Motion, ease_to, sliced
-from .environment import PATH_MARGIN, SUB
-from .plan_frame import IDENTITY, lattice_frame, local_environment, local_prop, state_to_local
+from .environment import PATH_MARGIN, SUB, Obstacle
+from .plan_frame import (IDENTITY, lattice_frame, local_environment, local_prop, state_to_local,
+                         to_local)
 from .stitching import BLEND_FRAMES, stitch
 from .synthesis import cycles_along, cycles_along_many, follow
 from .traversal_probability import accessibility, tile_traversal
@@ -583,6 +584,59 @@ class SegmentPlanner:
         plan.stats["frame"] = frame
         return plan
 
+    def replan_run(self, plan, first, last, extra=(), margin_tiles=3, max_expansions=400_000):
+        """``plan`` with its pieces ``first`` to ``last`` (inclusive, locomotion only)
+        searched again with the obstacles ``extra`` (world footprints) added: from the node
+        where piece ``first`` begins (the plan's start when it is the first piece) to the
+        node where piece ``last`` ends (the goal when it is the last), in the plan's own
+        frame, so every other piece is kept as it was and joins the new run on its node.
+        Used when a prop moves into a planned path (Sec. 4.4: only the occluded segments
+        are replaced). The run is shortened like a plan. Raises PlanError."""
+        pieces = plan.pieces
+        if not (0 <= first <= last < len(pieces)):
+            raise PlanError(f"no run {first}-{last} in a plan of {len(pieces)} pieces")
+        if any(p.kind not in shortcut.LOCOMOTION for p in pieces[first:last + 1]):
+            raise PlanError("a run holding a traversal or interaction clip is not re-planned")
+        start, goal = np.asarray(plan.start, float), np.asarray(plan.goal, float)
+        t0 = time.perf_counter()
+        with self.framed(start, goal, margin_tiles) as (ls, lg, frame):
+            for ob in extra:
+                self.env.place(Obstacle(ob.name, to_local(frame, ob.polygon)))
+            begin = end = None
+            if first > 0 and pieces[first].kind != "start":
+                p, h = shortcut.entry_state(self, pieces[first])
+                begin = self._node_key(p, h)
+                ls = np.array([p[0], p[1], h])
+            if last < len(pieces) - 1 and pieces[last].kind != "goal":
+                p, h = shortcut.exit_state(self, pieces[last])
+                end = self._node_key(p, h)
+                lg = np.array([p[0], p[1], h])
+            run = self._plan_local(ls, lg, margin_tiles, max_expansions, False,
+                                   start_key=begin, goal_key=end)
+            new = shortcut.shorten(self, run.pieces, ls, lg)
+            if end is None:
+                new = shortcut.pull_tail(self, new, lg)
+            out = list(pieces[:first]) + new + list(pieces[last + 1:])
+            if end is None:
+                out = self._long_last_piece(out)
+        for piece in out:
+            piece.frame = frame
+        stats = dict(plan.stats, repaired=plan.stats.get("repaired", 0) + 1,
+                     kept_pieces=len(pieces) - (last + 1 - first))
+        return Plan(out, plan.cost - sum(p.cost for p in pieces[first:last + 1]) + run.cost,
+                    plan.expansions + run.expansions, plan.seconds + time.perf_counter() - t0,
+                    plan.start, plan.goal, stats)
+
+    def _node_key(self, p, h):
+        """Key of the lattice node at plan-frame position ``p`` with heading ``h`` (a piece
+        boundary inside a plan); PlanError when no node is there."""
+        keys, pos, head = self._entries(self._block(self.env.tile_of(np.asarray(p, float))))
+        dh = np.abs((head - h + np.pi) % (2 * np.pi) - np.pi)
+        hit = np.flatnonzero((np.linalg.norm(pos - p, axis=1) < 1e-6) & (dh < 1e-6))
+        if hit.size == 0:
+            raise PlanError("a piece boundary of the plan is not on a lattice node")
+        return int(keys[hit[0]])
+
     @contextlib.contextmanager
     def framed(self, start, goal, margin_tiles=3):
         """Within the block the planner's ``env``, ``props`` and ``goal`` are those of the
@@ -603,8 +657,13 @@ class SegmentPlanner:
         finally:
             self.env, self.props = self.world_env, self.world_props
 
-    def _plan_local(self, start, goal, margin_tiles, max_expansions, use_corridor):
+    def _plan_local(self, start, goal, margin_tiles, max_expansions, use_corridor,
+                    start_key=None, goal_key=None):
         """The search of :meth:`plan`, in plan-frame coordinates.
+
+        With ``start_key`` (``goal_key``) the search begins (ends) on that node instead of
+        a start (goal) connector: ``start`` (``goal``) is then the node's state, and the
+        pieces begin (end) there (a run of a plan re-planned, :meth:`replan_run`).
 
         With ``use_corridor`` the segment search runs inside the corridor of the
         high-level tile path (the tiles within ``CORRIDOR_TILES`` of it) and falls back to
@@ -619,14 +678,19 @@ class SegmentPlanner:
         ts, tg = self.env.tile_of(start[:2]), self.env.tile_of(goal[:2])
         self.region = (min(ts[0], tg[0]) - margin_tiles, min(ts[1], tg[1]) - margin_tiles,
                        max(ts[0], tg[0]) + margin_tiles, max(ts[1], tg[1]) + margin_tiles)
-        for what, state in (("start", start), ("goal", goal)):
-            self._check_turning_room(what, state)
+        for what, state, key in (("start", start, start_key), ("goal", goal, goal_key)):
+            if key is None:
+                self._check_turning_room(what, state)
         t_conn = time.perf_counter()
-        starts = self.start_connectors(start)
-        goals = self.goal_connectors(goal)
+        self._start_table = {"valid": 0, "done": 0}
+        starts = self.start_connectors(start) if start_key is None else []
+        if goal_key is None:
+            goals = self.goal_connectors(goal)
+        else:
+            goals, self._goal_links = {int(goal_key): 0}, {}
 
         def no_start():
-            return not any(self.start_link(k) is not None for k, _ in starts)
+            return start_key is None and not any(self.start_link(k) is not None for k, _ in starts)
         if not goals:
             if no_start():
                 raise PlanError("no walkable way out of the start: " + self._boxed_in("start", start))
@@ -660,6 +724,9 @@ class SegmentPlanner:
         def goal_cost(key):
             if key not in goals:
                 return None
+            if goal_key is not None:  # the end node itself: nothing more to walk
+                payloads[key] = None
+                return 0.0, -1
             link = self.goal_link(key)
             if link is None:
                 return None
@@ -674,9 +741,12 @@ class SegmentPlanner:
             copies = self._traversal_estimates(start)
             observer = TraversalObserver(copies, stitch_copy, self.across,
                                          up_front=self.mode == "static")
-            result = astar.search([], self.expand, self.heuristic, goal_cost, max_expansions,
+            first = [] if start_key is None else [(int(start_key), 0.0, -1)]
+            bound = (self.goal_bound if goal_key is None
+                     else (lambda k: 0.0 if k == goal_key else None))
+            result = astar.search(first, self.expand, self.heuristic, goal_cost, max_expansions,
                                   observer if copies else None, lazy_starts=starts,
-                                  start_cost=start_cost, goal_bound=self.goal_bound)
+                                  start_cost=start_cost, goal_bound=bound)
             return result, observer
 
         connector_seconds = time.perf_counter() - t_conn
@@ -688,7 +758,8 @@ class SegmentPlanner:
             result, observer = search()
         if not result.found and no_start():
             raise PlanError("no walkable way out of the start: " + self._boxed_in("start", start))
-        if not result.found and not any(self.goal_link(k) is not None for k in goals):
+        if (not result.found and goal_key is None
+                and not any(self.goal_link(k) is not None for k in goals)):
             raise PlanError("no walkable way into the goal: " + self._boxed_in("goal", goal))
         if not result.found:
             raise PlanError(f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is unreachable: obstacles "
@@ -697,10 +768,12 @@ class SegmentPlanner:
         pieces = []
         keys = [k for k, _ in result.path]
         first = keys[0]
-        pieces.append(self.start_link(first)[1]())
+        if start_key is None:
+            pieces.append(self.start_link(first)[1]())
         for (k, payload), prev in zip(result.path[1:], keys[:-1]):
             if k == astar.GOAL:
-                pieces.append(payloads[prev]())
+                if payloads[prev] is not None:
+                    pieces.append(payloads[prev]())
             elif payload <= STITCH_PAYLOAD:
                 st = stitches[STITCH_PAYLOAD - payload]
                 prop = next(p for p in self.props if p.name == st.prop)

@@ -35,8 +35,8 @@ def shorten(planner, pieces, start, goal):
             end += 1
         for j in range(end, i, -1):  # the longest run first
             run = out[i:j + 1]
-            a = _entry_state(planner, run[0])
-            b = _exit_state(planner, run[-1])
+            a = entry_state(planner, run[0])
+            b = exit_state(planner, run[-1])
             to_goal = run[-1].kind == "goal"
             old_cost = sum(p.cost for p in run)
             free_length = to_goal or run[0].kind == "start"
@@ -52,18 +52,23 @@ def shorten(planner, pieces, start, goal):
     return out
 
 
+LOCOMOTION = ("start", "segment", "goal", "shortcut")  # pieces that walk (no clip)
+
+
 def _locomotion(piece):
-    return piece.kind in ("start", "segment", "goal", "shortcut")
+    return piece.kind in LOCOMOTION
 
 
-def _entry_state(planner, piece):
+def entry_state(planner, piece):
+    """(position, heading) where a piece begins (plan frame)."""
     if piece.curve is not None:
         return piece.curve.pos[0], float(piece.curve.heading[0])
     p0, d0, _, _ = planner.patch.endpoints(np.array([piece.segment]))
     return p0[0] + np.array(piece.tile, float) * planner.patch.side, float(np.arctan2(d0[0, 1], d0[0, 0]))
 
 
-def _exit_state(planner, piece):
+def exit_state(planner, piece):
+    """(position, heading) where a piece ends (plan frame)."""
     if piece.curve is not None:
         return piece.curve.pos[-1], float(piece.curve.heading[-1])
     _, _, p1, d1 = planner.patch.endpoints(np.array([piece.segment]))
@@ -168,10 +173,10 @@ def _pull(planner, run, goal):
         if q == len(run):
             pts, end_heading, tail = _resampled(planner, run, goal[:2]), float(goal[2]), []
         else:
-            p_end, end_heading = _entry_state(planner, run[q])
+            p_end, end_heading = entry_state(planner, run[q])
             pts, tail = _resampled(planner, run[:q], p_end), run[q:]
         corners = pts[_string_pull(planner.env, pts, planner.env.radius + PULL_CLEARANCE)]
-        parts = _chain(planner, corners, _entry_state(planner, run[0]), end_heading)
+        parts = _chain(planner, corners, entry_state(planner, run[0]), end_heading)
         if parts is None:
             continue
         parts += [p.curve if p.curve is not None else planner._segment_curve(p) for p in tail]
