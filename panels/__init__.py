@@ -14,8 +14,9 @@ _register, _unregister = bpy.utils.register_classes_factory(classes)
 
 def register():
     _register()
+    overlay.register_handlers()  # the overlay follows the file's setting (load_post)
 
 
 def unregister():
-    overlay.disable()  # never leave a draw handler behind
+    overlay.unregister_handlers()
     _unregister()

@@ -283,6 +283,37 @@ def is_enabled():
     return _handle is not None
 
 
+def sync():
+    """Draw handler on exactly when some scene has the overlay ticked: the setting is saved
+    with the .blend, the handler is not (a file opened, the add-on enabled again)."""
+    try:
+        wanted = any(sc.motion_patches.show_overlay for sc in bpy.data.scenes)
+    except AttributeError:  # bpy.data not readable yet (add-on registering at start-up)
+        return 0.1  # as a timer: try again shortly
+    enable() if wanted else disable()
+    return None
+
+
+@bpy.app.handlers.persistent
+def _on_load(_file=None):
+    sync()
+
+
+def register_handlers():
+    if _on_load not in bpy.app.handlers.load_post:
+        bpy.app.handlers.load_post.append(_on_load)
+    if sync() is not None:
+        bpy.app.timers.register(sync, first_interval=0.1)
+
+
+def unregister_handlers():
+    if _on_load in bpy.app.handlers.load_post:
+        bpy.app.handlers.load_post.remove(_on_load)
+    if bpy.app.timers.is_registered(sync):
+        bpy.app.timers.unregister(sync)
+    disable()  # never leave a draw handler behind
+
+
 class MOTION_PATCHES_PT_overlay(SidebarPanel, bpy.types.Panel):
     bl_label = "Overlay"
     bl_idname = "MOTION_PATCHES_PT_overlay"
