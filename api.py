@@ -350,8 +350,10 @@ def _endpoints(character, goal, start_prop, by_name, skel, goal_facing="exact", 
 
 @contextlib.contextmanager
 def _without(env, names):
-    """``env`` with the named obstacles taken out for the block (put back after)."""
-    saved = [env.obstacles[n] for n in names if n in env.obstacles]
+    """``env`` with the named obstacles (and their parts, :func:`adapter.scene.part_name`)
+    taken out for the block (put back after)."""
+    names = set(names)
+    saved = [ob for n, ob in env.obstacles.items() if n in names or scene_io.owner(n) in names]
     for ob in saved:
         env.remove(ob.name)
     try:
@@ -367,7 +369,7 @@ def _check_clear(env, character, endpoints, by_name):
                              ("goal", endpoints[1], endpoints[3])):
         if ref is not None:  # sitting down / standing up: the clip's own end, beside the prop
             continue
-        near = env.near(state)
+        near = scene_io.owners(env.near(state))
         if not near:
             continue
         who = f"the {what} of '{character.name}'"
@@ -393,7 +395,7 @@ def _solve(planner, character, endpoints, explain=True):
             plan = planner.plan(start_state, goal_state)
     except causes.NoPath as exc:
         raise PathNotFound(f"no path for '{character.name}': {exc}", exc.cause,
-                           exc.props) from None
+                           scene_io.owners(exc.props)) from None
     except PlanError as exc:
         raise PathNotFound(f"no path for '{character.name}': {exc}") from None
     return with_interactions(plan, start_ref, goal_ref)
@@ -786,7 +788,8 @@ def check_layout(scene, spec, context=None):
             plan = planner.plan(start, goal, margin_tiles=margin)
         except PlanError as exc:
             r["error"] = str(exc)
-            r["blocked_by"], r["blocked_reason"] = blocking.blocking_props(env, start, goal, margin)
+            names, r["blocked_reason"] = blocking.blocking_props(env, start, goal, margin)
+            r["blocked_by"] = scene_io.owners(names)
         else:
             world = concatenate(plan_motions(patch, plan))
             r["goal"] = state_dict(_shrunk(plan.goal, 1.0 / size), gob and gob.name)
