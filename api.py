@@ -19,6 +19,7 @@ import numpy as np
 from .adapter import actions as act_io
 from .adapter import evaluate, mocap, nla, props_io, scene as scene_io, storage
 from .adapter import rig as rig_io
+from .adapter import transaction
 from .motion_patches import (blocking, causes, contacts, crowd, foot_lock, layout_spec,
                              metrics, object_patch, validate)
 from .motion_patches import scene_rate
@@ -401,6 +402,32 @@ def _solve(planner, character, endpoints, explain=True):
     return with_interactions(plan, start_ref, goal_ref)
 
 
+def _writable(character, first=None, frames=None):
+    """Refuse, before anything is written, a plan on ``character`` that writing could not
+    carry out or that would delete user data (:func:`adapter.transaction.check_writable`);
+    ``first``: its first frame, ``frames``: how many."""
+    why = transaction.check_writable(bpy, character, first,
+                                     None if first is None else first + frames - 1)
+    if why:
+        raise MotionPatchesError(why)
+
+
+def _frame_start(scene, frame_start):
+    """The first frame of a plan: the scene's current frame, or ``frame_start`` (a whole
+    number Blender can hold)."""
+    if frame_start is None:
+        return scene.frame_current
+    lo, hi = transaction.frame_limits(bpy)
+    try:
+        f = float(frame_start)
+    except (TypeError, ValueError):
+        raise MotionPatchesError(f"the start frame must be a number, not {frame_start!r}") from None
+    if not (math.isfinite(f) and lo <= f <= hi):
+        raise MotionPatchesError(f"the start frame {frame_start} is outside what Blender holds "
+                                 f"({lo} to {hi})")
+    return int(round(f))
+
+
 def _placed(scene, patch, rig, motions):
     """A plan's piece motions (:func:`plan_motions`) put on the character: (its pieces'
     motions on its skeleton, at the patch's rate; the scene frames where the pieces start
@@ -503,6 +530,8 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
         raise MotionPatchesError("choose a goal object (its location and facing)")
     if goal == character:
         raise MotionPatchesError("the goal cannot be the character itself")
+    frame_start = _frame_start(scene, frame_start)
+    _writable(character)
     depsgraph = context.evaluated_depsgraph_get()
     goal_obj = goal if isinstance(goal, bpy.types.Object) else None
     env = scene_io.environment(scene, depsgraph, patch, radius,
@@ -514,11 +543,13 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
     _check_clear(env, character, ends, by_name)
     planner = SegmentPlanner(patch, env, alpha, beta, gamma, props=props, mode=stitching)
     plan = _solve(planner, character, ends)
-    frame_start = scene.frame_current if frame_start is None else int(frame_start)
     motions = plan_motions(patch, plan)
     plan.stats["glitches"] = validate.count(validate.plan_glitches(patch, plan, motions))
-    return _write(scene, character, patch, patch_name, plan,
-                  _placed(scene, patch, rig, motions), frame_start, env, radius, foot_lock, rig)
+    placed = _placed(scene, patch, rig, motions)
+    _writable(character, frame_start, placed[2].frames)
+    with transaction.kept(bpy, scene, [character], (PLAN_KEY, FRAME_RANGE_KEY)):
+        return _write(scene, character, patch, patch_name, plan, placed, frame_start, env,
+                      radius, foot_lock, rig)
 
 
 def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, radius=0.25,
@@ -560,6 +591,8 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
         if goal == character:
             raise MotionPatchesError(f"the goal of '{character.name}' is the character itself")
         _goal(goal)
+        _writable(character)
+    first = _frame_start(scene, frame_start)
     depsgraph = context.evaluated_depsgraph_get()
     # Characters are not obstacles of the scene: they are kept apart in time, and only where
     # they stand still (goals of earlier ones, starts of later ones) in space. A goal object
@@ -642,13 +675,16 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
         max(1, round(0.2 * fps)))
     if progress is not None:
         progress(0.9)
-    first = scene.frame_current if frame_start is None else int(frame_start)
     plans = []
     for (n, plan), p, d in zip(planned, placed, delays):
-        env = world_of(sizes[n])[0]
-        with _without(env, own_goal[n]):  # the plan record lists what it walked around
-            plans.append(_write(scene, pairs[n][0], patch, patch_name, plan, p, first + d,
-                                env, radius, foot_lock, rigs[n]))
+        _writable(pairs[n][0], first + d, p[2].frames)
+    with transaction.kept(bpy, scene, [pairs[n][0] for n, _ in planned],
+                          (PLAN_KEY, FRAME_RANGE_KEY)):
+        for (n, plan), p, d in zip(planned, placed, delays):
+            env = world_of(sizes[n])[0]
+            with _without(env, own_goal[n]):  # the plan record lists what it walked around
+                plans.append(_write(scene, pairs[n][0], patch, patch_name, plan, p, first + d,
+                                    env, radius, foot_lock, rigs[n]))
     if progress is not None:
         progress(1.0)
     names = [pairs[n][0].name for n, _ in planned]
