@@ -18,13 +18,15 @@ import numpy as np
 
 from .adapter import actions as act_io
 from .adapter import evaluate, mocap, nla, props_io, scene as scene_io, storage
+from .adapter import compat
 from .adapter import moving as moving_io
 from .adapter import rig as rig_io
+from .adapter import transaction
 from .motion_patches import (blocking, causes, contacts, crowd, foot_lock, layout_spec,
                              metrics, moving_props, object_patch, validate)
 from .motion_patches import scene_rate
 from .motion_patches.environment import Obstacle
-from .motion_patches.gait import build_gait
+from .motion_patches.gait import MIN_TURN, build_gait
 from .motion_patches.locomotion_patch import bake
 from .motion_patches.motion import concatenate
 from .motion_patches.planner import (PlanError, SegmentPlanner, interaction_states,
@@ -108,15 +110,40 @@ def bake_locomotion_patch(scene, armature, straight, turns=(), layer="walk", nam
         raise MotionPatchesError("choose a straight locomotion action")
     t0 = time.perf_counter()
     fps = scene_fps(scene)
+    bones = {b.name for b in armature.data.bones}
+    for action in (straight,) + tuple(turns):
+        unknown = sorted(_animated_bones(action) - bones)
+        if unknown:
+            raise MotionPatchesError(
+                f"the action '{action.name}' animates bones the armature '{armature.name}' does "
+                f"not have ({', '.join(unknown[:6])}{', ...' if len(unknown) > 6 else ''}): its "
+                f"bone names differ; import its BVH onto this armature (it is then retargeted) "
+                f"or rename its bones")
     try:
         clips = [act_io.clip_from_action(a, armature, fps) for a in (straight,) + tuple(turns)]
         gait = build_gait(layer, clips[0], tuple(clips[1:]), fps=fps, mirror_turns=mirror_turns)
+        for action in turns:
+            if not any(n.startswith(f"turn: {action.name} ") for n in gait.notes):
+                raise ValueError(
+                    f"the turn clip '{action.name}' does not turn: none of its gait cycles turns "
+                    f"{np.degrees(MIN_TURN):.0f} degrees or more; give a clip that turns, or "
+                    f"bake without it (the straight stride is bent to turns)")
         patch = bake(gait, cells=cells, nodes=nodes, effort_rate=effort_rate, progress=progress)
     except ValueError as exc:  # SparsePatch included
         raise MotionPatchesError(str(exc)) from None
     name = name or layer
     storage.store_patch(scene, patch, name)
     return BakeResult(name, layer, patch.stats, time.perf_counter() - t0, list(gait.notes))
+
+
+def _animated_bones(action):
+    """Names of the bones an action's F-curves animate (``pose.bones["name"]...`` paths)."""
+    out = set()
+    for fc in compat.fcurves(action):
+        path = fc.data_path
+        if path.startswith('pose.bones["'):
+            out.add(path[len('pose.bones["'):path.index('"]')])
+    return out
 
 
 def tag_object_patch(obj, clips, patch_name=None, scene=None, context=None):
@@ -352,8 +379,10 @@ def _endpoints(character, goal, start_prop, by_name, skel, goal_facing="exact", 
 
 @contextlib.contextmanager
 def _without(env, names):
-    """``env`` with the named obstacles taken out for the block (put back after)."""
-    saved = [env.obstacles[n] for n in names if n in env.obstacles]
+    """``env`` with the named obstacles (and their parts, :func:`adapter.scene.part_name`)
+    taken out for the block (put back after)."""
+    names = set(names)
+    saved = [ob for n, ob in env.obstacles.items() if n in names or scene_io.owner(n) in names]
     for ob in saved:
         env.remove(ob.name)
     try:
@@ -369,7 +398,7 @@ def _check_clear(env, character, endpoints, by_name):
                              ("goal", endpoints[1], endpoints[3])):
         if ref is not None:  # sitting down / standing up: the clip's own end, beside the prop
             continue
-        near = env.near(state)
+        near = scene_io.owners(env.near(state))
         if not near:
             continue
         who = f"the {what} of '{character.name}'"
@@ -394,11 +423,100 @@ def _solve(planner, character, endpoints, explain=True):
         else:
             plan = planner.plan(start_state, goal_state)
     except causes.NoPath as exc:
+        if exc.cause == "search limit":
+            raise PathNotFound(f"no path for '{character.name}': "
+                               f"{_limit_text(causes.SEARCH_LIMIT)}", exc.cause) from None
         raise PathNotFound(f"no path for '{character.name}': {exc}", exc.cause,
-                           exc.props) from None
+                           scene_io.owners(exc.props)) from None
     except PlanError as exc:
         raise PathNotFound(f"no path for '{character.name}': {exc}") from None
     return with_interactions(plan, start_ref, goal_ref)
+
+
+def _writable(character, first=None, frames=None):
+    """Refuse, before anything is written, a plan on ``character`` that writing could not
+    carry out or that would delete user data (:func:`adapter.transaction.check_writable`);
+    ``first``: its first frame, ``frames``: how many."""
+    why = transaction.check_writable(bpy, character, first,
+                                     None if first is None else first + frames - 1)
+    if why:
+        raise MotionPatchesError(why)
+
+
+def _frame_start(scene, frame_start):
+    """The first frame of a plan: the scene's current frame, or ``frame_start`` (a whole
+    number Blender can hold)."""
+    if frame_start is None:
+        return scene.frame_current
+    lo, hi = transaction.frame_limits(bpy)
+    try:
+        f = float(frame_start)
+    except (TypeError, ValueError):
+        raise MotionPatchesError(f"the start frame must be a number, not {frame_start!r}") from None
+    if not (math.isfinite(f) and lo <= f <= hi):
+        raise MotionPatchesError(f"the start frame {frame_start} is outside what Blender holds "
+                                 f"({lo} to {hi})")
+    return int(round(f))
+
+
+MAX_WEIGHT = 1e6      # alpha, beta, gamma above this overflow the search's costs
+MAX_RADIUS = 10.0     # metres: a character's radius
+MAX_COORDINATE = 1e5  # metres from the origin a start or goal may lie
+MAX_DISTANCE = 2000.0  # metres between start and goal of one plan (plan longer walks in legs)
+SAME_PLACE = 0.05     # metres: a goal this near the start, facing the same way, is the start
+SAME_FACING = np.radians(2.0)
+
+
+def _check_weights(alpha, beta, gamma, radius, where=""):
+    """Refuse weights the search cannot sum (NaN, negative, huge) and a radius that is not
+    a body's, naming the value."""
+    for name, v in (("alpha", alpha), ("beta", beta), ("gamma", gamma)):
+        try:
+            ok = math.isfinite(float(v)) and 0.0 <= float(v) <= MAX_WEIGHT
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise MotionPatchesError(f"{where}{name} must be a number from 0 to {MAX_WEIGHT:g}, "
+                                     f"not {v!r}")
+    try:
+        ok = math.isfinite(float(radius)) and 0.0 < float(radius) <= MAX_RADIUS
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise MotionPatchesError(f"{where}radius must be a number of metres above 0 and at most "
+                                 f"{MAX_RADIUS:g}, not {radius!r}")
+
+
+def _check_far(start, goal, who, scale=1.0):
+    """Refuse a start or goal farther from the origin than ``MAX_COORDINATE`` or start and
+    goal farther apart than ``MAX_DISTANCE`` (planner-world states of a character ``scale``
+    times the patch's size), and a goal where the start is (same place, same facing)."""
+    for what, state in (("start", start), ("goal", goal)):
+        far = float(np.abs(np.asarray(state[:2], float)).max()) * scale
+        if not far <= MAX_COORDINATE:
+            raise MotionPatchesError(f"the {what} of {who} lies {far:.3g} m from the origin; "
+                                     f"plans stay within {MAX_COORDINATE:g} m of it")
+    d = float(np.hypot(*(np.asarray(goal[:2], float) - np.asarray(start[:2], float)))) * scale
+    if d > MAX_DISTANCE:
+        raise MotionPatchesError(f"the goal of {who} is {d:,.0f} m from its start; one plan "
+                                 f"walks at most {MAX_DISTANCE:,.0f} m: plan the walk in legs")
+    turn = abs((float(goal[2]) - float(start[2]) + np.pi) % (2 * np.pi) - np.pi)
+    if d < SAME_PLACE and (np.isnan(goal[2]) or turn < SAME_FACING):
+        raise MotionPatchesError(f"the goal of {who} is where it stands ({d * 100:.0f} cm away, "
+                                 f"facing the same way): there is nothing to plan")
+
+
+def _check_ends(character, endpoints, scale):
+    """:func:`_check_far` of a character's start and goal states (``_endpoints``) unless a
+    prop's clip starts or ends the path there."""
+    if endpoints[2] is None and endpoints[3] is None:
+        _check_far(endpoints[0], endpoints[1], f"'{character.name}'", scale)
+
+
+def _limit_text(nodes):
+    return (f"search limit reached after {nodes:,} nodes: the search stopped before finding a "
+            f"way, which does not mean the props close it; plan to a nearer goal first and on "
+            f"from there")
 
 
 def _placed(scene, patch, rig, motions):
@@ -514,6 +632,7 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
     facing whichever way is cheapest (the goal object's facing is then ignored). Raises
     :class:`PathNotFound` when the props leave no way, and
     :class:`MotionPatchesError` for bad input; either way the scene is unchanged."""
+    _check_weights(alpha, beta, gamma, radius)
     patch = _patch_for_planning(scene, patch_name)
     context = context or bpy.context
     # Objects moved by a script have stale matrix_world until the view layer updates.
@@ -524,6 +643,8 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
         raise MotionPatchesError("choose a goal object (its location and facing)")
     if goal == character:
         raise MotionPatchesError("the goal cannot be the character itself")
+    frame_start = _frame_start(scene, frame_start)
+    _writable(character)
     depsgraph = context.evaluated_depsgraph_get()
     goal_obj = goal if isinstance(goal, bpy.types.Object) else None
     env = scene_io.environment(scene, depsgraph, patch, radius,
@@ -532,7 +653,7 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
     by_name = {p.name: p for p in props}
     ends = _endpoints(character, goal, start_prop, by_name,
                       rig.target if rig else patch.gait.skeleton, goal_facing, scale)
-    frame_start = scene.frame_current if frame_start is None else int(frame_start)
+    _check_ends(character, ends, scale)
     tracks = moving_io.tracks(scene, depsgraph, list(env.obstacles), frame_start, scale)
     awake = [t.name for t in tracks if t.awake_at(0.0)]
     for t in tracks:  # where each stands at the first frame (the scene may show another)
@@ -548,8 +669,11 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
         frame_start += int(round(wait * scene_fps(scene)))
     motions = plan_motions(patch, plan)
     plan.stats["glitches"] = validate.count(validate.plan_glitches(patch, plan, motions))
-    return _write(scene, character, patch, patch_name, plan,
-                  _placed(scene, patch, rig, motions), frame_start, env, radius, foot_lock, rig)
+    placed = _placed(scene, patch, rig, motions)
+    _writable(character, frame_start, placed[2].frames)
+    with transaction.kept(bpy, scene, [character], (PLAN_KEY, FRAME_RANGE_KEY)):
+        return _write(scene, character, patch, patch_name, plan, placed, frame_start, env,
+                      radius, foot_lock, rig)
 
 
 def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, radius=0.25,
@@ -571,6 +695,7 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
     approaches left are returned as ``conflicts``. Bad input raises
     :class:`MotionPatchesError` before anything is planned or written."""
     t0 = time.perf_counter()
+    _check_weights(alpha, beta, gamma, radius)
     patch = _patch_for_planning(scene, patch_name)
     context = context or bpy.context
     context.view_layer.update()
@@ -591,6 +716,8 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
         if goal == character:
             raise MotionPatchesError(f"the goal of '{character.name}' is the character itself")
         _goal(goal)
+        _writable(character)
+    first = _frame_start(scene, frame_start)
     depsgraph = context.evaluated_depsgraph_get()
     # Characters are not obstacles of the scene: they are kept apart in time, and only where
     # they stand still (goals of earlier ones, starts of later ones) in space. A goal object
@@ -611,6 +738,7 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
     own_goal = [[o.name for o in _not_obstacles([g])] if isinstance(g, bpy.types.Object) else []
                 for _, g in pairs]
     for (c, _), e, mine, sz in zip(pairs, ends, own_goal, sizes):
+        _check_ends(c, e, sz)
         with _without(world_of(sz)[0], mine):
             _check_clear(world_of(sz)[0], c, e, world_of(sz)[2])
     for w in worlds.values():
@@ -673,13 +801,16 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
         max(1, round(0.2 * fps)))
     if progress is not None:
         progress(0.9)
-    first = scene.frame_current if frame_start is None else int(frame_start)
     plans = []
     for (n, plan), p, d in zip(planned, placed, delays):
-        env = world_of(sizes[n])[0]
-        with _without(env, own_goal[n]):  # the plan record lists what it walked around
-            plans.append(_write(scene, pairs[n][0], patch, patch_name, plan, p, first + d,
-                                env, radius, foot_lock, rigs[n]))
+        _writable(pairs[n][0], first + d, p[2].frames)
+    with transaction.kept(bpy, scene, [pairs[n][0] for n, _ in planned],
+                          (PLAN_KEY, FRAME_RANGE_KEY)):
+        for (n, plan), p, d in zip(planned, placed, delays):
+            env = world_of(sizes[n])[0]
+            with _without(env, own_goal[n]):  # the plan record lists what it walked around
+                plans.append(_write(scene, pairs[n][0], patch, patch_name, plan, p, first + d,
+                                    env, radius, foot_lock, rigs[n]))
     if progress is not None:
         progress(1.0)
     names = [pairs[n][0].name for n, _ in planned]
@@ -744,8 +875,8 @@ def _resolve(place, what, patch):
     if ob is None:
         raise MotionPatchesError(f"layout spec: no object named '{place}' for a {what} "
                                  f"(have: {_some_names(bpy.data.objects)})")
-    if what == "start" and ob.type == "ARMATURE":
-        rig = _check_character(ob, patch)
+    if what == "character" or (what == "start" and ob.type == "ARMATURE"):
+        rig = _check_character(ob, patch)  # the rule plan_path applies to its character
         return scene_io.character_state(ob, rig.target if rig else patch.gait.skeleton), ob
     return scene_io.ground_state(ob), ob
 
@@ -768,14 +899,13 @@ def check_layout(scene, spec, context=None):
     s = scene.motion_patches
     w = {k: float(getattr(s, k) if spec[k] is None else spec[k])
          for k in ("alpha", "beta", "gamma", "radius")}
-    if w["radius"] <= 0:
-        raise MotionPatchesError("layout spec: radius must be > 0")
+    _check_weights(w["alpha"], w["beta"], w["gamma"], w["radius"], "layout spec: ")
     margin = 3 if spec["margin_tiles"] is None else int(spec["margin_tiles"])
     # Evaluate first: it also brings the objects' world matrices up to date.
     depsgraph = (context or bpy.context).evaluated_depsgraph_get()
     jobs = []
     for p in spec["pairs"]:
-        start, sob = _resolve(p["start"], "start", patch)
+        start, sob = _resolve(p["start"], "character" if p.get("character") else "start", patch)
         goal, gob = _resolve(p["goal"], "goal", patch)
         # A retargeted character plans in the world shrunk by its size (see _size).
         size = (_size(_check_character(sob, patch))
@@ -816,10 +946,18 @@ def check_layout(scene, spec, context=None):
             goal = np.array([goal[0], goal[1], np.nan])
         start, goal = _shrunk(start, size), _shrunk(goal, size)
         try:
-            plan = planner.plan(start, goal, margin_tiles=margin)
+            _check_far(start, goal, "start", size)
+            with causes.counted(planner) as expanded:
+                plan = planner.plan(start, goal, margin_tiles=margin)
+        except MotionPatchesError as exc:
+            r["error"], r["blocked_reason"] = str(exc), "refused"
         except PlanError as exc:
-            r["error"] = str(exc)
-            r["blocked_by"], r["blocked_reason"] = blocking.blocking_props(env, start, goal, margin)
+            if expanded[0] >= causes.SEARCH_LIMIT:
+                r["error"], r["blocked_reason"] = _limit_text(expanded[0]), "search limit"
+            else:
+                r["error"] = str(exc)
+                names, r["blocked_reason"] = blocking.blocking_props(env, start, goal, margin)
+                r["blocked_by"] = scene_io.owners(names)
         else:
             world = concatenate(plan_motions(patch, plan))
             r["goal"] = state_dict(_shrunk(plan.goal, 1.0 / size), gob and gob.name)

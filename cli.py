@@ -576,6 +576,9 @@ def _load_spec(path):
     p = Path(path).expanduser()
     if not p.is_file():
         raise BadInput(f"layout spec not found: {p}")
+    if p.suffix.lower() in (".yaml", ".yml"):
+        raise BadInput(f"layout spec {p.name}: specs are JSON or TOML (.json, .toml), not "
+                       f"YAML; see --help for the keys")
     try:
         if p.suffix.lower() == ".toml":
             import tomllib
@@ -584,7 +587,9 @@ def _load_spec(path):
         with open(p, encoding="utf-8") as fh:
             return json.load(fh)
     except (ValueError, UnicodeDecodeError) as exc:  # JSONDecodeError, TOMLDecodeError
-        raise BadInput(f"cannot read layout spec {p.name}: {exc}") from None
+        kind = "TOML" if p.suffix.lower() == ".toml" else "JSON"
+        raise BadInput(f"cannot read layout spec {p.name} as {kind} (specs are JSON, or TOML "
+                       f"with a .toml name): {exc}") from None
 
 
 def _planned_pairs(scene, characters, goals):

@@ -36,7 +36,10 @@ def import_bvh(paths, scale=CMU_SCALE, armature=None, name=None):
                 filepath=str(p), global_scale=scale, rotate_mode="QUATERNION",
                 use_fps_scale=True, update_scene_fps=False, update_scene_duration=False)
         except RuntimeError as exc:
-            raise ValueError(f"Blender's BVH importer could not read {p.name}: {exc}") from None
+            lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
+            raise ValueError(f"Blender's BVH importer could not read {p.name}: "
+                             f"{lines[-1] if lines else 'unknown error'} (a damaged or "
+                             f"truncated file?)") from None
         new = [o for o in bpy.data.objects if o not in before]
         if result != {"FINISHED"} or len(new) != 1 or new[0].type != "ARMATURE":
             for o in new:

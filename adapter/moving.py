@@ -56,13 +56,16 @@ def _pose(obj):
 
 
 def moving_names(scene, names):
-    """The names among ``names`` (scene objects) of props that move."""
-    return [n for n in names if n in scene.objects and _moves(scene.objects[n])]
+    """The object names among ``names`` (obstacle names: objects, or their parts) of props
+    that move."""
+    owners = scene_io.owners(names)
+    return [n for n in owners if n in scene.objects and _moves(scene.objects[n])]
 
 
 def tracks(scene, depsgraph, names, frame_start, scale=1.0):
-    """[PropTrack] of the named moving props, times in seconds from ``frame_start``,
-    positions divided by ``scale`` (the planner's world of a retargeted character)."""
+    """[PropTrack] of the moving props among obstacle ``names`` (one per footprint part, named
+    as the obstacle), times in seconds from ``frame_start``, positions divided by ``scale``
+    (the planner's world of a retargeted character)."""
     objs = [scene.objects[n] for n in moving_names(scene, names)]
     if not objs:
         return []
@@ -81,21 +84,23 @@ def tracks(scene, depsgraph, names, frame_start, scale=1.0):
             if f == frame_start:
                 dg = depsgraph if depsgraph is not None else scene.view_layers[0].depsgraph
                 for o in objs:
-                    polygons[o.name] = scene_io.footprint(o, dg)
+                    polygons[o.name] = scene_io.footprint_parts(o, dg)
     finally:
         scene.frame_set(frame0, subframe=sub0)
     out = []
     for o in objs:
-        poly, p = polygons.get(o.name), np.array(poses[o.name], float)
-        if poly is None or p.size == 0:
+        parts, p = polygons.get(o.name) or [], np.array(poses[o.name], float)
+        if not parts or p.size == 0:
             continue
         x, y, yaw = p[0]
         c, s = math.cos(yaw), math.sin(yaw)
-        d = poly - (x, y)
-        local = np.column_stack((c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]))
         p[:, :2] /= scale
         times = np.arange(len(p)) / fps
         if len(p) == 1:  # keyframes that end before the plan starts: held still
             times, p = np.array([0.0, 1.0]), np.vstack((p, p))
-        out.append(PropTrack(o.name, local / scale, times, p))
+        for k, poly in enumerate(parts):
+            d = poly - (x, y)
+            local = np.column_stack((c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]))
+            out.append(PropTrack(scene_io.part_name(o.name, k, len(parts)), local / scale,
+                                 times, p))
     return out

@@ -1,15 +1,17 @@
 """Tagged props -> core object patches.
 
 A tagged mesh object's footprint is the convex hull of its evaluated vertices in its own
-ground coordinates (scale applied, Z rotation factored out); its clips are read from their
+ground coordinates (scale applied, Z rotation factored out; a flat prop grown to the least
+thickness, :func:`motion_patches.footprint.outline`); its clips are read from their
 actions on the patch's skeleton and placed relative to the prop.
 """
 
 import numpy as np
 
+from ..motion_patches import footprint as fp
 from ..motion_patches import object_patch as op
-from ..motion_patches.environment import convex_hull
 from . import actions as act_io
+from . import scene as scene_io
 
 KINDS = {"TRAVERSAL": op.TRAVERSAL, "INTERACTION": op.INTERACTION}
 
@@ -20,30 +22,19 @@ def prop_pose(obj):
 
 
 def footprint(obj, depsgraph):
-    """Convex footprint in the prop's ground coordinates; ValueError if it has none."""
-    ev = obj.evaluated_get(depsgraph)
+    """Convex footprint in the prop's ground coordinates (the hull of its evaluated
+    vertices, at least ``footprint.MIN_THICKNESS`` wide: :func:`motion_patches.footprint.
+    outline`, the rule every footprint follows); ValueError if it has no vertices."""
     if obj.type != "MESH":
         raise ValueError(f"'{obj.name}' is not a mesh object: an object patch needs geometry "
                          f"for its footprint")
-    mesh = ev.to_mesh()
-    try:
-        n = len(mesh.vertices)
-        co = np.empty(n * 3)
-        mesh.vertices.foreach_get("co", co)
-    finally:
-        ev.to_mesh_clear()
-    if n < 3:
-        raise ValueError(f"'{obj.name}' has no footprint: its mesh has {n} vertices")
-    m = np.array(ev.matrix_world)
-    world = co.reshape(n, 3) @ m[:3, :3].T + m[:3, 3]
+    world = scene_io.mesh_arrays(obj, depsgraph)[0]
+    if not len(world):
+        raise ValueError(f"'{obj.name}' has no footprint: its mesh has no vertices")
     x, y, h = prop_pose(obj)
     c, s = np.cos(-h), np.sin(-h)
     d = world[:, :2] - (x, y)
-    local = np.column_stack((c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]))
-    hull = convex_hull(local)
-    if len(hull) < 3:
-        raise ValueError(f"'{obj.name}' has no footprint: its geometry is flat in plan view")
-    return hull
+    return fp.outline(np.column_stack((c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1])))
 
 
 def object_patch(obj, depsgraph, skeleton, fps, gait_floor=None, scale=1.0):

@@ -1,36 +1,66 @@
 """Scene objects -> core obstacles, and goal/start states of objects.
 
-A mesh object blocks walking when its evaluated geometry overlaps the body's height band
-(0.05 m to 1.8 m above the ground): floors and ceilings do not. Its footprint is the
-convex hull of its world-space vertices projected on the ground.
+A mesh object blocks walking where its evaluated geometry overlaps the body's height band
+(0.05 m to 1.8 m above the ground): floors and ceilings do not. Its footprint is made of
+convex parts by :func:`motion_patches.footprint.parts` (thin walls grown to a board, open
+rooms kept open); an object of several parts gives one obstacle per part, named
+:func:`part_name`.
 """
+
+import re
 
 import numpy as np
 
-from ..motion_patches.environment import Environment, Obstacle, convex_hull
+from ..motion_patches import footprint as fp
+from ..motion_patches.environment import Environment, Obstacle
 
-BODY_BAND = (0.05, 1.8)
+BODY_BAND = fp.BODY_BAND
+_PART = re.compile(r" \(part \d+\)$")
 
 
-def footprint(obj, depsgraph):
-    """Convex footprint (P, 2) of a mesh object's evaluated geometry, or None."""
+def mesh_arrays(obj, depsgraph):
+    """(world vertices (N, 3), triangle vertex indices (3T,), edges (E, 2)) of a mesh
+    object's evaluated geometry (modifiers applied): what :mod:`motion_patches.footprint`
+    reads. Triangles, not polygons: every face part is then convex in plan."""
     ev = obj.evaluated_get(depsgraph)
     mesh = ev.to_mesh()
     try:
         n = len(mesh.vertices)
-        if n == 0:
-            return None
         co = np.empty(n * 3)
         mesh.vertices.foreach_get("co", co)
+        mesh.calc_loop_triangles()
+        tris = np.empty(len(mesh.loop_triangles) * 3, np.int64)
+        mesh.loop_triangles.foreach_get("vertices", tris)
+        edges = np.empty(len(mesh.edges) * 2, np.int64)
+        mesh.edges.foreach_get("vertices", edges)
     finally:
         ev.to_mesh_clear()
-    co = co.reshape(n, 3)
     m = np.array(ev.matrix_world)
-    world = co @ m[:3, :3].T + m[:3, 3]
-    if world[:, 2].max() < BODY_BAND[0] or world[:, 2].min() > BODY_BAND[1]:
-        return None
-    hull = convex_hull(world[:, :2])
-    return hull if len(hull) >= 3 else None
+    world = co.reshape(n, 3) @ m[:3, :3].T + m[:3, 3]
+    return world, tris, edges.reshape(-1, 2)
+
+
+def footprint_parts(obj, depsgraph, band=BODY_BAND):
+    """Convex world footprint parts [(P, 2)] of a mesh object ([] when it blocks nothing)."""
+    world, tris, edges = mesh_arrays(obj, depsgraph)
+    t = len(tris) // 3
+    return fp.parts(world, tris, np.arange(t) * 3, np.full(t, 3), edges, band)
+
+
+def part_name(name, k, count):
+    """Obstacle name of part ``k`` (from 0) of an object of ``count`` parts: the object's
+    own name when it has one part, else "name (part k+1)"."""
+    return name if count == 1 else f"{name} (part {k + 1})"
+
+
+def owner(obstacle_name):
+    """The object name an obstacle name (:func:`part_name`) belongs to."""
+    return _PART.sub("", obstacle_name)
+
+
+def owners(obstacle_names):
+    """Object names of obstacle names, each once, in their first order."""
+    return list(dict.fromkeys(owner(n) for n in obstacle_names))
 
 
 def obstacles(scene, depsgraph, exclude=()):
@@ -40,9 +70,8 @@ def obstacles(scene, depsgraph, exclude=()):
     for obj in scene.objects:
         if obj.type != "MESH" or obj.name in skip or not obj.visible_get():
             continue
-        fp = footprint(obj, depsgraph)
-        if fp is not None:
-            out.append(Obstacle(obj.name, fp))
+        polys = footprint_parts(obj, depsgraph)
+        out += [Obstacle(part_name(obj.name, k, len(polys)), p) for k, p in enumerate(polys)]
     return out
 
 

@@ -94,6 +94,7 @@ def normalise(spec):
         if facing not in ("exact", "any"):
             raise _spec_error(f"{where}: goal_facing must be \"exact\" or \"any\"")
         out["pairs"].append({"name": str(name), "start": start, "goal": goal,
+                             "character": "character" in p,
                              "goal_facing": facing,
                              "exclude": _names_list(p.get("exclude"), where),
                              "limits": _limits(p, where, base)})

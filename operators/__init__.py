@@ -3,8 +3,9 @@
 import bpy
 
 from . import analyse, bake, mocap, object_patch, patch_files, plan
+from .common import guarded
 
-classes = (mocap.classes + bake.classes + patch_files.classes + object_patch.classes
-           + plan.classes + analyse.classes)
+classes = tuple(guarded(c) for c in mocap.classes + bake.classes + patch_files.classes
+                + object_patch.classes + plan.classes + analyse.classes)
 
 register, unregister = bpy.utils.register_classes_factory(classes)

@@ -1,6 +1,9 @@
-"""What several operators share: the window manager's progress indicator, and the add /
-remove buttons beside the add-on's lists (turn clips of a bake, a prop's clips)."""
+"""What several operators share: the window manager's progress indicator, the add /
+remove buttons beside the add-on's lists (turn clips of a bake, a prop's clips), and the
+guard that turns an unexpected exception into a report."""
 
+import functools
+import traceback
 from contextlib import contextmanager
 
 import bpy
@@ -53,3 +56,27 @@ def list_operators(name, noun, where, owner, items, index):
     return (operator("Add", f"Add a {noun.lower()} to {where}", has_list, add),
             operator("Remove", f"Remove the selected {noun.lower()} from {where} (the action "
                                f"itself is kept)", has_active, remove))
+
+
+def guarded(cls):
+    """``cls`` with its ``execute`` reporting an unexpected exception (a bug: not a
+    :class:`api.MotionPatchesError`, which the operator reports itself) as an error and
+    cancelling, the traceback printed to the console, instead of a Python traceback in the
+    user's face. The API puts back what it changed before the exception reaches here."""
+    execute = cls.__dict__.get("execute")
+    if execute is None or getattr(execute, "_guarded", False):
+        return cls
+
+    @functools.wraps(execute)
+    def run(self, context):
+        try:
+            return execute(self, context)
+        except Exception as exc:
+            traceback.print_exc()
+            self.report({'ERROR'}, f"Internal error ({type(exc).__name__}: {exc}); the scene "
+                                   f"was left as it was. Please report this bug with the "
+                                   f"console output")
+            return {'CANCELLED'}
+    run._guarded = True
+    cls.execute = run
+    return cls

@@ -4,27 +4,24 @@ its clip list, its footprint and the tag / untag buttons."""
 import bpy
 import numpy as np
 
-from ..motion_patches.environment import convex_hull
+from ..motion_patches import footprint as fp
 from .sidebar import SidebarPanel, list_with_buttons
 
 MAX_FOOTPRINT_VERTICES = 20000  # above this the panel does not compute the footprint area
 
 
 def footprint_info(ob):
-    """(vertex count, plan-view area in m² of the mesh's convex hull, or None when the mesh
-    is too large to measure while drawing). Modifiers are not applied here."""
+    """(vertex count, plan-view area in m² of the mesh's footprint as a tagged prop's
+    (:func:`motion_patches.footprint.outline`), or None when the mesh is too large to
+    measure while drawing). Modifiers are not applied here."""
     me = ob.data
     n = len(me.vertices)
-    if n < 3 or n > MAX_FOOTPRINT_VERTICES:
+    if n == 0 or n > MAX_FOOTPRINT_VERTICES:
         return n, None
     co = np.empty(n * 3)
     me.vertices.foreach_get("co", co)
     m = np.array(ob.matrix_world)
-    hull = convex_hull(co.reshape(n, 3) @ m[:2, :3].T + m[:2, 3])
-    if len(hull) < 3:
-        return n, 0.0
-    x, y = hull[:, 0], hull[:, 1]
-    return n, float(abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))) / 2)
+    return n, fp.area(fp.outline(co.reshape(n, 3) @ m[:2, :3].T + m[:2, 3]))
 
 
 class MOTION_PATCHES_UL_clips(bpy.types.UIList):
