@@ -327,14 +327,22 @@ def key_pose(action, slot, skel, frames, root_location, rotations, modes=None, t
         key_curve(action, slot, path, i, frames, v, group=group, tol=tol, stored=how)
 
 
-def read_channels(action, slot, bone, mode, frames):
+def read_channels(action, slot, bone, mode, frames, cache=None):
     """Values (F, 3 or 4) an action gives a bone's ``mode`` channel at (action) ``frames``,
-    linear between keys (or samples), the rest value where the channel is not keyed."""
+    linear between keys (or samples), the rest value where the channel is not keyed.
+    ``cache``: a dict kept by the caller, so each action's curves are read once."""
     path = f'pose.bones["{bone}"].{rotation_path(mode)}'
     rest = rest_channels(mode)
     out = np.tile(rest, (len(frames), 1))
-    for fc in compat.fcurves(action, slot):
-        if fc.data_path == path and fc.array_index < rest.size:
-            co = curve_points(fc)
-            out[:, fc.array_index] = np.interp(frames, co[:, 0], co[:, 1])
+    key = (action.name, slot.handle if slot is not None else None)
+    points = cache.get(key) if cache is not None else None
+    if points is None:
+        points = {(fc.data_path, fc.array_index): curve_points(fc)
+                  for fc in compat.fcurves(action, slot)}
+        if cache is not None:
+            cache[key] = points
+    for i in range(rest.size):
+        co = points.get((path, i))
+        if co is not None:
+            out[:, i] = np.interp(frames, co[:, 0], co[:, 1])
     return out

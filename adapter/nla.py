@@ -14,7 +14,7 @@ import json
 
 import numpy as np
 
-from ..motion_patches import quat
+from ..motion_patches import keys as key_plan, quat
 from ..motion_patches.clip import Clip
 from ..motion_patches.inplace import rest_facing, to_inplace, to_world
 from ..motion_patches.skeleton import root_position_to_location
@@ -118,7 +118,7 @@ def rotation_signature(skel, modes):
     return "mixed-" + hashlib.sha1(text.encode()).hexdigest()[:10]
 
 
-def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None):
+def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None, index=None):
     """The shared in-place action of a patch segment for a rig whose bones have rotation
     ``modes`` ({bone: rotation_mode}; default all quaternion), created on first use;
     ``rig`` (a :class:`~motion_patches.retarget.RigMap`) when the rig is another skeleton
@@ -135,20 +135,35 @@ def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None):
     (every character copied from one rig, every rig from one importer) still share one
     action per segment; the patch's own skeleton in all-quaternion mode uses the original
     key ``patch:seg``, so segment actions of earlier saved files are reused. Keys sit on
-    the patch's frames whatever the scene's rate (strips are scaled, :func:`write_plan`)."""
+    the patch's frames whatever the scene's rate (strips are scaled, :func:`write_plan`).
+    ``index``: {key: action} of the segment actions (:func:`segment_index`), so a plan of
+    many strips does not search every action of the file for each."""
     sig = rotation_signature(skel, modes or {})
     rig_sig = rig.signature() if rig is not None else ""
     key = (f"{patch_key}:{seg}" + (f":rig-{rig_sig}" if rig_sig else "")
            + (f":{sig}" if sig else ""))
-    for a in bpy.data.actions:
-        if a.get(SEGMENT_KEY) == key:
-            return a, compat.action_slot(a)
+    found = (segment_index(bpy) if index is None else index).get(key)
+    if found is not None:
+        return found, compat.action_slot(found)
     motion = patch.motion(seg)
     if rig is not None:
         motion = rig.motion(motion)
     name = (f"MP {patch.layer} seg{seg:04d}" + (f" rig-{rig_sig[:6]}" if rig_sig else "")
             + (f" {sig}" if sig else ""))
-    return _inplace_action(name, skel, motion, {SEGMENT_KEY: key}, modes)
+    action, slot = _inplace_action(name, skel, motion, {SEGMENT_KEY: key}, modes)
+    if index is not None:
+        index[key] = action
+    return action, slot
+
+
+def segment_index(bpy):
+    """{segment key: action} of the file's shared segment actions."""
+    out = {}
+    for a in bpy.data.actions:
+        key = a.get(SEGMENT_KEY)
+        if key is not None:
+            out.setdefault(key, a)
+    return out
 
 
 def _inplace_action(name, skel, motion, tags, modes=None):
@@ -191,10 +206,11 @@ def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start, lo
     motion_track.name = TRACK_MOTION
     strips, played = [], []
     first = int(frame_start)
+    index = segment_index(bpy)
     for n, (piece, m) in enumerate(zip(plan.pieces, motions)):
         if piece.kind == "segment":
             action, slot = segment_action(bpy, patch, patch_key, piece.segment, skel, modes,
-                                          rig)
+                                          rig, index)
         else:
             action, slot = _inplace_action(f"MP {obj.name} {piece.kind}", skel, m,
                                            {CHARACTER_KEY: obj.name}, modes)
@@ -246,7 +262,7 @@ def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start, lo
     return strips, stashed
 
 
-def _lower_channels(played, bone, mode, n_frames):
+def _lower_channels(played, bone, mode, n_frames, cache=None):
     """What the motion track gives a bone's ``mode`` channel on each plan frame, read from
     the keys of its strips' actions: ``played`` = [(action, slot, first plan frame, scene
     frames it spans, strip scale)] in track order; where two strips meet on a frame the
@@ -257,7 +273,8 @@ def _lower_channels(played, bone, mode, n_frames):
     for action, slot, start, frames, scale in played:
         idx = np.arange(start, min(start + frames, n_frames))
         idx = idx[~done[idx]]
-        out[idx] = act_io.read_channels(action, slot, bone, mode, (idx - start) / scale)
+        out[idx] = act_io.read_channels(action, slot, bone, mode, (idx - start) / scale,
+                                        cache)
         done[idx] = True
     return out
 
@@ -284,16 +301,21 @@ def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=(
     action, slot = compat.new_action(f"MP {obj.name} foot lock")
     action[CHARACTER_KEY] = obj.name
     frames = np.arange(world.frames, dtype=float)
+    cache, curves = {}, []
     for j in changed:
         name = skel.names[j]
         mode = modes.get(name, "QUATERNION")
-        lower = _lower_channels(played, name, mode, world.frames)
+        lower = _lower_channels(played, name, mode, world.frames, cache)
         delta = act_io.closest_channels(locked[:, j], mode, lower) - lower
         delta[~moved[:, j]] = 0.0
         path = f'pose.bones["{name}"].{act_io.rotation_path(mode)}'
-        for i in range(delta.shape[1]):
-            act_io.key_curve(action, slot, path, i, frames, delta[:, i], group=name,
-                             tol=act_io.COMPACT)
+        curves += [(path, i, name, delta[:, i]) for i in range(delta.shape[1])]
+    if curves:
+        stored = key_plan.plan_columns(np.column_stack([c[3] for c in curves]),
+                                       act_io.COMPACT)
+        for (path, i, name, v), how in zip(curves, stored):
+            act_io.key_curve(action, slot, path, i, frames, v, group=name,
+                             tol=act_io.COMPACT, stored=how)
     track = obj.animation_data.nla_tracks.new()
     track.name = TRACK_FOOT
     strip = track.strips.new(f"{obj.name} foot lock", int(frame_start), action)
