@@ -329,6 +329,7 @@ def test_quaternion_rig_evaluates_the_plan(planned):
     components to the locked rotation (a Combine track was 1.3e-3 off: Blender takes the
     angle of a Combine quaternion as acos of its float32 w)."""
     err, where = worst(planned, planned["matrices"]["Quat"], planned["expected"])
+    print(f"\nquaternion rig from the plan, foot lock {planned['foot_lock']}: worst {where}")
     assert err < TOL, where
 
 
