@@ -563,9 +563,10 @@ def _fit_frame_range(scene):
 
 
 def _write(scene, character, patch, patch_name, plan, placed, frame_start, env, radius,
-           lock=True, rig=None):
+           lock=True, rig=None, fit=True):
     """NLA strips and the plan record of one planned character (``placed``: its motion,
-    :func:`_placed`; ``env``: the planner's world, shrunk by the character's size)."""
+    :func:`_placed`; ``env``: the planner's world, shrunk by the character's size).
+    ``fit``: fit the scene's frame range now (a crowd fits it once, after every write)."""
     scale = _size(rig)
     goal_state = _shrunk(plan.goal, 1.0 / scale)  # the facing reached when any would do
     skel = rig.target if rig is not None else patch.gait.skeleton
@@ -591,7 +592,8 @@ def _write(scene, character, patch, patch_name, plan, placed, frame_start, env, 
         "interactions": [[s["start"], s["end"]] for s in strips if s["kind"] == "interaction"],
         "obstacles": {o.name: (o.polygon * scale).tolist() for o in env.obstacles.values()},
     })
-    _fit_frame_range(scene)
+    if fit:
+        _fit_frame_range(scene)
     return PlanResult(character.name, frame_start, frame_end, [p.label for p in plan.pieces],
                       plan.cost, plan.seconds, plan.expansions, strips, stashed, plan.stats,
                       path_length(world.ground), tuple(goal_state))
@@ -628,7 +630,7 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
     that is a tagged prop with a sit-down interaction clip ends the path seated on it; a
     ``start_prop`` with a stand-up clip starts it there (the character's own position is
     then not used). With ``foot_lock`` planted feet are pinned by leg IK, written as a
-    Combine track over the shared segment strips. ``goal_facing="any"`` lets the walk end
+    an Add track over the shared segment strips. ``goal_facing="any"`` lets the walk end
     facing whichever way is cheapest (the goal object's facing is then ignored). Raises
     :class:`PathNotFound` when the props leave no way, and
     :class:`MotionPatchesError` for bad input; either way the scene is unchanged."""
@@ -810,7 +812,9 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
             env = world_of(sizes[n])[0]
             with _without(env, own_goal[n]):  # the plan record lists what it walked around
                 plans.append(_write(scene, pairs[n][0], patch, patch_name, plan, p, first + d,
-                                    env, radius, foot_lock, rigs[n]))
+                                    env, radius, foot_lock, rigs[n], fit=False))
+        if plans:
+            _fit_frame_range(scene)  # once: it reads every character's plan record
     if progress is not None:
         progress(1.0)
     names = [pairs[n][0].name for n, _ in planned]

@@ -260,16 +260,18 @@ LINEAR = 1  # Keyframe.interpolation enum value of 'LINEAR' (4.5 and 5.0)
 COMPACT = 1e-5  # tolerance of compact keys (metres, radians, quaternion components)
 
 
-def key_curve(action, slot, data_path, index, frames, values, group=None, tol=None):
+def key_curve(action, slot, data_path, index, frames, values, group=None, tol=None,
+              stored=None):
     """Create one F-curve keyed at ``frames`` with ``values`` in one bulk write.
 
     With ``tol`` the curve is stored compactly (:mod:`motion_patches.keys`): one key when
     constant, linear keys on the frames that need them, or, when those would cost more,
     one sample per frame (``convert_to_samples``: 16 bytes a frame in the .blend instead
-    of a keyframe's 72; it plays the same values, linear between frames)."""
+    of a keyframe's 72; it plays the same values, linear between frames). ``stored``:
+    that choice made already (:func:`motion_patches.keys.plan_columns`)."""
     fc = compat.new_fcurve(action, slot, data_path, index, group)
     frames, values = np.asarray(frames, float), np.asarray(values, float)
-    how, kept = ("all", None) if tol is None else key_plan.plan(values, tol)
+    how, kept = stored or (("all", None) if tol is None else key_plan.plan(values, tol))
     if how == "samples" and not (np.all(np.diff(frames) == 1.0) and frames[0] == int(frames[0])):
         how = "all"  # samples sit on whole frames, one apart
     if how == "constant":
@@ -306,9 +308,8 @@ def key_pose(action, slot, skel, frames, root_location, rotations, modes=None, t
     ``tol``: store the curves compactly (:func:`key_curve`)."""
     modes = modes or {}
     root = skel.names[skel.root]
-    for i in range(3):
-        key_curve(action, slot, f'pose.bones["{root}"].location', i, frames,
-                  root_location[:, i], group=root, tol=tol)
+    curves = [(f'pose.bones["{root}"].location', i, root, root_location[:, i])
+              for i in range(3)]
     by_mode = {}
     for j, name in enumerate(skel.names):
         by_mode.setdefault(modes.get(name, "QUATERNION"), []).append(j)
@@ -318,19 +319,30 @@ def key_pose(action, slot, skel, frames, root_location, rotations, modes=None, t
                   else rotation_channels(rotations[:, joints], mode))
         for c, j in enumerate(joints):
             name = skel.names[j]
-            for i in range(values.shape[-1]):
-                key_curve(action, slot, f'pose.bones["{name}"].{path}', i, frames,
-                          values[:, c, i], group=name, tol=tol)
+            curves += [(f'pose.bones["{name}"].{path}', i, name, values[:, c, i])
+                       for i in range(values.shape[-1])]
+    stored = (key_plan.plan_columns(np.column_stack([c[3] for c in curves]), tol)
+              if tol is not None else [None] * len(curves))
+    for (path, i, group, v), how in zip(curves, stored):
+        key_curve(action, slot, path, i, frames, v, group=group, tol=tol, stored=how)
 
 
-def read_channels(action, slot, bone, mode, frames):
+def read_channels(action, slot, bone, mode, frames, cache=None):
     """Values (F, 3 or 4) an action gives a bone's ``mode`` channel at (action) ``frames``,
-    linear between keys (or samples), the rest value where the channel is not keyed."""
+    linear between keys (or samples), the rest value where the channel is not keyed.
+    ``cache``: a dict kept by the caller, so each action's curves are read once."""
     path = f'pose.bones["{bone}"].{rotation_path(mode)}'
     rest = rest_channels(mode)
     out = np.tile(rest, (len(frames), 1))
-    for fc in compat.fcurves(action, slot):
-        if fc.data_path == path and fc.array_index < rest.size:
-            co = curve_points(fc)
-            out[:, fc.array_index] = np.interp(frames, co[:, 0], co[:, 1])
+    key = (action.name, slot.handle if slot is not None else None)
+    points = cache.get(key) if cache is not None else None
+    if points is None:
+        points = {(fc.data_path, fc.array_index): curve_points(fc)
+                  for fc in compat.fcurves(action, slot)}
+        if cache is not None:
+            cache[key] = points
+    for i in range(rest.size):
+        co = points.get((path, i))
+        if co is not None:
+            out[:, i] = np.interp(frames, co[:, 0], co[:, 1])
     return out

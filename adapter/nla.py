@@ -14,7 +14,7 @@ import json
 
 import numpy as np
 
-from ..motion_patches import quat
+from ..motion_patches import keys as key_plan, quat
 from ..motion_patches.clip import Clip
 from ..motion_patches.inplace import rest_facing, to_inplace, to_world
 from ..motion_patches.skeleton import root_position_to_location
@@ -118,7 +118,7 @@ def rotation_signature(skel, modes):
     return "mixed-" + hashlib.sha1(text.encode()).hexdigest()[:10]
 
 
-def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None):
+def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None, index=None):
     """The shared in-place action of a patch segment for a rig whose bones have rotation
     ``modes`` ({bone: rotation_mode}; default all quaternion), created on first use;
     ``rig`` (a :class:`~motion_patches.retarget.RigMap`) when the rig is another skeleton
@@ -135,20 +135,35 @@ def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None):
     (every character copied from one rig, every rig from one importer) still share one
     action per segment; the patch's own skeleton in all-quaternion mode uses the original
     key ``patch:seg``, so segment actions of earlier saved files are reused. Keys sit on
-    the patch's frames whatever the scene's rate (strips are scaled, :func:`write_plan`)."""
+    the patch's frames whatever the scene's rate (strips are scaled, :func:`write_plan`).
+    ``index``: {key: action} of the segment actions (:func:`segment_index`), so a plan of
+    many strips does not search every action of the file for each."""
     sig = rotation_signature(skel, modes or {})
     rig_sig = rig.signature() if rig is not None else ""
     key = (f"{patch_key}:{seg}" + (f":rig-{rig_sig}" if rig_sig else "")
            + (f":{sig}" if sig else ""))
-    for a in bpy.data.actions:
-        if a.get(SEGMENT_KEY) == key:
-            return a, compat.action_slot(a)
+    found = (segment_index(bpy) if index is None else index).get(key)
+    if found is not None:
+        return found, compat.action_slot(found)
     motion = patch.motion(seg)
     if rig is not None:
         motion = rig.motion(motion)
     name = (f"MP {patch.layer} seg{seg:04d}" + (f" rig-{rig_sig[:6]}" if rig_sig else "")
             + (f" {sig}" if sig else ""))
-    return _inplace_action(name, skel, motion, {SEGMENT_KEY: key}, modes)
+    action, slot = _inplace_action(name, skel, motion, {SEGMENT_KEY: key}, modes)
+    if index is not None:
+        index[key] = action
+    return action, slot
+
+
+def segment_index(bpy):
+    """{segment key: action} of the file's shared segment actions."""
+    out = {}
+    for a in bpy.data.actions:
+        key = a.get(SEGMENT_KEY)
+        if key is not None:
+            out.setdefault(key, a)
+    return out
 
 
 def _inplace_action(name, skel, motion, tags, modes=None):
@@ -176,7 +191,7 @@ def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start, lo
     (``bounds[-1] + 1`` of them), which the per-character root trajectory is keyed from.
     ``locked``: rotation channels (F, J, 4) of ``world`` with the feet pinned
     (:func:`motion_patches.foot_lock.lock_feet`); the difference is written as a
-    per-character correction on its own track, combined over the shared segment actions."""
+    per-character correction on its own track, added over the shared segment actions."""
     skel = rig.target if rig is not None else patch.gait.skeleton
     modes = rig_rotation_modes(obj, skel)
     if bounds is None:
@@ -191,10 +206,11 @@ def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start, lo
     motion_track.name = TRACK_MOTION
     strips, played = [], []
     first = int(frame_start)
+    index = segment_index(bpy)
     for n, (piece, m) in enumerate(zip(plan.pieces, motions)):
         if piece.kind == "segment":
             action, slot = segment_action(bpy, patch, patch_key, piece.segment, skel, modes,
-                                          rig)
+                                          rig, index)
         else:
             action, slot = _inplace_action(f"MP {obj.name} {piece.kind}", skel, m,
                                            {CHARACTER_KEY: obj.name}, modes)
@@ -246,7 +262,7 @@ def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start, lo
     return strips, stashed
 
 
-def _lower_channels(played, bone, mode, n_frames):
+def _lower_channels(played, bone, mode, n_frames, cache=None):
     """What the motion track gives a bone's ``mode`` channel on each plan frame, read from
     the keys of its strips' actions: ``played`` = [(action, slot, first plan frame, scene
     frames it spans, strip scale)] in track order; where two strips meet on a frame the
@@ -257,56 +273,53 @@ def _lower_channels(played, bone, mode, n_frames):
     for action, slot, start, frames, scale in played:
         idx = np.arange(start, min(start + frames, n_frames))
         idx = idx[~done[idx]]
-        out[idx] = act_io.read_channels(action, slot, bone, mode, (idx - start) / scale)
+        out[idx] = act_io.read_channels(action, slot, bone, mode, (idx - start) / scale,
+                                        cache)
         done[idx] = True
     return out
 
 
 def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=()):
-    """The foot lock as a Combine strip above the motion, so segment actions stay shared.
+    """The foot lock as an Add strip above the motion, so segment actions stay shared.
 
-    For every bone it changes the strip keys, in the bone's rotation mode, the ``delta``
-    that Blender's Combine blend (influence 1) turns into the ``locked`` rotation:
-
-    * quaternion: Combine multiplies, ``lower @ delta``: delta = conj(base) @ locked;
-    * Euler (any order): Combine adds the angles, ``lower + delta``: delta = locked - lower,
-      with ``locked`` written as the Euler triple nearest ``lower`` (same order), and
-      ``lower`` the angles the motion strips really key on that frame (an Euler rotation
-      has many triples, and the sum is only right against the one that plays);
-    * axis-angle: Combine adds the four values too (angle and axis; Blender normalises the
-      axis when it builds the matrix): delta = locked - lower, ``locked`` as the angle and
-      unit axis nearest ``lower``, so the sum is exactly the locked rotation.
-
-    These rules are Blender's ``nla_combine_value`` / ``nla_combine_quaternion`` (checked in
-    tests/blender/test_rotation_modes.py on every supported version). Blender takes the
-    quaternion delta's angle as acos of its float32 w, so corrections under ~0.0005 rad
-    are lost on quaternion bones (under a millimetre at the foot); the Euler and
-    axis-angle sums are exact to float32."""
+    Blender's Add blend (influence 1) adds each channel value, ``lower + delta``, in every
+    rotation mode: the four quaternion components (the sum is normalised when the pose is
+    built), the three Euler angles, the four axis-angle values. So for every bone the lock
+    changes, the strip keys ``delta = locked - lower`` in the bone's own mode, ``locked``
+    being the representation of the locked rotation nearest ``lower`` (quaternion sign,
+    Euler triple of the bone's order, axis-angle axis and turns) and ``lower`` the values
+    the motion strips really key on that frame (:func:`_lower_channels`). The sum is the
+    locked rotation to float32 in every mode. (A Combine strip multiplies quaternions, and
+    Blender takes the strip quaternion's angle as acos of its float32 w: corrections under
+    ~0.0005 rad were lost on quaternion bones, 1.3e-3 off the plan; checked in
+    tests/blender/test_rotation_modes.py.) On the frames where the lock leaves a bone alone
+    its delta is exactly zero (the motion plays unchanged; the curve stays compact)."""
     modes = modes or {}
     base = world.rotations
-    changed = [j for j in range(len(skel.names))
-               if not np.allclose(np.abs(np.sum(base[:, j] * locked[:, j], axis=-1)), 1.0,
-                                  atol=1e-9)]
+    moved = np.abs(np.abs(np.sum(base * locked, axis=-1)) - 1.0) > 1e-9  # (F, J)
+    changed = np.flatnonzero(moved.any(axis=0))
     action, slot = compat.new_action(f"MP {obj.name} foot lock")
     action[CHARACTER_KEY] = obj.name
     frames = np.arange(world.frames, dtype=float)
+    cache, curves = {}, []
     for j in changed:
         name = skel.names[j]
         mode = modes.get(name, "QUATERNION")
-        if mode == "QUATERNION":
-            delta = quat.make_continuous(quat.mul(quat.conj(base[:, j]), locked[:, j]), axis=0)
-            delta *= np.where(delta[:, :1] < 0, -1.0, 1.0)  # near identity: keep w >= 0
-        else:
-            lower = _lower_channels(played, name, mode, world.frames)
-            delta = act_io.closest_channels(locked[:, j], mode, lower) - lower
+        lower = _lower_channels(played, name, mode, world.frames, cache)
+        delta = act_io.closest_channels(locked[:, j], mode, lower) - lower
+        delta[~moved[:, j]] = 0.0
         path = f'pose.bones["{name}"].{act_io.rotation_path(mode)}'
-        for i in range(delta.shape[1]):
-            act_io.key_curve(action, slot, path, i, frames, delta[:, i], group=name,
-                             tol=act_io.COMPACT)
+        curves += [(path, i, name, delta[:, i]) for i in range(delta.shape[1])]
+    if curves:
+        stored = key_plan.plan_columns(np.column_stack([c[3] for c in curves]),
+                                       act_io.COMPACT)
+        for (path, i, name, v), how in zip(curves, stored):
+            act_io.key_curve(action, slot, path, i, frames, v, group=name,
+                             tol=act_io.COMPACT, stored=how)
     track = obj.animation_data.nla_tracks.new()
     track.name = TRACK_FOOT
     strip = track.strips.new(f"{obj.name} foot lock", int(frame_start), action)
     compat.set_strip_slot(strip, slot)
-    strip.blend_type = "COMBINE"
+    strip.blend_type = "ADD"
     strip.extrapolation = "HOLD"
     strip.blend_in = strip.blend_out = 0.0

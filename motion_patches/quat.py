@@ -93,11 +93,19 @@ def make_continuous(q, axis=0):
     Blender interpolates quaternion channels component-wise, so a sign flip between keys
     would swing the bone through a wrong pose; this keeps keyed curves smooth.
     """
-    q = np.array(q, float)
-    q = np.moveaxis(q, axis, 0)
-    for i in range(1, q.shape[0]):
-        d = np.sum(q[i] * q[i - 1], axis=-1)
-        q[i][d < 0] *= -1
+    q = np.moveaxis(np.array(q, float), axis, 0)
+    if q.shape[0] < 2:
+        return np.moveaxis(q, 0, axis)
+    # Frame i flips when an odd number of the steps since the last step with a zero dot
+    # product (which keeps its sign) have a negative one: the loop "flip q[i] when it
+    # points away from the flipped q[i-1]" as cumulative sums.
+    d = np.sum(q[1:] * q[:-1], axis=-1)
+    flips = np.concatenate((np.zeros((1,) + d.shape[1:], int), np.cumsum(d < 0, axis=0)))
+    idx = np.arange(q.shape[0]).reshape((-1,) + (1,) * (d.ndim - 1))
+    zero = np.concatenate((np.ones((1,) + d.shape[1:], bool), d == 0))
+    last = np.maximum.accumulate(np.where(zero, idx, 0), axis=0)
+    odd = (flips - np.take_along_axis(flips, last, axis=0)) % 2 == 1
+    q[odd] *= -1
     return np.moveaxis(q, 0, axis)
 
 

@@ -83,7 +83,7 @@ def test_plan_writes_nla_and_evaluates_onto_the_goal(baked_blend, addon_module):
 
 
 def test_foot_lock_pins_the_evaluated_feet(baked_blend, addon_module):
-    """The Combine track over the shared segment strips: the same plan, evaluated through
+    """The Add track over the shared segment strips: the same plan, evaluated through
     the depsgraph with and without it; planted feet slide much less with it, nothing else
     about the path changes, and no pose pops."""
     bpy.ops.wm.open_mainfile(filepath=str(baked_blend))
@@ -97,7 +97,7 @@ def test_foot_lock_pins_the_evaluated_feet(baked_blend, addon_module):
     locked = api.plan_path(scene, char, goal, frame_start=1)
     assert locked.pieces == free.pieces and locked.cost == free.cost
     lock_track = char.animation_data.nla_tracks["MP foot lock"]
-    assert lock_track.strips[0].blend_type == "COMBINE"
+    assert lock_track.strips[0].blend_type == "ADD"
     after = api.analyse(bpy.context, char)
     sk0, sk1 = before["foot_skate"], after["foot_skate"]
     assert sk1["mean_cm_per_s"] < 0.5 * sk0["mean_cm_per_s"], (sk0, sk1)

@@ -1,0 +1,271 @@
+"""Blender benchmark of the write path (issue 16, the Blender rows): NLA strips and crowds.
+
+Prints numbers next to their targets, asserts nothing. Run from the repository root with a
+Blender Python (bpy from PyPI):
+
+    .venv/blender-4.5/bin/python bench/bench_blender.py [--sections strips,crowd] [--json out.json]
+
+Set-up (not timed): the walk patch (CMU 16_15 + 16_18) baked through the API at 30 fps in a
+fresh scene, the add-on enabled as an installed extension (tools/blender_session.py).
+
+Sections:
+
+* ``strips``: write 1,000 NLA strips through the API write path (``api._write``, what
+  ``plan_path`` and ``plan_crowd`` call after the search: strips, root trajectory, foot
+  lock, plan record). One plan through a slalom of pillars, 36 m, is searched and
+  synthesised once, unshortened (the search's own chain of segments: many strips; the
+  shortening pass would join most of them into one connector); it is then written onto
+  fresh characters (copies of the source armature) until 1,000 strips
+  are written. The first write creates the plan's shared segment actions, the others
+  reuse them, as characters of one crowd do. Timed with the foot lock and without.
+* ``crowd``: plan and write 100 characters with ``api.plan_crowd`` (the user's path: the
+  Plan Crowd operator and ``cli.py crowd`` call it): 10 x 10 characters, each walking
+  about 8 m along +X in its own lane, a few pillars between the lanes' ends. Timed end
+  to end (search, synthesis, staggering, writing), with its split.
+
+``--profile N`` prints the N most expensive functions (cProfile, cumulative) of each section.
+"""
+
+import argparse
+import cProfile
+import io
+import json
+import os
+import platform
+import pstats
+import sys
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+REPO = HERE.parent
+sys.path.insert(0, str(REPO / "tools"))
+import blender_session  # noqa: E402
+
+SECTIONS = ("strips", "crowd")
+TARGETS = {"strips_s": 1.0, "crowd_s": 10.0}
+STRIPS = 1000
+CROWD = 100
+
+
+def parse_args(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--sections", default=",".join(SECTIONS),
+                   help=f"comma-separated sections (default all: {','.join(SECTIONS)})")
+    p.add_argument("--mocap", default=os.environ.get("MOTION_PATCHES_MOCAP",
+                                                     str(REPO.parent / "shared" / "mocap")))
+    p.add_argument("--crowd", type=int, default=CROWD, help=f"crowd characters (default {CROWD}, "
+                   f"a multiple of 10)")
+    p.add_argument("--strips", type=int, default=STRIPS, help=f"strips to write (default {STRIPS})")
+    p.add_argument("--json", metavar="PATH", help="also write every figure as JSON")
+    p.add_argument("--profile", type=int, default=0, metavar="N",
+                   help="print the N most expensive functions of each section (cProfile)")
+    a = p.parse_args(argv)
+    a.sections = [s for s in a.sections.split(",") if s]
+    bad = set(a.sections) - set(SECTIONS)
+    if bad:
+        p.error(f"unknown sections {sorted(bad)}; choose from {', '.join(SECTIONS)}")
+    return a
+
+
+def profiled(n, fn, *args, **kw):
+    """fn(*args, **kw), printing the n most expensive functions when n > 0."""
+    if n <= 0:
+        return fn(*args, **kw)
+    prof = cProfile.Profile()
+    out = prof.runcall(fn, *args, **kw)
+    s = io.StringIO()
+    pstats.Stats(prof, stream=s).sort_stats("cumulative").print_stats(n)
+    print(s.getvalue())
+    return out
+
+
+def baked_scene(bpy, api, mocap):
+    """A fresh scene at 30 fps with the walk patch baked; returns (scene, source armature)."""
+    bpy.ops.wm.read_homefile(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.fps = 30
+    cmu = Path(mocap) / "cmu"
+    arm, acts = api.import_mocap([cmu / "16_15.bvh", cmu / "16_18.bvh"], name="Source")
+    api.bake_locomotion_patch(scene, arm, acts[0], [acts[1]], layer="walk")
+    scene.motion_patches.source_armature = arm
+    return scene, arm
+
+
+def character(bpy, source, name, x, y):
+    ob = source.copy()
+    ob.name = name
+    ob.animation_data_clear()
+    bpy.context.scene.collection.objects.link(ob)
+    ob.location = (x, y, 0.0)
+    return ob
+
+
+def goal_empty(bpy, name, x, y, heading):
+    """An empty facing ``heading`` along its -Y axis (the add-on's goal convention)."""
+    import math
+    ob = bpy.data.objects.new(name, None)
+    bpy.context.scene.collection.objects.link(ob)
+    ob.location = (x, y, 0.0)
+    ob.rotation_euler = (0.0, 0.0, heading + math.pi / 2)
+    return ob
+
+
+def pillar(bpy, name, x, y, r=0.25, h=2.0):
+    bpy.ops.mesh.primitive_cylinder_add(radius=r, depth=h, location=(x, y, h / 2))
+    bpy.context.object.name = name
+
+
+def section_strips(bpy, addon, args):
+    """Write one searched plan onto fresh characters until STRIPS strips are written."""
+    api = addon.api
+    scene, source = baked_scene(bpy, api, args.mocap)
+    for n in range(10):
+        pillar(bpy, f"Pillar{n}", 4.0 + 3.0 * n, 1.0 if n % 2 else -1.0)
+    goal = goal_empty(bpy, "Goal", 36.0, 0.5, 0.0)
+    first = character(bpy, source, "Walker000", 0.0, 0.0)
+    captured = {}
+    write = api._write
+
+    def spy(*a, **kw):
+        captured["args"], captured["kw"] = a, kw
+        return write(*a, **kw)
+    planner = addon.motion_patches.planner.SegmentPlanner
+    plan = planner.plan
+
+    def unshortened(self, *a, **kw):  # the search's own chain of segments, one strip each
+        return plan(self, *a, **dict(kw, shorten=False))
+    api._write, planner.plan = spy, unshortened
+    try:
+        res = api.plan_path(scene, first, goal, frame_start=1)
+    finally:
+        api._write, planner.plan = write, plan
+    pieces = len(res.pieces)
+    a, kw = captured["args"], captured["kw"]
+    out = {"pieces": pieces, "piece_labels": res.pieces, "plan_frames": res.frame_end - res.frame_start + 1}
+    for lock in (True, False):
+        # fresh segment actions: the first write creates them, as in a new file
+        nla = addon.adapter.nla
+        for act in [x for x in bpy.data.actions if x.get(nla.SEGMENT_KEY)
+                    or x.get(nla.CHARACTER_KEY)]:
+            act.user_clear()
+            bpy.data.actions.remove(act)
+        count = -(-args.strips // pieces)
+        chars = [character(bpy, source, f"W{int(lock)}_{k:03d}", 0.0, 0.0) for k in range(count)]
+
+        def write_all():
+            t = []
+            for c in chars:
+                t0 = time.perf_counter()
+                write(a[0], c, *a[2:9], lock, *a[10:], **{k: v for k, v in kw.items()
+                                                            if k != "lock"})
+                t.append(time.perf_counter() - t0)
+            return t
+        t0 = time.perf_counter()
+        per = profiled(args.profile, write_all)
+        total = time.perf_counter() - t0
+        strips = sum(len(c.animation_data.nla_tracks[nla.TRACK_MOTION].strips) for c in chars)
+        key = "foot_lock" if lock else "no_foot_lock"
+        out[key] = {"characters": count, "strips": strips, "seconds": total,
+                    "s_per_1000_strips": total * 1000.0 / strips,
+                    "first_write_s": per[0], "later_write_ms_median": 1e3 * sorted(per[1:])[len(per[1:]) // 2]}
+        print(f"  {key}: {strips} strips on {count} characters in {total:.3f} s "
+              f"({out[key]['s_per_1000_strips']:.3f} s per 1,000; first write "
+              f"{per[0] * 1e3:.0f} ms, later {out[key]['later_write_ms_median']:.1f} ms median)",
+              flush=True)
+    return out
+
+
+def section_crowd(bpy, addon, args):
+    """plan_crowd of ``args.crowd`` characters (10 lanes per column), end to end."""
+    api = addon.api
+    scene, source = baked_scene(bpy, api, args.mocap)
+    pairs = []
+    for i in range(args.crowd // 10):
+        for j in range(10):
+            x0, y = 14.0 * i, 1.6 * j
+            pairs.append((character(bpy, source, f"C{i}{j}", x0, y),
+                          goal_empty(bpy, f"G{i}{j}", x0 + 8.0, y + 0.3, 0.0)))
+        pillar(bpy, f"P{i}", 14.0 * i + 11.0, -1.5)
+    t0 = time.perf_counter()
+    writes = []
+    write = api._write
+
+    def timed_write(*a, **kw):
+        t = time.perf_counter()
+        try:
+            return write(*a, **kw)
+        finally:
+            writes.append(time.perf_counter() - t)
+    api._write = timed_write
+    try:
+        res = profiled(args.profile, api.plan_crowd, scene, pairs, frame_start=1)
+    finally:
+        api._write = write
+    total = time.perf_counter() - t0
+    strips = sum(len(p.strips) for p in res.plans)
+    out = {"characters": len(pairs), "planned": len(res.plans), "failed": len(res.failed),
+           "conflicts": len(res.conflicts), "strips": strips, "seconds": total,
+           "write_seconds": sum(writes), "plan_seconds": total - sum(writes)}
+    print(f"  {len(res.plans)} of {len(pairs)} planned ({len(res.failed)} failed), {strips} strips "
+          f"in {total:.2f} s: writing {sum(writes):.2f} s, the rest (search, synthesis, "
+          f"staggering) {total - sum(writes):.2f} s", flush=True)
+    return out
+
+
+def rows(res):
+    def met(ok):
+        return "met" if ok else "NOT met"
+    out = []
+    if "strips" in res:
+        s = res["strips"]
+        lock, free = s["foot_lock"], s["no_foot_lock"]
+        out.append(("write 1,000 NLA strips (api write path, foot lock on)",
+                    f"< {TARGETS['strips_s']:g} s",
+                    f"{lock['s_per_1000_strips']:.2f} s per 1,000 ({lock['strips']} strips of a "
+                    f"{s['pieces']}-piece plan on {lock['characters']} characters; without the "
+                    f"foot lock {free['s_per_1000_strips']:.2f} s)",
+                    met(lock["s_per_1000_strips"] < TARGETS["strips_s"])))
+    if "crowd" in res:
+        c = res["crowd"]
+        out.append(("plan and write 100 characters (api.plan_crowd)",
+                    f"< {TARGETS['crowd_s']:g} s",
+                    f"{c['seconds']:.2f} s ({c['planned']} planned, {c['strips']} strips; "
+                    f"writing {c['write_seconds']:.2f} s, search + synthesis + staggering "
+                    f"{c['plan_seconds']:.2f} s)",
+                    met(c["seconds"] < TARGETS["crowd_s"] and c["planned"] == c["characters"])))
+    return out
+
+
+def markdown(table):
+    lines = ["| figure | target | value | |", "|---|---|---|---|"]
+    lines += [f"| {a} | {b} | {c} | {d} |" for a, b, c, d in table]
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    args = parse_args(argv)
+    bpy, addon = blender_session.start()
+    import numpy as np
+    res = {"machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+                      f"Python {platform.python_version()}, numpy {np.__version__}, "
+                      f"Blender {bpy.app.version_string}"}
+    for name in args.sections:
+        print(f"{name} ...", flush=True)
+        res[name] = (section_strips if name == "strips" else section_crowd)(bpy, addon, args)
+    table = rows(res)
+    res["table"] = [dict(zip(("figure", "target", "value", "met"), r)) for r in table]
+    print()
+    print(json.dumps({"machine": res["machine"], "rows": res["table"]}, ensure_ascii=False))
+    print()
+    print(markdown(table))
+    if args.json:
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        with open(args.json, "w") as fh:
+            json.dump(res, fh, indent=1, default=float)
+        print(f"wrote {args.json}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
