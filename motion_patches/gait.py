@@ -37,7 +37,14 @@ class Gait:
 
     @property
     def straight(self):
-        return self.loops[int(np.argmin(np.abs([lp.curvature for lp in self.loops])))]
+        # Asked for in every connector and synthesis call: the loop list is fixed once a
+        # gait is built, so its index is looked up once.
+        key = id(self.loops), len(self.loops)
+        cached = self.__dict__.get("_straight")
+        if cached is None or cached[0] != key:
+            i = int(np.argmin(np.abs([lp.curvature for lp in self.loops])))
+            cached = self.__dict__["_straight"] = (key, i)
+        return self.loops[cached[1]]
 
     @property
     def curvatures(self):

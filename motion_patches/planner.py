@@ -308,7 +308,8 @@ class SegmentPlanner:
         ranked = ranked[np.isfinite(f[ranked])]
         self._start_table = {"start": start, "table": table, "keys": keys, "ranked": ranked,
                              "rank": {int(keys[m]): r for r, m in enumerate(ranked)},
-                             "done": 0, "valid": 0, "links": {}}
+                             "done": 0, "valid": 0, "links": {},
+                             "shortest": MIN_CONNECTOR_CYCLES * self.patch.gait.cycle_distance}
         return [(int(keys[m]), float(bound[m])) for m in ranked]
 
     def start_link(self, key):
@@ -323,7 +324,7 @@ class SegmentPlanner:
         if r is None:
             return None
         start, keys = t["start"], t["keys"]
-        shortest = MIN_CONNECTOR_CYCLES * self.patch.gait.cycle_distance
+        shortest = t["shortest"]
         while t["done"] <= r:
             if t["valid"] >= START_CONNECTORS:
                 return None
