@@ -22,8 +22,8 @@ from .adapter import compat
 from .adapter import moving as moving_io
 from .adapter import rig as rig_io
 from .adapter import transaction
-from .motion_patches import (blocking, causes, contacts, crowd, foot_lock, layout_spec,
-                             metrics, moving_props, object_patch, validate)
+from .motion_patches import (blocking, body_clearance, causes, contacts, crowd, foot_lock,
+                             layout_spec, metrics, moving_props, object_patch, validate)
 from .motion_patches import scene_rate
 from .motion_patches.environment import Obstacle
 from .motion_patches.gait import MIN_TURN, build_gait
@@ -433,6 +433,13 @@ def _solve(planner, character, endpoints, explain=True):
     return with_interactions(plan, start_ref, goal_ref)
 
 
+def _body_clear(planner, plan, motions, ends):
+    """(plan, its motions) whose hips keep the radius too (:mod:`body_clearance`)."""
+    return body_clearance.keep_clear(planner, plan, motions, ends[0], ends[1],
+                                     lambda p: plan_motions(planner.patch, p),
+                                     lambda p: with_interactions(p, ends[2], ends[3]))
+
+
 def _writable(character, first=None, frames=None):
     """Refuse, before anything is written, a plan on ``character`` that writing could not
     carry out or that would delete user data (:func:`adapter.transaction.check_writable`);
@@ -665,11 +672,12 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
         _check_clear(env, character, ends, by_name)
         planner = SegmentPlanner(patch, env, alpha, beta, gamma, props=props, mode=stitching)
         plan = _solve(planner, character, ends)
+        plan, motions = _body_clear(planner, plan, plan_motions(patch, plan), ends)
     if tracks:
         plan, wait = _avoid_moving(planner, patch, plan, tracks, character, frame_start,
                                    scene_fps(scene))
         frame_start += int(round(wait * scene_fps(scene)))
-    motions = plan_motions(patch, plan)
+        motions = plan_motions(patch, plan)
     plan.stats["glitches"] = validate.count(validate.plan_glitches(patch, plan, motions))
     placed = _placed(scene, patch, rig, motions)
     _writable(character, frame_start, placed[2].frames)
