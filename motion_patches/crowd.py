@@ -316,3 +316,17 @@ def resolve(tracks, replan, spacing, radius, fps, max_delay, step, ramp=None,
             conflicts.append({"a": j, "b": i, "frame": frame, "first_frame": int(frames[0]),
                               "frames": int(len(frames)), "distance_m": dist})
     return schedules, conflicts
+
+
+def conflicts_of(tracks, delays, spacing):
+    """Every pair of ``tracks`` (in order, started ``delays`` frames late) closer than
+    ``spacing`` on some frame, as :func:`resolve` reports them: the check of what is
+    finally written, independent of how it was resolved."""
+    table, out = Reservations(spacing), []
+    for i, (track, d) in enumerate(zip(tracks, delays)):
+        track = np.asarray(track, float)[:, :2]
+        for j, (frames, frame, dist) in sorted(table.check(track, d).items()):
+            out.append({"a": j, "b": i, "frame": frame, "first_frame": int(frames[0]),
+                        "frames": int(len(frames)), "distance_m": dist})
+        table.reserve(i, track, d)
+    return out
