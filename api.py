@@ -672,28 +672,36 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
         if progress is not None:
             progress(0.8 * (count + 1) / len(pairs))
 
+    versions = [[p] for p in planned]  # every re-plan kept: the crowd may settle on any
+
     def replan(k, ghosts):
-        """Character k of the planned ones re-planned round ``ghosts``; its new track."""
+        """Character k of the planned ones re-planned round ``ghosts``: its new track (the
+        next version of its plan)."""
         n = planned[k][0]
         try:
             plan = solve_one(n, ghosts)
         except PathNotFound:
             return None
-        planned[k] = [n, plan, *synthesised(n, plan)]
-        return planned[k][3][2].ground[:, :2], planned[k][4]
+        versions[k].append([n, plan, *synthesised(n, plan)])
+        return _root_track(patch, rigs[n], versions[k][-1][3]), versions[k][-1][4]
 
     schedules, _ = crowd.resolve(
-        [p[3][2].ground[:, :2] for p in planned], replan, spacing, radius, fps,
+        [_root_track(patch, rigs[p[0]], p[3]) for p in planned], replan, spacing, radius, fps,
         round(max_wait_seconds * fps), max(1, round(0.2 * fps)), ramp=ramp,
         holdable=[p[4] for p in planned])
+    planned = [v[s.version] for v, s in zip(versions, schedules)]
     holds = {}
     for p, s in zip(planned, schedules):
-        if s.hold is not None:  # the hold put in the piece it falls in, as its own strip
-            p[1], raw = _with_hold(p[1], p[2], p[3][1], *s.hold, ramp)
-            p[3] = _placed(scene, patch, rigs[p[0]], raw)
-            holds[pairs[p[0]][0].name] = {"frames": int(s.hold[1]), "at": int(s.hold[0])}
+        if s.holds:  # each hold put in the piece it falls in, as its own strip
+            at = []
+            for k, h in s.holds:
+                bounds = np.concatenate(([0], np.cumsum([m.frames - 1 for m in p[2]])))
+                p[1], p[2] = _with_hold(p[1], p[2], bounds, k, h, ramp)
+                at = [(f + h + ramp if f > k else f, n) for f, n in at] + [(k, h)]
+            p[3] = _placed(scene, patch, rigs[p[0]], p[2])
+            holds[pairs[p[0]][0].name] = sorted(at)
     # what is reported is checked on the motion written, whatever resolved it
-    conflicts = crowd.conflicts_of([p[3][2].ground for p in planned],
+    conflicts = crowd.conflicts_of([_root_track(patch, rigs[p[0]], p[3]) for p in planned],
                                    [s.delay for s in schedules], spacing)
     if progress is not None:
         progress(0.9)
@@ -711,10 +719,11 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
         c["a"], c["b"] = names[c["a"]], names[c["b"]]
         c["frame"] += first
         c["first_frame"] += first
-    for p in planned:  # a hold's frame in the scene (a character that holds starts at once)
-        if pairs[p[0]][0].name in holds:
-            h = holds[pairs[p[0]][0].name]
-            h["frame"] = written[p[0]].frame_start + h.pop("at")
+    for p in planned:  # holds on the scene's frames (a character that holds starts at once)
+        name = pairs[p[0]][0].name
+        if name in holds:
+            holds[name] = [{"frame": written[p[0]].frame_start + f, "frames": int(n)}
+                           for f, n in holds[name]]
     return CrowdSchedule(
         [written[n] for n in sorted(written)], failed, conflicts,
         {nm: s.delay for nm, s in zip(names, schedules)}, time.perf_counter() - t0,
@@ -882,7 +891,7 @@ CROWD_HOLD_RAMP_SECONDS = 0.5  # slowing to an idle hold and walking on again, e
 @dataclass
 class CrowdSchedule(CrowdResult):
     """A :class:`CrowdResult` with how the crowd was kept apart beyond waits."""
-    holds: dict = field(default_factory=dict)  # name -> {"frame": scene frame, "frames": n}
+    holds: dict = field(default_factory=dict)  # name -> [{"frame": scene frame, "frames": n}]
     order: list = field(default_factory=list)  # names in priority order (planned first first)
 
 
@@ -929,4 +938,12 @@ def _with_hold(plan, raw, bounds, at, hold, ramp):
     pieces = list(plan.pieces)
     pieces[i] = dataclasses.replace(pieces[i], kind="hold")
     return dataclasses.replace(plan, pieces=pieces), raw
+
+
+def _root_track(patch, rig, placed):
+    """(frames, 2) ground position of the root joint of a placed motion (:func:`_placed`):
+    what a crowd keeps apart (the hips sway a few centimetres about the ground track)."""
+    skel = rig.target if rig is not None else patch.gait.skeleton
+    world = placed[2]
+    return world.world_matrices(skel)[:, skel.root, :2, 3]
 

@@ -18,9 +18,11 @@ from . import retime
 
 
 def disc(centre, radius, sides=12):
-    """(sides, 2) convex polygon around a point, counter-clockwise."""
+    """(sides, 2) convex polygon round a disc of ``radius`` about a point (its sides touch
+    the circle, so nothing inside the polygon's inner circle is missed), counter-clockwise."""
     a = np.linspace(0.0, 2 * np.pi, sides, endpoint=False)
-    return np.column_stack((centre[0] + radius * np.cos(a), centre[1] + radius * np.sin(a)))
+    r = radius / np.cos(np.pi / sides)
+    return np.column_stack((centre[0] + r * np.cos(a), centre[1] + r * np.sin(a)))
 
 
 def standing_spots(ends, n, spacing, radius):
@@ -209,16 +211,22 @@ class Reservations:
         return timeline(track, d, horizon)
 
 
-def held_track(track, at, hold, ramp):
-    """``track`` (frames, 2) with an idle hold (:func:`motion_patches.retime.hold_phases`)."""
+def held_track(track, at, hold, ramp, holdable=None):
+    """``track`` (frames, 2) with an idle hold (:func:`motion_patches.retime.hold_phases`),
+    and ``holdable`` (bool per frame) carried along: true on the frames of the held track
+    that replay a holdable frame whole (so a later hold may be put there too)."""
     track = np.asarray(track, float)
     u = retime.hold_phases(len(track), at, hold, ramp)
     lo = np.minimum(np.floor(u).astype(int), len(track) - 2)
     w = (u - lo)[:, None]
-    return track[lo] * (1 - w) + track[lo + 1] * w
+    out = track[lo] * (1 - w) + track[lo + 1] * w
+    if holdable is None:
+        return out, None
+    near = np.rint(u).astype(int)
+    return out, np.asarray(holdable, bool)[near] & (np.abs(u - near) < 1e-9)
 
 
-def hold_frames(holdable, before, ramp, count=2):
+def hold_frames(holdable, before, ramp, count=3):
     """Up to ``count`` frames to hold on, latest first: frames where ``holdable`` (bool per
     track frame; double support on a walking piece) whose slow-down ends before frame
     ``before`` and whose ramps fit in the track, at least a ramp apart."""
@@ -239,31 +247,71 @@ def hold_frames(holdable, before, ramp, count=2):
 @dataclass
 class Schedule:
     """How a character walks its track in the crowd: ``delay`` frames standing at its start,
-    an idle ``hold`` (frame on its track, frames) or None, re-planned round others or not."""
+    idle ``holds`` [(frame, frames)] applied in turn (each frame on the track as the holds
+    before it left it), on the track of re-plan ``version`` (0: its first plan, n: the
+    n-th re-plan round others); ``track`` is what it then walks."""
     delay: int = 0
-    hold: tuple = None
-    rerouted: bool = False
+    holds: tuple = ()
+    version: int = 0
     track: np.ndarray = None
+    holdable: np.ndarray = None
+
+    @property
+    def rerouted(self):
+        return self.version > 0
 
 
 def _too_close(conflicts):
     return sum(len(v[0]) for v in conflicts.values())
 
 
+def _improve(table, s, found, max_delay, max_hold, step, ramp):
+    """The next schedule from ``s`` (which meets ``found``): the shortest idle hold before
+    the first frame too close that clears everything, else the shortest further wait that
+    does, else whichever of them leaves the fewest frames too close (None: none is better)."""
+    first = min(int(v[0][0]) for v in found.values()) - s.delay
+    held = sum(h for _, h in s.holds)
+    options = []
+    for h in range(step, int(max_hold - held) + 1, step):
+        for k in hold_frames(s.holdable, first, ramp):
+            track, mask = held_track(s.track, k, h, ramp, s.holdable)
+            c = table.check(track, s.delay)
+            option = Schedule(s.delay, s.holds + ((k, h),), s.version, track, mask)
+            if not c:
+                return option, c
+            options.append((_too_close(c), h, option, c))
+    for d in range(s.delay + step, int(max_delay) + 1, step):
+        c = table.check(s.track, d)
+        option = Schedule(d, s.holds, s.version, s.track, s.holdable)
+        if not c:
+            return option, c
+        options.append((_too_close(c), d - s.delay, option, c))
+    if not options:
+        return None, found
+    best = min(options, key=lambda o: o[:2])
+    if best[0] >= _too_close(found):
+        return None, found
+    return best[2], best[3]
+
+
 def resolve(tracks, replan, spacing, radius, fps, max_delay, step, ramp=None,
-            max_hold=None, holdable=None, rounds=2):
+            max_hold=None, holdable=None, rounds=2, stages=6):
     """Schedules and the conflicts left for ``tracks`` [(frames, 2)] in priority order,
     all starting on frame 0: each character in turn is checked against the
-    :class:`Reservations` of those before it and, when it comes closer than ``spacing``,
-    resolved by, in this order of preference:
+    :class:`Reservations` of those before it and, while it comes closer than ``spacing``,
+    changed by (at most ``stages`` changes, the first that clears everything, in this
+    order of preference):
 
-    1. an idle hold (whole ``step`` frames up to ``max_hold``) on a double-support frame of
-       its walk (``holdable[i]``: bool per frame of ``tracks[i]``, None: no holds) before
-       the first frame too close, slowing down and speeding up over ``ramp`` frames;
-    2. waiting at its start (``step`` frames up to ``max_delay``);
-    3. re-planning (``replan(i, discs) -> (track, holdable) or None``) round the discs where
-       the others it meets walk around those frames (:func:`ghosts`), then 1 and 2 again,
-       at most ``rounds`` times.
+    1. an idle hold (whole ``step`` frames, all its holds at most ``max_hold``) on a
+       double-support frame of its walk (``holdable[i]``: bool per frame of ``tracks[i]``,
+       None: no holds) before the first frame too close, slowing down and speeding up
+       over ``ramp`` frames;
+    2. waiting longer at its start (``step`` frames, at most ``max_delay`` in all);
+    3. else the change leaving the fewest frames too close, and again from there.
+
+    Still too close, it is re-planned (``replan(i, discs) -> (track, holdable) or None``,
+    each call a new version of its plan, :attr:`Schedule.version`) round the discs where the others it meets walk around those frames (:func:`ghosts`),
+    and the above is done again, at most ``rounds`` times.
 
     What is left is kept with the fewest frames too close and reported: [{"a", "b" (indices,
     ``a`` placed first), "frame" (closest), "first_frame", "frames", "distance_m"}]."""
@@ -274,44 +322,31 @@ def resolve(tracks, replan, spacing, radius, fps, max_delay, step, ramp=None,
     holdable = list(holdable) if holdable is not None else [None] * len(tracks)
     schedules, conflicts = [], []
     for i, track in enumerate(tracks):
-        track = np.asarray(track, float)[:, :2]
-        best, reserved, mask = None, [], holdable[i]
+        s = Schedule(0, (), 0, np.asarray(track, float)[:, :2], holdable[i])
+        best, reserved = None, []
         for attempt in range(rounds + 1):
-            found = table.check(track)
-            options = [(Schedule(0, None, attempt > 0, track), found)]
-            if found:
-                first = min(int(v[0][0]) for v in found.values())
-                holds = hold_frames(mask, first, ramp)
-                for h in range(step, int(max_hold) + 1, step):
-                    for k in holds:
-                        line = held_track(track, k, h, ramp)
-                        c = table.check(line)
-                        options.append((Schedule(0, (k, h), attempt > 0, line), c))
-                        if not c:
-                            break
-                    if not options[-1][1]:
-                        break
-            if options[-1][1]:
-                for d in range(step, int(max_delay) + 1, step):
-                    c = table.check(track, d)
-                    options.append((Schedule(d, None, attempt > 0, track), c))
-                    if not c:
-                        break
-            for option in options:
-                if best is None or _too_close(option[1]) < _too_close(best[1]):
-                    best = option
+            found = table.check(s.track)
+            for _ in range(stages):
+                if not found:
+                    break
+                better, c = _improve(table, s, found, max_delay, max_hold, step, ramp)
+                if better is None:
+                    break
+                s, found = better, c
+            if best is None or _too_close(found) < _too_close(best[1]):
+                best = (s, found)
             if not best[1] or attempt == rounds:
                 break
-            horizon = max(table.horizon, len(track)) + 1
-            for j, (_, frame, _) in best[1].items():
+            horizon = max(table.horizon, len(s.track) + s.delay) + 1
+            for j, (_, frame, _) in found.items():
                 reserved += ghosts(table.line(j, horizon), frame, spacing, radius, fps)
             new = replan(i, list(reserved))
             if new is None:
                 break
-            track, mask = np.asarray(new[0], float)[:, :2], new[1]
-        sched, found = best
-        table.reserve(i, sched.track, sched.delay)
-        schedules.append(sched)
+            s = Schedule(0, (), attempt + 1, np.asarray(new[0], float)[:, :2], new[1])
+        s, found = best
+        table.reserve(i, s.track, s.delay)
+        schedules.append(s)
         for j, (frames, frame, dist) in sorted(found.items()):
             conflicts.append({"a": j, "b": i, "frame": frame, "first_frame": int(frames[0]),
                               "frames": int(len(frames)), "distance_m": dist})

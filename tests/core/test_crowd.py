@@ -86,15 +86,15 @@ def test_a_crossing_is_cleared_by_an_idle_hold_before_a_wait():
     sched, conflicts = crowd.resolve([a, b], lambda i, d: None, 0.5, 0.25, 30.0, 60, 3,
                                      ramp=10, holdable=holdable)
     assert conflicts == []
-    assert sched[0].delay == 0 and sched[0].hold is None
-    k, h = sched[1].hold
+    assert sched[0].delay == 0 and sched[0].holds == ()
+    (k, h), = sched[1].holds
     assert sched[1].delay == 0 and holdable[1][k] and 0 < h <= 60
     la, lb = lines_of(sched)
     assert min_gap(la, lb) >= 0.5
     assert np.allclose(lb[-1], b[-1])                   # still arrives
     # without double-support frames to stand on, it waits at its start instead
     sched, conflicts = crowd.resolve([a, b], lambda i, d: None, 0.5, 0.25, 30.0, 60, 3)
-    assert conflicts == [] and sched[1].hold is None and sched[1].delay > 0
+    assert conflicts == [] and sched[1].holds == () and sched[1].delay > 0
     d = sched[1].delay
     assert min_gap(*lines_of(sched)) >= 0.5
     shorter = crowd.Reservations(0.5)
@@ -118,7 +118,7 @@ def test_far_apart_characters_neither_wait_nor_hold():
     tracks = [line((x, 0.0), (x, 8.0), 80) for x in (0.0, 3.0, 6.0)]
     sched, conflicts = crowd.resolve(tracks, None, 0.5, 0.25, 30.0, 60, 6,
                                      holdable=[np.ones(80, bool)] * 3)
-    assert [(s.delay, s.hold) for s in sched] == [(0, None)] * 3 and conflicts == []
+    assert [(s.delay, s.holds) for s in sched] == [(0, ())] * 3 and conflicts == []
 
 
 def test_reroute_when_neither_hold_nor_wait_clears():
@@ -148,7 +148,8 @@ def test_standing_spots_are_earlier_goals_and_later_starts():
     assert [m for m, _ in spots] == [0, 2]
     centres = [poly.mean(axis=0) for _, poly in spots]
     assert np.allclose(centres[0], (10, 0)) and np.allclose(centres[1], (0, 6))
-    assert np.allclose(np.linalg.norm(spots[0][1] - (10, 0), axis=1), 0.75)
+    r = np.linalg.norm(spots[0][1] - (10, 0), axis=1)  # a polygon round the 0.75 m disc
+    assert np.allclose(r, 0.75 / np.cos(np.pi / 12))
     ends[0] = ((0, 0, 0), (10, 3.5, 0))
     assert [m for m, _ in crowd.standing_spots(ends, 1, 1.0, 0.25)] == [2]
     assert crowd.standing_spots(ends, 0, spacing=0.0, radius=0.25) == []
@@ -172,8 +173,8 @@ def test_a_hold_on_real_walking_keeps_the_feet_planted(walk_patch):
     ramp = 16
     sched, conflicts = crowd.resolve(tracks, None, 1.0, 0.5, walk_patch.gait.fps, 120, 6,
                                      ramp=ramp, holdable=double)
-    assert conflicts == [] and sched[1].hold is not None and sched[1].delay == 0
-    k, h = sched[1].hold
+    assert conflicts == [] and len(sched[1].holds) == 1 and sched[1].delay == 0
+    (k, h), = sched[1].holds
     motion = retime.held(whole[1], k, h, ramp)
     assert np.allclose(motion.ground[:, :2], sched[1].track)   # the track the crowd checked
     skel = walk_patch.gait.skeleton
