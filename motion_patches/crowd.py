@@ -265,27 +265,62 @@ def _too_close(conflicts):
     return sum(len(v[0]) for v in conflicts.values())
 
 
+def _lengths(step, most):
+    """Hold or wait lengths to try, shortest first: ``step`` doubling up to ``most``."""
+    out, n = [], step
+    while n < most:
+        out.append(n)
+        n *= 2
+    return out + [int(most) // step * step] if most >= step else out
+
+
+def _shortest(clears, longest, step):
+    """Shorten a length that clears (``clears(n) -> conflicts or None``, ``longest`` known
+    to clear) by halving the gap to the longest length below it that does not: the
+    shortest clearing length to within ``step`` where clearing grows with the length."""
+    lo, hi = longest // 2 // step * step, longest
+    while hi - lo > step:
+        mid = (lo + hi) // 2 // step * step
+        if mid > lo and clears(mid):
+            hi = mid
+        else:
+            lo = mid if mid > lo else hi - step
+    return hi
+
+
 def _improve(table, s, found, max_delay, max_hold, step, ramp):
-    """The next schedule from ``s`` (which meets ``found``): the shortest idle hold before
-    the first frame too close that clears everything, else the shortest further wait that
-    does, else whichever of them leaves the fewest frames too close (None: none is better)."""
+    """The next schedule from ``s`` (which meets ``found``): a short idle hold before the
+    first frame too close that clears everything, else a short further wait that does,
+    else whichever tried leaves the fewest frames too close (None: none is better). Lengths
+    are tried doubling from ``step`` and a clearing one is then shortened by halving."""
     first = min(int(v[0][0]) for v in found.values()) - s.delay
     held = sum(h for _, h in s.holds)
     options = []
-    for h in range(step, int(max_hold - held) + 1, step):
+
+    def hold(k, h):
+        track, mask = held_track(s.track, k, h, ramp, s.holdable)
+        c = table.check(track, s.delay)
+        option = Schedule(s.delay, s.holds + ((k, h),), s.version, track, mask)
+        options.append((_too_close(c), h, option, c))
+        return not c
+
+    def wait(d):
+        c = table.check(s.track, s.delay + d)
+        option = Schedule(s.delay + d, s.holds, s.version, s.track, s.holdable)
+        options.append((_too_close(c), d, option, c))
+        return not c
+
+    for h in _lengths(step, max_hold - held):
         for k in hold_frames(s.holdable, first, ramp):
-            track, mask = held_track(s.track, k, h, ramp, s.holdable)
-            c = table.check(track, s.delay)
-            option = Schedule(s.delay, s.holds + ((k, h),), s.version, track, mask)
-            if not c:
-                return option, c
-            options.append((_too_close(c), h, option, c))
-    for d in range(s.delay + step, int(max_delay) + 1, step):
-        c = table.check(s.track, d)
-        option = Schedule(d, s.holds, s.version, s.track, s.holdable)
-        if not c:
-            return option, c
-        options.append((_too_close(c), d - s.delay, option, c))
+            if hold(k, h):
+                h = _shortest(lambda n: hold(k, n), h, step)
+                return next(o[2:] for o in options if o[1] == h and o[2].holds[-1][0] == k
+                            and not o[3])
+    for d in _lengths(step, max_delay - s.delay):
+        if wait(d):
+            d = _shortest(wait, d, step)
+            return next(o[2:] for o in options if o[1] == d and o[2].delay == s.delay + d
+                        and not o[2].holds[len(s.holds):] and not o[3])
     if not options:
         return None, found
     best = min(options, key=lambda o: o[:2])
@@ -302,7 +337,8 @@ def resolve(tracks, replan, spacing, radius, fps, max_delay, step, ramp=None,
     changed by (at most ``stages`` changes, the first that clears everything, in this
     order of preference):
 
-    1. an idle hold (whole ``step`` frames, all its holds at most ``max_hold``) on a
+    1. an idle hold (whole ``step`` frames, all its holds at most ``max_hold``, see
+       :func:`_improve` for which lengths are tried) on a
        double-support frame of its walk (``holdable[i]``: bool per frame of ``tracks[i]``,
        None: no holds) before the first frame too close, slowing down and speeding up
        over ``ramp`` frames;
