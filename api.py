@@ -947,3 +947,103 @@ def _root_track(patch, rig, placed):
     world = placed[2]
     return world.world_matrices(skel)[:, skel.root, :2, 3]
 
+
+
+# --- crowds: duplicating a source armature ---------------------------------------------------
+
+CROWD_COLLECTION = "MP Crowd"
+
+
+def duplicate_crowd(scene, source, count, region, goal_region, seed=0, radius=0.25,
+                    spacing=None, patch_name=None, context=None):
+    """[(character, goal empty)]: ``count`` copies of the armature ``source`` sharing its
+    armature data (linked, as Alt+D makes them), scattered over ``region`` ((x0, y0), (x1,
+    y1)) and each sent to a goal empty scattered over ``goal_region``, facing the way it
+    walks; all in a new collection. Starts and goals keep ``spacing`` (default: two radii)
+    plus a radius from one another and stay clear of the props. Everything is checked and
+    every spot drawn before anything is made: a source the patch cannot play, or regions
+    too small to hold the crowd, raise :class:`MotionPatchesError` with the scene unchanged."""
+    context = context or bpy.context
+    patch = _patch_for_planning(scene, patch_name)
+    if source is None or source.type != "ARMATURE":
+        raise MotionPatchesError("choose the source armature to duplicate")
+    rig = _check_character(source, patch)
+    try:
+        count = int(count)
+        region = np.asarray(region, float).reshape(2, 2)
+        goal_region = np.asarray(goal_region, float).reshape(2, 2)
+    except (TypeError, ValueError):
+        raise MotionPatchesError("a crowd needs a count and two regions ((x0, y0), (x1, y1))") \
+            from None
+    if count < 1:
+        raise MotionPatchesError("a crowd needs at least one character")
+    for what, r in (("region", region), ("goal region", goal_region)):
+        if not np.isfinite(r).all() or (r[1] <= r[0]).any():
+            raise MotionPatchesError(f"the {what} must have its second corner above and right "
+                                     f"of its first")
+    spacing = 2 * radius if spacing is None else float(spacing)
+    context.view_layer.update()
+    depsgraph = context.evaluated_depsgraph_get()
+    env = scene_io.environment(scene, depsgraph, patch, radius, _not_obstacles([source]), 1.0)
+    rng = np.random.default_rng(seed)
+    gap = spacing + radius
+
+    def scatter(r, what):
+        pts = np.empty((0, 2))
+        for _ in range(200 * count):
+            p = rng.uniform(r[0], r[1])
+            if env.near(p) or (len(pts) and np.linalg.norm(pts - p, axis=1).min() < gap):
+                continue
+            pts = np.vstack((pts, p))
+            if len(pts) == count:
+                return pts
+        raise MotionPatchesError(
+            f"the {what} holds only {len(pts)} of {count} characters {gap:.2f} m apart and "
+            f"clear of the props: make it larger or the crowd smaller")
+    starts, goals = scatter(region, "region"), scatter(goal_region, "goal region")
+    rng.shuffle(goals)
+    skel = rig.target if rig is not None else patch.gait.skeleton
+    facing = nla.facing_angle(skel)
+    coll = bpy.data.collections.new(CROWD_COLLECTION)
+    scene.collection.children.link(coll)
+    pairs = []
+    for k, (s, g) in enumerate(zip(starts, goals)):
+        heading = float(np.arctan2(g[1] - s[1], g[0] - s[0]))
+        ob = source.copy()  # object copy, armature data shared
+        ob.name = f"{source.name}.crowd{k:03d}"
+        ob.animation_data_clear()
+        for key in (PLAN_KEY, nla.TRACKS_KEY):
+            if key in ob:
+                del ob[key]
+        coll.objects.link(ob)
+        ob.location = (s[0], s[1], source.location[2])
+        ob.rotation_mode = "XYZ"
+        ob.rotation_euler = (0.0, 0.0, heading - facing)
+        goal = bpy.data.objects.new(f"{ob.name} goal", None)
+        coll.objects.link(goal)
+        goal.location = (g[0], g[1], 0.0)
+        goal.rotation_euler = (0.0, 0.0, heading + np.pi / 2)  # its -Y along the heading
+        ob.motion_patches_character.goal = goal
+        pairs.append((ob, goal))
+    context.view_layer.update()
+    return pairs
+
+
+def remove_crowd(pairs):
+    """Remove what :func:`duplicate_crowd` made (the copies, their goals, their collection
+    when it is left empty, the actions planning made for them); the source is untouched."""
+    colls = set()
+    for ob, goal in pairs:
+        for o in (ob, goal):
+            colls.update(c for c in o.users_collection if c.name.startswith(CROWD_COLLECTION))
+        names = {ob.name}
+        if ob.animation_data is not None:
+            ob.animation_data_clear()
+        bpy.data.objects.remove(ob)
+        bpy.data.objects.remove(goal)
+        for a in list(bpy.data.actions):
+            if a.get(nla.CHARACTER_KEY) in names and a.users == 0:
+                bpy.data.actions.remove(a)
+    for c in colls:
+        if not c.objects and not c.children:
+            bpy.data.collections.remove(c)

@@ -2,9 +2,9 @@
 
 import bpy
 
-from . import analyse, bake, mocap, object_patch, patch_files, plan
+from . import analyse, bake, crowd, mocap, object_patch, patch_files, plan
 
 classes = (mocap.classes + bake.classes + patch_files.classes + object_patch.classes
-           + plan.classes + analyse.classes)
+           + plan.classes + analyse.classes + crowd.classes)
 
 register, unregister = bpy.utils.register_classes_factory(classes)
