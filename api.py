@@ -722,8 +722,8 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
     for p in planned:  # holds on the scene's frames (a character that holds starts at once)
         name = pairs[p[0]][0].name
         if name in holds:
-            holds[name] = [{"frame": written[p[0]].frame_start + f, "frames": int(n)}
-                           for f, n in holds[name]]
+            holds[name] = [{"frame": written[p[0]].frame_start + f + ramp // 2,
+                            "frames": int(n)} for f, n in holds[name]]
     return CrowdSchedule(
         [written[n] for n in sorted(written)], failed, conflicts,
         {nm: s.delay for nm, s in zip(names, schedules)}, time.perf_counter() - t0,
@@ -891,7 +891,8 @@ CROWD_HOLD_RAMP_SECONDS = 0.5  # slowing to an idle hold and walking on again, e
 @dataclass
 class CrowdSchedule(CrowdResult):
     """A :class:`CrowdResult` with how the crowd was kept apart beyond waits."""
-    holds: dict = field(default_factory=dict)  # name -> [{"frame": scene frame, "frames": n}]
+    # name -> [{"frame": first scene frame standing still, "frames": how many}]
+    holds: dict = field(default_factory=dict)
     order: list = field(default_factory=list)  # names in priority order (planned first first)
 
 

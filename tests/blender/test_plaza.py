@@ -150,6 +150,16 @@ def test_a_plaza_of_fifty_crosses_without_meeting(plaza, addon_module):
         assert np.linalg.norm(roots[c, -1] - at) < 0.35, (ob.name, roots[c, -1], at)
         skates.append(metrics.foot_skate(pos[c][mine][:, 1:], api.scene_fps(scene),
                                          arrays["contacts"])["mean_cm_per_s"])
+    # an idle hold stands still, feet planted: root and both feet still on its frames
+    still = 0
+    for name, hs in res.holds.items():
+        c = [o.name for o in planned].index(name)
+        for h in hs:
+            i = np.arange(h["frame"], h["frame"] + h["frames"]) - 1
+            moved = np.linalg.norm(pos[c, i, :, :2] - pos[c, i[:1], :, :2], axis=-1).max()
+            assert moved < 0.01, (name, h, moved)
+            still += h["frames"]
+    print(f"{still} frames held still in {sum(map(len, res.holds.values()))} holds")
     # a lone character crossing the same plaza (nobody else planned with it)
     lone = walker_from(scene.motion_patches.source_armature, "Lone", (-9.5, 0.7, 0.0))
     face(lone, 0.0)
