@@ -169,8 +169,10 @@ class Reservations:
             for (a, b), xy in (((0, d), track[0]), ((d + n, np.inf), track[-1])):
                 dist = np.linalg.norm(sp[:, :2] - xy, axis=1)
                 lo, hi = np.maximum(sp[:, 2], a), np.minimum(sp[:, 3], b)
-                k = np.nonzero((dist < s) & (lo < hi))[0]
-                found.append((sp[k, 4].astype(int), lo[k].astype(np.int64), dist[k]))
+                for k in np.nonzero((dist < s) & (lo < hi))[0]:  # both standing: every frame
+                    frames = np.arange(int(lo[k]), int(min(hi[k], max(end, lo[k] + 1))))
+                    found.append((np.full(frames.size, int(sp[k, 4])), frames,
+                                  np.full(frames.size, dist[k])))
         out = {}
         if not found:
             return out
@@ -345,7 +347,8 @@ def resolve(tracks, replan, spacing, radius, fps, max_delay, step, ramp=None,
     2. waiting longer at its start (``step`` frames, at most ``max_delay`` in all);
     3. else the change leaving the fewest frames too close, and again from there.
 
-    Still too close, it is re-planned (``replan(i, discs) -> (track, holdable) or None``,
+    Still too close, it is re-planned (``replan(i, discs) -> (track, holdable) or None``;
+    ``replan`` None: never),
     each call a new version of its plan, :attr:`Schedule.version`) round the discs where the others it meets walk around those frames (:func:`ghosts`),
     and the above is done again, at most ``rounds`` times.
 
@@ -371,7 +374,7 @@ def resolve(tracks, replan, spacing, radius, fps, max_delay, step, ramp=None,
                 s, found = better, c
             if best is None or _too_close(found) < _too_close(best[1]):
                 best = (s, found)
-            if not best[1] or attempt == rounds:
+            if not best[1] or attempt == rounds or replan is None:
                 break
             horizon = max(table.horizon, len(s.track) + s.delay) + 1
             for j, (_, frame, _) in found.items():

@@ -58,7 +58,6 @@ def test_the_reservation_table_finds_exactly_the_frames_too_close():
         assert sorted(found) == sorted(expect), i
         for j, close in expect.items():
             frames, frame, dist = found[j]
-            # a standing spot against a standing spot is reported by its first frame
             assert frames[0] == close[0] and set(frames) <= set(close)
             assert dist < spacing
         table.reserve(i, track, delay)
@@ -183,3 +182,35 @@ def test_a_hold_on_real_walking_keeps_the_feet_planted(walk_patch):
     assert motion.contacts[still, :2].any(1).all() and motion.contacts[still, 2:].any(1).all()
     assert np.ptp(feet[still, :, :2], axis=0).max() < 1e-6
     assert min_gap(*lines_of(sched)) >= 1.0
+
+
+def test_what_resolve_reports_is_exactly_what_is_left():
+    """A dense random crowd: the pairs reported are exactly the pairs a brute-force
+    comparison of the final timelines finds too close, with the same frame counts; every
+    hold stands on a holdable frame of the track it was put in."""
+    rng = np.random.default_rng(3)
+    tracks, masks = [], []
+    for i in range(25):
+        p0 = rng.uniform(-4, 4, 2)
+        p1 = p0 + rng.uniform(4, 7) * np.array([np.cos(a := rng.uniform(0, 2 * np.pi)),
+                                                 np.sin(a)])
+        n = int(np.linalg.norm(p1 - p0) / 1.3 * 30)
+        tracks.append(line(p0, p1, n))
+        masks.append((np.arange(n) % 16) == 3)
+    before = len(crowd.conflicts_of(tracks, [0] * 25, 0.5))
+    sched, conflicts = crowd.resolve(tracks, None, 0.5, 0.25, 30.0, 120, 6, ramp=12,
+                                     holdable=masks)
+    brute = brute_conflicts(lines_of(sched), 0.5)
+    # (two standing for good are counted to the end of the crowd as it was when placed)
+    assert {(c["a"], c["b"]): c["first_frame"] for c in conflicts} == \
+        {k: v[0] for k, v in brute.items()}
+    horizon = max(len(s.track) + s.delay for s in sched)
+    assert all(c["frames"] == len(brute[c["a"], c["b"]]) for c in conflicts
+               if brute[c["a"], c["b"]][-1] < horizon - 1)
+    assert len(conflicts) < before, (len(conflicts), before)  # some are solved
+    for s, track, mask in zip(sched, tracks, masks):
+        t, m = track, mask
+        for k, h in s.holds:
+            assert m[k]
+            t, m = crowd.held_track(t, k, h, 12, m)
+        assert np.allclose(t, s.track)
