@@ -701,8 +701,10 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
             p[3] = _placed(scene, patch, rigs[p[0]], p[2])
             holds[pairs[p[0]][0].name] = sorted(at)
     # what is reported is checked on the motion written, whatever resolved it
-    conflicts = crowd.conflicts_of([_root_track(patch, rigs[p[0]], p[3]) for p in planned],
-                                   [s.delay for s in schedules], spacing)
+    ranked = sorted(range(len(planned)), key=lambda k: schedules[k].rank)  # order kept
+    conflicts = crowd.conflicts_of([_root_track(patch, rigs[planned[k][0]], planned[k][3])
+                                    for k in ranked], [schedules[k].delay for k in ranked],
+                                   spacing)
     if progress is not None:
         progress(0.9)
     first = scene.frame_current if frame_start is None else int(frame_start)
@@ -716,7 +718,7 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
         progress(1.0)
     names = [pairs[p[0]][0].name for p in planned]
     for c in conflicts:
-        c["a"], c["b"] = names[c["a"]], names[c["b"]]
+        c["a"], c["b"] = names[ranked[c["a"]]], names[ranked[c["b"]]]
         c["frame"] += first
         c["first_frame"] += first
     for p in planned:  # holds on the scene's frames (a character that holds starts at once)
@@ -728,7 +730,7 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
         [written[n] for n in sorted(written)], failed, conflicts,
         {nm: s.delay for nm, s in zip(names, schedules)}, time.perf_counter() - t0,
         [nm for nm, s in zip(names, schedules) if s.rerouted], holds,
-        [pairs[n][0].name for n in order])
+        [names[k] for k in ranked])
 
 
 def analyse(context, character):
@@ -893,7 +895,7 @@ class CrowdSchedule(CrowdResult):
     """A :class:`CrowdResult` with how the crowd was kept apart beyond waits."""
     # name -> [{"frame": first scene frame standing still, "frames": how many}]
     holds: dict = field(default_factory=dict)
-    order: list = field(default_factory=list)  # names in priority order (planned first first)
+    order: list = field(default_factory=list)  # planned names in the order they were placed
 
 
 _CLIPS = ("traversal", "interaction")

@@ -257,6 +257,7 @@ class Schedule:
     version: int = 0
     track: np.ndarray = None
     holdable: np.ndarray = None
+    rank: int = 0
 
     @property
     def rerouted(self):
@@ -331,36 +332,14 @@ def _improve(table, s, found, max_delay, max_hold, step, ramp):
     return best[2], best[3]
 
 
-def resolve(tracks, replan, spacing, radius, fps, max_delay, step, ramp=None,
-            max_hold=None, holdable=None, rounds=2, stages=6):
-    """Schedules and the conflicts left for ``tracks`` [(frames, 2)] in priority order,
-    all starting on frame 0: each character in turn is checked against the
-    :class:`Reservations` of those before it and, while it comes closer than ``spacing``,
-    changed by (at most ``stages`` changes, the first that clears everything, in this
-    order of preference):
-
-    1. an idle hold (whole ``step`` frames, all its holds at most ``max_hold``, see
-       :func:`_improve` for which lengths are tried) on a
-       double-support frame of its walk (``holdable[i]``: bool per frame of ``tracks[i]``,
-       None: no holds) before the first frame too close, slowing down and speeding up
-       over ``ramp`` frames;
-    2. waiting longer at its start (``step`` frames, at most ``max_delay`` in all);
-    3. else the change leaving the fewest frames too close, and again from there.
-
-    Still too close, it is re-planned (``replan(i, discs) -> (track, holdable) or None``;
-    ``replan`` None: never),
-    each call a new version of its plan, :attr:`Schedule.version`) round the discs where the others it meets walk around those frames (:func:`ghosts`),
-    and the above is done again, at most ``rounds`` times.
-
-    What is left is kept with the fewest frames too close and reported: [{"a", "b" (indices,
-    ``a`` placed first), "frame" (closest), "first_frame", "frames", "distance_m"}]."""
+def _resolve_once(order, tracks, replan, spacing, radius, fps, max_delay, step, ramp,
+                  max_hold, holdable, rounds, stages, versions):
+    """One pass of :func:`resolve` placing the characters in ``order``; ``versions``
+    counts each character's re-plans over all passes (its next one's number)."""
     table = Reservations(spacing)
-    ramp = int(ramp if ramp is not None else round(fps)) // 2 * 2
-    max_hold = max_delay if max_hold is None else max_hold
-    step = max(int(step), 1)
-    holdable = list(holdable) if holdable is not None else [None] * len(tracks)
-    schedules, conflicts = [], []
-    for i, track in enumerate(tracks):
+    schedules, conflicts = [None] * len(tracks), []
+    for i in order:
+        track = tracks[i]
         s = Schedule(0, (), 0, np.asarray(track, float)[:, :2], holdable[i])
         best, reserved = None, []
         for attempt in range(rounds + 1):
@@ -382,14 +361,63 @@ def resolve(tracks, replan, spacing, radius, fps, max_delay, step, ramp=None,
             new = replan(i, list(reserved))
             if new is None:
                 break
-            s = Schedule(0, (), attempt + 1, np.asarray(new[0], float)[:, :2], new[1])
+            versions[i] += 1
+            s = Schedule(0, (), versions[i], np.asarray(new[0], float)[:, :2], new[1])
         s, found = best
         table.reserve(i, s.track, s.delay)
-        schedules.append(s)
+        schedules[i] = s
         for j, (frames, frame, dist) in sorted(found.items()):
             conflicts.append({"a": j, "b": i, "frame": frame, "first_frame": int(frames[0]),
                               "frames": int(len(frames)), "distance_m": dist})
     return schedules, conflicts
+
+
+def resolve(tracks, replan, spacing, radius, fps, max_delay, step, ramp=None,
+            max_hold=None, holdable=None, rounds=2, stages=6, restarts=2):
+    """Schedules and the conflicts left for ``tracks`` [(frames, 2)] in priority order,
+    all starting on frame 0: each character in turn is checked against the
+    :class:`Reservations` of those before it and, while it comes closer than ``spacing``,
+    changed by (at most ``stages`` changes, the first that clears everything, in this
+    order of preference):
+
+    1. an idle hold (whole ``step`` frames, all its holds at most ``max_hold``, see
+       :func:`_improve` for which lengths are tried) on a
+       double-support frame of its walk (``holdable[i]``: bool per frame of ``tracks[i]``,
+       None: no holds) before the first frame too close, slowing down and speeding up
+       over ``ramp`` frames;
+    2. waiting longer at its start (``step`` frames, at most ``max_delay`` in all);
+    3. else the change leaving the fewest frames too close, and again from there.
+
+    Still too close, it is re-planned (``replan(i, discs) -> (track, holdable) or None``,
+    each call a new version of its plan, :attr:`Schedule.version`; None: never) round the
+    discs where the others it meets walk around those frames (:func:`ghosts`), and the
+    above is done again, at most ``rounds`` times.
+
+    When conflicts are left, the crowd is resolved again from the start with the
+    characters that met them placed first (prioritised planning's restart with raised
+    priorities), at most ``restarts`` times, and the pass with the fewest frames too close
+    is kept. What is left is reported: [{"a", "b" (indices, ``a`` placed first), "frame"
+    (closest), "first_frame", "frames", "distance_m"}]. :attr:`Schedule.rank` is each
+    character's place in the order of the pass kept."""
+    ramp = int(ramp if ramp is not None else round(fps)) // 2 * 2
+    max_hold = max_delay if max_hold is None else max_hold
+    step = max(int(step), 1)
+    holdable = list(holdable) if holdable is not None else [None] * len(tracks)
+    order, versions, best = list(range(len(tracks))), [0] * len(tracks), None
+    for _ in range(restarts + 1):
+        schedules, conflicts = _resolve_once(order, tracks, replan, spacing, radius, fps,
+                                             max_delay, step, ramp, max_hold, holdable,
+                                             rounds, stages, versions)
+        for rank, i in enumerate(order):
+            schedules[i].rank = rank
+        left = sum(c["frames"] for c in conflicts)
+        if best is None or left < best[0]:
+            best = (left, schedules, conflicts)
+        if not conflicts:
+            break
+        first = list(dict.fromkeys(c["b"] for c in conflicts))
+        order = first + [i for i in order if i not in first]
+    return best[1], best[2]
 
 
 def conflicts_of(tracks, delays, spacing):
