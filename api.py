@@ -689,34 +689,47 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
 def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, radius=0.25,
                frame_start=None, context=None, stitching="dynamic", progress=None,
                max_wait_seconds=4.0, spacing=None, foot_lock=True, goal_facing="exact"):
-    """Plan several characters, ``pairs`` = [(armature, goal object or (x, y, heading))],
-    and write each one's NLA; characters that find no path are listed in ``failed``.
+    """Plan several characters and write each one's NLA; ``pairs`` = [(armature, goal)] or
+    [(armature, goal, options)], a goal being an object or (x, y, heading); ``options``:
+    {"start_prop": a tagged prop with a stand-up clip to start seated on, "priority":
+    a number, higher planned first}. A goal that is a tagged prop with a sit-down clip
+    ends the walk seated on it. Characters that find no path are listed in ``failed``
+    with the reason.
 
-    Each path is planned against the props and the spots where the others stand still
-    while it walks: the goals of the characters before it and the starts of those after it
-    (:func:`motion_patches.crowd.standing_spots`; dropped when they box it in). Then, in
-    the given order, each character waits at its start (whole 0.2 s steps, at
-    most ``max_wait_seconds``) until it keeps ``spacing`` metres (default: two radii)
-    from everyone before it at every frame, standing at the goal afterwards included
-    (:func:`motion_patches.crowd.stagger`). Where no wait clears two characters, the later
-    one is re-planned round the stretch the earlier one walks around that frame (its
-    reserved stretch as obstacles, :func:`motion_patches.crowd.keep_apart`) and the crowd
-    is staggered again (at most three rounds); those are listed in ``rerouted``. Closer
-    approaches left are returned as ``conflicts``. Bad input raises
-    :class:`MotionPatchesError` before anything is planned or written."""
+    Characters are taken in priority order (the given priority, then the longer distance
+    from start to goal first). Each path is planned against the props and the spots where
+    the others stand still while it walks: the goals of those before it and the starts of
+    those after it (:func:`motion_patches.crowd.standing_spots`; dropped when they box it
+    in). Then each character in turn is checked against a space-time reservation of
+    everyone before it and kept ``spacing`` metres (default: two radii) from them by an
+    idle hold mid-walk on a double-support frame, else a wait at its start (whole 0.2 s
+    steps, each at most ``max_wait_seconds``), else a re-route round where the other walks
+    then (:func:`motion_patches.crowd.resolve`). Closer approaches left are returned as
+    ``conflicts`` by pair and frame, checked on the motion as written. Bad input (a
+    character twice, two characters sent to one goal, goals closer than ``spacing``: one
+    could never be free) raises :class:`MotionPatchesError` before anything is written."""
     t0 = time.perf_counter()
     _check_weights(alpha, beta, gamma, radius)
     patch = _patch_for_planning(scene, patch_name)
     context = context or bpy.context
     context.view_layer.update()
-    pairs = list(pairs)
+    pairs = [tuple(p) for p in pairs]
     if not pairs:
         raise MotionPatchesError("a crowd needs at least one character with a goal")
+    if any(len(p) not in (2, 3) for p in pairs):
+        raise MotionPatchesError("each crowd entry is (character, goal) or (character, goal, "
+                                 "options)")
+    options = [dict(p[2]) if len(p) == 3 and p[2] else {} for p in pairs]
+    pairs = [p[:2] for p in pairs]
     spacing = 2 * radius if spacing is None else float(spacing)
     if not (0 <= spacing < np.inf and 0 <= max_wait_seconds < np.inf):
         raise MotionPatchesError("spacing and the longest wait must be numbers >= 0")
-    seen, rigs = set(), []
-    for character, goal in pairs:
+    seen, rigs, taken = set(), [], {}
+    for (character, goal), opt in zip(pairs, options):
+        unknown = set(opt) - {"start_prop", "priority"}
+        if unknown:
+            raise MotionPatchesError(f"unknown crowd option(s) {', '.join(sorted(unknown))} "
+                                     f"for '{getattr(character, 'name', character)}'")
         rigs.append(_check_character(character, patch))
         if character.name in seen:
             raise MotionPatchesError(f"'{character.name}' appears twice in the crowd")
@@ -727,12 +740,24 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
             raise MotionPatchesError(f"the goal of '{character.name}' is the character itself")
         _goal(goal)
         _writable(character)
+        try:
+            opt["priority"] = float(opt.get("priority", 0.0))
+        except (TypeError, ValueError):
+            raise MotionPatchesError(f"the priority of '{character.name}' must be a number") \
+                from None
+        for what, ob in (("goal", goal), ("start seat", opt.get("start_prop"))):
+            if isinstance(ob, bpy.types.Object):
+                if ob.name in taken:
+                    raise MotionPatchesError(
+                        f"'{ob.name}' is the {what} of both '{taken[ob.name]}' and "
+                        f"'{character.name}': one spot, one character; give each its own")
+                taken[ob.name] = character.name
     first = _frame_start(scene, frame_start)
     depsgraph = context.evaluated_depsgraph_get()
-    # Characters are not obstacles of the scene: they are kept apart in time, and only where
-    # they stand still (goals of earlier ones, starts of later ones) in space. A goal object
-    # is no obstacle for its own character only. Characters of another size than the patch
-    # skeleton (retargeted rigs) are planned in the world shrunk by their size, one
+    # Characters are not obstacles of the scene: they are kept apart in space and time, and
+    # where they stand still (goals of earlier ones, starts of later ones) in space. A goal
+    # object is no obstacle for its own character only. Characters of another size than the
+    # patch skeleton (retargeted rigs) are planned in the world shrunk by their size, one
     # environment and planner per size.
     sizes, worlds = [_size(r) for r in rigs], {}
 
@@ -743,29 +768,45 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
             props = object_patches(scene, depsgraph, patch, size)
             worlds[size] = [env, props, {p.name: p for p in props}, None]
         return worlds[size]
-    ends = [_endpoints(c, g, None, world_of(sz)[2], r.target if r else patch.gait.skeleton,
-                       goal_facing, sz) for (c, g), r, sz in zip(pairs, rigs, sizes)]
-    own_goal = [[o.name for o in _not_obstacles([g])] if isinstance(g, bpy.types.Object) else []
-                for _, g in pairs]
-    for (c, _), e, mine, sz in zip(pairs, ends, own_goal, sizes):
+    ends = [_endpoints(c, g, opt.get("start_prop"), world_of(sz)[2],
+                       r.target if r else patch.gait.skeleton, goal_facing, sz)
+            for (c, g), opt, r, sz in zip(pairs, options, rigs, sizes)]
+    own = [[o.name for o in _not_obstacles([g, opt.get("start_prop")])
+            if isinstance(o, bpy.types.Object)] for (_, g), opt in zip(pairs, options)]
+    for (c, _), e, mine, sz in zip(pairs, ends, own, sizes):
         _check_ends(c, e, sz)
         with _without(world_of(sz)[0], mine):
             _check_clear(world_of(sz)[0], c, e, world_of(sz)[2])
     for w in worlds.values():
         w[3] = SegmentPlanner(patch, w[0], alpha, beta, gamma, props=w[1], mode=stitching)
     world_ends = [(_shrunk(e[0], 1.0 / sz), _shrunk(e[1], 1.0 / sz)) for e, sz in zip(ends, sizes)]
+    goals = np.array([g[1][:2] for g in world_ends])
+    for i in range(len(pairs)):
+        for j in range(i):
+            gap = float(np.linalg.norm(goals[i] - goals[j]))
+            if gap < spacing:
+                raise MotionPatchesError(
+                    f"the goals of '{pairs[j][0].name}' and '{pairs[i][0].name}' are {gap:.2f} m "
+                    f"apart, closer than the spacing ({spacing:.2f} m): the one arriving second "
+                    f"would never find its goal free; move one of them")
+    # priority order: the given priority, then the longer way first
+    order = sorted(range(len(pairs)), key=lambda n: (
+        -options[n]["priority"], -float(np.linalg.norm(world_ends[n][1][:2] - world_ends[n][0][:2]))))
+    rank_ends = [world_ends[n] for n in order]
+
     def solve_one(n, ghosts=()):
         """Plan character n round the standing spots (dropped when they box it in) and,
         when re-routing, round ``ghosts`` (world polygons; PathNotFound if they box it in)."""
         character, e = pairs[n][0], ends[n]
         env, _, _, planner = world_of(sizes[n])
-        spots = [Obstacle(f"{CROWD_SPOT}{pairs[m][0].name}", polygon / sizes[n]) for m, polygon
-                 in crowd.standing_spots(world_ends, n, spacing, radius)]
-        own = np.array([e[0][:2], e[1][:2]], float)
+        spots = [Obstacle(f"{CROWD_SPOT}{pairs[order[m]][0].name}", polygon / sizes[n])
+                 for m, polygon in crowd.standing_spots(rank_ends, order.index(n), spacing,
+                                                        radius)]
+        mine = np.array([e[0][:2], e[1][:2]], float)
         extra = [Obstacle(f"{CROWD_GHOST}{k}", polygon / sizes[n]) for k, polygon in
                  enumerate(ghosts)]
-        extra = [g for g in extra if not g.within(own, radius).any()]  # not on its own ends
-        with _without(env, own_goal[n]):
+        extra = [g for g in extra if not g.within(mine, radius).any()]  # not on its own ends
+        with _without(env, own[n]):
             for ob in spots + extra:  # where the others stand still while this one walks
                 env.place(ob)
             try:
@@ -782,54 +823,90 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
                 for ob in spots + extra:
                     env.remove(ob.name)
 
-    planned, failed = [], []
-    for n, (character, _) in enumerate(pairs):
-        try:
-            planned.append((n, solve_one(n)))
-        except PathNotFound as exc:
-            failed.append((character.name, str(exc)))
-        if progress is not None:
-            progress(0.8 * (n + 1) / len(pairs))
     fps = scene_fps(scene)
-    placed = [_placed(scene, patch, rigs[n], plan_motions(patch, plan))  # synthesised once
-              for n, plan in planned]
-    tracks = [p[2].ground[:, :2] for p in placed]  # on the scene's frames
+    same_rate = abs(fps - patch.gait.fps) < 1e-6
+    ramp = max(2, int(round(CROWD_HOLD_RAMP_SECONDS * fps)) // 2 * 2)
+
+    def synthesised(n, plan):
+        """(raw piece motions, placed motion, holdable frames or None) of a plan."""
+        raw = plan_motions(patch, plan)
+        placed = _placed(scene, patch, rigs[n], raw)
+        return raw, placed, (_holdable(plan, placed, ramp) if same_rate else None)
+
+    planned, failed = [], []  # planned: [(n, plan, raw, placed, holdable)] in priority order
+    for count, n in enumerate(order):
+        try:
+            plan = solve_one(n)
+            planned.append([n, plan, *synthesised(n, plan)])
+        except PathNotFound as exc:
+            failed.append((pairs[n][0].name, str(exc)))
+        if progress is not None:
+            progress(0.8 * (count + 1) / len(pairs))
+
+    versions = [[p] for p in planned]  # every re-plan kept: the crowd may settle on any
 
     def replan(k, ghosts):
-        """Character k of the planned ones re-planned round ``ghosts``; its new track."""
+        """Character k of the planned ones re-planned round ``ghosts``: its new track (the
+        next version of its plan)."""
         n = planned[k][0]
         try:
             plan = solve_one(n, ghosts)
         except PathNotFound:
             return None
-        planned[k] = (n, plan)
-        placed[k] = _placed(scene, patch, rigs[n], plan_motions(patch, plan))
-        return placed[k][2].ground[:, :2]
+        versions[k].append([n, plan, *synthesised(n, plan)])
+        return _root_track(patch, rigs[n], versions[k][-1][3]), versions[k][-1][4]
 
-    delays, conflicts, rerouted = crowd.keep_apart(
-        tracks, replan, spacing, radius, fps, round(max_wait_seconds * fps),
-        max(1, round(0.2 * fps)))
+    schedules, _ = crowd.resolve(
+        [_root_track(patch, rigs[p[0]], p[3]) for p in planned], replan, spacing, radius, fps,
+        round(max_wait_seconds * fps), max(1, round(0.2 * fps)), ramp=ramp,
+        holdable=[p[4] for p in planned])
+    planned = [v[s.version] for v, s in zip(versions, schedules)]
+    holds = {}
+    for p, s in zip(planned, schedules):
+        if s.holds:  # each hold put in the piece it falls in, as its own strip
+            at = []
+            for k, h in s.holds:
+                bounds = np.concatenate(([0], np.cumsum([m.frames - 1 for m in p[2]])))
+                p[1], p[2] = _with_hold(p[1], p[2], bounds, k, h, ramp)
+                at = [(f + h + ramp if f > k else f, n) for f, n in at] + [(k, h)]
+            p[3] = _placed(scene, patch, rigs[p[0]], p[2])
+            holds[pairs[p[0]][0].name] = sorted(at)
+    # what is reported is checked on the motion written, whatever resolved it
+    ranked = sorted(range(len(planned)), key=lambda k: schedules[k].rank)  # order kept
+    conflicts = crowd.conflicts_of([_root_track(patch, rigs[planned[k][0]], planned[k][3])
+                                    for k in ranked], [schedules[k].delay for k in ranked],
+                                   spacing)
     if progress is not None:
         progress(0.9)
-    plans = []
-    for (n, plan), p, d in zip(planned, placed, delays):
-        _writable(pairs[n][0], first + d, p[2].frames)
-    with transaction.kept(bpy, scene, [pairs[n][0] for n, _ in planned],
+    written = {}
+    for (n, plan, _, placed, _), s in zip(planned, schedules):
+        _writable(pairs[n][0], first + s.delay, placed[2].frames)
+    with transaction.kept(bpy, scene, [pairs[n][0] for n, *_ in planned],
                           (PLAN_KEY, FRAME_RANGE_KEY)):
-        for (n, plan), p, d in zip(planned, placed, delays):
+        for (n, plan, _, placed, _), s in zip(planned, schedules):
             env = world_of(sizes[n])[0]
-            with _without(env, own_goal[n]):  # the plan record lists what it walked around
-                plans.append(_write(scene, pairs[n][0], patch, patch_name, plan, p, first + d,
-                                    env, radius, foot_lock, rigs[n], fit=False))
-        if plans:
+            with _without(env, own[n]):  # the plan record lists what it walked around
+                written[n] = _write(scene, pairs[n][0], patch, patch_name, plan, placed,
+                                    first + s.delay, env, radius, foot_lock, rigs[n], fit=False)
+        if written:
             _fit_frame_range(scene)  # once: it reads every character's plan record
     if progress is not None:
         progress(1.0)
-    names = [pairs[n][0].name for n, _ in planned]
+    names = [pairs[p[0]][0].name for p in planned]
     for c in conflicts:
-        c["a"], c["b"], c["frame"] = names[c["a"]], names[c["b"]], first + c["frame"]
-    return CrowdResult(plans, failed, conflicts, dict(zip(names, delays)),
-                       time.perf_counter() - t0, [names[k] for k in rerouted])
+        c["a"], c["b"] = names[ranked[c["a"]]], names[ranked[c["b"]]]
+        c["frame"] += first
+        c["first_frame"] += first
+    for p in planned:  # holds on the scene's frames (a character that holds starts at once)
+        name = pairs[p[0]][0].name
+        if name in holds:
+            holds[name] = [{"frame": written[p[0]].frame_start + f + ramp // 2,
+                            "frames": int(n)} for f, n in holds[name]]
+    return CrowdSchedule(
+        [written[n] for n in sorted(written)], failed, conflicts,
+        {nm: s.delay for nm, s in zip(names, schedules)}, time.perf_counter() - t0,
+        [nm for nm, s in zip(names, schedules) if s.rerouted], holds,
+        [names[k] for k in ranked])
 
 
 def analyse(context, character):
@@ -989,3 +1066,170 @@ def check_layout(scene, spec, context=None):
 def _some_names(coll, limit=8):
     names = sorted(x.name for x in coll)
     return (", ".join(names[:limit]) + (", ..." if len(names) > limit else "")) or "none"
+
+
+# --- crowds: idle holds ----------------------------------------------------------------------
+
+CROWD_HOLD_RAMP_SECONDS = 0.5  # slowing to an idle hold and walking on again, each
+
+
+@dataclass
+class CrowdSchedule(CrowdResult):
+    """A :class:`CrowdResult` with how the crowd was kept apart beyond waits."""
+    # name -> [{"frame": first scene frame standing still, "frames": how many}]
+    holds: dict = field(default_factory=dict)
+    order: list = field(default_factory=list)  # planned names in the order they were placed
+
+
+_CLIPS = ("traversal", "interaction")
+
+
+def _piece_holding(plan, bounds, at, ramp):
+    """Index of the walking piece whose scene frames ``bounds[i]..bounds[i+1]`` hold frame
+    ``at`` with half a ``ramp`` to spare on both sides, or None."""
+    half = ramp // 2
+    for i, p in enumerate(plan.pieces):
+        if p.kind not in _CLIPS and bounds[i] + half <= at <= bounds[i + 1] - half:
+            return i
+    return None
+
+
+def _holdable(plan, placed, ramp):
+    """Bool per scene frame of a placed plan (:func:`_placed`): frames a crowd may hold on,
+    double support (a planted joint on each foot) inside a walking piece with room for the
+    slow-down and speed-up in that piece."""
+    _, bounds, world = placed
+    c = world.contacts
+    ok = c[:, :2].any(axis=1) & c[:, 2:].any(axis=1)
+    inside = np.zeros_like(ok)
+    half = ramp // 2
+    for i, p in enumerate(plan.pieces):
+        if p.kind not in _CLIPS:
+            inside[bounds[i] + half:bounds[i + 1] - half + 1] = True
+    return ok & inside
+
+
+def _with_hold(plan, raw, bounds, at, hold, ramp):
+    """(plan, raw piece motions) with an idle hold of ``hold`` frames on scene frame ``at``
+    (the scene at the patch's rate): the piece it falls in is time-warped
+    (:func:`motion_patches.retime.held`) and becomes a piece of kind "hold", so it is
+    written as its own action, not the shared segment action."""
+    import dataclasses
+    from .motion_patches import retime
+    i = _piece_holding(plan, bounds, at, ramp)
+    if i is None:
+        raise MotionPatchesError(f"internal: frame {at} is in no walking piece to hold in")
+    raw = list(raw)
+    raw[i] = retime.held(raw[i], at - bounds[i], hold, ramp)
+    pieces = list(plan.pieces)
+    pieces[i] = dataclasses.replace(pieces[i], kind="hold")
+    return dataclasses.replace(plan, pieces=pieces), raw
+
+
+def _root_track(patch, rig, placed):
+    """(frames, 2) ground position of the root joint of a placed motion (:func:`_placed`):
+    what a crowd keeps apart (the hips sway a few centimetres about the ground track)."""
+    skel = rig.target if rig is not None else patch.gait.skeleton
+    world = placed[2]
+    return world.world_matrices(skel)[:, skel.root, :2, 3]
+
+
+
+# --- crowds: duplicating a source armature ---------------------------------------------------
+
+CROWD_COLLECTION = "MP Crowd"
+
+
+def duplicate_crowd(scene, source, count, region, goal_region, seed=0, radius=0.25,
+                    spacing=None, patch_name=None, context=None):
+    """[(character, goal empty)]: ``count`` copies of the armature ``source`` sharing its
+    armature data (linked, as Alt+D makes them), scattered over ``region`` ((x0, y0), (x1,
+    y1)) and each sent to a goal empty scattered over ``goal_region``, facing the way it
+    walks; all in a new collection. Starts and goals keep ``spacing`` (default: two radii)
+    plus a radius from one another and stay clear of the props. Everything is checked and
+    every spot drawn before anything is made: a source the patch cannot play, or regions
+    too small to hold the crowd, raise :class:`MotionPatchesError` with the scene unchanged."""
+    context = context or bpy.context
+    patch = _patch_for_planning(scene, patch_name)
+    if source is None or source.type != "ARMATURE":
+        raise MotionPatchesError("choose the source armature to duplicate")
+    rig = _check_character(source, patch)
+    try:
+        count = int(count)
+        region = np.asarray(region, float).reshape(2, 2)
+        goal_region = np.asarray(goal_region, float).reshape(2, 2)
+    except (TypeError, ValueError):
+        raise MotionPatchesError("a crowd needs a count and two regions ((x0, y0), (x1, y1))") \
+            from None
+    if count < 1:
+        raise MotionPatchesError("a crowd needs at least one character")
+    for what, r in (("region", region), ("goal region", goal_region)):
+        if not np.isfinite(r).all() or (r[1] <= r[0]).any():
+            raise MotionPatchesError(f"the {what} must have its second corner above and right "
+                                     f"of its first")
+    spacing = 2 * radius if spacing is None else float(spacing)
+    context.view_layer.update()
+    depsgraph = context.evaluated_depsgraph_get()
+    env = scene_io.environment(scene, depsgraph, patch, radius, _not_obstacles([source]), 1.0)
+    rng = np.random.default_rng(seed)
+    gap = spacing + radius
+
+    def scatter(r, what):
+        pts = np.empty((0, 2))
+        for _ in range(200 * count):
+            p = rng.uniform(r[0], r[1])
+            if env.near(p) or (len(pts) and np.linalg.norm(pts - p, axis=1).min() < gap):
+                continue
+            pts = np.vstack((pts, p))
+            if len(pts) == count:
+                return pts
+        raise MotionPatchesError(
+            f"the {what} holds only {len(pts)} of {count} characters {gap:.2f} m apart and "
+            f"clear of the props: make it larger or the crowd smaller")
+    starts, goals = scatter(region, "region"), scatter(goal_region, "goal region")
+    rng.shuffle(goals)
+    skel = rig.target if rig is not None else patch.gait.skeleton
+    facing = nla.facing_angle(skel)
+    coll = bpy.data.collections.new(CROWD_COLLECTION)
+    scene.collection.children.link(coll)
+    pairs = []
+    for k, (s, g) in enumerate(zip(starts, goals)):
+        heading = float(np.arctan2(g[1] - s[1], g[0] - s[0]))
+        ob = source.copy()  # object copy, armature data shared
+        ob.name = f"{source.name}.crowd{k:03d}"
+        ob.animation_data_clear()
+        for key in (PLAN_KEY, nla.TRACKS_KEY):
+            if key in ob:
+                del ob[key]
+        coll.objects.link(ob)
+        ob.location = (s[0], s[1], source.location[2])
+        ob.rotation_mode = "XYZ"
+        ob.rotation_euler = (0.0, 0.0, heading - facing)
+        goal = bpy.data.objects.new(f"{ob.name} goal", None)
+        coll.objects.link(goal)
+        goal.location = (g[0], g[1], 0.0)
+        goal.rotation_euler = (0.0, 0.0, heading + np.pi / 2)  # its -Y along the heading
+        ob.motion_patches_character.goal = goal
+        pairs.append((ob, goal))
+    context.view_layer.update()
+    return pairs
+
+
+def remove_crowd(pairs):
+    """Remove what :func:`duplicate_crowd` made (the copies, their goals, their collection
+    when it is left empty, the actions planning made for them); the source is untouched."""
+    colls = set()
+    for ob, goal in pairs:
+        for o in (ob, goal):
+            colls.update(c for c in o.users_collection if c.name.startswith(CROWD_COLLECTION))
+        names = {ob.name}
+        if ob.animation_data is not None:
+            ob.animation_data_clear()
+        bpy.data.objects.remove(ob)
+        bpy.data.objects.remove(goal)
+        for a in list(bpy.data.actions):
+            if a.get(nla.CHARACTER_KEY) in names and a.users == 0:
+                bpy.data.actions.remove(a)
+    for c in colls:
+        if not c.objects and not c.children:
+            bpy.data.collections.remove(c)

@@ -72,3 +72,42 @@ def eased(motion, ease_in=False, ease_out=False, ramp=None):
     if not (ease_in or ease_out) or motion.frames < 3:
         return motion
     return resample(motion, warp_phases(motion.frames, ease_in, ease_out, ramp))
+
+
+def _ramp_area(a):
+    """Phase covered over the first ``a`` (0..1) of a unit ramp whose rate falls from 1 to 0
+    along a smoothstep: the integral of 1 - (3 x^2 - 2 x^3)."""
+    return a - a ** 3 + 0.5 * a ** 4
+
+
+def hold_phases(frames, at, hold, ramp):
+    """Fractional frame positions (K,) that play a motion of ``frames`` frames at its pace,
+    slow to a stop on frame ``at`` over ``ramp`` frames of time (a smoothstep in rate),
+    stay there ``hold`` frames and speed up again over ``ramp``: an idle hold. Held on a
+    double-support frame both feet stay planted, since a time warp only replays the same
+    poses slower. ``at`` must leave ``ramp / 2`` frames of the motion either side; the
+    result has ``frames + hold + ramp`` positions (``ramp`` even: whole frames)."""
+    ramp, hold, at = int(ramp), int(hold), float(at)
+    if hold <= 0:
+        return np.arange(frames, dtype=float)
+    if ramp % 2 or at - ramp / 2 < 0 or at + ramp / 2 > frames - 1:
+        raise ValueError(f"a hold at frame {at:g} needs an even ramp ({ramp}) with half of it "
+                         f"inside the motion's {frames} frames on both sides")
+    t = np.arange(frames + hold + ramp, dtype=float)
+    a0 = at - ramp / 2                      # the slow-down starts here (rate 1 before)
+    a1, a2 = a0 + ramp, a0 + ramp + hold    # stopped from a1 to a2, then speeding up
+    u = t.copy()
+    if ramp:
+        down = (t > a0) & (t < a1)
+        u[down] = a0 + ramp * _ramp_area((t[down] - a0) / ramp)
+        up = (t >= a2) & (t < a2 + ramp)
+        u[up] = at + ramp * (0.5 - _ramp_area(1.0 - (t[up] - a2) / ramp))
+    u[(t >= a1) & (t < a2)] = at
+    after = t >= a2 + ramp
+    u[after] = t[after] - hold - ramp
+    return u
+
+
+def held(motion, at, hold, ramp):
+    """``motion`` with an idle hold of ``hold`` frames on frame ``at`` (:func:`hold_phases`)."""
+    return resample(motion, hold_phases(motion.frames, at, hold, ramp))

@@ -2,10 +2,10 @@
 
 import bpy
 
-from . import analyse, bake, mocap, object_patch, patch_files, plan
+from . import analyse, bake, crowd, mocap, object_patch, patch_files, plan
 from .common import guarded
 
 classes = tuple(guarded(c) for c in mocap.classes + bake.classes + patch_files.classes
-                + object_patch.classes + plan.classes + analyse.classes)
+                + object_patch.classes + plan.classes + analyse.classes + crowd.classes)
 
 register, unregister = bpy.utils.register_classes_factory(classes)

@@ -35,6 +35,7 @@ class MOTION_PATCHES_PT_planning(SidebarPanel, bpy.types.Panel):
         row = layout.row(align=True)
         row.operator("motion_patches.plan_path", icon='PLAY')
         row.operator("motion_patches.plan_crowd", icon='COMMUNITY')
+        layout.operator("motion_patches.duplicate_crowd", icon='DUPLICATE')
 
 
 class MOTION_PATCHES_UL_bone_map(bpy.types.UIList):

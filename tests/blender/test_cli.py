@@ -476,10 +476,10 @@ def test_crowd_plans_everyone_and_keeps_them_apart(cli, capsys, crossing, tmp_pa
                                "--spacing", "1", "--frame-start", "1", "--save", out)
     assert code == 0 and doc["ok"] and doc["conflicts"] == [] and doc["failed"] == [], err
     assert [p["character"] for p in doc["planned"]] == ["East", "North"]
-    wait = doc["delays_frames"]["North"]
-    assert doc["delays_frames"]["East"] == 0 and 0 < wait <= 4 * 30
+    # North gives way by an idle hold mid-walk (preferred to a wait at its start)
+    assert doc["delays_frames"] == {"East": 0, "North": 0}
     first, second = doc["planned"]
-    assert first["frame_start"] == 1 and second["frame_start"] == 1 + wait
+    assert first["frame_start"] == 1 and second["frame_start"] == 1
     # Evaluated through the depsgraph: both arrive, and they keep a metre apart throughout.
     open_blend(out)
     end = max(first["frame_end"], second["frame_end"])
@@ -488,7 +488,12 @@ def test_crowd_plans_everyone_and_keeps_them_apart(cli, capsys, crossing, tmp_pa
     assert gap.min() >= 1.0 - 0.05, f"closest approach {gap.min():.2f} m"
     assert np.linalg.norm(roots[0, -1] - (8.0, 0.0)) < 0.3
     assert np.linalg.norm(roots[1, -1] - (4.0, 4.0)) < 0.3
-    assert np.linalg.norm(roots[1, wait - 1] - roots[1, 0]) < 0.01  # it waits where it stood
+    # it stands still for a while between leaving its start and reaching its goal
+    walk = roots[1, :second["frame_end"]]
+    still = np.linalg.norm(np.diff(walk, axis=0), axis=1) < 1e-3
+    moved = np.linalg.norm(walk - walk[0], axis=1) > 0.5
+    far = np.linalg.norm(walk - (4.0, 4.0), axis=1) > 0.5
+    assert (still & moved[1:] & far[1:]).sum() >= 6
 
 
 def test_crowd_with_an_unreachable_goal_exits_1_and_saves_nothing(cli, capsys, layout, tmp_path):

@@ -1,8 +1,9 @@
-"""Crowds: characters planned one by one are kept apart by waiting at their start."""
+"""Crowds: characters planned one by one are kept apart in space and time."""
 
 import numpy as np
+import pytest
 
-from motion_patches import crowd
+from motion_patches import contacts, crowd, retime
 from motion_patches.environment import Environment
 from motion_patches.motion import concatenate
 from motion_patches.planner import SegmentPlanner, plan_motions
@@ -12,51 +13,132 @@ def line(p0, p1, frames):
     return np.linspace(p0, p1, frames)
 
 
-def min_gap(a, b, da, db):
-    horizon = max(len(a) + da, len(b) + db)
-    return np.linalg.norm(crowd.timeline(a, da, horizon) - crowd.timeline(b, db, horizon),
-                          axis=1).min()
+def lines_of(schedules):
+    horizon = max(len(s.track) + s.delay for s in schedules) + 1
+    return [crowd.timeline(s.track, s.delay, horizon) for s in schedules]
 
 
-def test_a_crossing_is_cleared_by_the_smallest_wait():
+def min_gap(a, b):
+    return np.linalg.norm(a - b, axis=1).min()
+
+
+def brute_conflicts(lines, spacing):
+    """{(a, b): frames closer than spacing} over whole timelines, every pair."""
+    out = {}
+    for i in range(len(lines)):
+        for j in range(i):
+            close = np.nonzero(np.linalg.norm(lines[i] - lines[j], axis=1) < spacing)[0]
+            if close.size:
+                out[(j, i)] = close
+    return out
+
+
+def test_the_reservation_table_finds_exactly_the_frames_too_close():
+    """Against a brute-force comparison of whole timelines, on random walks with random
+    starts (delays) in a small square, so that many come close, some stand on others'
+    paths and some wait where others walk."""
+    rng = np.random.default_rng(7)
+    spacing = 0.5
+    table = crowd.Reservations(spacing)
+    placed = []
+    for i in range(40):
+        p0, p1 = rng.uniform(-4, 4, 2), rng.uniform(-4, 4, 2)
+        n = int(rng.integers(20, 90))
+        track = line(p0, p1, n) + rng.normal(0, 0.02, (n, 2))
+        delay = int(rng.integers(0, 30))
+        found = table.check(track, delay)
+        horizon = max([len(t) + d for d, t in placed] + [n + delay]) + 1
+        mine = crowd.timeline(track, delay, horizon)
+        expect = {}
+        for j, (d, t) in enumerate(placed):
+            close = np.nonzero(np.linalg.norm(mine - crowd.timeline(t, d, horizon), axis=1)
+                               < spacing)[0]
+            if close.size:
+                expect[j] = close
+        assert sorted(found) == sorted(expect), i
+        for j, close in expect.items():
+            frames, frame, dist = found[j]
+            assert frames[0] == close[0] and set(frames) <= set(close)
+            assert dist < spacing
+        table.reserve(i, track, delay)
+        placed.append((delay, track))
+    assert sum(bool(v) for v in [table.check(t, d) for d, t in placed]) > 10  # many meet
+
+
+def test_hold_phases_stop_on_the_frame_and_keep_the_pace_elsewhere():
+    u = retime.hold_phases(60, 30, 12, 10)
+    assert len(u) == 60 + 12 + 10 and u[0] == 0 and u[-1] == 59
+    assert np.all(np.diff(u) >= -1e-12)
+    assert np.sum(np.isclose(u, 30.0)) >= 12            # stands on frame 30
+    assert np.allclose(u[:26], np.arange(26))           # full pace before the slow-down
+    assert np.allclose(u[-25:], np.arange(35, 60))      # and after the speed-up
+    assert np.diff(u).max() <= 1.0 + 1e-9               # never faster than recorded
+    with pytest.raises(ValueError, match="ramp"):
+        retime.hold_phases(60, 3, 12, 10)               # no room to slow down
+
+
+def test_a_crossing_is_cleared_by_an_idle_hold_before_a_wait():
     a = line((-5.0, 0.0), (5.0, 0.0), 101)   # 10 m in 100 frames
     b = line((0.0, -5.0), (0.0, 5.0), 101)   # crosses a's path at the same moment
-    assert min_gap(a, b, 0, 0) < 0.1
-    delays, conflicts = crowd.stagger([a, b], clearance=0.5, max_delay=60, step=2)
-    assert delays[0] == 0 and conflicts == []
-    d = delays[1]
-    assert min_gap(a, b, 0, d) >= 0.5
-    assert min_gap(a, b, 0, d - 2) < 0.5       # and no shorter wait would do
+    holdable = [np.ones(101, bool), (np.arange(101) % 15) == 0]  # b: double support every 15
+    assert min_gap(a, b) < 0.1
+    sched, conflicts = crowd.resolve([a, b], lambda i, d: None, 0.5, 0.25, 30.0, 60, 3,
+                                     ramp=10, holdable=holdable)
+    assert conflicts == []
+    assert sched[0].delay == 0 and sched[0].holds == ()
+    (k, h), = sched[1].holds
+    assert sched[1].delay == 0 and holdable[1][k] and 0 < h <= 60
+    la, lb = lines_of(sched)
+    assert min_gap(la, lb) >= 0.5
+    assert np.allclose(lb[-1], b[-1])                   # still arrives
+    # without double-support frames to stand on, it waits at its start instead
+    sched, conflicts = crowd.resolve([a, b], lambda i, d: None, 0.5, 0.25, 30.0, 60, 3)
+    assert conflicts == [] and sched[1].holds == () and sched[1].delay > 0
+    d = sched[1].delay
+    assert min_gap(*lines_of(sched)) >= 0.5
+    shorter = crowd.Reservations(0.5)
+    shorter.reserve(0, a)
+    assert shorter.check(b, d - 3)                      # and no shorter wait would do
 
 
-def test_a_goal_on_someone_elses_path_is_reported_not_hidden():
+def test_a_goal_on_someone_elses_path_is_reported_by_pair_and_frame():
     a = line((-5.0, 0.0), (5.0, 0.0), 101)
-    b = line((0.0, -2.0), (0.0, 0.0), 21)      # b stands on a's path long before a comes
-    delays, conflicts = crowd.stagger([a, b], clearance=0.5, max_delay=30, step=3)
-    assert crowd.stagger([a, b], clearance=0.5, max_delay=60, step=3)[1] == []  # waiting longer lets a pass first
+    b = line((0.0, -2.0), (0.0, 0.0), 21)    # b ends standing on a's path
+    sched, conflicts = crowd.resolve([a, b], lambda i, d: None, 0.5, 0.25, 30.0, 30, 3)
     assert len(conflicts) == 1
     c = conflicts[0]
     assert (c["a"], c["b"]) == (0, 1) and c["distance_m"] < 0.5
-    assert abs(c["frame"] - 50) <= 3           # where a walks past b standing there
+    assert abs(c["frame"] - 50) <= 3 and c["frames"] > 0  # where a walks past b standing
+    brute = brute_conflicts(lines_of(sched), 0.5)
+    assert list(brute) == [(0, 1)] and len(brute[(0, 1)]) == c["frames"]
 
 
-def test_far_apart_characters_do_not_wait():
+def test_far_apart_characters_neither_wait_nor_hold():
     tracks = [line((x, 0.0), (x, 8.0), 80) for x in (0.0, 3.0, 6.0)]
-    delays, conflicts = crowd.stagger(tracks, clearance=0.5, max_delay=60, step=6)
-    assert delays == [0, 0, 0] and conflicts == []
+    sched, conflicts = crowd.resolve(tracks, None, 0.5, 0.25, 30.0, 60, 6,
+                                     holdable=[np.ones(80, bool)] * 3)
+    assert [(s.delay, s.holds) for s in sched] == [(0, ())] * 3 and conflicts == []
 
 
-def test_two_planned_walkers_crossing_in_the_open_are_staggered(walk_patch):
-    env = Environment(walk_patch.side, walk_patch.cells, 0.25)
-    planner = SegmentPlanner(walk_patch, env)
-    plans = [planner.plan((0.0, 0.0, 0.0), (8.0, 0.0, 0.0)),
-             planner.plan((4.0, -4.0, np.pi / 2), (4.0, 4.0, np.pi / 2))]
-    tracks = [concatenate(plan_motions(walk_patch, p)).ground[:, :2] for p in plans]
-    clearance = 1.0  # two characters of 0.5 m radius
-    assert min_gap(tracks[0], tracks[1], 0, 0) < clearance  # they would walk into each other
-    delays, conflicts = crowd.stagger(tracks, clearance, max_delay=120, step=6)
-    assert conflicts == [] and delays[0] == 0 and delays[1] > 0
-    assert min_gap(tracks[0], tracks[1], 0, delays[1]) >= clearance
+def test_reroute_when_neither_hold_nor_wait_clears():
+    """Head-on in the open: b would meet a or stand where a ends; re-planned round a's
+    reserved stretch (discs on a's line near the meeting), it passes clear."""
+    t = np.linspace(0.0, 1.0, 121)[:, None]
+    a = np.array([0.0, 0.0]) + t * np.array([10.0, 0.0])       # west -> east
+    b = np.array([10.0, 0.3]) + t * np.array([-10.0, 0.0])     # east -> west, 0.3 m aside
+    calls = []
+
+    def replan(index, discs):
+        calls.append(index)
+        centres = np.array([d.mean(axis=0) for d in discs])
+        assert np.abs(centres[:, 1]).max() < 0.5   # the reserved stretch is on a's line
+        return b + np.array([0.0, 2.0]), None      # the re-plan goes 2 m round it
+
+    sched, conflicts = crowd.resolve([a, b], replan, 1.0, 0.25, 30.0, 12, 6,
+                                     holdable=[None, np.ones(121, bool)])
+    assert calls == [1] and conflicts == [] and sched[1].rerouted
+    sched0, conflicts0 = crowd.resolve([a, b], lambda i, d: None, 1.0, 0.25, 30.0, 12, 6)
+    assert conflicts0 and not sched0[1].rerouted  # without re-routing the conflict stays
 
 
 def test_standing_spots_are_earlier_goals_and_later_starts():
@@ -65,35 +147,71 @@ def test_standing_spots_are_earlier_goals_and_later_starts():
     assert [m for m, _ in spots] == [0, 2]
     centres = [poly.mean(axis=0) for _, poly in spots]
     assert np.allclose(centres[0], (10, 0)) and np.allclose(centres[1], (0, 6))
-    # grown by the planner's radius, a disc keeps the spacing between the two roots
-    assert np.allclose(np.linalg.norm(spots[0][1] - (10, 0), axis=1), 0.75)
-    # a spot on the character's own goal is left out: it could never arrive
+    r = np.linalg.norm(spots[0][1] - (10, 0), axis=1)  # a polygon round the 0.75 m disc
+    assert np.allclose(r, 0.75 / np.cos(np.pi / 12))
     ends[0] = ((0, 0, 0), (10, 3.5, 0))
     assert [m for m, _ in crowd.standing_spots(ends, 1, 1.0, 0.25)] == [2]
-
-
-def test_an_empty_crowd_and_no_spacing_are_handled():
-    assert crowd.stagger([], clearance=0.5, max_delay=30, step=3) == ([], [])
-    ends = [((0, 0, 0), (10, 0, 0)), ((0, 3, 0), (10, 3, 0))]
     assert crowd.standing_spots(ends, 0, spacing=0.0, radius=0.25) == []
 
 
-def test_keep_apart_reroutes_the_later_walker_when_no_wait_clears_it():
-    """Two walkers that cross head-on in a corridor-free plane: a wait cannot help the
-    second one (the first stands at its goal where the second walks); re-planned round
-    the first's reserved stretch, it passes clear."""
-    from motion_patches import crowd
-    t = np.linspace(0.0, 1.0, 121)[:, None]
-    a = np.array([0.0, 0.0]) + t * np.array([10.0, 0.0])       # west -> east
-    b = np.array([10.0, 0.3]) + t * np.array([-10.0, 0.0])     # east -> west, 0.3 m aside
+def test_an_empty_crowd_is_handled():
+    assert crowd.resolve([], None, 0.5, 0.25, 30.0, 30, 3) == ([], [])
 
-    def replan(index, discs):
-        assert index == 1 and discs
-        centres = np.array([d.mean(axis=0) for d in discs])
-        assert np.abs(centres[:, 1]).max() < 0.5   # the reserved stretch is on a's line
-        return b + np.array([0.0, 2.0])            # the re-plan goes 2 m round it
 
-    delays, conflicts, rerouted = crowd.keep_apart([a, b], replan, 1.0, 0.25, 30.0, 12, 6)
-    assert rerouted == [1] and conflicts == []
-    delays0, conflicts0 = crowd.stagger([a, b], 1.0, 12, 6)
-    assert conflicts0  # without re-routing the conflict stays
+def test_a_hold_on_real_walking_keeps_the_feet_planted(walk_patch):
+    """Two real planned walkers crossing: the later one holds on a double-support frame
+    of its walk; on the held motion both feet stay planted and still while it stands."""
+    env = Environment(walk_patch.side, walk_patch.cells, 0.25)
+    planner = SegmentPlanner(walk_patch, env)
+    plans = [planner.plan((0.0, 0.0, 0.0), (8.0, 0.0, 0.0)),
+             planner.plan((4.0, -4.0, np.pi / 2), (4.0, 4.0, np.pi / 2))]
+    motions = [plan_motions(walk_patch, p) for p in plans]
+    whole = [concatenate(m) for m in motions]
+    tracks = [w.ground[:, :2] for w in whole]
+    double = [w.contacts[:, :2].any(1) & w.contacts[:, 2:].any(1) for w in whole]
+    ramp = 16
+    sched, conflicts = crowd.resolve(tracks, None, 1.0, 0.5, walk_patch.gait.fps, 120, 6,
+                                     ramp=ramp, holdable=double)
+    assert conflicts == [] and len(sched[1].holds) == 1 and sched[1].delay == 0
+    (k, h), = sched[1].holds
+    motion = retime.held(whole[1], k, h, ramp)
+    assert np.allclose(motion.ground[:, :2], sched[1].track)   # the track the crowd checked
+    skel = walk_patch.gait.skeleton
+    feet = motion.world_matrices(skel)[:, contacts.foot_joints(skel)][..., :3, 3]
+    still = slice(k + ramp // 2, k + ramp // 2 + h)
+    assert motion.contacts[still, :2].any(1).all() and motion.contacts[still, 2:].any(1).all()
+    assert np.ptp(feet[still, :, :2], axis=0).max() < 1e-6
+    assert min_gap(*lines_of(sched)) >= 1.0
+
+
+def test_what_resolve_reports_is_exactly_what_is_left():
+    """A dense random crowd: the pairs reported are exactly the pairs a brute-force
+    comparison of the final timelines finds too close, with the same frame counts; every
+    hold stands on a holdable frame of the track it was put in."""
+    rng = np.random.default_rng(3)
+    tracks, masks = [], []
+    for i in range(25):
+        p0 = rng.uniform(-4, 4, 2)
+        p1 = p0 + rng.uniform(4, 7) * np.array([np.cos(a := rng.uniform(0, 2 * np.pi)),
+                                                 np.sin(a)])
+        n = int(np.linalg.norm(p1 - p0) / 1.3 * 30)
+        tracks.append(line(p0, p1, n))
+        masks.append((np.arange(n) % 16) == 3)
+    before = len(crowd.conflicts_of(tracks, [0] * 25, 0.5))
+    sched, conflicts = crowd.resolve(tracks, None, 0.5, 0.25, 30.0, 120, 6, ramp=12,
+                                     holdable=masks)
+    brute = brute_conflicts(lines_of(sched), 0.5)
+    # (two standing for good are counted to the end of the crowd as it was when placed)
+    pair = lambda c: tuple(sorted((c["a"], c["b"])))  # noqa: E731 ("a" placed first)
+    assert {pair(c): c["first_frame"] for c in conflicts} == {k: v[0] for k, v in brute.items()}
+    horizon = max(len(s.track) + s.delay for s in sched)
+    assert all(c["frames"] == len(brute[pair(c)]) for c in conflicts
+               if brute[pair(c)][-1] < horizon - 1)
+    assert all(sched[c["a"]].rank < sched[c["b"]].rank for c in conflicts)
+    assert len(conflicts) < before, (len(conflicts), before)  # some are solved
+    for s, track, mask in zip(sched, tracks, masks):
+        t, m = track, mask
+        for k, h in s.holds:
+            assert m[k]
+            t, m = crowd.held_track(t, k, h, 12, m)
+        assert np.allclose(t, s.track)

@@ -1,0 +1,251 @@
+"""Crowd benchmark of the core: plan time and memory for 10, 100 and 1,000 characters.
+
+Prints numbers, asserts nothing. Run from the repository root:
+
+    .venv/blender-4.5/bin/python bench/bench_crowd.py [--sizes 10,100,1000] [--json out.json]
+
+Each size is a plaza of pillars and benches (boxes), its area growing with the crowd
+(``--area`` m² per character), where two groups cross: half walk east, half west, each
+10-14 m, starts and goals at least a metre from every other. The crowd is planned the way
+``api.plan_crowd`` does it, on the core alone: priority by distance, each path planned
+round the props and the others' standing spots (:func:`motion_patches.crowd.standing_spots`),
+its motion synthesised, then :func:`motion_patches.crowd.resolve` (idle holds, waits,
+re-routes) and the final check :func:`motion_patches.crowd.conflicts_of`. Times are split
+into path planning, motion synthesis, resolution and the final check. Memory: the peak
+traced by ``tracemalloc`` over the resolution and check (run a second time, traced), and the
+process's peak resident size after each size (``resource``; it only grows, sizes run in
+increasing order).
+"""
+
+import argparse
+import cProfile
+import io
+import json
+import os
+import platform
+import pstats
+import resource
+import sys
+import time
+import tracemalloc
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+REPO = HERE.parent
+for p in (str(REPO), str(HERE)):
+    if p not in sys.path:
+        sys.path.insert(0, p)
+
+import bench_core as core  # noqa: E402
+from motion_patches import crowd  # noqa: E402
+from motion_patches.environment import Environment, Obstacle  # noqa: E402
+from motion_patches.motion import concatenate  # noqa: E402
+from motion_patches.planner import PlanError, SegmentPlanner, plan_motions  # noqa: E402
+
+RADIUS = 0.25
+SPACING = 2 * RADIUS
+CLIPS = ("traversal", "interaction")
+
+
+def parse_args(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--sizes", default="10,100,1000", help="crowd sizes, comma-separated")
+    p.add_argument("--area", type=float, default=12.0, help="plaza m² per character")
+    p.add_argument("--seed", type=int, default=17)
+    p.add_argument("--max-wait", type=float, default=4.0, help="longest wait / hold, s")
+    p.add_argument("--mocap", type=Path, default=Path(os.environ.get(
+        "MOTION_PATCHES_MOCAP", REPO.parent / "shared" / "mocap")))
+    p.add_argument("--profile", type=int, default=0, metavar="N",
+                   help="cProfile the crowd of size N and print the top functions")
+    p.add_argument("--json", type=Path, help="also write the full results here")
+    return p.parse_args(argv)
+
+
+def plaza(patch, n, args):
+    """(environment, [(start, goal)] in priority order, plaza side): pillars and benches
+    on a square of ``n * area`` m², two groups crossing it east and west."""
+    rng = np.random.default_rng(args.seed + n)
+    side = max(20.0, float(np.sqrt(n * args.area)))
+    env = Environment(patch.side, patch.cells, RADIUS)
+    core.pillar_field(env, rng, int(0.02 * side * side), 2.0, side - 2.0)
+    for k in range(int(0.01 * side * side)):  # benches: 1.6 x 0.5 m boxes, any direction
+        c, a = rng.uniform(2.0, side - 2.0, 2), rng.uniform(0, np.pi)
+        u, v = np.array([np.cos(a), np.sin(a)]), np.array([-np.sin(a), np.cos(a)])
+        env.place(Obstacle(f"bench{k}", np.array([c + 0.8 * u + 0.25 * v, c - 0.8 * u + 0.25 * v,
+                                                  c - 0.8 * u - 0.25 * v, c + 0.8 * u - 0.25 * v])))
+    taken, ends = np.empty((0, 2)), []
+    while len(ends) < n:
+        east = len(ends) % 2 == 0
+        s = rng.uniform(1.0, side - 1.0, 2)
+        g = s + np.array([rng.uniform(10.0, 14.0) * (1 if east else -1), rng.uniform(-3, 3)])
+        pts = np.stack((s, g))
+        if (g < 1.0).any() or (g > side - 1.0).any() or env.blocked(pts).any():
+            continue
+        if len(taken) and np.linalg.norm(taken[:, None] - pts[None], axis=2).min() < 1.0:
+            continue
+        taken = np.vstack((taken, pts))
+        h = 0.0 if east else np.pi
+        ends.append((np.r_[s, h], np.r_[g, h]))
+    ends.sort(key=lambda e: -np.linalg.norm(e[1][:2] - e[0][:2]))
+    return env, ends, side
+
+
+def holdable(patch, plan, world, bounds, ramp):
+    """As ``api._holdable``: double support inside a walking piece with room for ramps."""
+    c = world.contacts
+    ok = c[:, :2].any(axis=1) & c[:, 2:].any(axis=1)
+    inside = np.zeros_like(ok)
+    for i, p in enumerate(plan.pieces):
+        if p.kind not in CLIPS:
+            inside[bounds[i] + ramp // 2:bounds[i + 1] - ramp // 2 + 1] = True
+    return ok & inside
+
+
+def run_crowd(patch, n, args):
+    env, ends, side = plaza(patch, n, args)
+    planner = SegmentPlanner(patch, env)
+    skel = patch.gait.skeleton
+    fps = patch.gait.fps
+    ramp = max(2, int(round(0.5 * fps)) // 2 * 2)
+    t = {"paths": 0.0, "synthesis": 0.0, "replan": 0.0}
+
+    def solve(i, extra=()):
+        spots = [Obstacle(f"spot{m}", poly) for m, poly in
+                 crowd.standing_spots(ends, i, SPACING, RADIUS)]
+        ghosts = [Obstacle(f"ghost{k}", poly) for k, poly in enumerate(extra)]
+        mine = np.array([ends[i][0][:2], ends[i][1][:2]])
+        ghosts = [g for g in ghosts if not g.within(mine, RADIUS).any()]
+        t0 = time.perf_counter()
+        for ob in spots + ghosts:
+            env.place(ob)
+        try:
+            try:
+                plan = planner.plan(*ends[i])
+            except PlanError:
+                if not spots or ghosts:
+                    raise
+                for ob in spots:
+                    env.remove(ob.name)
+                spots = []
+                plan = planner.plan(*ends[i])
+        finally:
+            for ob in spots + ghosts:
+                env.remove(ob.name)
+            t["paths"] += time.perf_counter() - t0
+        t0 = time.perf_counter()
+        ms = plan_motions(patch, plan)
+        world = concatenate(ms)
+        bounds = np.concatenate(([0], np.cumsum([m.frames - 1 for m in ms])))
+        root = world.world_matrices(skel)[:, skel.root, :2, 3]
+        mask = holdable(patch, plan, world, bounds, ramp)
+        t["synthesis"] += time.perf_counter() - t0
+        return root, mask
+
+    tracks, masks, index, failed = [], [], [], 0
+    for i in range(n):
+        try:
+            root, mask = solve(i)
+        except PlanError:
+            failed += 1
+            continue
+        tracks.append(root)
+        masks.append(mask)
+        index.append(i)
+
+    def replan(k, discs):
+        t0 = time.perf_counter()
+        try:
+            return solve(index[k], discs)
+        except PlanError:
+            return None
+        finally:
+            t["replan"] += time.perf_counter() - t0
+
+    wait = round(args.max_wait * fps)
+    t0 = time.perf_counter()
+    schedules, left = crowd.resolve(list(tracks), replan, SPACING, RADIUS, fps, wait,
+                                    max(1, round(0.2 * fps)), ramp=ramp, holdable=masks)
+    t_resolve = time.perf_counter() - t0 - t["replan"]  # re-plans count as paths
+    finals = [s.track for s in schedules]
+    delays = [s.delay for s in schedules]
+    t0 = time.perf_counter()
+    final = crowd.conflicts_of(finals, delays, SPACING)
+    t_check = time.perf_counter() - t0
+    # memory of resolution and check, traced (a second run: tracing slows it)
+    tracemalloc.start()
+    crowd.resolve(list(tracks), lambda k, d: None, SPACING, RADIUS, fps, wait,
+                  max(1, round(0.2 * fps)), ramp=ramp, holdable=masks)
+    crowd.conflicts_of(finals, delays, SPACING)
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    frames = [len(s.track) + s.delay for s in schedules]
+    return {
+        "characters": n, "plaza_m": round(side, 1), "props": len(env.obstacles),
+        "planned": len(tracks), "no_path": failed,
+        "holds": sum(bool(s.holds) for s in schedules),
+        "waits": sum(s.delay > 0 for s in schedules),
+        "rerouted": sum(s.rerouted for s in schedules),
+        "conflicts_left": len(final), "conflicts_resolve": len(left),
+        "frames_max": int(max(frames)) if frames else 0,
+        "seconds": {"paths": t["paths"], "synthesis": t["synthesis"], "resolve": t_resolve,
+                    "check": t_check,
+                    "total": t["paths"] + t["synthesis"] + t_resolve + t_check},
+        "resolve_ms_per_character": 1000 * t_resolve / max(len(tracks), 1),
+        "resolve_peak_mb": peak / 2 ** 20,
+        "process_max_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+    }
+
+
+def markdown(rows):
+    out = ["| characters | plaza | planned | no path | holds | waits | re-routed | conflicts "
+           "left | paths s | synthesis s | resolve s | check s | total s | resolve peak MB "
+           "| max RSS MB |", "|" + "---|" * 15]
+    for r in rows:
+        s = r["seconds"]
+        out.append(f"| {r['characters']} | {r['plaza_m']} m | {r['planned']} | {r['no_path']} "
+                   f"| {r['holds']} | {r['waits']} | {r['rerouted']} | {r['conflicts_left']} "
+                   f"| {s['paths']:.1f} | {s['synthesis']:.1f} | {s['resolve']:.2f} "
+                   f"| {s['check']:.2f} | {s['total']:.1f} | {r['resolve_peak_mb']:.1f} "
+                   f"| {r['process_max_rss_mb']:.0f} |")
+    return "\n".join(out)
+
+
+def main(argv=None):
+    args = parse_args(argv)
+    missing = core.missing_mocap(args.mocap)
+    if missing:
+        print(missing, file=sys.stderr)
+        return 2
+    print("bake ...", flush=True)
+    patch, _, bake = core.bench_bake(args.mocap)
+    res = {"machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+                      f"Python {platform.python_version()}, numpy {np.__version__}",
+           "args": {k: str(v) for k, v in vars(args).items() if k != "json"}, "crowds": []}
+    for n in sorted(int(s) for s in args.sizes.split(",")):
+        print(f"{n} characters ...", flush=True)
+        if n == args.profile:
+            prof = cProfile.Profile()
+            prof.enable()
+        r = run_crowd(patch, n, args)
+        if n == args.profile:
+            prof.disable()
+            buf = io.StringIO()
+            pstats.Stats(prof, stream=buf).sort_stats("cumulative").print_stats(25)
+            print(buf.getvalue())
+        print(f"  {json.dumps(r)}", flush=True)
+        res["crowds"].append(r)
+    print()
+    print(json.dumps({"machine": res["machine"], "crowds": res["crowds"]}))
+    print()
+    print(markdown(res["crowds"]))
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps(res, indent=1))
+        print(f"wrote {args.json}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
