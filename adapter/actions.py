@@ -15,7 +15,8 @@ import re
 
 import numpy as np
 
-from ..motion_patches import keys as key_plan, quat
+from ..motion_patches import keys as key_plan
+from ..motion_patches import quat
 from ..motion_patches.clip import Clip
 from ..motion_patches.skeleton import Skeleton, root_location_to_position
 from . import compat

@@ -10,10 +10,6 @@ import bpy
 OWNER_KEY = "motion_patches_owner"  # custom property marking data this add-on created
 
 
-def version():
-    return bpy.app.version
-
-
 def new_action(name, id_type="OBJECT"):
     """A new layered action with one slot, one layer and one keyframe strip."""
     act = bpy.data.actions.new(name)

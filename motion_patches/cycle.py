@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import quat
-from .clip import sample, Clip
+from .clip import Clip, sample
 from .contacts import foot_contacts, strikes
 from .curves import arc_frame, arc_project
 from .inplace import facing_yaw, to_inplace

@@ -26,8 +26,8 @@ def start():
     for var, sub in (("BLENDER_USER_CONFIG", "config"), ("BLENDER_USER_SCRIPTS", "scripts"),
                      ("BLENDER_USER_DATAFILES", "datafiles"), ("BLENDER_USER_EXTENSIONS", "extensions")):
         os.environ[var] = str(home / sub)
-    import bpy
     import addon_utils
+    import bpy
     repo_dir = home / "repo"
     repo_dir.mkdir()
     (repo_dir / "motion_patches").symlink_to(REPO_ROOT, target_is_directory=True)

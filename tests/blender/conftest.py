@@ -70,8 +70,10 @@ os.environ.update(blender_user_env(BLENDER_HOME))
 # Registered before bpy is imported, so it runs after bpy's own exit handlers.
 atexit.register(shutil.rmtree, BLENDER_HOME, ignore_errors=True)
 
+# isort: off
 import bpy  # noqa: E402
 import addon_utils  # noqa: E402  (ships with bpy; importable once bpy is)
+# isort: on
 
 
 def raise_error(ex):

@@ -2,7 +2,6 @@
 weights are refused up front with a message naming the cause, and a search that runs out of
 nodes says so instead of blaming props."""
 
-import json
 import math
 
 import bpy

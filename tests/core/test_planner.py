@@ -3,8 +3,8 @@ import pytest
 
 from motion_patches import contacts, metrics
 from motion_patches.environment import Environment, Obstacle
-from motion_patches.motion import concatenate
 from motion_patches.inplace import to_world
+from motion_patches.motion import concatenate
 from motion_patches.planner import PlanError, SegmentPlanner, piece_motion, plan_motions
 
 

@@ -4,10 +4,11 @@
 import numpy as np
 import pytest
 
-from conftest import MOCAP, cmu
 from motion_patches import bvh, keys, retarget, scene_rate
 from motion_patches.retarget import RetargetError, rig_map
 from motion_patches.skeleton import Skeleton
+
+from conftest import MOCAP, cmu
 
 
 @pytest.fixture(scope="module")
