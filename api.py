@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Python API: the functions behind every operator and every CLI command.
 
 Arguments are plain Blender objects, actions, names and numbers; results are small

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Command line: ``blender [-b] [scene.blend] -c motion_patches <command> ...``.
 
 The handler :func:`main` is a plain function of ``argv`` (every argument after the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Properties the add-on stores: baked patches and planning settings in the .blend, each
 character's own goal, and the add-on preferences that hold an animator's defaults.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Actions <-> core arrays: reading an armature action into a Clip, writing keyed channels.
 
 Reading takes every key of the rotation and root location curves (keys may sit on

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Blender version differences in one place (4.5 LTS, 5.0; 5.2 handled here too).
 
 Since 4.4 actions are layered with slots; 5.0 removed ``Action.fcurves``. Everything

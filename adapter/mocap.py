@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Importing motion capture through Blender's bundled BVH importer.
 
 Every file becomes one action on a single armature (the first file's, or the one given),

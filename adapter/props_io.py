@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Tagged props -> core object patches.
 
 A tagged mesh object's footprint is the convex hull of its evaluated vertices in its own

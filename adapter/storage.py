@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """What the add-on keeps inside the .blend: baked patches (scene property group, base64
 payload), the plan record of each planned character and the figures of its last analysis
 (custom properties on the object). Every reader and writer of these goes through here.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Writing a plan as one transaction: what can fail is checked before the first change, and
 what writing changed is put back as it was when it fails anyway.
 

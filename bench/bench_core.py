@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Benchmark of the pure-numpy core: bake, plan through random pillar fields, placement.
 
 Prints numbers, asserts nothing about timing. Run from the repository root:

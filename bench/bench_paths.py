@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Benchmark of path quality: detours, straight lines, glitches, failures, starts and stops.
 
 Prints numbers next to their targets, asserts nothing. Run from the repository root:

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Speed benchmark of the core: plans in milliseconds, the paper's Table 1, peers side by side.
 
 Prints numbers next to their targets, asserts nothing. Run from the repository root:

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Gait cycles: detecting them in a clip and cutting one into a seamless loop.
 
 A cycle runs from one left-foot strike to the next. The loop keeps the body relative to a

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Footprints: what a mesh covers on the ground, as the convex polygons the planner needs.
 
 The environment tests points and cells against *convex* polygons (:mod:`.environment`). A

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Object patches: props that carry their own animation (paper Sec. 4).
 
 A prop has a footprint (convex polygon in its own ground coordinates) and clips given

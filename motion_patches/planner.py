@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Segment-level path planning across tiles (paper Sec. 4.2, Eq. 5, 7, 8).
 
 Nodes are tile entry states packed into one integer: tile (i, j) and the local entry id

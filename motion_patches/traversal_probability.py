@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Accessibility psi (Eq. 2), density rho and traversal probability tau (Eq. 3).
 
 psi is precomputed once per kind of prop: the prop is placed at sampled spots of one

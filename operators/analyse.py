@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Measure the active character's evaluated motion; the API keeps the figures on it for
 the Analysis panel."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Bake a locomotion patch from the scene's chosen clips, and edit the list of turn clips."""
 
 import bpy

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Baked patches to and from files: bake once on the farm, use the patch in every shot."""
 
 import bpy

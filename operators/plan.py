@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Plan one character (the active armature) or a crowd (every selected armature), and
 reset the scene's planning settings to the animator's defaults from the preferences."""
 

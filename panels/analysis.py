@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Analysis panel: the Analyse button and the last figures measured on the active
 character (stored on it by the operator), in the numbers an animator checks."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Viewport overlay: what the planner sees, drawn with the ``gpu`` module when enabled.
 
 Tile grid and occluded cells around each planned path, the path coloured by piece kind

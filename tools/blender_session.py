@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Start bpy with throw-away user folders and this working tree enabled as an extension.
 
 Used by the demo and other scripts run outside Blender's UI, so they exercise the add-on

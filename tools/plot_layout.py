@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Top-down picture of a planned layout as a PNG, with numpy, zlib and struct only.
 
     .venv/blender-4.5/bin/python tools/plot_layout.py [--output docs/plan.png]

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Shared set-up for the tests that run inside Blender (bpy from PyPI).
 
 Why this file exists: bpy reads its user directories once, at import, and an add-on shipped as an

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The ``blender -c motion_patches ...`` command: its handler called with argv, as Blender does.
 
 There is no Blender binary here, so the handler registered with

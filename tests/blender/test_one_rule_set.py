@@ -214,3 +214,42 @@ def test_an_imported_patch_is_the_active_one_through_every_door(scene, mp, cli,
                      "--save", str(out)]) == 0
     bpy.ops.wm.open_mainfile(filepath=str(out))
     assert mp.api.active_patch_name(bpy.context.scene) == "by cli"
+
+
+def test_file_import_offers_mocap_and_patch_files_and_both_import(scene, mp, mocap_dir,
+                                                                  tmp_path):
+    """File > Import lists both entries (drawn into a recording layout), each an operator
+    that exists; run in background mode they import a CMU BVH and a patch file."""
+    menu = bpy.types.TOPBAR_MT_file_import
+    assert mp.panels.file_import.draw_entries in menu._dyn_ui_initialize()
+    drawn = []
+    layout = type("Layout", (), {"operator": lambda self, idname, text="": drawn.append(
+        (idname, text))})()
+    mp.panels.file_import.draw_entries(type("Menu", (), {"layout": layout})(), bpy.context)
+    assert [t for _, t in drawn] == ["Motion Patches Mocap (.bvh)",
+                                     "Motion Patches Patch (.mpatch)"]
+    for idname, _ in drawn:
+        module, name = idname.split(".")
+        getattr(getattr(bpy.ops, module), name).get_rna_type()  # raises when it does not exist
+
+    before = set(bpy.data.objects)
+    bvh = mocap_dir / "cmu" / "16_06.bvh"
+    assert bpy.ops.motion_patches.import_mocap(filepath=str(bvh)) == {'FINISHED'}
+    (arm,) = set(bpy.data.objects) - before
+    assert arm.type == "ARMATURE" and scene.motion_patches.source_armature == arm
+    assert arm.animation_data.action.name == "16_06"
+
+    patch_file = tmp_path / "walk.mpatch"
+    mp.api.export_patch(scene, patch_file)
+    assert bpy.ops.motion_patches.import_patch(filepath=str(patch_file)) == {'FINISHED'}
+    assert mp.api.active_patch_name(scene) == "walk"
+    with pytest.raises(RuntimeError, match="patch file not found"):
+        bpy.ops.motion_patches.import_patch(filepath=str(tmp_path / "missing.mpatch"))
+
+
+def test_list_buttons_stay_out_of_f3_search(mp):
+    """The + / - buttons beside the add-on's lists are INTERNAL, as Blender's own are."""
+    buttons = [c for c in mp.operators.classes
+               if c.bl_idname.endswith(("_add", "_remove"))]
+    assert len(buttons) == 4  # turn clips and a prop's clips, add and remove each
+    assert all('INTERNAL' in c.bl_options for c in buttons)

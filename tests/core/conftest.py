@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Fixtures for the pure-numpy core: real CMU clips read without Blender."""
 
 import os

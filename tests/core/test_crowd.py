@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Crowds: characters planned one by one are kept apart by waiting at their start."""
 
 import numpy as np

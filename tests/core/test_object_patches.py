@@ -1,10 +1,11 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 import numpy as np
 import pytest
 
 from motion_patches import object_patch as op
 from motion_patches.environment import Environment, Obstacle
 from motion_patches.motion import concatenate
-from motion_patches.planner import PlanError, SegmentPlanner, plan_motions
+from motion_patches.planner import SegmentPlanner, plan_motions
 
 from conftest import cmu
 

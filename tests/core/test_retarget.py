@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Bone maps and retargeting (issue 15, item 2), compact keys and scene-rate timing (items
 4 and 6), on real CMU skeletons read without Blender."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """A straight walk alone bakes a patch that plans (issue 15, item 3; paper Sec. 6): space-
 curve following bends the straight stride into turns, up to the documented default radius
 ``gait.STRAIGHT_BEND_RADIUS``, and a bake too sparse to connect is refused."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The GUI suite: the extension in a real, windowed Blender, used as an animator would.
 
 Run by ``./dev gui`` inside the GUI root (tools/gui/gui-root), with Xvfb and Mesa's software
