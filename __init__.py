@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Dynamic Motion Patches: tilable locomotion patches, object patches and path planning.
 
 The extension entry point only registers classes; all logic lives in the pure-numpy

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Python API: the functions behind every operator and every CLI command.
 
 Arguments are plain Blender objects, actions, names and numbers; results are small
@@ -5,34 +6,51 @@ dataclasses. Every failure is a :class:`MotionPatchesError` with a message meant
 user, raised before the scene is changed.
 """
 
-import base64
 import contextlib
-import io
-import json
+import functools
+import inspect
 import math
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import bpy
 import numpy as np
 
 from .adapter import actions as act_io
-from .adapter import evaluate, mocap, nla, props_io, scene as scene_io, storage
-from .adapter import compat
+from .adapter import compat, evaluate, mocap, nla, props_io, storage, transaction
 from .adapter import moving as moving_io
 from .adapter import rig as rig_io
-from .adapter import transaction
-from .motion_patches import (blocking, body_clearance, causes, contacts, crowd, foot_lock,
-                             layout_spec, metrics, moving_props, object_patch, validate)
-from .motion_patches import scene_rate
+from .adapter import scene as scene_io
+from .motion_patches import (
+    blocking,
+    body_clearance,
+    causes,
+    contacts,
+    crowd,
+    foot_lock,
+    layout_spec,
+    metrics,
+    moving_props,
+    object_patch,
+    scene_rate,
+    validate,
+)
+from .motion_patches.defaults import GOAL_FACING, STITCHING
+from .motion_patches.defaults import PLANNING as DEFAULTS
 from .motion_patches.environment import Obstacle
 from .motion_patches.gait import MIN_TURN, build_gait
 from .motion_patches.locomotion_patch import bake
 from .motion_patches.motion import concatenate
-from .motion_patches.planner import (PlanError, SegmentPlanner, interaction_states,
-                                     plan_motions, with_interactions)
+from .motion_patches.planner import (
+    PlanError,
+    SegmentPlanner,
+    interaction_states,
+    plan_motions,
+    with_interactions,
+)
 
-PLAN_KEY = "motion_patches_plan"
+PLAN_KEY = storage.PLAN_KEY  # the custom property holding a character's plan record
 CROWD_SPOT = "\x00crowd spot "  # obstacle names of other characters' standing spots
 CROWD_GHOST = "\x00crowd ghost "  # where another character walks when two would meet
 
@@ -59,6 +77,10 @@ class BakeResult:
     stats: dict
     seconds: float
     notes: list
+    armature: str = ""                              # the armature the clips play on
+    straight: str = ""                              # action names baked
+    turns: list = field(default_factory=list)
+    imported: list = field(default_factory=list)    # actions imported from BVH files
 
 
 @dataclass
@@ -99,15 +121,96 @@ def import_mocap(paths, scale=mocap.CMU_SCALE, armature=None, name=None):
         raise MotionPatchesError(str(exc)) from None
 
 
-def bake_locomotion_patch(scene, armature, straight, turns=(), layer="walk", name=None,
-                          cells=8, nodes=8, effort_rate=1.0, mirror_turns=True, progress=None):
+def bake_locomotion_patch(scene: "bpy.types.Scene", armature, straight, turns=(),
+                          layer: str = "walk", name: str | None = None, cells: int = 8,
+                          nodes: int = 8, effort_rate: float = 1.0, mirror_turns: bool = True,
+                          progress=None, bvh_files=(), fps: float | None = None) -> BakeResult:
     """Bake and store a locomotion patch from a straight action and turn actions (none
-    needed: the straight stride is bent to turns, see ``gait.STRAIGHT_BEND_RADIUS``).
-    A patch too sparse to connect is refused, saying what to add."""
-    if armature is None or armature.type != "ARMATURE":
-        raise MotionPatchesError("choose the armature the clips were imported on")
+    needed: the straight stride is bent to turns, see ``gait.STRAIGHT_BEND_RADIUS``), make
+    it the active patch and remember its clips in the scene's bake settings (what the
+    Locomotion Patches panel shows). A patch too sparse to connect is refused, saying what
+    to add.
+
+    ``bvh_files``: BVH files imported first, onto ``armature`` (an armature object, or the
+    name of a new one); ``straight`` and ``turns`` are actions or action names, a name
+    matching an imported file's stem meaning that file's action. ``fps`` sets the scene's
+    frame rate first (the patch is baked at the scene rate). Everything is checked before
+    the first change; when the bake fails anyway, the objects, armatures and actions it
+    made and the frame rate are put back."""
+    if fps is not None and not (isinstance(fps, (int, float)) and 1 <= fps <= 1000):
+        raise MotionPatchesError(f"the frame rate must be between 1 and 1000, not {fps}")
+    if not str(layer).strip():
+        raise MotionPatchesError("the layer (gait name) must not be empty")
+    for what, v in (("cells", cells), ("nodes per edge", nodes)):
+        if not (isinstance(v, int) and 2 <= v <= 8):
+            raise MotionPatchesError(f"{what} must be a whole number from 2 to 8, not {v!r}")
+    files = [Path(f).expanduser() for f in bvh_files]
+    armature = _bake_armature(scene, armature, bool(files))
+    stems = {f.stem for f in files}
+    for f in files:
+        if not f.is_file():
+            raise MotionPatchesError(f"BVH file not found: {f}")
     if straight is None:
         raise MotionPatchesError("choose a straight locomotion action")
+    if any(t is None for t in turns):
+        raise MotionPatchesError("a turn clip has no action: choose one or remove the row")
+    for clip in (straight, *turns):
+        if isinstance(clip, str) and clip not in stems and bpy.data.actions.get(clip) is None:
+            raise MotionPatchesError(
+                f"no action named '{clip}' (have: {_some_names(bpy.data.actions)}"
+                + (f"; imported files give: {', '.join(sorted(stems))}" if stems else "") + ")")
+    with transaction.made_undone_on_error(bpy, scene):
+        if fps is not None:
+            scene.render.fps, scene.render.fps_base = int(fps), 1.0
+        imported = {}
+        if files:
+            armature, acts = import_mocap(files, armature=None if isinstance(armature, str)
+                                          else armature,
+                                          name=armature if isinstance(armature, str) else None)
+            imported = {f.stem: a for f, a in zip(files, acts)}
+        straight = _bake_action(straight, imported)
+        turns = [_bake_action(t, imported) for t in turns]
+        res = _bake(scene, armature, straight, turns, layer, name, cells, nodes, effort_rate,
+                    mirror_turns, progress)
+    s = scene.motion_patches  # the clips this patch came from, as the panel shows them
+    s.source_armature = armature
+    s.straight_action = straight
+    s.turn_actions.clear()
+    for t in turns:
+        s.turn_actions.add().action = t
+    storage.make_active(scene, res.name)
+    res.armature, res.straight, res.turns = armature.name, straight.name, [t.name for t in turns]
+    res.imported = [a.name for a in imported.values()]
+    return res
+
+
+def _bake_armature(scene, armature, importing):
+    """The armature to bake on: an object, or a name (of one in the scene; with BVH files
+    to import, a name no object has becomes the new armature's)."""
+    if isinstance(armature, str):
+        ob = scene.objects.get(armature)
+        if ob is None and importing:
+            return armature
+        if ob is None:
+            raise MotionPatchesError(
+                f"no armature object named '{armature}' for the clips (have: "
+                f"{_some_names([o for o in scene.objects if o.type == 'ARMATURE'])})")
+        armature = ob
+    if armature is None or armature.type != "ARMATURE":
+        raise MotionPatchesError("choose the armature the clips were imported on"
+                                 + (f" ('{armature.name}' is a {armature.type.lower()})"
+                                    if armature is not None else ""))
+    return armature
+
+
+def _bake_action(clip, imported):
+    if not isinstance(clip, str):
+        return clip
+    return imported.get(clip) or bpy.data.actions[clip]
+
+
+def _bake(scene, armature, straight, turns, layer, name, cells, nodes, effort_rate,
+          mirror_turns, progress):
     t0 = time.perf_counter()
     fps = scene_fps(scene)
     bones = {b.name for b in armature.data.bones}
@@ -182,24 +285,41 @@ def tag_object_patch(obj, clips, patch_name=None, scene=None, context=None):
     return obj
 
 
-def export_patch(scene, path, patch_name=None):
-    """Write a baked patch (the active one by default) to a file another scene can import."""
+def active_patch_name(scene: "bpy.types.Scene") -> str | None:
+    """The patch planning uses when none is named (None: no patch is baked)."""
+    return storage.active_name(scene)
+
+
+def export_patch(scene: "bpy.types.Scene", path, patch_name: str | None = None) -> str:
+    """Write a baked patch (the active one by default) to a file another scene can import;
+    returns the name of the patch written."""
+    path = Path(path).expanduser()
+    if not path.parent.is_dir():
+        raise MotionPatchesError(f"cannot write {path}: folder {path.parent} does not exist")
     try:
-        storage.export_patch(scene, patch_name, path)
+        name = patch_name or storage.active_name(scene)
+        storage.export_patch(scene, name, path)
     except ValueError as exc:
         raise MotionPatchesError(str(exc)) from None
     except OSError as exc:
         raise MotionPatchesError(f"cannot write {path}: {exc.strerror or exc}") from None
+    return name
 
 
-def import_patch(scene, path, name=None):
-    """Store a patch file written by :func:`export_patch` in ``scene``; returns its name."""
+def import_patch(scene: "bpy.types.Scene", path, name: str | None = None) -> str:
+    """Store a patch file written by :func:`export_patch` in ``scene`` and make it the
+    active patch (the one planning uses next); returns its name."""
+    path = Path(path).expanduser()
+    if not path.is_file():
+        raise MotionPatchesError(f"patch file not found: {path}")
     try:
-        return storage.import_patch(scene, path, name).name
+        stored = storage.import_patch(scene, path, name).name
     except OSError as exc:
         raise MotionPatchesError(f"cannot read {path}: {exc.strerror or exc}") from None
     except ValueError as exc:
         raise MotionPatchesError(f"{path}: {exc}") from None
+    storage.make_active(scene, stored)
+    return stored
 
 
 def object_patches(scene, depsgraph, patch, scale=1.0):
@@ -217,22 +337,17 @@ def object_patches(scene, depsgraph, patch, scale=1.0):
     return out
 
 
-def _plan_store(obj, data):
-    buf = io.BytesIO()
-    np.savez_compressed(buf, **{k: v for k, v in data.items() if isinstance(v, np.ndarray)})
-    meta = {k: v for k, v in data.items() if not isinstance(v, np.ndarray)}
-    obj[PLAN_KEY] = json.dumps({"meta": meta, "arrays": base64.b64encode(buf.getvalue()).decode()})
-
-
-def load_plan_record(obj):
+def load_plan_record(obj: "bpy.types.Object") -> tuple[dict, dict]:
     """The last plan written on ``obj`` (meta dict, arrays dict)."""
-    raw = obj.get(PLAN_KEY)
-    if raw is None:
-        raise MotionPatchesError(f"'{obj.name}' has no planned motion; plan a path first")
-    d = json.loads(raw)
-    with np.load(io.BytesIO(base64.b64decode(d["arrays"]))) as z:
-        arrays = {k: z[k] for k in z.files}
-    return d["meta"], arrays
+    try:
+        return storage.load_plan(obj)
+    except ValueError as exc:
+        raise MotionPatchesError(str(exc)) from None
+
+
+def last_analysis(obj: "bpy.types.Object | None") -> dict | None:
+    """The figures :func:`analyse` kept on ``obj`` last time, or None."""
+    return storage.last_analysis(obj)
 
 
 def state_dict(state, name=None):
@@ -494,6 +609,48 @@ def _check_weights(alpha, beta, gamma, radius, where=""):
                                  f"{MAX_RADIUS:g}, not {radius!r}")
 
 
+def planning_settings(scene: "bpy.types.Scene", **given) -> dict:
+    """The planning settings of a request (the keys of :data:`motion_patches.defaults.PLANNING`):
+    each one given (not None) as given, the others the scene's (its Planning panel, which
+    starts from those defaults). All are checked: :class:`MotionPatchesError` names a bad one."""
+    s = scene.motion_patches
+    out = {}
+    for key in DEFAULTS:
+        v = given.pop(key, None)
+        if v is None:
+            v = getattr(s, key)
+        out[key] = v.lower() if key in ("stitching", "goal_facing") and isinstance(v, str) else v
+    if given:
+        raise TypeError(f"not planning settings: {', '.join(sorted(given))}")
+    _check_weights(out["alpha"], out["beta"], out["gamma"], out["radius"])
+    for key in ("alpha", "beta", "gamma", "radius"):
+        out[key] = float(out[key])
+    for key, allowed in (("stitching", STITCHING), ("goal_facing", GOAL_FACING)):
+        if out[key] not in allowed:
+            raise MotionPatchesError(f"{key.replace('_', ' ')} must be "
+                                     f"{' or '.join(repr(a) for a in allowed)}, not {out[key]!r}")
+    if out["foot_lock"] not in (True, False):
+        raise MotionPatchesError(f"foot lock must be True or False, not {out['foot_lock']!r}")
+    out["foot_lock"] = bool(out["foot_lock"])
+    return out
+
+
+def _fills_planning_settings(fn):
+    """``fn`` with every planning setting its caller left None (or out) filled from the
+    scene's and checked (:func:`planning_settings`): one rule for the operators, the CLI
+    and scripts."""
+    sig = inspect.signature(fn)
+
+    @functools.wraps(fn)
+    def run(*args, **kwargs):
+        bound = sig.bind(*args, **kwargs)
+        bound.apply_defaults()
+        a = bound.arguments
+        a.update(planning_settings(a["scene"], **{k: a[k] for k in DEFAULTS}))
+        return fn(*bound.args, **bound.kwargs)
+    return run
+
+
 def _check_far(start, goal, who, scale=1.0):
     """Refuse a start or goal farther from the origin than ``MAX_COORDINATE`` or start and
     goal farther apart than ``MAX_DISTANCE`` (planner-world states of a character ``scale``
@@ -560,7 +717,7 @@ def _fit_frame_range(scene):
     if not getattr(scene.motion_patches, "fit_frame_range", True):
         return
     plans = [(m["frame_start"], m["frame_end"]) for m in
-             (json.loads(ob[PLAN_KEY])["meta"] for ob in scene.objects if PLAN_KEY in ob)]
+             (storage.plan_meta(ob) for ob in scene.objects if storage.has_plan(ob))]
     if plans:
         ours = scene.get(FRAME_RANGE_KEY)
         start, end = fitted_frame_range((scene.frame_start, scene.frame_end), plans,
@@ -589,7 +746,7 @@ def _write(scene, character, patch, patch_name, plan, placed, frame_start, env, 
     if abs(scene_fps(scene) - patch.gait.fps) > 1e-3:
         plan.stats["frame_rate"] = (f"patch baked at {patch.gait.fps:g} fps, played at the "
                                     f"scene's {scene_fps(scene):g} fps (strips scaled)")
-    _plan_store(character, {
+    storage.store_plan(character, {
         "ground": world.ground, "root": wm[:, skel.root, :3, 3], "contacts": world.contacts,
         "foot_names": [skel.names[i] for i in foot], "root_name": skel.names[skel.root],
         "frame_start": frame_start, "frame_end": frame_end, "goal": goal_state.tolist(),
@@ -627,10 +784,15 @@ def _avoid_moving(planner, patch, plan, tracks, character, frame_start, fps):
     return plan, wait
 
 
-def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2,
-              radius=0.25, frame_start=None, context=None, stitching="dynamic", start_prop=None,
-              foot_lock=True, goal_facing="exact"):
-    """Plan ``character`` to ``goal`` (an object or (x, y, heading)) and write it as NLA.
+@_fills_planning_settings
+def plan_path(scene: "bpy.types.Scene", character: "bpy.types.Object", goal,
+              patch_name: str | None = None, alpha: float | None = None,
+              beta: float | None = None, gamma: float | None = None,
+              radius: float | None = None, frame_start: int | None = None, context=None,
+              stitching: str | None = None, start_prop: "bpy.types.Object | None" = None,
+              foot_lock: bool | None = None, goal_facing: str | None = None) -> PlanResult:
+    """Plan ``character`` to ``goal`` (an object or (x, y, heading); None: the scene's goal)
+    and write it as NLA. Settings left None are the scene's (:func:`planning_settings`).
 
     Tagged props (object patches) offer their traversal clips; ``stitching`` is
     "dynamic" (lazy, the paper's method) or "static" (everything stitched first). A goal
@@ -641,7 +803,6 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
     facing whichever way is cheapest (the goal object's facing is then ignored). Raises
     :class:`PathNotFound` when the props leave no way, and
     :class:`MotionPatchesError` for bad input; either way the scene is unchanged."""
-    _check_weights(alpha, beta, gamma, radius)
     patch = _patch_for_planning(scene, patch_name)
     context = context or bpy.context
     # Objects moved by a script have stale matrix_world until the view layer updates.
@@ -649,7 +810,10 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
     rig = _check_character(character, patch)
     scale = _size(rig)
     if goal is None:
-        raise MotionPatchesError("choose a goal object (its location and facing)")
+        goal = scene.motion_patches.goal
+    if goal is None:
+        raise MotionPatchesError("no goal: choose a goal object (its location and facing) "
+                                 "or set the scene's goal")
     if goal == character:
         raise MotionPatchesError("the goal cannot be the character itself")
     frame_start = _frame_start(scene, frame_start)
@@ -686,9 +850,47 @@ def plan_path(scene, character, goal, patch_name=None, alpha=1.0, beta=0.5, gamm
                       radius, foot_lock, rig)
 
 
-def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, radius=0.25,
-               frame_start=None, context=None, stitching="dynamic", progress=None,
-               max_wait_seconds=4.0, spacing=None, foot_lock=True, goal_facing="exact"):
+def crowd_members(scene: "bpy.types.Scene", characters=None) -> list[tuple]:
+    """Who is in a crowd and where each walks: [(armature, goal object)] by name, what
+    :func:`plan_crowd` takes. The one rule for the operator, the CLI and scripts.
+
+    ``characters``: the objects chosen (the selection, the CLI's --character); the
+    armatures among them are the crowd (a selected body mesh is no character). None:
+    every armature of the scene that has its own goal. Each walks to its own goal, else to
+    the scene's; a character with neither, or whose goal is itself, is refused by name,
+    and so is a choice with no armature in it."""
+    scene_goal = scene.motion_patches.goal
+    if characters is None:
+        chosen = [ob for ob in scene.objects
+                  if ob.type == "ARMATURE" and ob.motion_patches_character.goal is not None]
+        if not chosen:
+            raise MotionPatchesError("no crowd: no armature in the scene has its own goal; "
+                                     "choose the characters, or give each its own goal")
+    else:
+        chosen = [ob for ob in characters if ob is not None and ob.type == "ARMATURE"]
+        if not chosen:
+            raise MotionPatchesError("no crowd: none of the chosen objects is an armature")
+    pairs = []
+    for ob in sorted({ob.name: ob for ob in chosen}.values(), key=lambda o: o.name):
+        if scene.objects.get(ob.name) != ob:
+            raise MotionPatchesError(f"'{ob.name}' is not in the scene '{scene.name}'")
+        goal = ob.motion_patches_character.goal or scene_goal
+        if goal is None:
+            raise MotionPatchesError(f"'{ob.name}' has no goal: give it its own goal or set "
+                                     f"the scene's goal")
+        if goal == ob:
+            raise MotionPatchesError(f"the goal of '{ob.name}' is the character itself")
+        pairs.append((ob, goal))
+    return pairs
+
+
+@_fills_planning_settings
+def plan_crowd(scene: "bpy.types.Scene", pairs, patch_name: str | None = None,
+               alpha: float | None = None, beta: float | None = None,
+               gamma: float | None = None, radius: float | None = None,
+               frame_start: int | None = None, context=None, stitching: str | None = None,
+               progress=None, max_wait_seconds: float = 4.0, spacing: float | None = None,
+               foot_lock: bool | None = None, goal_facing: str | None = None) -> CrowdResult:
     """Plan several characters and write each one's NLA; ``pairs`` = [(armature, goal)] or
     [(armature, goal, options)], a goal being an object or (x, y, heading); ``options``:
     {"start_prop": a tagged prop with a stand-up clip to start seated on, "priority":
@@ -909,8 +1111,17 @@ def plan_crowd(scene, pairs, patch_name=None, alpha=1.0, beta=0.5, gamma=0.2, ra
         [names[k] for k in ranked])
 
 
-def analyse(context, character):
-    """Figures of the evaluated (depsgraph) motion against the last plan on ``character``."""
+def analyse(context: "bpy.types.Context", character: "bpy.types.Object",
+            keep: bool = False) -> dict:
+    """Figures of the evaluated (depsgraph) motion against the last plan on ``character``;
+    ``keep`` stores them on it (:func:`last_analysis`, the Analysis panel)."""
+    figures = _analyse(context, character)
+    if keep:
+        storage.store_analysis(character, figures)
+    return figures
+
+
+def _analyse(context, character):
     meta, arrays = load_plan_record(character)
     frames = np.arange(meta["frame_start"], meta["frame_end"] + 1)
     bones = [meta["root_name"]] + list(meta["foot_names"])
@@ -922,10 +1133,7 @@ def analyse(context, character):
     planned_root = arrays["root"]
     root_err = np.linalg.norm(root[:, :2] - planned_root[:, :2], axis=1)
     path_err = metrics.distance_to_polyline(ground[:, :2], arrays["ground"][:, :2])
-    from .motion_patches.environment import Environment, Obstacle
-    env = Environment(1.0, 8, 0.0)
-    for name, poly in meta["obstacles"].items():
-        env.place(Obstacle(name, np.array(poly)))
+    env = storage.plan_environment(meta)
     inside_mask = env.blocked(root[:, :2]) if meta["obstacles"] else np.zeros(frames.size, bool)
     during = np.zeros(frames.size, bool)
     for a, b in meta.get("traversals", []) + meta.get("interactions", []):
@@ -950,27 +1158,58 @@ def analyse(context, character):
     }
 
 
-def _resolve(place, what, patch):
-    """(state, object or None) for an object name or [x, y, heading_deg]; a start that is
-    an armature starts where its own skeleton stands (it may be retargeted)."""
+def _resolve(scene, place, what, patch):
+    """(state, object or None) for the name of an object of ``scene`` or [x, y,
+    heading_deg]; a start that is an armature starts where its own skeleton stands (it may
+    be retargeted)."""
     if what == "exclude":
-        ob = bpy.data.objects.get(place)
+        ob = scene.objects.get(place)
         if ob is None:
             raise MotionPatchesError(f"layout spec: no object named '{place}' to exclude")
         return None, ob
     if not isinstance(place, str):
         return np.array([place[0], place[1], math.radians(place[2])]), None
-    ob = bpy.data.objects.get(place)
+    ob = scene.objects.get(place)
     if ob is None:
         raise MotionPatchesError(f"layout spec: no object named '{place}' for a {what} "
-                                 f"(have: {_some_names(bpy.data.objects)})")
+                                 f"(have: {_some_names(scene.objects)})")
     if what == "character" or (what == "start" and ob.type == "ARMATURE"):
         rig = _check_character(ob, patch)  # the rule plan_path applies to its character
         return scene_io.character_state(ob, rig.target if rig else patch.gait.skeleton), ob
     return scene_io.ground_state(ob), ob
 
 
-def check_layout(scene, spec, context=None):
+def planned_pairs(scene: "bpy.types.Scene", characters=(), goals=()) -> list[dict]:
+    """Layout-spec pairs (:func:`check_layout`) for ``characters``: each from the character
+    to the goal object at the same place in ``goals``, or (no goals) from where its stored
+    plan starts to the goal that plan reached. No characters: every armature of the scene
+    that has a plan."""
+    characters, goals = list(characters), list(goals)
+    if goals and len(goals) != len(characters):
+        raise MotionPatchesError(f"give one goal per character ({len(characters)} characters, "
+                                 f"{len(goals)} goals), or none to use each one's planned goal")
+    if not characters:
+        characters = [ob for ob in scene.objects if ob.type == "ARMATURE" and storage.has_plan(ob)]
+        if not characters:
+            raise MotionPatchesError("nothing to check: no pairs given and no character in the "
+                                     "scene has a planned path")
+    pairs = []
+    for n, ob in enumerate(characters):
+        if ob is None or ob.type != "ARMATURE":
+            raise MotionPatchesError("a character to check must be an armature")
+        if goals:
+            pairs.append({"name": ob.name, "character": ob.name, "goal": goals[n].name})
+            continue
+        meta, arrays = load_plan_record(ob)
+        g0, goal = arrays["ground"][0], meta["goal"]
+        pairs.append({"name": ob.name,
+                      "start": [float(g0[0]), float(g0[1]), math.degrees(g0[2])],
+                      "goal": [float(goal[0]), float(goal[1]), math.degrees(goal[2])],
+                      "exclude": [ob.name]})
+    return pairs
+
+
+def check_layout(scene: "bpy.types.Scene", spec: dict, context=None) -> list[dict]:
     """Plan every start/goal pair of a layout ``spec`` WITHOUT writing to the scene.
 
     Returns one dict per pair: reachable, seconds of motion, length, cost, the props
@@ -985,24 +1224,25 @@ def check_layout(scene, spec, context=None):
         patch = storage.load_patch(scene, spec["patch"])
     except ValueError as exc:
         raise MotionPatchesError(str(exc)) from None
-    s = scene.motion_patches
-    w = {k: float(getattr(s, k) if spec[k] is None else spec[k])
-         for k in ("alpha", "beta", "gamma", "radius")}
-    _check_weights(w["alpha"], w["beta"], w["gamma"], w["radius"], "layout spec: ")
+    try:
+        w = planning_settings(scene, **{k: spec[k] for k in ("alpha", "beta", "gamma", "radius")})
+    except MotionPatchesError as exc:
+        raise MotionPatchesError(f"layout spec: {exc}") from None
     margin = 3 if spec["margin_tiles"] is None else int(spec["margin_tiles"])
     # Evaluate first: it also brings the objects' world matrices up to date.
     depsgraph = (context or bpy.context).evaluated_depsgraph_get()
     jobs = []
     for p in spec["pairs"]:
-        start, sob = _resolve(p["start"], "character" if p.get("character") else "start", patch)
-        goal, gob = _resolve(p["goal"], "goal", patch)
+        start, sob = _resolve(scene, p["start"], "character" if p.get("character") else "start",
+                              patch)
+        goal, gob = _resolve(scene, p["goal"], "goal", patch)
         # A retargeted character plans in the world shrunk by its size (see _size).
         size = (_size(_check_character(sob, patch))
                 if sob is not None and sob.type == "ARMATURE" else 1.0)
         # Not obstacles: the start and goal objects with their children (a character's own
         # body mesh) and whatever the spec excludes.
         exclude = {}
-        for ob in [sob, gob] + [_resolve(n, "exclude", patch)[1]
+        for ob in [sob, gob] + [_resolve(scene, n, "exclude", patch)[1]
                                 for n in spec["exclude"] + p["exclude"]]:
             if ob is not None:
                 for o in (ob, *ob.children_recursive):

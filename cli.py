@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Command line: ``blender [-b] [scene.blend] -c motion_patches <command> ...``.
 
 The handler :func:`main` is a plain function of ``argv`` (every argument after the
@@ -26,7 +27,6 @@ import bpy
 import numpy as np
 
 from . import api
-from .adapter import storage
 
 COMMAND_ID = "motion_patches"
 PROG = "blender -c " + COMMAND_ID
@@ -225,27 +225,15 @@ def _names(coll, pred=lambda x: True, limit=8):
 
 
 def _object(name, what, types=None):
-    ob = bpy.data.objects.get(name)
+    """The object of the scene named ``name`` (a name is the CLI's way to point at one)."""
+    objects = bpy.context.scene.objects
+    ob = objects.get(name)
     if ob is None or (types and ob.type not in types):
         kind = " / ".join(t.lower() for t in types) + " object" if types else "object"
         found = "" if ob is None else f" ('{name}' is a {ob.type.lower()})"
         raise BadInput(f"no {kind} named '{name}' for the {what}{found} (have: "
-                       f"{_names(bpy.data.objects, lambda o: not types or o.type in types)})")
+                       f"{_names(objects, lambda o: not types or o.type in types)})")
     return ob
-
-
-def _action(name, imported=None):
-    act = (imported or {}).get(name) or bpy.data.actions.get(name)
-    if act is None:
-        raise BadInput(f"no action named '{name}' (have: {_names(bpy.data.actions)})")
-    return act
-
-
-def _load_patch(scene, name):
-    try:
-        return storage.load_patch(scene, name)
-    except ValueError as exc:
-        raise BadInput(str(exc)) from None
 
 
 def _open_blend(args):
@@ -288,112 +276,33 @@ def _save(path):
     return str(path)
 
 
-def _active_patch_name(scene):
-    """The patch used when none is named (as ``storage.load_patch``: active, else first)."""
-    s = scene.motion_patches
-    items = s.patches
-    i = s.active_patch_index
-    return items[i].name if 0 <= i < len(items) else items[0].name
-
-
-def _nonneg(value, flag):
-    if value is not None and (not math.isfinite(value) or value < 0):
-        raise BadInput(f"{flag} must be a number >= 0, not {value:g}")
-    return value
-
-
-def _weights(scene, args):
-    s = scene.motion_patches
-    out = {}
-    for key in ("alpha", "beta", "gamma", "radius"):
-        v = getattr(args, key, None)
-        out[key] = float(getattr(s, key) if v is None else _nonneg(v, "--" + key))
-    if out["radius"] <= 0:
-        raise BadInput("--radius must be > 0")
-    return out
+def _settings(args):
+    """The planning settings given as flags (None: not given, the scene's is used)."""
+    return {k: getattr(args, k, None) for k in api.DEFAULTS}
 
 
 # --- bake ------------------------------------------------------------------------------------
 
 
-class _Rollback:
-    """Remove the objects, armatures and actions made after it was taken; restore the rate."""
-
-    COLLECTIONS = ("objects", "armatures", "actions")
-
-    def __init__(self, scene):
-        self.scene = scene
-        self.before = {c: set(getattr(bpy.data, c)) for c in self.COLLECTIONS}
-        self.fps = (scene.render.fps, scene.render.fps_base)
-
-    def restore(self):
-        for c in self.COLLECTIONS:
-            coll = getattr(bpy.data, c)
-            for item in [x for x in coll if x not in self.before[c]]:
-                coll.remove(item)
-        self.scene.render.fps, self.scene.render.fps_base = self.fps
-
-
 def cmd_bake(args):
+    """Import (optionally), bake and remember the clips: all in api.bake_locomotion_patch,
+    which checks every argument first and undoes what it made when the bake fails."""
     scene = bpy.context.scene
-    files = [Path(p).expanduser() for p in args.import_bvh or ()]
-    for f in files:
-        if not f.is_file():
-            raise BadInput(f"BVH file not found: {f}")
-    arm = bpy.data.objects.get(args.armature)
-    if arm is None and not files:
-        _object(args.armature, "clips", {"ARMATURE"})  # raises with the names there are
-    if arm is not None and arm.type != "ARMATURE":
-        _object(args.armature, "clips", {"ARMATURE"})
-    stems = {f.stem for f in files}
-    for name in [args.straight] + list(args.turn or ()):
-        if name not in stems and bpy.data.actions.get(name) is None:
-            raise BadInput(f"no action named '{name}' (have: {_names(bpy.data.actions)}"
-                           + (f"; imported files give: {', '.join(sorted(stems))}" if stems else "")
-                           + ")")
-    if args.fps is not None and not 1 <= args.fps <= 1000:
-        raise BadInput(f"--fps must be between 1 and 1000, not {args.fps}")
-    if not args.layer.strip():
-        raise BadInput("--layer must not be empty")
     save = _save_target(args)
-
-    rollback = _Rollback(scene)
     progress = Progress("bake", enabled=not args.json)
     try:
-        if args.fps is not None:
-            scene.render.fps, scene.render.fps_base = int(args.fps), 1.0
-        imported = {}
-        if files:
-            arm, acts = api.import_mocap(files, armature=arm,
-                                         name=args.armature if arm is None else None)
-            imported = {f.stem: a for f, a in zip(files, acts)}
-        straight = _action(args.straight, imported)
-        turns = [_action(n, imported) for n in args.turn or ()]
-        try:
-            res = api.bake_locomotion_patch(scene, arm, straight, turns, layer=args.layer,
-                                            name=args.name, cells=args.cells, nodes=args.nodes,
-                                            progress=progress)
-        finally:
-            progress.close()
-    except api.MotionPatchesError as exc:
-        rollback.restore()
-        raise BadInput(str(exc)) from None
-    except BaseException:
-        rollback.restore()
-        raise
-    s = scene.motion_patches  # what the panel shows: the clips this patch came from
-    s.source_armature = arm
-    s.straight_action = straight
-    s.turn_actions.clear()
-    for t in turns:
-        s.turn_actions.add().action = t
-    s.active_patch_index = list(s.patches).index(s.patches[res.name])
+        res = api.bake_locomotion_patch(scene, args.armature, args.straight, args.turn or (),
+                                        layer=args.layer, name=args.name, cells=args.cells,
+                                        nodes=args.nodes, progress=progress,
+                                        bvh_files=args.import_bvh or (), fps=args.fps)
+    finally:
+        progress.close()
     saved = _save(save)
     st = res.stats
-    doc = {"patch": res.name, "layer": res.layer, "armature": arm.name,
-           "straight": straight.name, "turns": [t.name for t in turns],
-           "imported": [a.name for a in imported.values()], "fps": api.scene_fps(scene),
-           "seconds": res.seconds, "stats": st, "notes": res.notes, "saved": saved}
+    doc = {"patch": res.name, "layer": res.layer, "armature": res.armature,
+           "straight": res.straight, "turns": res.turns, "imported": res.imported,
+           "fps": api.scene_fps(scene), "seconds": res.seconds, "stats": st,
+           "notes": res.notes, "saved": saved}
     text = [f"baked '{res.name}' ({res.layer}) in {res.seconds:.1f} s: {st.get('kept')} "
             f"segments kept, {st.get('culled')} culled"]
     text += ["  " + n for n in res.notes]
@@ -406,18 +315,15 @@ def cmd_bake(args):
 
 
 def _goal_of(args, scene):
-    """(goal for api.plan_path, goal object or None) from --goal / --goal-xyh / the scene."""
+    """(goal for api.plan_path, goal object or None) from --goal / --goal-xyh; neither:
+    None, which api.plan_path reads as the scene's goal."""
     if args.goal:
         ob = _object(args.goal, "goal")
         return ob, ob
     if args.goal_xyh:
         x, y, h = args.goal_xyh
-        if not all(math.isfinite(v) for v in (x, y, h)):
-            raise BadInput("--goal-xyh needs finite numbers")
         return (x, y, math.radians(h)), None
-    if scene.motion_patches.goal is not None:
-        return scene.motion_patches.goal, scene.motion_patches.goal
-    raise BadInput("no goal: give --goal OBJECT or --goal-xyh X Y HEADING_DEG")
+    return None, scene.motion_patches.goal
 
 
 def _plan_doc(res, fps):
@@ -439,19 +345,18 @@ def cmd_plan(args):
     scene = bpy.context.scene
     char = _object(args.character, "character", {"ARMATURE"})
     goal, goal_obj = _goal_of(args, scene)
-    w = _weights(scene, args)
+    w = api.planning_settings(scene, **_settings(args))  # what is used: the flags over the scene's
     save = _save_target(args)
     try:
         res = api.plan_path(scene, char, goal, patch_name=args.patch, frame_start=args.frame_start,
-                            stitching=args.stitching, foot_lock=args.foot_lock,
-                            goal_facing=args.goal_facing, **w)
+                            **w)
     except api.PathNotFound as exc:
         raise Failed(str(exc)) from None
     fps = api.scene_fps(scene)
     saved = _save(save)
     doc = _plan_doc(res, fps)
     doc.update(goal=api.state_dict(res.goal, goal_obj and goal_obj.name),
-               patch=args.patch or _active_patch_name(scene), weights=w, saved=saved)
+               patch=args.patch or api.active_patch_name(scene), weights=w, saved=saved)
     text = [_plan_line(res, fps)]
     if res.stashed_action_track:
         text.append(f"  its active action was moved to the muted track "
@@ -465,33 +370,28 @@ def cmd_plan(args):
 
 
 def _crowd_pairs(args, scene):
+    """--pair CHARACTER GOAL as given; else the crowd the API makes of --character (or of
+    the scene, none given): api.crowd_members, the rule the Plan Crowd button follows."""
+    if args.pair and args.character:
+        raise BadInput("give either --pair or --character, not both")
     if args.pair:
         return [(_object(c, "character", {"ARMATURE"}), _object(g, "goal")) for c, g in args.pair]
-    pairs = []
-    for ob in sorted(scene.objects, key=lambda o: o.name):
-        goal = getattr(getattr(ob, "motion_patches_character", None), "goal", None)
-        if ob.type == "ARMATURE" and goal is not None:
-            pairs.append((ob, goal))
-    if not pairs:
-        raise BadInput("no crowd: give --pair CHARACTER GOAL (repeat), or set a goal on each "
-                       "character (Motion Patches panel)")
-    return pairs
+    if args.character:
+        return api.crowd_members(scene, [_object(c, "character", {"ARMATURE"})
+                                         for c in args.character])
+    return api.crowd_members(scene)
 
 
 def cmd_crowd(args):
     scene = bpy.context.scene
     pairs = _crowd_pairs(args, scene)
-    w = _weights(scene, args)
-    _nonneg(args.max_wait, "--max-wait")
-    _nonneg(args.spacing, "--spacing")
+    w = api.planning_settings(scene, **_settings(args))
     save = _save_target(args)
     progress = Progress("crowd", enabled=not args.json)
+    wait = {} if args.max_wait is None else {"max_wait_seconds": args.max_wait}
     try:
         res = api.plan_crowd(scene, pairs, patch_name=args.patch, frame_start=args.frame_start,
-                             stitching=args.stitching, foot_lock=args.foot_lock,
-                             goal_facing=args.goal_facing, progress=progress,
-                             max_wait_seconds=4.0 if args.max_wait is None else args.max_wait,
-                             spacing=args.spacing, **w)
+                             progress=progress, spacing=args.spacing, **wait, **w)
     finally:
         progress.close()
     fps = api.scene_fps(scene)
@@ -501,7 +401,7 @@ def cmd_crowd(args):
            "failed": [{"character": c, "error": e} for c, e in res.failed],
            "conflicts": res.conflicts, "delays_frames": res.delays, "rerouted": res.rerouted,
            "seconds": res.seconds,
-           "patch": args.patch or _active_patch_name(scene), "weights": w, "saved": saved}
+           "patch": args.patch or api.active_patch_name(scene), "weights": w, "saved": saved}
     text = [f"crowd: {len(res.plans)} of {len(pairs)} characters planned in "
             f"{res.seconds:.1f} s, {len(res.conflicts)} conflict(s)"]
     for p in res.plans:
@@ -524,23 +424,16 @@ def cmd_crowd(args):
 
 
 def cmd_export(args):
-    scene = bpy.context.scene
     out = Path(args.file).expanduser()
-    if not out.parent.is_dir():
-        raise BadInput(f"cannot write {out}: folder {out.parent} does not exist")
-    name = args.patch or _active_patch_name(scene) if len(scene.motion_patches.patches) else None
-    api.export_patch(scene, out, name)
+    name = api.export_patch(bpy.context.scene, out, args.patch)
     return Result({"patch": name, "file": str(out.resolve())}, OK,
                   [f"exported '{name}' to {out}"])
 
 
 def cmd_import(args):
-    scene = bpy.context.scene
     src = Path(args.file).expanduser()
-    if not src.is_file():
-        raise BadInput(f"patch file not found: {src}")
     save = _save_target(args)
-    name = api.import_patch(scene, src, args.name)
+    name = api.import_patch(bpy.context.scene, src, args.name)  # and makes it the active one
     saved = _save(save)
     text = [f"imported '{name}' from {src}"] + ([f"saved {saved}"] if saved else [])
     return Result({"patch": name, "file": str(src.resolve()), "saved": saved}, OK, text)
@@ -593,39 +486,9 @@ def _load_spec(path):
 
 
 def _planned_pairs(scene, characters, goals):
-    """Spec pairs from --character/--goal, or from the stored plans of characters."""
-    pairs = []
-    if goals and len(goals) != len(characters):
-        raise BadInput(f"give one --goal per --character ({len(characters)} characters, "
-                       f"{len(goals)} goals), or no --goal to use each character's planned goal")
-    if characters:
-        for n, name in enumerate(characters):
-            ob = _object(name, "character", {"ARMATURE"})
-            if goals:
-                _object(goals[n], "goal")
-                pairs.append({"name": name, "character": name, "goal": goals[n]})
-            else:
-                pairs.append(_stored_pair(ob))
-        return pairs
-    for ob in scene.objects:
-        if ob.type == "ARMATURE" and api.PLAN_KEY in ob:
-            pairs.append(_stored_pair(ob))
-    if not pairs:
-        raise BadInput("nothing to check: no --spec, no --character, and no character in the "
-                       "scene has a planned path")
-    return pairs
-
-
-def _stored_pair(ob):
-    try:
-        meta, arrays = api.load_plan_record(ob)
-    except api.MotionPatchesError as exc:
-        raise BadInput(str(exc)) from None
-    g0 = arrays["ground"][0]
-    goal = meta["goal"]
-    return {"name": ob.name, "start": [float(g0[0]), float(g0[1]), math.degrees(g0[2])],
-            "goal": [float(goal[0]), float(goal[1]), math.degrees(goal[2])],
-            "exclude": [ob.name]}
+    """Spec pairs from --character/--goal, or from the stored plans (api.planned_pairs)."""
+    return api.planned_pairs(scene, [_object(c, "character", {"ARMATURE"}) for c in characters],
+                             [_object(g, "goal") for g in goals])
 
 
 def cmd_check(args):
@@ -640,11 +503,10 @@ def cmd_check(args):
             spec["patch"] = args.patch
         for k in ("alpha", "beta", "gamma", "radius"):
             if getattr(args, k, None) is not None:
-                spec[k] = _nonneg(getattr(args, k), "--" + k)
+                spec[k] = getattr(args, k)
         for k in ("max_seconds", "max_length", "max_cost"):
             v = getattr(args, k)
             if v is not None:
-                _nonneg(v, "--" + k.replace("_", "-"))
                 spec["limits"] = dict(spec.get("limits") or {})
                 spec["limits"][k] = v
     try:
@@ -707,8 +569,10 @@ def build_parser():
                         "file, e.g. 16_15.bvh -> 16_15")
     b.add_argument("--fps", type=int,
                    help="set the scene frame rate first (the patch is baked at the scene rate)")
-    b.add_argument("--cells", type=int, default=8, choices=range(2, 9), metavar="2..8")
-    b.add_argument("--nodes", type=int, default=8, choices=range(2, 9), metavar="2..8")
+    b.add_argument("--cells", type=int, default=8, metavar="2..8",
+                   help="cells per side of the patch (default 8)")
+    b.add_argument("--nodes", type=int, default=8, metavar="2..8",
+                   help="entry/exit nodes per edge (default 8)")
     _save_options(b)
     b.set_defaults(run=cmd_bake)
 
@@ -768,8 +632,11 @@ def build_parser():
                                     "a character finds no path or a conflict remains (then "
                                     "nothing is saved).")
     cr.add_argument("--pair", nargs=2, action="append", metavar=("CHARACTER", "GOAL"),
-                    help="an armature and its goal object (repeat; the order is the priority); "
-                         "default: every armature with a goal set in its Motion Patches panel")
+                    help="an armature and its goal object (repeat; the order is the priority)")
+    cr.add_argument("--character", action="append", metavar="NAME",
+                    help="an armature of the crowd (repeat), walking to its own goal, else to "
+                         "the scene's (as Plan Crowd does with the selected armatures); "
+                         "neither --pair nor --character: every armature with its own goal")
     cr.add_argument("--patch", metavar="NAME", help="locomotion patch (default: the active one)")
     _weight_options(cr)
     _planning_options(cr)
@@ -804,20 +671,28 @@ def build_parser():
 
 def _weight_options(p):
     p.add_argument("--alpha", type=float, help="cost per metre (default: the scene's setting)")
-    p.add_argument("--beta", type=float, help="cost per radian turned")
-    p.add_argument("--gamma", type=float, help="cost per unit of effort")
-    p.add_argument("--radius", type=float, help="character radius in metres")
+    p.add_argument("--beta", type=float, help="cost per radian turned (default: the scene's)")
+    p.add_argument("--gamma", type=float, help="cost per unit of effort (default: the scene's)")
+    p.add_argument("--radius", type=float,
+                   help="character radius in metres (default: the scene's)")
 
 
 def _planning_options(p):
-    p.add_argument("--stitching", choices=("dynamic", "static"), default="dynamic",
+    """Flags over the scene's Planning settings; a setting not given is the scene's."""
+    p.add_argument("--stitching", choices=("dynamic", "static"),
                    help="stitch traversal clips lazily (dynamic, the paper's method) or all "
-                        "before the search (static, Lee 2006)")
-    p.add_argument("--no-foot-lock", dest="foot_lock", action="store_false",
+                        "before the search (static, Lee 2006); default: the scene's setting")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--foot-lock", dest="foot_lock", action="store_const", const=True,
+                   help="pin planted feet with leg IK (default: the scene's setting)")
+    g.add_argument("--no-foot-lock", dest="foot_lock", action="store_const", const=False,
                    help="leave planted feet as synthesised (no leg IK track)")
-    p.add_argument("--any-facing", dest="goal_facing", action="store_const", const="any",
-                   default="exact", help="end facing whichever way is cheapest (the goal's "
-                                         "own facing is ignored)")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--any-facing", dest="goal_facing", action="store_const", const="any",
+                   help="end facing whichever way is cheapest (the goal's own facing is "
+                        "ignored); default: the scene's Goal Facing")
+    g.add_argument("--exact-facing", dest="goal_facing", action="store_const", const="exact",
+                   help="end facing the goal's facing")
 
 
 def _save_options(p):

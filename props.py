@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Properties the add-on stores: baked patches and planning settings in the .blend, each
 character's own goal, and the add-on preferences that hold an animator's defaults.
 
@@ -8,33 +9,46 @@ read the preferences by themselves).
 """
 
 import bpy
-from bpy.props import (BoolProperty, CollectionProperty, EnumProperty, FloatProperty,
-                       IntProperty, PointerProperty, StringProperty)
+from bpy.props import (
+    BoolProperty,
+    CollectionProperty,
+    EnumProperty,
+    FloatProperty,
+    IntProperty,
+    PointerProperty,
+    StringProperty,
+)
+
+from .motion_patches.defaults import PLANNING as DEFAULTS
+
+# Called with the new value when Show Planner Overlay changes; the overlay (panels/overlay.py)
+# sets it while registered, so the properties need not know the UI.
+overlay_switch = None
 
 
 def _overlay_toggle(on):
-    from .panels import overlay
-    overlay.enable() if on else overlay.disable()
+    if overlay_switch is not None:
+        overlay_switch(on)
 
 
 PLANNING = {  # name -> factory of the bpy property (one fresh definition per class)
-    "alpha": lambda: FloatProperty(name="Distance (α)", default=1.0, min=0.0,
+    "alpha": lambda: FloatProperty(name="Distance (α)", default=DEFAULTS["alpha"], min=0.0,
                                    description="Cost per metre walked"),
-    "beta": lambda: FloatProperty(name="Turning (β)", default=0.5, min=0.0,
+    "beta": lambda: FloatProperty(name="Turning (β)", default=DEFAULTS["beta"], min=0.0,
                                   description="Cost per radian turned"),
-    "gamma": lambda: FloatProperty(name="Effort (γ)", default=0.2, min=0.0,
+    "gamma": lambda: FloatProperty(name="Effort (γ)", default=DEFAULTS["gamma"], min=0.0,
                                    description="Cost per unit of effort (jumping a prop costs "
                                                "its clip's effort)"),
-    "radius": lambda: FloatProperty(name="Character Radius", default=0.25, min=0.05, max=2.0,
+    "radius": lambda: FloatProperty(name="Character Radius", default=DEFAULTS["radius"], min=0.05, max=2.0,
                                     unit='LENGTH',
                                     description="Clearance kept between the root and props"),
-    "stitching": lambda: EnumProperty(name="Stitching", default='DYNAMIC', items=(
+    "stitching": lambda: EnumProperty(name="Stitching", default=DEFAULTS["stitching"].upper(), items=(
         ('DYNAMIC', "Dynamic", "Stitch traversal clips lazily, when the search needs them"),
         ('STATIC', "Static", "Stitch every traversal clip before searching (Lee 2006 baseline)"))),
-    "goal_facing": lambda: EnumProperty(name="Goal Facing", default='EXACT', items=(
+    "goal_facing": lambda: EnumProperty(name="Goal Facing", default=DEFAULTS["goal_facing"].upper(), items=(
         ('EXACT', "Exact", "Arrive facing the goal object's facing (its -Y axis)"),
         ('ANY', "Any", "Arrive facing whichever way is cheapest (e.g. a goal in a dead end)"))),
-    "foot_lock": lambda: BoolProperty(name="Lock Planted Feet", default=True,
+    "foot_lock": lambda: BoolProperty(name="Lock Planted Feet", default=DEFAULTS["foot_lock"],
                                       description="Pin each planted foot with leg IK (a Combine "
                                                   "track over the walk) so it does not slide"),
     "fit_frame_range": lambda: BoolProperty(
@@ -72,8 +86,6 @@ class MOTION_PATCHES_PG_patch_clip(bpy.types.PropertyGroup):
         ('INTERACTION', "Interaction", "Starts or ends a path at the prop (sit, stand)")))
     effort: FloatProperty(name="Effort (T)", default=8.0, min=0.0,
                           description="Effort of the whole clip, in walking seconds")
-    layer_in: StringProperty(name="Layer In", default="walk")
-    layer_out: StringProperty(name="Layer Out", default="walk")
     copy_step: FloatProperty(name="Copies Every (°)", default=10.0, min=0.0, max=180.0,
                              description="Copy the clip around the prop every so many "
                                          "degrees (0: no copies)")
@@ -97,8 +109,9 @@ class MOTION_PATCHES_PG_bone_pair(bpy.types.PropertyGroup):
 
 class MOTION_PATCHES_PG_character(bpy.types.PropertyGroup):
     goal: PointerProperty(type=bpy.types.Object, name="Own Goal",
-                          description="Where this character walks to when a crowd is planned "
-                                      "(empty: the scene's goal)")
+                          description="Where this character walks when it is planned in a "
+                                      "crowd (empty: the scene's goal; a character with "
+                                      "neither is refused, named)")
 
 
 class MOTION_PATCHES_PG_rig(bpy.types.PropertyGroup):

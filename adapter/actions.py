@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Actions <-> core arrays: reading an armature action into a Clip, writing keyed channels.
 
 Reading takes every key of the rotation and root location curves (keys may sit on
@@ -15,7 +16,8 @@ import re
 
 import numpy as np
 
-from ..motion_patches import keys as key_plan, quat
+from ..motion_patches import keys as key_plan
+from ..motion_patches import quat
 from ..motion_patches.clip import Clip
 from ..motion_patches.skeleton import Skeleton, root_location_to_position
 from . import compat

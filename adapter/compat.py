@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Blender version differences in one place (4.5 LTS, 5.0; 5.2 handled here too).
 
 Since 4.4 actions are layered with slots; 5.0 removed ``Action.fcurves``. Everything
@@ -8,10 +9,6 @@ the rest of the add-on never branches on the version.
 import bpy
 
 OWNER_KEY = "motion_patches_owner"  # custom property marking data this add-on created
-
-
-def version():
-    return bpy.app.version
 
 
 def new_action(name, id_type="OBJECT"):

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Reading back what Blender actually plays: the depsgraph-evaluated armature per frame."""
 
 import numpy as np

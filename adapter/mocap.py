@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Importing motion capture through Blender's bundled BVH importer.
 
 Every file becomes one action on a single armature (the first file's, or the one given),
@@ -87,9 +88,12 @@ def _retargeted(action, source_obj, target_obj, path):
     applies): rotations kept relative to each bone's rest, root motion scaled by hip
     height. ValueError naming the joints that cannot be mapped."""
     import numpy as np
+
     from ..motion_patches.retarget import rig_map
     from ..motion_patches.skeleton import root_position_to_location
-    from . import actions as act_io, compat, rig as rig_io
+    from . import actions as act_io
+    from . import compat
+    from . import rig as rig_io
     fps = bpy.context.scene.render.fps / bpy.context.scene.render.fps_base
     src = act_io.clip_from_action(action, source_obj, fps)
     target = act_io.skeleton_of(target_obj)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Keyframed props -> core prop tracks (:class:`~..motion_patches.moving_props.PropTrack`).
 
 A prop moves when it (or an object it is parented to) has an action, drivers or

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Plans -> NLA: one strip per motion segment on shared in-place actions, one root track.
 
 Tracks the add-on makes are named with ``TRACK_PREFIX`` and listed on the object, so a

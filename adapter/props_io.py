@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Tagged props -> core object patches.
 
 A tagged mesh object's footprint is the convex hull of its evaluated vertices in its own
@@ -50,7 +51,6 @@ def object_patch(obj, depsgraph, skeleton, fps, gait_floor=None, scale=1.0):
         clip = act_io.clip_from_action(item.action, None, fps, skeleton=skeleton)
         pc = op.patch_clip_from(clip, KINDS[item.kind], fps, effort=item.effort,
                                 name=item.action.name, floor=gait_floor)
-        pc.layer_in, pc.layer_out = item.layer_in, item.layer_out
         if pc.kind == op.TRAVERSAL and item.copy_step > 0:
             if patch.add_traversal_copies(pc, item.copy_step) == 0:
                 raise ValueError(f"every copy of '{item.action.name}' around '{obj.name}' "

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Characters on another skeleton than the patch's: the bone map stored on the armature and
 the :class:`~motion_patches.retarget.RigMap` of a character, the glue every writer uses.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Scene objects -> core obstacles, and goal/start states of objects.
 
 A mesh object blocks walking where its evaluated geometry overlaps the body's height band

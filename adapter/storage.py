@@ -1,13 +1,23 @@
-"""Baked patches stored inside the .blend (scene property group, base64 payload).
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""What the add-on keeps inside the .blend: baked patches (scene property group, base64
+payload), the plan record of each planned character and the figures of its last analysis
+(custom properties on the object). Every reader and writer of these goes through here.
 
 Decoded patches are cached by content hash so planning does not re-decode them.
 """
 
 import base64
 import hashlib
+import io
 import json
 
+import numpy as np
+
 from ..motion_patches import serialize
+from ..motion_patches.environment import Environment, Obstacle
+
+PLAN_KEY = "motion_patches_plan"            # custom property: the last plan written
+ANALYSIS_KEY = "motion_patches_analysis"    # custom property: the last analysis figures
 
 _cache = {}
 
@@ -30,18 +40,29 @@ def store_patch(scene, patch, name):
     return item
 
 
+def active_name(scene):
+    """The patch used when none is named: the active one, else the first; None when none
+    is baked. The one place that decides it."""
+    items = patch_items(scene)
+    if not len(items):
+        return None
+    i = scene.motion_patches.active_patch_index
+    return (items[i] if 0 <= i < len(items) else items[0]).name
+
+
+def make_active(scene, name):
+    """Make the stored patch ``name`` the one planning uses."""
+    scene.motion_patches.active_patch_index = patch_items(scene).find(name)
+
+
 def _item(scene, name=None):
     items = patch_items(scene)
     if not len(items):
         raise ValueError("no locomotion patch is baked in this scene; bake one first")
-    if name:
-        item = items.get(name)
-        if item is None:
-            raise ValueError(f"no locomotion patch named '{name}' (have: "
-                             f"{', '.join(i.name for i in items)})")
-    else:
-        i = scene.motion_patches.active_patch_index
-        item = items[i] if 0 <= i < len(items) else items[0]
+    item = items.get(name or active_name(scene))
+    if item is None:
+        raise ValueError(f"no locomotion patch named '{name}' (have: "
+                         f"{', '.join(i.name for i in items)})")
     return item
 
 
@@ -69,3 +90,68 @@ def import_patch(scene, path, name=None):
     with open(path, "rb") as fh:
         patch = serialize.patch_from_bytes(fh.read())
     return store_patch(scene, patch, name or patch.layer)
+
+
+# --- plan records ---------------------------------------------------------------------------
+
+
+def store_plan(obj, data):
+    """Keep a plan record on ``obj``: numpy arrays as one compressed npz (base64), every
+    other value as JSON."""
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **{k: v for k, v in data.items() if isinstance(v, np.ndarray)})
+    meta = {k: v for k, v in data.items() if not isinstance(v, np.ndarray)}
+    obj[PLAN_KEY] = json.dumps({"meta": meta,
+                                "arrays": base64.b64encode(buf.getvalue()).decode()})
+
+
+def has_plan(obj):
+    return obj is not None and PLAN_KEY in obj
+
+
+def plan_meta(obj):
+    """The JSON part of ``obj``'s plan record (no arrays decoded); ValueError when none."""
+    raw = obj.get(PLAN_KEY)
+    if raw is None:
+        raise ValueError(f"'{obj.name}' has no planned motion; plan a path first")
+    return json.loads(raw)["meta"]
+
+
+def load_plan(obj):
+    """``obj``'s plan record: (meta dict, arrays dict); ValueError when it has none."""
+    raw = obj.get(PLAN_KEY)
+    if raw is None:
+        raise ValueError(f"'{obj.name}' has no planned motion; plan a path first")
+    d = json.loads(raw)
+    with np.load(io.BytesIO(base64.b64decode(d["arrays"]))) as z:
+        arrays = {k: z[k] for k in z.files}
+    return d["meta"], arrays
+
+
+def plan_fingerprint(obj):
+    """A short string that changes when ``obj``'s plan record does (for caches)."""
+    raw = obj.get(PLAN_KEY, "")
+    return hashlib.sha1(raw.encode()).hexdigest()[:16] if raw else ""
+
+
+def plan_environment(meta, side=1.0, cells=8, radius=0.0):
+    """The props a plan walked around (its record's obstacle polygons, world metres) as an
+    :class:`Environment` of tiles ``side`` metres, ``cells`` cells per side, grown by
+    ``radius`` (0: the footprints themselves)."""
+    env = Environment(side, cells, radius)
+    for name, poly in meta["obstacles"].items():
+        env.place(Obstacle(name, np.array(poly)))
+    return env
+
+
+# --- analysis figures -----------------------------------------------------------------------
+
+
+def store_analysis(obj, figures):
+    obj[ANALYSIS_KEY] = json.dumps(figures)
+
+
+def last_analysis(obj):
+    """The figures of ``obj``'s last analysis (dict), or None."""
+    raw = obj.get(ANALYSIS_KEY) if obj is not None else None
+    return json.loads(raw) if raw else None

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Writing a plan as one transaction: what can fail is checked before the first change, and
 what writing changed is put back as it was when it fails anyway.
 
@@ -15,8 +16,7 @@ a successful write, those left without a user are deleted as the write itself wo
 import contextlib
 import re
 
-from . import compat
-from . import nla
+from . import compat, nla
 
 _STRIP_FIELDS = ("action_frame_start", "action_frame_end", "scale", "repeat", "blend_type",
                  "extrapolation", "blend_in", "blend_out", "use_auto_blend", "influence",
@@ -245,3 +245,20 @@ def kept(bpy, scene, objects, keys=()):
         snap.restore()
         raise
     snap.commit()
+
+
+@contextlib.contextmanager
+def made_undone_on_error(bpy, scene, collections=("objects", "armatures", "actions")):
+    """When the block raises, remove the objects, armatures and actions it made (nothing
+    that existed before is touched) and put the scene's frame rate back."""
+    before = {c: set(getattr(bpy.data, c)) for c in collections}
+    fps = (scene.render.fps, scene.render.fps_base)
+    try:
+        yield
+    except BaseException:
+        for c in collections:
+            coll = getattr(bpy.data, c)
+            for item in [x for x in coll if x not in before[c]]:
+                coll.remove(item)
+        scene.render.fps, scene.render.fps_base = fps
+        raise

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Benchmark of the pure-numpy core: bake, plan through random pillar fields, placement.
 
 Prints numbers, asserts nothing about timing. Run from the repository root:
@@ -33,11 +34,15 @@ REPO = Path(__file__).resolve().parents[1]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
-from motion_patches import bvh, clip as clip_mod, contacts, gait as gait_mod  # noqa: E402
-from motion_patches import foot_lock, locomotion_patch, metrics  # noqa: E402
+from motion_patches import bvh, contacts, foot_lock, locomotion_patch, metrics  # noqa: E402  # noqa: E402
+from motion_patches import clip as clip_mod
+from motion_patches import gait as gait_mod
+from motion_patches.defaults import PLANNING as DEFAULTS  # noqa: E402
 from motion_patches.environment import Environment, Obstacle  # noqa: E402
 from motion_patches.motion import Motion, concatenate  # noqa: E402
 from motion_patches.planner import PlanError, SegmentPlanner, plan_motions  # noqa: E402
+
+WEIGHTS = tuple(DEFAULTS[k] for k in ("alpha", "beta", "gamma"))
 
 PILLAR_SIDES = 12
 
@@ -50,9 +55,10 @@ def parse_args(argv=None):
                    help="pillars per square metre of the field (default 0.1)")
     p.add_argument("--field", type=float, default=30.0,
                    help="side of the square pillar field in metres (default 30)")
-    p.add_argument("--radius", type=float, default=0.25, help="character radius (default 0.25 m)")
-    p.add_argument("--weights", type=float, nargs=3, default=(1.0, 0.5, 0.2),
-                   metavar=("ALPHA", "BETA", "GAMMA"), help="Eq. 5 weights (default 1 0.5 0.2)")
+    p.add_argument("--radius", type=float, default=DEFAULTS["radius"],
+                   help=f"character radius (default {DEFAULTS['radius']:g} m)")
+    p.add_argument("--weights", type=float, nargs=3, default=WEIGHTS,
+                   metavar=("ALPHA", "BETA", "GAMMA"), help="Eq. 5 weights (default %s)" % " ".join(f"{w:g}" for w in WEIGHTS))
     p.add_argument("--mocap", default=os.environ.get("MOTION_PATCHES_MOCAP",
                                                      str(REPO.parent / "shared" / "mocap")),
                    help="folder holding cmu/16_15.bvh and cmu/16_18.bvh")

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Benchmark of path quality: detours, straight lines, glitches, failures, starts and stops.
 
 Prints numbers next to their targets, asserts nothing. Run from the repository root:
@@ -42,10 +43,15 @@ for p in (str(REPO), str(HERE)):
         sys.path.insert(0, p)
 
 import bench_core as core  # noqa: E402
-from motion_patches import planner as planner_mod, validate  # noqa: E402
+
+from motion_patches import planner as planner_mod  # noqa: E402
+from motion_patches import validate
+from motion_patches.defaults import PLANNING as DEFAULTS  # noqa: E402
 from motion_patches.environment import Environment, Obstacle, distance_to_polygon  # noqa: E402
 from motion_patches.inplace import to_world  # noqa: E402
 from motion_patches.motion import concatenate  # noqa: E402
+
+WEIGHTS = tuple(DEFAULTS[k] for k in ("alpha", "beta", "gamma"))
 
 VARIANTS = ("along", "facing-Y")
 FACING_Y = -np.pi / 2
@@ -77,9 +83,10 @@ def parse_args(argv=None):
                    help="pillars per square metre of the random fields (default 0.1)")
     p.add_argument("--field", type=float, default=30.0,
                    help="side of the random pillar fields in metres (default 30)")
-    p.add_argument("--radius", type=float, default=0.25, help="character radius (default 0.25 m)")
-    p.add_argument("--weights", type=float, nargs=3, default=(1.0, 0.5, 0.2),
-                   metavar=("ALPHA", "BETA", "GAMMA"), help="Eq. 5 weights (default 1 0.5 0.2)")
+    p.add_argument("--radius", type=float, default=DEFAULTS["radius"],
+                   help=f"character radius (default {DEFAULTS['radius']:g} m)")
+    p.add_argument("--weights", type=float, nargs=3, default=WEIGHTS,
+                   metavar=("ALPHA", "BETA", "GAMMA"), help="Eq. 5 weights (default %s)" % " ".join(f"{w:g}" for w in WEIGHTS))
     p.add_argument("--variants", nargs="+", choices=VARIANTS, default=list(VARIANTS),
                    help="heading variants to plan (default both)")
     p.add_argument("--only", metavar="SCENE", default=None,

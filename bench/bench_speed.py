@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Speed benchmark of the core: plans in milliseconds, the paper's Table 1, peers side by side.
 
 Prints numbers next to their targets, asserts nothing. Run from the repository root:
@@ -55,12 +56,22 @@ for p in (str(REPO), str(HERE)):
         sys.path.insert(0, p)
 
 import bench_core as core  # noqa: E402
-from motion_patches import astar, object_patch as op  # noqa: E402
+
+from motion_patches import astar  # noqa: E402
+from motion_patches import object_patch as op
+from motion_patches.defaults import PLANNING as DEFAULTS  # noqa: E402
 from motion_patches.environment import Environment, Obstacle  # noqa: E402
 from motion_patches.motion import concatenate  # noqa: E402
 from motion_patches.node_keys import pack  # noqa: E402
-from motion_patches.planner import (PlanError, SegmentPlanner, interaction_states,  # noqa: E402
-                                    plan_motions, with_interactions)
+from motion_patches.planner import (  # noqa: E402
+    PlanError,
+    SegmentPlanner,
+    interaction_states,
+    plan_motions,
+    with_interactions,
+)
+
+WEIGHTS = tuple(DEFAULTS[k] for k in ("alpha", "beta", "gamma"))
 
 SECTIONS = ("bake", "plan", "table1", "astar", "corridor", "length", "placement")
 LENGTHS = (5.0, 15.0, 30.0, 60.0)  # seconds of motion
@@ -82,9 +93,10 @@ def parse_args(argv=None):
     p.add_argument("--seed", type=int, default=0, help="seed of the layouts (default 0)")
     p.add_argument("--density", type=float, default=0.1, help="pillars per m² (default 0.1)")
     p.add_argument("--field", type=float, default=30.0, help="side of the field, m (default 30)")
-    p.add_argument("--radius", type=float, default=0.25, help="character radius (default 0.25 m)")
-    p.add_argument("--weights", type=float, nargs=3, default=(1.0, 0.5, 0.2),
-                   metavar=("ALPHA", "BETA", "GAMMA"), help="Eq. 5 weights (default 1 0.5 0.2)")
+    p.add_argument("--radius", type=float, default=DEFAULTS["radius"],
+                   help=f"character radius (default {DEFAULTS['radius']:g} m)")
+    p.add_argument("--weights", type=float, nargs=3, default=WEIGHTS,
+                   metavar=("ALPHA", "BETA", "GAMMA"), help="Eq. 5 weights (default %s)" % " ".join(f"{w:g}" for w in WEIGHTS))
     p.add_argument("--repeat", type=int, default=3,
                    help="time each plan this many times and keep the fastest (default 3)")
     p.add_argument("--chairs", type=int, default=40, help="table1: chairs on the field (default 40)")

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """A* over integer node keys with a binary heap of plain tuples.
 
 Graph structure is supplied as a vectorised ``expand(key)`` returning numpy arrays of

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Which props keep a start from a goal: the answer a layout check gives for an
 unreachable pair, read from the planner's own occluded cells (not from meshes), so it names
 what the planner actually could not get past."""

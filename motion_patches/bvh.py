@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """A small BVH reader for the core, so the core can be tested on real mocap without bpy.
 
 Blender's bundled importer is what users go through (see the adapter); this reader builds

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Why a plan found no path: the props in the way, the locomotion patch, or the search limit.
 
 The planner says where it got stuck (no way out of the start, into the goal, or between

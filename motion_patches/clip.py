@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Clip: one source animation reduced to arrays, and the operations on whole clips.
 
 A clip holds the root's armature-space position and every bone's pose rotation per frame

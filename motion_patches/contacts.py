@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Foot contacts: which foot joints are planted on each frame.
 
 On the source clip a joint counts as planted while it is near its typical planted height

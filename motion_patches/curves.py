@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Space curves: cubic Hermite curves between nodes, constant-curvature arcs, arc length.
 
 Hermite curves are evaluated for many candidates at once ((C, M) arrays) because the bake

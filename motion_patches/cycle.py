@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Gait cycles: detecting them in a clip and cutting one into a seamless loop.
 
 A cycle runs from one left-foot strike to the next. The loop keeps the body relative to a
@@ -11,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import quat
-from .clip import sample, Clip
+from .clip import Clip, sample
 from .contacts import foot_contacts, strikes
 from .curves import arc_frame, arc_project
 from .inplace import facing_yaw, to_inplace

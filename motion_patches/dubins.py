@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Dubins paths: the shortest ground paths of bounded curvature between two states.
 
 A walk can turn no tighter than its turn clips show, so the shortest way from a standing

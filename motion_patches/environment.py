@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Environment: obstacles on the ground, the tile grid of a layer, and cell occlusion.
 
 Tiles are instances of a locomotion patch laid on a fixed grid (tile (i, j) has its corner

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Foot locking: keep a planted foot where it was put down.
 
 Space-curve following turns and bends the recorded walk, so a foot that was planted in the

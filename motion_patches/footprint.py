@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Footprints: what a mesh covers on the ground, as the convex polygons the planner needs.
 
 The environment tests points and cells against *convex* polygons (:mod:`.environment`). A
@@ -128,7 +129,6 @@ def parts(vertices, face_vertex=(), face_start=(), face_total=(), edges=(), band
     fv = np.asarray(face_vertex, np.int64).ravel()
     fs = np.asarray(face_start, np.int64).ravel()
     ft = np.asarray(face_total, np.int64).ravel()
-    face_of = np.repeat(np.arange(len(fs)), ft)
     first = np.repeat(fs, ft)
     pairs = [np.column_stack((fv[first], fv))]
     ed = np.asarray(edges, np.int64).reshape(-1, 2)

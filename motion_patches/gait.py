@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Gait: the loops of one layer and parametric blending between them by curvature.
 
 A straight loop and turn loops (slow / fast, left / right; a missing side is mirrored) are

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """High-level planning over tiles (paper Sec. 4.1, Eq. 1 and 4).
 
 A state is a tile and the edge it was entered by. Crossing the tile from edge j to edge k

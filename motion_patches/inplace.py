@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """In-place motion: the body relative to a moving ground frame.
 
 A ground frame is (x, y, heading) per frame with heading measured from +X. The in-place

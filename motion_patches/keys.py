@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Compact keys: how many values a channel really needs, for small .blend files.
 
 A planned channel is one value per frame. Blender stores a keyframe in 72 bytes (a

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Layout specs: the start/goal pairs and limits a layout check plans (JSON or TOML, as a
 studio writes them), validated before anything is planned, and the verdict of one pair
 against its limits. Plain Python, so a spec can be checked without Blender."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Locomotion patch: the tilable square of motion segments for one layer (paper Sec. 6).
 
 The square's side is two straight cycles; it is split into cells x cells cells and carries

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Motion-quality figures an animator cares about, from per-frame positions only.
 
 Foot skate is the horizontal speed of a foot joint on frames where it is planted (labels

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Motion: synthesised animation as a ground trajectory plus in-place body channels."""
 
 from dataclasses import dataclass

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Props that move while a character walks (paper Sec. 4.4): asleep and awake, path repair.
 
 A prop keyframed in Blender is known for the whole shot, so what the paper does at run time

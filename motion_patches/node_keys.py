@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Integer keys of low-level graph nodes: a tile and a local entry state, packed.
 
 A node is where the character enters tile (i, j) in local entry state (edge, slot,

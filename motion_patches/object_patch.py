@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Object patches: props that carry their own animation (paper Sec. 4).
 
 A prop has a footprint (convex polygon in its own ground coordinates) and clips given
@@ -30,8 +31,6 @@ class PatchClip:
     kind: str
     motion: Motion          # ground frames relative to the prop, in-place channels
     effort: float = 1.0     # user-supplied T of Eq. 5 for the whole clip
-    layer_in: str = "walk"
-    layer_out: str = "walk"
     angle: float = 0.0      # rotation of this copy about the prop (radians)
 
     @property
@@ -59,8 +58,7 @@ class PatchClip:
 
     def rotated(self, angle):
         m = self.motion.transformed(0.0, 0.0, angle)
-        return PatchClip(self.name, self.kind, m, self.effort, self.layer_in, self.layer_out,
-                         self.angle + angle)
+        return PatchClip(self.name, self.kind, m, self.effort, self.angle + angle)
 
 
 def clip_ground(clip):
@@ -132,7 +130,6 @@ class ObjectPatch:
     footprint: np.ndarray        # (P, 2) convex, counter-clockwise, prop coordinates
     clips: list = field(default_factory=list)   # PatchClip in prop coordinates (copies included)
     pose: tuple = (0.0, 0.0, 0.0)               # x, y, heading of the prop on the ground
-    accessibility: float = 0.0                  # psi of Eq. 2 (precomputed)
 
     def to_world(self, xy):
         x, y, h = self.pose

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The plan frame: the tile lattice of one plan, anchored at the start and turned to the goal.
 
 Tiles own no precomputed data (occlusion is lazy, Sec. 4.2), so nothing ties the lattice

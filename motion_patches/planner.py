@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Segment-level path planning across tiles (paper Sec. 4.2, Eq. 5, 7, 8).
 
 Nodes are tile entry states packed into one integer: tile (i, j) and the local entry id
@@ -20,14 +21,20 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import astar, curves, dubins, retime, shortcut
-from .high_level import TilePlanner
-from .node_keys import BIAS, LOCAL, NEXT_EDGE, TILE_STEP, pack, unpack
-from .locomotion_patch import (DIRECTIONS, EDGES, INWARD, node_id, node_position,
-                               split_node_id)
-from .motion import Motion, ease_to, sliced
+from .defaults import PLANNING as DEFAULTS
 from .environment import PATH_MARGIN, SUB, Obstacle
-from .plan_frame import (IDENTITY, lattice_frame, local_environment, local_prop, state_to_local,
-                         to_local)
+from .high_level import TilePlanner
+from .locomotion_patch import DIRECTIONS, EDGES, INWARD, node_id, node_position, split_node_id
+from .motion import Motion, ease_to, sliced
+from .node_keys import BIAS, LOCAL, NEXT_EDGE, TILE_STEP, pack, unpack
+from .plan_frame import (
+    IDENTITY,
+    lattice_frame,
+    local_environment,
+    local_prop,
+    state_to_local,
+    to_local,
+)
 from .stitching import BLEND_FRAMES, stitch
 from .synthesis import cycles_along, cycles_along_many, follow
 from .traversal_probability import accessibility, tile_traversal
@@ -94,7 +101,8 @@ class Plan:
 class SegmentPlanner:
     """Plans one character's path on an environment with a baked locomotion patch."""
 
-    def __init__(self, patch, env, alpha=1.0, beta=0.5, gamma=0.2, props=(), mode="dynamic"):
+    def __init__(self, patch, env, alpha=DEFAULTS["alpha"], beta=DEFAULTS["beta"],
+                 gamma=DEFAULTS["gamma"], props=(), mode=DEFAULTS["stitching"]):
         if mode not in ("dynamic", "static"):
             raise PlanError(f"unknown stitching mode '{mode}' (dynamic or static)")
         self.props, self.mode = list(props), mode

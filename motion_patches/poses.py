@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Pose clusters: k-means over poses, used to label the pose a node carries.
 
 Nodes join segments only when their pose labels agree, so the labelling decides which

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Quaternion helpers on numpy arrays (w, x, y, z order, as Blender stores them).
 
 Every function is vectorised over leading axes so per-frame, per-joint data stays in

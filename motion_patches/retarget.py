@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Bone maps and retargeting: the one place where motion of one skeleton is put on another.
 
 A locomotion patch, a clip or a planned motion carries its skeleton (bone names, parents,

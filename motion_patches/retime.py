@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Starts and stops: a planned walk eased in from standing and out to standing.
 
 Space-curve following plays the gait at its recorded pace, so a plan would start and stop

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Playing a plan at the scene's frame rate when the patch was baked at another.
 
 A patch's motion lives on the patch's frames (its gait loops are sampled at the bake's

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Locomotion patches to and from bytes (compressed npz), for the .blend and for files.
 
 Only arrays and a JSON header go in, so a stored patch never runs code when loaded. What is

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Shortening a found path: runs of pieces replaced by one followed space curve.
 
 The segment search (Sec. 4.2) finds the cheapest path through the lattice, but the lattice

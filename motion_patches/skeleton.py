@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Skeleton: bone hierarchy and rest matrices, and forward kinematics that match Blender.
 
 Blender poses a bone as ``A_j = A_parent @ inv(rest_parent) @ rest_j @ basis_j`` where

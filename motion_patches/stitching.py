@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Stitching a traversal clip of an object patch into the tiled locomotion (Sec. 4.3).
 
 The clip's first keyframe (position, heading, pose) indexes one cell of the tile under

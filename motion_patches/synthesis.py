@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Space-curve following: a gait's loops played along a curve, turns blended by curvature.
 
 The root is bound to the curve by the loops' own travelled distance and faces the curve's

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Accessibility psi (Eq. 2), density rho and traversal probability tau (Eq. 3).
 
 psi is precomputed once per kind of prop: the prop is placed at sampled spots of one
@@ -13,6 +14,7 @@ import hashlib
 
 import numpy as np
 
+from .defaults import PLANNING as DEFAULTS
 from .environment import Environment, Obstacle
 from .object_patch import ObjectPatch
 from .stitching import stitch
@@ -29,7 +31,8 @@ def signature(prop):
     return h.hexdigest()
 
 
-def accessibility(patch, prop, radius, spots=(0.35, 0.65), weights=(1.0, 0.5, 0.2)):
+def accessibility(patch, prop, radius, spots=(0.35, 0.65),
+                  weights=tuple(DEFAULTS[k] for k in ("alpha", "beta", "gamma"))):
     """psi of a kind of prop (cached): mean over sampled placements of T / O, at most 1."""
     key = (signature(prop), round(radius, 4), patch.side)
     if key in _PSI:

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Glitch validator for baked segments and planned motion: pure functions on ground tracks.
 
 A ground track is an (F, 3) array of x, y, heading per frame (``Motion.ground``: the

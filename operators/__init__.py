@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Operators: read properties and context, call :mod:`api`, report. Nothing else."""
 
 import bpy

@@ -1,19 +1,10 @@
-"""Measure the active character's evaluated motion and keep the figures on it for the
-Analysis panel (a JSON string in the custom property ``RESULT_KEY``)."""
-
-import json
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Measure the active character's evaluated motion; the API keeps the figures on it for
+the Analysis panel."""
 
 import bpy
 
 from .. import api
-
-RESULT_KEY = "motion_patches_analysis"
-
-
-def last_figures(ob):
-    """The figures of the last analysis of ``ob`` (dict), or None."""
-    raw = ob.get(RESULT_KEY) if ob is not None else None
-    return json.loads(raw) if raw else None
 
 
 class MOTION_PATCHES_OT_analyse_motion(bpy.types.Operator):
@@ -29,11 +20,10 @@ class MOTION_PATCHES_OT_analyse_motion(bpy.types.Operator):
     def execute(self, context):
         ob = context.active_object
         try:
-            figures = api.analyse(context, ob)
+            figures = api.analyse(context, ob, keep=True)
         except api.MotionPatchesError as exc:
             self.report({'ERROR'}, str(exc))
             return {'CANCELLED'}
-        ob[RESULT_KEY] = json.dumps(figures)
         sk = figures["foot_skate"]
         self.report({'INFO'}, f"Foot skate {sk['mean_cm_per_frame']:.2f} cm/frame "
                               f"({sk['mean_cm_per_s']:.1f} cm/s), goal error "

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Bake a locomotion patch from the scene's chosen clips, and edit the list of turn clips."""
 
 import bpy
@@ -34,30 +35,23 @@ class MOTION_PATCHES_OT_bake_locomotion_patch(bpy.types.Operator):
     def execute(self, context):
         self._size_from_preferences(context)
         settings = context.scene.motion_patches
+        # Action names or the scene's bake settings; the API checks them and remembers them.
+        straight = self.straight or settings.straight_action
+        turns = ([n.strip() for n in self.turns.split(",") if n.strip()] if self.turns
+                 else [r.action for r in settings.turn_actions if r.action])
         try:
-            straight = _action(self.straight) if self.straight else settings.straight_action
-            turns = ([_action(n.strip()) for n in self.turns.split(",") if n.strip()]
-                     if self.turns else [r.action for r in settings.turn_actions if r.action])
-            arm = settings.source_armature or context.active_object
             with progress(context) as update:
                 res = api.bake_locomotion_patch(
-                    context.scene, arm, straight, turns, layer=self.layer, cells=self.cells,
-                    nodes=self.nodes, progress=update)
+                    context.scene, settings.source_armature or context.active_object, straight,
+                    turns, layer=self.layer, cells=self.cells, nodes=self.nodes,
+                    progress=update)
         except api.MotionPatchesError as exc:
             self.report({'ERROR'}, str(exc))
             return {'CANCELLED'}
-        settings.active_patch_index = settings.patches.find(res.name)
         st = res.stats
         self.report({'INFO'}, f"Baked '{res.name}': {st['kept']} segments kept, {st['culled']} "
                               f"culled ({res.seconds:.1f} s)")
         return {'FINISHED'}
-
-
-def _action(name):
-    act = bpy.data.actions.get(name)
-    if act is None:
-        raise api.MotionPatchesError(f"no action named '{name}'")
-    return act
 
 
 turn_list = list_operators("turn", "Turn Clip", "the clips the patch is baked from",

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """What several operators share: the window manager's progress indicator, the add /
 remove buttons beside the add-on's lists (turn clips of a bake, a prop's clips), and the
 guard that turns an unexpected exception into a report."""
@@ -50,7 +51,8 @@ def list_operators(name, noun, where, owner, items, index):
         return type(f"MOTION_PATCHES_OT_{name}_{verb.lower()}", (bpy.types.Operator,), {
             "bl_idname": f"motion_patches.{name}_{verb.lower()}",
             "bl_label": f"{verb} {noun}", "bl_description": description,
-            "bl_options": {'REGISTER', 'UNDO'},
+            # INTERNAL: a list's + / - button, not a command to find in F3 search.
+            "bl_options": {'REGISTER', 'UNDO', 'INTERNAL'},
             "poll": classmethod(lambda cls, context: poll(context)), "execute": execute})
 
     return (operator("Add", f"Add a {noun.lower()} to {where}", has_list, add),

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Tag a mesh as an object patch (a prop carrying clips), untag it, edit its clip list."""
 
 import bpy

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Baked patches to and from files: bake once on the farm, use the patch in every shot."""
 
 import bpy
@@ -23,11 +24,8 @@ class MOTION_PATCHES_OT_export_patch(bpy.types.Operator, ExportHelper):
         return len(context.scene.motion_patches.patches) > 0
 
     def execute(self, context):
-        s = context.scene.motion_patches
-        name = s.patches[s.active_patch_index].name if 0 <= s.active_patch_index < len(
-            s.patches) else None
         try:
-            api.export_patch(context.scene, self.filepath, name)
+            name = api.export_patch(context.scene, self.filepath)
         except api.MotionPatchesError as exc:
             self.report({'ERROR'}, str(exc))
             return {'CANCELLED'}
@@ -50,8 +48,6 @@ class MOTION_PATCHES_OT_import_patch(bpy.types.Operator, ImportHelper):
         except api.MotionPatchesError as exc:
             self.report({'ERROR'}, str(exc))
             return {'CANCELLED'}
-        s = context.scene.motion_patches
-        s.active_patch_index = list(s.patches).index(s.patches[name])
         self.report({'INFO'}, f"Imported '{name}'")
         return {'FINISHED'}
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Plan one character (the active armature) or a crowd (every selected armature), and
 reset the scene's planning settings to the animator's defaults from the preferences."""
 
@@ -6,14 +7,6 @@ from bpy.props import StringProperty
 
 from .. import api, props
 from .common import progress
-
-
-def _weights(settings):
-    """The planning arguments of :func:`api.plan_path` / :func:`api.plan_crowd` that the
-    scene's settings hold."""
-    return dict(alpha=settings.alpha, beta=settings.beta, gamma=settings.gamma,
-                radius=settings.radius, stitching=settings.stitching.lower(),
-                foot_lock=settings.foot_lock, goal_facing=settings.goal_facing.lower())
 
 
 class MOTION_PATCHES_OT_plan_path(bpy.types.Operator):
@@ -29,10 +22,10 @@ class MOTION_PATCHES_OT_plan_path(bpy.types.Operator):
         return context.active_object is not None and context.active_object.type == 'ARMATURE'
 
     def execute(self, context):
-        s = context.scene.motion_patches
-        try:
-            res = api.plan_path(context.scene, context.active_object, s.goal,
-                                patch_name=self.patch or None, context=context, **_weights(s))
+        try:  # the planning settings are the scene's (api.planning_settings)
+            res = api.plan_path(context.scene, context.active_object,
+                                context.scene.motion_patches.goal,
+                                patch_name=self.patch or None, context=context)
         except api.MotionPatchesError as exc:
             self.report({'ERROR'}, str(exc))
             return {'CANCELLED'}
@@ -42,22 +35,6 @@ class MOTION_PATCHES_OT_plan_path(bpy.types.Operator):
             self.report({'WARNING'}, f"The active action was moved to the muted track "
                                      f"'{res.stashed_action_track}' so the plan can play")
         return {'FINISHED'}
-
-
-def _crowd(context):
-    """[(armature, goal)] of the selected armatures, by name; each one's own goal, else the
-    scene's. Raises :class:`api.MotionPatchesError` naming a character without either."""
-    scene_goal = context.scene.motion_patches.goal
-    pairs = []
-    for ob in sorted(context.selected_objects, key=lambda o: o.name):
-        if ob.type != 'ARMATURE':
-            continue
-        goal = ob.motion_patches_character.goal or scene_goal
-        if goal is None:
-            raise api.MotionPatchesError(f"'{ob.name}' has no goal: give it its own goal or "
-                                         f"set the scene's goal")
-        pairs.append((ob, goal))
-    return pairs
 
 
 class MOTION_PATCHES_OT_plan_crowd(bpy.types.Operator):
@@ -73,12 +50,11 @@ class MOTION_PATCHES_OT_plan_crowd(bpy.types.Operator):
         return any(ob.type == 'ARMATURE' for ob in context.selected_objects)
 
     def execute(self, context):
-        s = context.scene.motion_patches
         try:
-            pairs = _crowd(context)
+            pairs = api.crowd_members(context.scene, context.selected_objects)
             with progress(context) as update:
                 res = api.plan_crowd(context.scene, pairs, patch_name=self.patch or None,
-                                     context=context, progress=update, **_weights(s))
+                                     context=context, progress=update)
         except api.MotionPatchesError as exc:
             self.report({'ERROR'}, str(exc))
             return {'CANCELLED'}

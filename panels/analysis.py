@@ -1,9 +1,10 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Analysis panel: the Analyse button and the last figures measured on the active
 character (stored on it by the operator), in the numbers an animator checks."""
 
 import bpy
 
-from ..operators.analyse import last_figures
+from .. import api
 from .sidebar import SidebarPanel, wrapped_label
 
 
@@ -26,7 +27,7 @@ class MOTION_PATCHES_PT_analysis(SidebarPanel, bpy.types.Panel):
         layout = self.layout
         layout.operator("motion_patches.analyse_motion", icon='GRAPH')
         ob = context.active_object
-        figures = last_figures(ob) if ob is not None and ob.type == 'ARMATURE' else None
+        figures = api.last_analysis(ob) if ob is not None and ob.type == 'ARMATURE' else None
         if figures is None:
             wrapped_label(layout, context, "Select a planned character and analyse it",
                           icon='INFO')

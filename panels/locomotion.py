@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Locomotion Patches panel: the clips a patch is baked from, the bake, and the baked
 patches with the active one (the one the planner uses) and its bake figures."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Object Patch panel: the active mesh as a prop carrying clips (traversals, interactions),
 its clip list, its footprint and the tag / untag buttons."""
 

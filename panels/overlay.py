@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Viewport overlay: what the planner sees, drawn with the ``gpu`` module when enabled.
 
 Tile grid and occluded cells around each planned path, the path coloured by piece kind
@@ -14,9 +15,8 @@ import json
 import bpy
 import numpy as np
 
-from .. import api
+from .. import api, props
 from ..adapter import storage
-from ..motion_patches.environment import Environment, Obstacle
 from ..motion_patches.plan_frame import lattice_frame, local_environment, to_local, to_world
 from .sidebar import SidebarPanel, wrapped_label
 
@@ -136,9 +136,9 @@ def plan_buffers(scene):
     except ValueError:
         patch = None
     for ob in scene.objects:
-        if ob.type != "ARMATURE" or api.PLAN_KEY not in ob:
+        if ob.type != "ARMATURE" or not storage.has_plan(ob):
             continue
-        meta, arrays = api.load_plan_record(ob)
+        meta, arrays = storage.load_plan(ob)
         g = arrays["ground"]
         kinds = np.full(g.shape[0] - 1, "segment", dtype=object)
         strip_starts = [meta["frame_start"]] + list(meta["boundaries"])
@@ -160,9 +160,7 @@ def plan_buffers(scene):
                 pcol.append(STITCH)
         if patch is None:
             continue
-        env = Environment(patch.side, patch.cells, meta["radius"])
-        for name, poly in meta["obstacles"].items():
-            env.place(Obstacle(name, np.array(poly)))
+        env = storage.plan_environment(meta, patch.side, patch.cells, meta["radius"])
         # The plan's own lattice (motion_patches.plan_frame): anchored at the start, +x
         # towards the goal, as the planner laid it.
         frame = lattice_frame(g[0], meta["goal"], patch.side, patch.nodes)
@@ -214,8 +212,8 @@ def _patch_key(scene):
 
 
 def _plans_key(scene):
-    return json.dumps([ob.get(api.PLAN_KEY, "")[:64] + str(len(ob.get(api.PLAN_KEY, "")))
-                       for ob in scene.objects if ob.type == "ARMATURE"] + _patch_key(scene))
+    return json.dumps([storage.plan_fingerprint(ob) for ob in scene.objects
+                       if ob.type == "ARMATURE"] + _patch_key(scene))
 
 
 def _markers_key(scene):
@@ -299,7 +297,12 @@ def _on_load(_file=None):
     sync()
 
 
+def _switch(on):
+    enable() if on else disable()
+
+
 def register_handlers():
+    props.overlay_switch = _switch  # Show Planner Overlay ticked or unticked
     if _on_load not in bpy.app.handlers.load_post:
         bpy.app.handlers.load_post.append(_on_load)
     if sync() is not None:
@@ -307,6 +310,7 @@ def register_handlers():
 
 
 def unregister_handlers():
+    props.overlay_switch = None
     if _on_load in bpy.app.handlers.load_post:
         bpy.app.handlers.load_post.remove(_on_load)
     if bpy.app.timers.is_registered(sync):

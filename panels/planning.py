@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Planning panel: the goal (the scene's, and the active character's own for crowds), the
 active armature's bone map (when it is another skeleton than the patch's), the cost weights
 α β γ, radius and stitching, and the Plan Path / Plan Crowd buttons."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Where every panel of the add-on lives: the 3D viewport's sidebar, "Motion Patches" tab."""
 
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Start bpy with throw-away user folders and this working tree enabled as an extension.
 
 Used by the demo and other scripts run outside Blender's UI, so they exercise the add-on
@@ -26,8 +27,8 @@ def start():
     for var, sub in (("BLENDER_USER_CONFIG", "config"), ("BLENDER_USER_SCRIPTS", "scripts"),
                      ("BLENDER_USER_DATAFILES", "datafiles"), ("BLENDER_USER_EXTENSIONS", "extensions")):
         os.environ[var] = str(home / sub)
-    import bpy
     import addon_utils
+    import bpy
     repo_dir = home / "repo"
     repo_dir.mkdir()
     (repo_dir / "motion_patches").symlink_to(REPO_ROOT, target_is_directory=True)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Demo: bake a walk patch from real CMU mocap, plan through a pillar field, write NLA.
 
 Run with ``./dev demo``. Builds the scene from scratch with the add-on's operators,

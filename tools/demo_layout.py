@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The demo scene's layout, shared by tools/demo.py (Blender) and tools/plot_layout.py
 (the README picture), so the picture always shows the demo's own pillars."""
 

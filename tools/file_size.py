@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """How much one planned walk adds to a saved .blend (issue 15, item 6).
 
 Bakes the demo's walk patch (CMU 16_15 + 16_18) at ``--bake-fps``, sets the scene to

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Top-down picture of a planned layout as a PNG, with numpy, zlib and struct only.
 
     .venv/blender-4.5/bin/python tools/plot_layout.py [--output docs/plan.png]
@@ -494,6 +495,7 @@ def _legend(cv, plan, motions, patch, title):
 def demo_pillars(seed=7, sides=32):
     """The pillars of tools/demo.py as footprints (Blender's default cylinder has 32 sides)."""
     import demo_layout
+
     from motion_patches.environment import Obstacle
     a = np.linspace(0.0, 2.0 * np.pi, sides + 1)[:-1]
     return [Obstacle(f"Pillar.{n:02d}", np.column_stack((x + r * np.cos(a), y + r * np.sin(a))))

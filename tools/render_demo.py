@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Render the demo scene (sample_blends/demo_walk.blend) to a PNG for the README.
 
 Run with Blender as a Python module, e.g.::

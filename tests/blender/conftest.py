@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Shared set-up for the tests that run inside Blender (bpy from PyPI).
 
 Why this file exists: bpy reads its user directories once, at import, and an add-on shipped as an
@@ -70,8 +71,10 @@ os.environ.update(blender_user_env(BLENDER_HOME))
 # Registered before bpy is imported, so it runs after bpy's own exit handlers.
 atexit.register(shutil.rmtree, BLENDER_HOME, ignore_errors=True)
 
+# isort: off
 import bpy  # noqa: E402
 import addon_utils  # noqa: E402  (ships with bpy; importable once bpy is)
+# isort: on
 
 
 def raise_error(ex):

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Scene-building helpers shared by the Blender tests."""
 
 import bpy

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """A straight clip alone bakes a patch that plans, and a failed plan names its cause
 (issue 15, items 3 and 5), through the API on a rig from Blender's own BVH importer."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The ``blender -c motion_patches ...`` command: its handler called with argv, as Blender does.
 
 There is no Blender binary here, so the handler registered with
@@ -127,7 +128,8 @@ def test_help_exits_0(cli, capsys, command):
     (["frobnicate"], "invalid choice"),
     (["plan", "--goal", "Goal"], "--character"),
     (["plan", "--character", "W", "--alpha", "fast"], "invalid float"),
-    (["bake", "--armature", "A", "--straight", "s", "--cells", "12"], "--cells"),
+    (["bake", "--armature", "A", "--straight", "s", "--cells", "12"],
+     "cells must be a whole number from 2 to 8, not 12"),
 ])
 def test_usage_errors_exit_2_with_one_line(cli, capsys, argv, needle):
     code, out, err = call(cli, capsys, *argv)
@@ -185,9 +187,9 @@ def test_bake_bad_input_exits_2_and_writes_nothing(cli, capsys, clean_scene, moc
 
 def test_failed_bake_rolls_back_the_import(cli, capsys, clean_scene, mocap_dir, tmp_path,
                                            monkeypatch):
-    def refuse(*a, **k):
-        raise cli.api.MotionPatchesError("every candidate segment was culled")
-    monkeypatch.setattr(cli.api, "bake_locomotion_patch", refuse)
+    def refuse(*a, **k):  # the core bake, after the import: the API puts the import back
+        raise ValueError("every candidate segment was culled")
+    monkeypatch.setattr(cli.api, "bake", refuse)
     fps = clean_scene.render.fps
     out = tmp_path / "out.blend"
     code, doc, err = call_json(cli, capsys, "bake", "--import-bvh", mocap_dir / "cmu" / "16_15.bvh",
@@ -260,7 +262,8 @@ def test_plan_to_coordinates_prints_a_summary(cli, capsys, layout):
     (["--character", "Pillar0", "--goal", "Goal"], "'Pillar0' is a mesh"),
     (["--character", "Walker", "--goal", "Nowhere"], "no object named 'Nowhere'"),
     (["--character", "Walker", "--goal", "Goal", "--patch", "run"], "no locomotion patch named"),
-    (["--character", "Walker", "--goal", "Goal", "--radius", "-1"], "--radius"),
+    (["--character", "Walker", "--goal", "Goal", "--radius", "-1"],
+     "radius must be a number of metres above 0"),
     (["--character", "Walker", "--goal-xyh", "3", "1", "0"],
      "the goal of 'Walker' is inside or within 0.25 m of 'Pillar0'"),
     (["--character", "Walker", "--goal", "Walker"], "the goal cannot be the character itself"),
@@ -509,12 +512,13 @@ def test_crowd_with_an_unreachable_goal_exits_1_and_saves_nothing(cli, capsys, l
 
 
 @pytest.mark.parametrize("argv, needle", [
-    ([], "no crowd: give --pair"),
+    ([], "no crowd: no armature in the scene has its own goal"),
     (["--pair", "East", "Goal", "--pair", "East", "NorthGoal"], "'East' appears twice"),
     (["--pair", "East", "Nowhere"], "no object named 'Nowhere'"),
     (["--pair", "East", "East"], "the character itself"),
     (["--pair", "Goal", "East"], "no armature object named 'Goal'"),
-    (["--pair", "East", "Goal", "--max-wait", "-2"], "--max-wait"),
+    (["--pair", "East", "Goal", "--max-wait", "-2"], "the longest wait must be numbers >= 0"),
+    (["--pair", "East", "Goal", "--character", "North"], "either --pair or --character"),
 ])
 def test_crowd_bad_input_exits_2_and_changes_nothing(cli, capsys, crossing, tmp_path, argv,
                                                      needle):

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The working tree loads as a Blender extension and survives being switched off and on."""
 
 import sys

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The extension builds into a zip that Blender accepts, installs and enables.
 
 Uses ``blender_ext.py``, the extension command line tool that ships inside the bpy wheel

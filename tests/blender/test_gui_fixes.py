@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """What the GUI suite (./dev gui, a real Blender with its window) found, pinned down where
 bpy-as-a-module can check it: labels that wrap instead of being cut, headed preference
 sections, the overlay's blocked area (each prop grown by the radius, not whole cells) and

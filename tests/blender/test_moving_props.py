@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Props keyframed across a walk (paper Sec. 4.4), judged through the depsgraph: a cart
 crossing the path is walked round, a cart that leaves before the character gets there is no
 obstacle, one that parks on the goal is reported by name and frame."""

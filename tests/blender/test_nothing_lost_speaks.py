@@ -1,8 +1,8 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The silent cases speak (issue 20, items 4 and 5): bad clips, files, characters, goals and
 weights are refused up front with a message naming the cause, and a search that runs out of
 nodes says so instead of blaming props."""
 
-import json
 import math
 
 import bpy

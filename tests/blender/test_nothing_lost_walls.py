@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Walls as a user models them block as they look (issue 20, item 1): a plane standing up is
 a wall, and a room of four walls as one mesh is open inside, with its door the way out."""
 

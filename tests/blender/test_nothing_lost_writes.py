@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """A plan that cannot be written leaves the scene as it was (issue 20, item 2), compared
 object by object: every object's NLA tracks, strips, active action and plan record, every
 action (name, users, keys), the scene's frame range."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Object patches inside Blender: tag chairs with the real CMU jump, hurdle or walk around."""
 
 import bpy

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The overlay follows the file: a .blend saved with it ticked draws it when opened again, and
 after the add-on is disabled and enabled again; one saved without it draws nothing."""
 

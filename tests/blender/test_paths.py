@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Paths an animator keeps, judged through the depsgraph: straight on open ground, through a
 narrow gap, starting and stopping from standing (issue: paths on any scene)."""
 

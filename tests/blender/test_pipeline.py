@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Bake -> save -> reload -> plan -> evaluate, on real CMU mocap inside Blender."""
 
 import json

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Rigs in any rotation mode (issue 15, item 1).
 
 Blender's own BVH importer, at its default rotate_mode='NATIVE', makes pose bones in Euler

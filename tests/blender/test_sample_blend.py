@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The sample file saved by the oldest supported Blender opens and plans in this one."""
 
 import bpy

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Characters on other skeletons, scenes at other frame rates, and file size (issue 15,
 items 2, 4 and 6), judged through the depsgraph.
 

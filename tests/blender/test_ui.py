@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The animator's side of the add-on: sidebar panels, lists, preferences, undo, crowd
 planning from the selection, and the overlay's markers where props' clips start and end.
 

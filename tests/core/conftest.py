@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Fixtures for the pure-numpy core: real CMU clips read without Blender."""
 
 import os
@@ -9,7 +10,8 @@ import pytest
 REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO))
 
-from motion_patches import bvh, gait as gait_mod, locomotion_patch  # noqa: E402
+from motion_patches import bvh, locomotion_patch  # noqa: E402
+from motion_patches import gait as gait_mod
 
 MOCAP = Path(os.environ.get("MOTION_PATCHES_MOCAP", REPO.parent / "shared" / "mocap"))
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Crowds: characters planned one by one are kept apart in space and time."""
 
 import numpy as np

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 import numpy as np
 
 from motion_patches import curves
@@ -107,5 +108,4 @@ def test_vectorised_cell_occlusion_matches_the_pairwise_polygon_test():
         fast = cells_within(x0, y0, c, poly, r)
         for k in range(64):
             cell = np.array([[x0[k], y0[k]], [x0[k] + c, y0[k]], [x0[k] + c, y0[k] + c], [x0[k], y0[k] + c]])
-            if r > 0:
-                assert fast[k] == polygons_within(cell, poly, r), (k, r)
+            assert fast[k] == polygons_within(cell, poly, r), (k, r)

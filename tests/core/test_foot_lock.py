@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Foot locking: planted feet of a planned walk stay put, nothing else moves or pops."""
 
 import numpy as np

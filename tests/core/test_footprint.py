@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Footprints of meshes as a user models them: thin walls block, rooms stay open."""
 
 import numpy as np

@@ -1,6 +1,8 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 import numpy as np
 
-from motion_patches import clip as clipmod, quat
+from motion_patches import clip as clipmod
+from motion_patches import quat
 from motion_patches.cycle import cycle_turns, detect_cycles
 from motion_patches.inplace import facing_yaw, to_inplace, to_world
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Layout-check verdicts without Blender: which props block a pair, spec validation."""
 
 import numpy as np

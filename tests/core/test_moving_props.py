@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Props that move during a walk (paper Sec. 4.4): asleep / awake, repair of the pieces met."""
 
 import numpy as np

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Every "no path" names its cause (issue 15, item 5): the props in the way, the patch, or
 the search limit (motion_patches.causes)."""
 

@@ -1,10 +1,11 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 import numpy as np
 import pytest
 
 from motion_patches import object_patch as op
 from motion_patches.environment import Environment, Obstacle
 from motion_patches.motion import concatenate
-from motion_patches.planner import PlanError, SegmentPlanner, plan_motions
+from motion_patches.planner import SegmentPlanner, plan_motions
 
 from conftest import cmu
 
@@ -95,23 +96,26 @@ def test_hurried_character_hurdles_the_chair_line_unhurried_walks_around(walk_pa
         assert np.linalg.norm(np.diff(whole.ground[:, :2], axis=0), axis=1).max() < 0.1
 
 
-@pytest.mark.parametrize("seed", range(8))
-def test_dynamic_and_static_stitching_find_paths_of_equal_cost(walk_patch, hurdle_clip, seed):
-    rng = np.random.default_rng(seed)
-    start = (0.5, 0.5, 0.0)
-    goal = (10.0, float(rng.uniform(-1, 2)), 0.0)
-    costs = []
-    for mode in ("dynamic", "static"):
-        env, props = scattered_chairs(walk_patch, hurdle_clip, seed, 8)
-        try:
-            costs.append(SegmentPlanner(walk_patch, env, 3.0, 0.5, 0.1, props=props, mode=mode)
-                         .plan(start, goal).cost)
-        except PlanError as exc:
-            costs.append(str(exc))
-    if isinstance(costs[0], str):
-        assert isinstance(costs[1], str)
-    else:
-        assert np.isclose(costs[0], costs[1])
+def test_dynamic_and_static_stitching_find_paths_of_equal_cost(walk_patch, hurdle_clip):
+    """Lazy (dynamic) and up-front (static) stitching search the same graph: on every
+    layout both find a path (a PlanError fails the test) of the same cost, with the same
+    number of chairs jumped; and the layouts are ones where jumping pays, in some of them."""
+    jumped = []
+    for seed in range(8):
+        rng = np.random.default_rng(seed)
+        start = (0.5, 0.5, 0.0)
+        goal = (10.0, float(rng.uniform(-1, 2)), 0.0)
+        plans = []
+        for mode in ("dynamic", "static"):
+            env, props = scattered_chairs(walk_patch, hurdle_clip, seed, 8)
+            plans.append(SegmentPlanner(walk_patch, env, 3.0, 0.5, 0.1, props=props,
+                                        mode=mode).plan(start, goal))
+        assert np.isclose(plans[0].cost, plans[1].cost), seed
+        used = [sum(p.kind == "traversal" for p in plan.pieces) for plan in plans]
+        assert used[0] == used[1], seed
+        jumped.append(used[0])
+    print("chairs jumped per layout:", jumped)
+    assert sum(n > 0 for n in jumped) >= 2, jumped
 
 
 def test_per_tile_observer_stitches_the_chair_line_lazily(walk_patch, hurdle_clip):
@@ -203,8 +207,8 @@ def test_corridor_planning_with_traversals_matches_the_full_search(walk_patch, h
 
 def test_stand_up_walk_and_sit_down_on_retargeted_real_clips(walk_patch, walk_gait, walk16):
     from motion_patches.clip import retarget
-    from motion_patches.planner import interaction_states, with_interactions
     from motion_patches.object_patch import floor_level
+    from motion_patches.planner import interaction_states, with_interactions
     floor = floor_level(walk16)
     sit = op.patch_clip_from(retarget(cmu("13_05"), walk16.skeleton), op.INTERACTION,
                              walk_gait.fps, effort=2.0, floor=floor)

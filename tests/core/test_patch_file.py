@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Patch files are validated before anything is stored (issue 20, item 3): truncated or
 damaged bytes and crafted headers and arrays are refused naming the cause."""
 

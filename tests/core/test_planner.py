@@ -1,10 +1,11 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 import numpy as np
 import pytest
 
 from motion_patches import contacts, metrics
 from motion_patches.environment import Environment, Obstacle
-from motion_patches.motion import concatenate
 from motion_patches.inplace import to_world
+from motion_patches.motion import concatenate
 from motion_patches.planner import PlanError, SegmentPlanner, piece_motion, plan_motions
 
 

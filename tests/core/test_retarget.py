@@ -1,13 +1,15 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Bone maps and retargeting (issue 15, item 2), compact keys and scene-rate timing (items
 4 and 6), on real CMU skeletons read without Blender."""
 
 import numpy as np
 import pytest
 
-from conftest import MOCAP, cmu
 from motion_patches import bvh, keys, retarget, scene_rate
 from motion_patches.retarget import RetargetError, rig_map
 from motion_patches.skeleton import Skeleton
+
+from conftest import MOCAP, cmu
 
 
 @pytest.fixture(scope="module")

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """A straight walk alone bakes a patch that plans (issue 15, item 3; paper Sec. 6): space-
 curve following bends the straight stride into turns, up to the documented default radius
 ``gait.STRAIGHT_BEND_RADIUS``, and a bake too sparse to connect is refused."""
@@ -5,12 +6,14 @@ curve following bends the straight stride into turns, up to the documented defau
 import numpy as np
 import pytest
 
-from conftest import cmu
-from motion_patches import contacts, curves, gait as gait_mod, locomotion_patch, synthesis
+from motion_patches import contacts, curves, locomotion_patch, synthesis
+from motion_patches import gait as gait_mod
 from motion_patches.environment import Environment, Obstacle
 from motion_patches.locomotion_patch import SparsePatch
 from motion_patches.motion import concatenate
 from motion_patches.planner import SegmentPlanner, plan_motions
+
+from conftest import cmu
 
 STRAIGHT_CLIPS = ("16_15", "02_01")  # subject 16 and subject 2, each a straight walk
 

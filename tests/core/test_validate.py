@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The glitch validator: it catches flips, backward steps and join jumps, passes clean walks."""
 
 import numpy as np

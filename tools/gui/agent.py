@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Runs inside a windowed Blender for the GUI suite (``blender --python tools/gui/agent.py --
 --channel DIR``): a timer that executes the Python snippets the suite drops into DIR and
 answers with JSON. It is how the suite reads the scene, the screen layout and the clipboard,

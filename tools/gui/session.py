@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """A windowed Blender under Xvfb, driven with real input events (xdotool) and read through
 the agent (tools/gui/agent.py). Used by tools/gui/suite.py inside the GUI root
 (tools/gui/gui-root); needs Xvfb, xdotool, ImageMagick and numpy there.

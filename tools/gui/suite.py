@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The GUI suite: the extension in a real, windowed Blender, used as an animator would.
 
 Run by ``./dev gui`` inside the GUI root (tools/gui/gui-root), with Xvfb and Mesa's software
@@ -158,10 +159,10 @@ class Suite:
     def settle(self):
         """Let a panel that grew after a scripted change be laid out again: Blender does it
         on the next redraw, which moving the pointer over the sidebar brings."""
-        (x, y, w, h), (l, r) = self.sidebar()
+        (x, y, w, h), (left, _right) = self.sidebar()
         self.s.py("redraw_all(); result = 1")
-        self.s.move(l + 5, y + h // 2)
-        self.s.move(l + 6, y + h // 2 + 3)
+        self.s.move(left + 5, y + h // 2)
+        self.s.move(left + 6, y + h // 2 + 3)
         self.s.wait_idle()
         time.sleep(0.2)
         self.s.wait_idle()
@@ -649,7 +650,7 @@ result = 1''')
     # --- preferences --------------------------------------------------------------------
 
     def preferences(self):
-        self.s.py(f'''
+        self.s.py('''
 bpy.context.preferences.active_section = "ADDONS"
 bpy.context.window_manager.addon_search = "Motion"
 with override("VIEW_3D"):
