@@ -1355,6 +1355,7 @@ def _with_hold(plan, raw, bounds, at, hold, ramp):
     (:func:`motion_patches.retime.held`) and becomes a piece of kind "hold", so it is
     written as its own action, not the shared segment action."""
     import dataclasses
+
     from .motion_patches import retime
     i = _piece_holding(plan, bounds, at, ramp)
     if i is None:

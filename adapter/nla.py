@@ -15,7 +15,8 @@ import json
 
 import numpy as np
 
-from ..motion_patches import keys as key_plan, quat
+from ..motion_patches import keys as key_plan
+from ..motion_patches import quat
 from ..motion_patches.clip import Clip
 from ..motion_patches.inplace import rest_facing, to_inplace, to_world
 from ..motion_patches.skeleton import root_position_to_location

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Blender benchmark of the write path (issue 16, the Blender rows): NLA strips and crowds.
 
 Prints numbers next to their targets, asserts nothing. Run from the repository root with a

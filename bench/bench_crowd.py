@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Crowd benchmark of the core: plan time and memory for 10, 100 and 1,000 characters.
 
 Prints numbers, asserts nothing. Run from the repository root:
@@ -39,6 +40,7 @@ for p in (str(REPO), str(HERE)):
         sys.path.insert(0, p)
 
 import bench_core as core  # noqa: E402
+
 from motion_patches import crowd  # noqa: E402
 from motion_patches.environment import Environment, Obstacle  # noqa: E402
 from motion_patches.motion import concatenate  # noqa: E402

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The clearance rule for the body: the hips, not only the ground path, keep the radius.
 
 The planner keeps the ground path (the character's ground frame, the root's smoothed

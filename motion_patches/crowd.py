@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Crowds of independently planned characters kept apart in space and time.
 
 Each character's path is planned on its own against the props (the paper plans one

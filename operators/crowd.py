@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Duplicate the active armature into a crowd scattered over a region and plan it."""
 
 import bpy

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Duplicate Crowd (issue 17): a source armature copied into a linked crowd and planned,
 and crowd requests that cannot be carried out refused with the scene unchanged."""
 

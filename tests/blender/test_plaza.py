@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """A plaza crowd from the real clips (issue 17): fifty characters in two groups cross
 between pillars and seats, some standing up from a seat first, some sitting down at the
 end, planned with api.plan_crowd and checked through the depsgraph on every frame."""

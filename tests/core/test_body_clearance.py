@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """The clearance rule holds for the body: the hips, not only the ground path, keep the radius
 from every footprint (issue: nothing lost, nothing crossed, item 6)."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Property suite: thousands of random and adversarial layouts, every plan checked for what
 must always hold (issue: nothing lost, nothing crossed).
 
