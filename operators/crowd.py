@@ -6,7 +6,6 @@ from bpy.props import FloatVectorProperty, IntProperty, StringProperty
 
 from .. import api
 from .common import progress
-from .plan import _weights
 
 
 class MOTION_PATCHES_OT_duplicate_crowd(bpy.types.Operator):
@@ -36,10 +35,9 @@ class MOTION_PATCHES_OT_duplicate_crowd(bpy.types.Operator):
         return context.window_manager.invoke_props_dialog(self)
 
     def execute(self, context):
-        s = context.scene.motion_patches
-        w = _weights(s)
         pairs = []
         try:
+            w = api.planning_settings(context.scene)
             pairs = api.duplicate_crowd(
                 context.scene, context.active_object, self.count,
                 (self.region_min, self.region_max), (self.goal_min, self.goal_max),
@@ -47,7 +45,7 @@ class MOTION_PATCHES_OT_duplicate_crowd(bpy.types.Operator):
                 context=context)
             with progress(context) as update:
                 res = api.plan_crowd(context.scene, pairs, patch_name=self.patch or None,
-                                     context=context, progress=update, **w)
+                                     context=context, progress=update)
         except api.MotionPatchesError as exc:
             api.remove_crowd(pairs)  # nothing made is left behind
             self.report({'ERROR'}, str(exc))

@@ -27,8 +27,10 @@ def start():
     for var, sub in (("BLENDER_USER_CONFIG", "config"), ("BLENDER_USER_SCRIPTS", "scripts"),
                      ("BLENDER_USER_DATAFILES", "datafiles"), ("BLENDER_USER_EXTENSIONS", "extensions")):
         os.environ[var] = str(home / sub)
-    import addon_utils
+    # isort: off
     import bpy
+    import addon_utils  # ships with bpy: importable only once bpy is
+    # isort: on
     repo_dir = home / "repo"
     repo_dir.mkdir()
     (repo_dir / "motion_patches").symlink_to(REPO_ROOT, target_is_directory=True)
