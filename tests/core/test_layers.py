@@ -161,3 +161,48 @@ def test_choose_takes_the_cheapest_layer_with_a_plan():
     assert layers.choose([None, None]) is None
     with pytest.raises(ValueError, match="gait"):
         layers.check_gait("  ")
+
+
+def test_blend_table_walk_to_run_ends_on_the_run_node_pose_without_a_pop(walk_patch, run_patch):
+    """Each walk pose cluster has a blend into the run; the one from the walk's node pose
+    starts on it and lands on the run's node pose (its pose distance to the run loop's
+    first frame is zero within the stitch's tolerance, root continuous); the ground goes
+    on at the blended pace; no joint turns more per frame at the joins than inside the
+    walk and run cycles (99th percentile)."""
+    from motion_patches import blend_table, poses, quat
+    from motion_patches.stitching import POSITION_TOLERANCE
+    entries = blend_table.table(walk_patch, run_patch)
+    assert len(entries) == walk_patch.pose_centres.shape[0]
+    assert all(t.end_pose == run_patch.seg_pose[0, 0] for t in entries)
+    assert all(0.5 * walk_patch.gait.frames <= t.frames <= 1.5 * walk_patch.gait.frames + 1
+               for t in entries)
+    m = blend_table.blend(walk_patch.gait, run_patch.gait, 0)   # from the walk's node pose
+    lw, lr = walk_patch.gait.straight, run_patch.gait.straight
+    offset = m.ground[-1]
+
+    def dist(root, rot, ref_root, ref_rot):
+        return float(np.abs(poses.pose_features(root[None], rot[None])
+                            - poses.pose_features(ref_root[None], ref_rot[None])).max())
+    assert dist(m.root_local[0], m.rotations[0], lw.root_local[0], lw.rotations[0]) < 1e-6
+    assert dist(m.root_local[-1], m.rotations[-1], lr.root_local[0], lr.rotations[0]) < 1e-6
+    assert np.linalg.norm(m.root_local[-1] - lr.root_local[0]) < POSITION_TOLERANCE / 10
+    # One cycle of the blend covers between a walk cycle and a run cycle of ground, straight.
+    assert walk_patch.gait.cycle_distance < offset[0] < run_patch.gait.cycle_distance
+    assert offset[1] == 0 and offset[2] == 0
+    step = np.diff(m.ground[:, 0])
+    assert step.min() > 0 and step.max() < 1.5 * run_patch.gait.cycle_distance / lr.rotations.shape[0]
+
+    def joint_steps(rot):
+        d = quat.mul(quat.conj(rot[:-1]), rot[1:])
+        return 2 * np.arccos(np.clip(np.abs(d[..., 0]), 0, 1)).max(axis=1)
+    inside = np.concatenate([joint_steps(np.concatenate([lp.rotations, lp.rotations[:1]]))
+                             for lp in (lw, lr)])
+    joins = np.concatenate([joint_steps(np.concatenate([lw.rotations[-1:], m.rotations[:2]])),
+                            joint_steps(np.concatenate([m.rotations[-2:], lr.rotations[1:2]])),
+                            joint_steps(m.rotations)])
+    print(f"largest joint step: blend {np.degrees(joins.max()):.1f} deg, "
+          f"99th percentile in the cycles {np.degrees(np.percentile(inside, 99)):.1f} deg")
+    assert joins.max() <= np.percentile(inside, 99)
+    back = blend_table.table(run_patch, walk_patch)
+    assert len(back) == run_patch.pose_centres.shape[0]
+    assert all(t.end_pose == walk_patch.seg_pose[0, 0] for t in back)
