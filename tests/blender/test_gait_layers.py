@@ -113,3 +113,19 @@ def test_a_layer_not_baked_is_refused_and_nothing_written(layers_blend, addon_mo
         plan(api, "run", patch_name="walk")
     assert walker.animation_data is None or not walker.animation_data.nla_tracks
     assert api.PLAN_KEY not in walker
+
+
+def test_cli_plan_gait(layers_blend, addon_module_name, capsys):
+    import json
+    import sys
+    cli = sys.modules[addon_module_name].cli
+    bpy.ops.wm.open_mainfile(filepath=str(layers_blend))
+    code = cli.main(["plan", "--character", "Walker", "--goal", "Goal", "--gait", "auto", "--json"])
+    doc = json.loads(capsys.readouterr().out)
+    assert code == 0 and doc["layer"] == "run"
+    assert set(doc["layer_costs"]) == {"walk", "run"}
+    bpy.ops.wm.open_mainfile(filepath=str(layers_blend))
+    code = cli.main(["plan", "--character", "Walker", "--goal", "Goal", "--gait", "swim"])
+    err = capsys.readouterr().err
+    assert code != 0 and "no locomotion patch of layer 'swim'" in err
+    assert "motion_patches_plan" not in bpy.data.objects["Walker"]
