@@ -29,6 +29,7 @@ from .motion_patches import (
     contacts,
     crowd,
     foot_lock,
+    layers,
     layout_spec,
     metrics,
     moving_props,
@@ -123,13 +124,16 @@ def import_mocap(paths, scale=mocap.CMU_SCALE, armature=None, name=None):
 
 def bake_locomotion_patch(scene: "bpy.types.Scene", armature, straight, turns=(),
                           layer: str = "walk", name: str | None = None, cells: int = 8,
-                          nodes: int = 8, effort_rate: float = 1.0, mirror_turns: bool = True,
+                          nodes: int = 8, effort_rate: float | None = None, mirror_turns: bool = True,
                           progress=None, bvh_files=(), fps: float | None = None) -> BakeResult:
     """Bake and store a locomotion patch from a straight action and turn actions (none
     needed: the straight stride is bent to turns, see ``gait.STRAIGHT_BEND_RADIUS``), make
     it the active patch and remember its clips in the scene's bake settings (what the
     Locomotion Patches panel shows). A patch too sparse to connect is refused, saying what
-    to add.
+    to add. Its tile side is two straight cycles, so a run's tiles are larger than a
+    walk's; ``effort_rate`` (effort T per second) defaults to the gait's
+    (:func:`motion_patches.layers.effort_rate`: 1 for a walk, more for a run) so the costs
+    of two layers compare.
 
     ``bvh_files``: BVH files imported first, onto ``armature`` (an armature object, or the
     name of a new one); ``straight`` and ``turns`` are actions or action names, a name
@@ -231,6 +235,8 @@ def _bake(scene, armature, straight, turns, layer, name, cells, nodes, effort_ra
                     f"the turn clip '{action.name}' does not turn: none of its gait cycles turns "
                     f"{np.degrees(MIN_TURN):.0f} degrees or more; give a clip that turns, or "
                     f"bake without it (the straight stride is bent to turns)")
+        if effort_rate is None:
+            effort_rate = layers.effort_rate(gait)
         patch = bake(gait, cells=cells, nodes=nodes, effort_rate=effort_rate, progress=progress)
     except ValueError as exc:  # SparsePatch included
         raise MotionPatchesError(str(exc)) from None
@@ -790,7 +796,8 @@ def plan_path(scene: "bpy.types.Scene", character: "bpy.types.Object", goal,
               beta: float | None = None, gamma: float | None = None,
               radius: float | None = None, frame_start: int | None = None, context=None,
               stitching: str | None = None, start_prop: "bpy.types.Object | None" = None,
-              foot_lock: bool | None = None, goal_facing: str | None = None) -> PlanResult:
+              foot_lock: bool | None = None, goal_facing: str | None = None,
+              gait: str | None = None) -> PlanResult:
     """Plan ``character`` to ``goal`` (an object or (x, y, heading); None: the scene's goal)
     and write it as NLA. Settings left None are the scene's (:func:`planning_settings`).
 
@@ -800,15 +807,17 @@ def plan_path(scene: "bpy.types.Scene", character: "bpy.types.Object", goal,
     ``start_prop`` with a stand-up clip starts it there (the character's own position is
     then not used). With ``foot_lock`` planted feet are pinned by leg IK, written as a
     an Add track over the shared segment strips. ``goal_facing="any"`` lets the walk end
-    facing whichever way is cheapest (the goal object's facing is then ignored). Raises
+    facing whichever way is cheapest (the goal object's facing is then ignored).
+    ``gait`` picks the layer: a layer name ("walk", "run") plans with the stored patch of
+    that layer, "auto" plans in every layer stored and keeps the cheapest Eq. 5 cost
+    (:mod:`motion_patches.layers`; ``stats["layers"]`` gives each layer's cost), None
+    plans with ``patch_name`` (or the active patch). Raises
     :class:`PathNotFound` when the props leave no way, and
     :class:`MotionPatchesError` for bad input; either way the scene is unchanged."""
-    patch = _patch_for_planning(scene, patch_name)
+    candidates = _layer_patches(scene, patch_name, gait)
     context = context or bpy.context
     # Objects moved by a script have stale matrix_world until the view layer updates.
     context.view_layer.update()
-    rig = _check_character(character, patch)
-    scale = _size(rig)
     if goal is None:
         goal = scene.motion_patches.goal
     if goal is None:
@@ -818,11 +827,86 @@ def plan_path(scene: "bpy.types.Scene", character: "bpy.types.Object", goal,
         raise MotionPatchesError("the goal cannot be the character itself")
     frame_start = _frame_start(scene, frame_start)
     _writable(character)
+    tried, failures = [], []
+    for name, patch in candidates:
+        try:
+            tried.append(_plan_in_layer(scene, character, goal, patch, alpha, beta, gamma,
+                                        radius, frame_start, context, stitching, start_prop,
+                                        goal_facing) + (name,))
+        except PathNotFound as exc:
+            if len(candidates) == 1:
+                raise
+            failures.append((patch.layer, exc))
+    if not tried:
+        first = failures[0][1]
+        raise PathNotFound("; ".join(f"{layer}: {exc}" for layer, exc in failures),
+                           first.cause, first.props)
+    best = layers.choose([t[3].cost for t in tried])
+    patch, rig, env, plan, motions, start_frame, name = tried[best]
+    if gait is not None:
+        plan.stats["layer"] = patch.layer
+        plan.stats["layers"] = {t[0].layer: round(float(t[3].cost), 4) for t in tried}
+        plan.stats["layers"].update({layer: None for layer, _ in failures})
+    placed = _placed(scene, patch, rig, motions)
+    _writable(character, start_frame, placed[2].frames)
+    with transaction.kept(bpy, scene, [character], (PLAN_KEY, FRAME_RANGE_KEY)):
+        return _write(scene, character, patch, name, plan, placed, start_frame, env,
+                      radius, foot_lock, rig)
+
+
+def _layer_patches(scene, patch_name, gait):
+    """[(stored name, patch)] to plan with: the named (or active) patch when ``gait`` is
+    None; the patch of layer ``gait`` (the named one, else the active one when it is of
+    that layer, else the first); for "auto" one patch per layer stored."""
+    if gait is None:
+        return [(patch_name, _patch_for_planning(scene, patch_name))]
+    try:
+        gait = layers.check_gait(gait)
+    except ValueError as exc:
+        raise MotionPatchesError(str(exc)) from None
+    items = list(storage.patch_items(scene))
+    if not items:
+        _patch_for_planning(scene, None)  # raises: nothing baked
+    have = ", ".join(f"'{i.name}' ({i.layer})" for i in items)
+    if patch_name:
+        item = next((i for i in items if i.name == patch_name), None)
+        if item is None:
+            _patch_for_planning(scene, patch_name)  # raises naming the patches there are
+        if gait != "auto" and item.layer != gait:
+            raise MotionPatchesError(f"the patch '{patch_name}' is of layer '{item.layer}', not "
+                                     f"'{gait}' (have: {have})")
+        if gait != "auto":
+            return [(item.name, _patch_for_planning(scene, item.name))]
+    active = scene.motion_patches.active_patch_index
+    active = items[active] if 0 <= active < len(items) else None
+    by_layer = {}
+    for item in items:
+        if item.layer not in by_layer or item == active:
+            by_layer[item.layer] = item
+    if gait == "auto":
+        chosen = list(by_layer.values())
+    elif gait in by_layer:
+        chosen = [by_layer[gait]]
+    else:
+        raise MotionPatchesError(f"no locomotion patch of layer '{gait}' is baked in this scene "
+                                 f"(have: {have}); bake one with that layer, or plan with "
+                                 f"gait 'auto' or one of the layers there are")
+    return [(item.name, _patch_for_planning(scene, item.name)) for item in chosen]
+
+
+def _plan_in_layer(scene, character, goal, patch, alpha, beta, gamma, radius, frame_start,
+                   context, stitching, start_prop, goal_facing):
+    """(patch, rig map, planner world, plan, piece motions, first frame) of one character
+    planned in the layer of ``patch``; its props offer only the traversal clips that
+    serve that layer (:func:`motion_patches.layers.serves`)."""
+    rig = _check_character(character, patch)
+    scale = _size(rig)
     depsgraph = context.evaluated_depsgraph_get()
     goal_obj = goal if isinstance(goal, bpy.types.Object) else None
     env = scene_io.environment(scene, depsgraph, patch, radius,
                                _not_obstacles((character, goal_obj)), scale)
-    props = object_patches(scene, depsgraph, patch, scale)
+    props = [layers.for_layer(p, patch.layer)
+             for p in object_patches(scene, depsgraph, patch, scale)]
     by_name = {p.name: p for p in props}
     ends = _endpoints(character, goal, start_prop, by_name,
                       rig.target if rig else patch.gait.skeleton, goal_facing, scale)
@@ -843,11 +927,7 @@ def plan_path(scene: "bpy.types.Scene", character: "bpy.types.Object", goal,
         frame_start += int(round(wait * scene_fps(scene)))
         motions = plan_motions(patch, plan)
     plan.stats["glitches"] = validate.count(validate.plan_glitches(patch, plan, motions))
-    placed = _placed(scene, patch, rig, motions)
-    _writable(character, frame_start, placed[2].frames)
-    with transaction.kept(bpy, scene, [character], (PLAN_KEY, FRAME_RANGE_KEY)):
-        return _write(scene, character, patch, patch_name, plan, placed, frame_start, env,
-                      radius, foot_lock, rig)
+    return patch, rig, env, plan, motions, frame_start
 
 
 def crowd_members(scene: "bpy.types.Scene", characters=None) -> list[tuple]:

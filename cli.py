@@ -349,15 +349,21 @@ def cmd_plan(args):
     save = _save_target(args)
     try:
         res = api.plan_path(scene, char, goal, patch_name=args.patch, frame_start=args.frame_start,
-                            **w)
+                            gait=args.gait, **w)
     except api.PathNotFound as exc:
         raise Failed(str(exc)) from None
     fps = api.scene_fps(scene)
     saved = _save(save)
     doc = _plan_doc(res, fps)
+    if args.gait:
+        doc.update(layer=res.stats.get("layer"), layer_costs=res.stats.get("layers"))
     doc.update(goal=api.state_dict(res.goal, goal_obj and goal_obj.name),
                patch=args.patch or api.active_patch_name(scene), weights=w, saved=saved)
     text = [_plan_line(res, fps)]
+    if args.gait:
+        text.append(f"  layer '{res.stats.get('layer')}' (Eq. 5 cost per layer: "
+                    + ", ".join(f"{k} {'no path' if v is None else f'{v:.2f}'}"
+                                for k, v in res.stats.get("layers", {}).items()) + ")")
     if res.stashed_action_track:
         text.append(f"  its active action was moved to the muted track "
                     f"'{res.stashed_action_track}'")
@@ -587,6 +593,9 @@ def build_parser():
     g.add_argument("--goal-xyh", nargs=3, type=float, metavar=("X", "Y", "HEADING_DEG"),
                    help="goal position (m) and facing (degrees counter-clockwise from +X)")
     pl.add_argument("--patch", metavar="NAME", help="locomotion patch (default: the active one)")
+    pl.add_argument("--gait", metavar="walk|run|auto",
+                    help="plan in the patch of this layer, or 'auto': in every layer baked, "
+                         "keeping the cheapest (default: the --patch or active patch)")
     _weight_options(pl)
     _planning_options(pl)
     pl.add_argument("--frame-start", type=int, metavar="N",

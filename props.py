@@ -86,6 +86,12 @@ class MOTION_PATCHES_PG_patch_clip(bpy.types.PropertyGroup):
         ('INTERACTION', "Interaction", "Starts or ends a path at the prop (sit, stand)")))
     effort: FloatProperty(name="Effort (T)", default=8.0, min=0.0,
                           description="Effort of the whole clip, in walking seconds")
+    layer_in: StringProperty(name="Layer In", default="walk",
+                             description="Gait layer(s) the clip is entered from: a name, "
+                                         "names separated by commas, or * for any")
+    layer_out: StringProperty(name="Layer Out", default="walk",
+                              description="Gait layer(s) the clip is left in: a name, names "
+                                          "separated by commas, or * for any")
     copy_step: FloatProperty(name="Copies Every (°)", default=10.0, min=0.0, max=180.0,
                              description="Copy the clip around the prop every so many "
                                          "degrees (0: no copies)")

@@ -51,6 +51,7 @@ def object_patch(obj, depsgraph, skeleton, fps, gait_floor=None, scale=1.0):
         clip = act_io.clip_from_action(item.action, None, fps, skeleton=skeleton)
         pc = op.patch_clip_from(clip, KINDS[item.kind], fps, effort=item.effort,
                                 name=item.action.name, floor=gait_floor)
+        pc.layer_in, pc.layer_out = item.layer_in, item.layer_out
         if pc.kind == op.TRAVERSAL and item.copy_step > 0:
             if patch.add_traversal_copies(pc, item.copy_step) == 0:
                 raise ValueError(f"every copy of '{item.action.name}' around '{obj.name}' "

@@ -31,6 +31,8 @@ class PatchClip:
     kind: str
     motion: Motion          # ground frames relative to the prop, in-place channels
     effort: float = 1.0     # user-supplied T of Eq. 5 for the whole clip
+    layer_in: str = "walk"  # layers the clip is entered from / left in (names, "a, b" or "*";
+    layer_out: str = "walk"  # motion_patches.layers.serves)
     angle: float = 0.0      # rotation of this copy about the prop (radians)
 
     @property
@@ -58,7 +60,8 @@ class PatchClip:
 
     def rotated(self, angle):
         m = self.motion.transformed(0.0, 0.0, angle)
-        return PatchClip(self.name, self.kind, m, self.effort, self.angle + angle)
+        return PatchClip(self.name, self.kind, m, self.effort, self.layer_in, self.layer_out,
+                         self.angle + angle)
 
 
 def clip_ground(clip):

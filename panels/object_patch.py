@@ -57,6 +57,10 @@ class MOTION_PATCHES_PT_object_patch(SidebarPanel, bpy.types.Panel):
             col = layout.column(align=True)
             col.prop(clip, "effort")
             col.prop(clip, "copy_step")
+            if clip.kind == 'TRAVERSAL':  # which gait layers may take it (walk, run, *)
+                row = layout.row(align=True)
+                row.prop(clip, "layer_in")
+                row.prop(clip, "layer_out")
         n, area = footprint_info(ob)
         layout.label(text=f"{n} vertices" + (f", footprint {area:.2f} m²" if area is not None
                                              else ""), icon='MESH_DATA')
