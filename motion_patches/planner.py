@@ -1007,7 +1007,7 @@ def plan_motions(patch, plan, standing=True):
             ms[0] = retime.eased(ms[0], ease_in=first_walks, ramp=ramp)
             ms[-1] = retime.eased(ms[-1], ease_out=last_walks, ramp=ramp)
         if last_walks and np.isfinite(np.asarray(plan.goal[:2], float)).all():
-            ms[-1] = hips_to(ms[-1], plan.goal[:2])
+            ms[-1] = hips_to(ms[-1], plan.goal[:2], 2 * patch.gait.frames)
     for i, p in enumerate(plan.pieces):
         if p.kind in clips:
             continue
@@ -1018,26 +1018,28 @@ def plan_motions(patch, plan, standing=True):
     return ms
 
 
-def hips_to(motion, xy):
+def hips_to(motion, xy, window):
     """The motion with its root (the hips) brought onto the ground point ``xy`` on its last
-    frame: a walk stops wherever its stride ends, so the hips stand a few centimetres
-    beside the ground path's end (up to ~9 cm); the root's offset from the ground frame is
-    eased over the whole motion (smoothstep in frames, zero at its start) so the body ends
-    standing over the goal while the ground path (the object) is unchanged. Planted feet
-    move with the body by at most that offset over the stop; foot locking pins them."""
+    frame: a walk stops wherever its stride ends, so the hips would stand a few centimetres
+    beside the ground path's end. Over the last ``window`` frames (a smoothstep) the root's
+    horizontal offset from the ground frame is blended from the stride's own sway to the
+    offset that puts it on ``xy`` (none when the ground path ends there, as a plan's
+    does): the body settles over the goal as a stopping walker does, never swaying farther
+    from the path than the stride itself, and the ground path (the object) is unchanged.
+    Planted feet move with the body by at most the sway; foot locking pins them."""
     n = motion.frames
     if n < 2:
         return motion
     g = motion.ground
     c, s = np.cos(g[-1, 2]), np.sin(g[-1, 2])
-    r = motion.root_local[-1]
-    d = np.asarray(xy, float) - (g[-1, :2] + np.array([c * r[0] - s * r[1], s * r[0] + c * r[1]]))
-    t = np.linspace(0.0, 1.0, n)
-    w = t * t * (3.0 - 2.0 * t)
-    c, s = np.cos(g[:, 2]), np.sin(g[:, 2])
+    d = np.asarray(xy, float) - g[-1, :2]
+    target = np.array([c * d[0] + s * d[1], -s * d[0] + c * d[1]])  # in the last ground frame
+    k = int(min(max(window, 2), n))
+    t = np.linspace(0.0, 1.0, k)
+    w = np.zeros(n)
+    w[-k:] = t * t * (3.0 - 2.0 * t)
     root = motion.root_local.copy()
-    root[:, 0] += w * (c * d[0] + s * d[1])    # d in each frame's ground coordinates
-    root[:, 1] += w * (-s * d[0] + c * d[1])
+    root[:, :2] += w[:, None] * (target[None] - root[:, :2])
     return Motion(g, root, motion.rotations, motion.contacts)
 
 
