@@ -52,6 +52,7 @@ from .motion_patches.planner import (
 )
 
 PLAN_KEY = storage.PLAN_KEY  # the custom property holding a character's plan record
+CROWD_RESOLVE_SLACK = 0.05  # metres the crowd is resolved wider than its spacing (see plan_crowd)
 CROWD_SPOT = "\x00crowd spot "  # obstacle names of other characters' standing spots
 CROWD_GHOST = "\x00crowd ghost "  # where another character walks when two would meet
 
@@ -1138,8 +1139,11 @@ def plan_crowd(scene: "bpy.types.Scene", pairs, patch_name: str | None = None,
         versions[k].append([n, plan, *synthesised(n, plan)])
         return _root_track(patch, rigs[n], versions[k][-1][3]), versions[k][-1][4]
 
+    # Resolved a little wider than reported: a hold is laid into the written motion by a time
+    # warp, which may bring a pair a few millimetres nearer than the track the table saw.
     schedules, _ = crowd.resolve(
-        [_root_track(patch, rigs[p[0]], p[3]) for p in planned], replan, spacing, radius, fps,
+        [_root_track(patch, rigs[p[0]], p[3]) for p in planned], replan,
+        spacing + CROWD_RESOLVE_SLACK, radius, fps,
         round(max_wait_seconds * fps), max(1, round(0.2 * fps)), ramp=ramp,
         holdable=[p[4] for p in planned])
     planned = [v[s.version] for v, s in zip(versions, schedules)]

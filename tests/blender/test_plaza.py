@@ -118,10 +118,7 @@ def test_a_plaza_of_fifty_crosses_without_meeting(plaza, addon_module):
     for name, why in res.failed:
         assert name in why and "no path" in why, why
     assert len(res.failed) <= 2, res.failed
-    # Issue 17 asks for none; on Blender 4.5 none is left, on 5.0 one pair is (the seats'
-    # evaluated placement differs by float rounding, the priorities tie-break otherwise and
-    # the resolution does not clear one pair). Whatever is left must be reported exactly.
-    assert len(res.conflicts) <= 1, res.conflicts
+    assert not res.conflicts, res.conflicts  # none left (issue 17)
     assert res.holds  # the crowd gives way by idle holds, not only by waiting
     planned = [bpy.data.objects[p.character] for p in res.plans]
     end = max(p.frame_end for p in res.plans)
