@@ -18,12 +18,15 @@ def cart(name, keys, size=(1.2, 0.8, 1.0)):
     ob = bpy.context.object
     ob.name = name
     ob.scale = size
-    for f, x, y in keys:
-        ob.location = (x, y, size[2] / 2)
-        ob.keyframe_insert("location", frame=f)
-    for fc in ob.animation_data.action.fcurves if hasattr(ob.animation_data.action, "fcurves") else ():
-        for k in fc.keyframe_points:
-            k.interpolation = 'LINEAR'
+    edit = bpy.context.preferences.edit
+    kept = edit.keyframe_new_interpolation_type
+    edit.keyframe_new_interpolation_type = 'LINEAR'  # the same on every version's actions
+    try:
+        for f, x, y in keys:
+            ob.location = (x, y, size[2] / 2)
+            ob.keyframe_insert("location", frame=f)
+    finally:
+        edit.keyframe_new_interpolation_type = kept
     return ob
 
 
@@ -109,6 +112,30 @@ def test_a_cart_crossing_at_walking_pace_is_waited_for(walk_blend, addon_module)
     scene.frame_set(1)
     pos, _, _, _ = addon_module.adapter.evaluate.sample_armature(bpy.context, char, [1], ["Hips"])
     assert np.linalg.norm(pos[0, 0, :2] - hips[0]) < 1e-3
+
+
+def test_a_slow_cart_crossing_the_path_is_walked_round_keeping_the_other_pieces(
+        walk_blend, addon_module):
+    """A long cart (2.4 m) crossing at a crawl (0.2 m/s) would keep the walker waiting longer
+    than the longest wait offered: the pieces it meets are re-planned round it, the rest
+    of the plan kept."""
+    scene, char, goal, start, d = setup(addon_module, walk_blend)
+    fps = scene.render.fps / scene.render.fps_base
+    f, p = crossing_frame(addon_module, char, goal, start, d, 11.0)
+    side = np.array([-d[1], d[0]])
+    a, b = p - 2.0 * side, p + 2.0 * side   # 4 m at 0.2 m/s, in the middle when the walker is
+    half = 2.0 / 0.2
+    assert f - half * fps > 1
+    ob = cart("Cart", [(1, *a), (int(f - half * fps), *a), (int(f + half * fps), *b)],
+              size=(2.4, 2.4, 1.0))
+    result = plan(addon_module, char, goal)
+    info = result.stats["moving_props"]
+    assert info["wait_s"] == 0 and info["repairs"], info
+    assert all(r["kept"] >= 1 for r in info["repairs"])    # not the whole plan searched again
+    frames, hips, closest = clearances(addon_module, char, ob)
+    assert closest.min() > RADIUS - 0.06, closest.min()
+    assert np.all(closest > 0.0)
+    check_walk(scene, goal, hips)
 
 
 def test_a_cart_parked_across_the_path_is_walked_round(walk_blend, addon_module):
