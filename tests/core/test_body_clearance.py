@@ -60,4 +60,6 @@ def test_a_plan_that_keeps_clear_is_left_alone(walk_patch):
     same, _ = body_clearance.keep_clear(planner, plan, ms, (0.0, 0.0, 0.0), (10.0, 0.0, 0.0),
                                         lambda p: plan_motions(walk_patch, p))
     assert same is plan and "body_clearance" not in plan.stats
-    assert 0.05 < body_clearance.sway(walk_patch.gait) < 0.2
+    sway = body_clearance.sway(walk_patch.gait)
+    print(f"\nthe hips sway at most {sway * 100:.0f} cm from the ground path (CMU 16 walk)")
+    assert 0.05 < sway < 0.2
