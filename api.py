@@ -79,10 +79,10 @@ class BakeResult:
     stats: dict
     seconds: float
     notes: list
-    armature: str = ""                              # the armature the clips play on
-    straight: str = ""                              # action names baked
+    armature: str = ""  # the armature the clips play on
+    straight: str = ""  # action names baked
     turns: list = field(default_factory=list)
-    imported: list = field(default_factory=list)    # actions imported from BVH files
+    imported: list = field(default_factory=list)  # actions imported from BVH files
 
 
 @dataclass
@@ -103,10 +103,10 @@ class PlanResult:
 
 @dataclass
 class CrowdResult:
-    plans: list        # PlanResult per planned character, in the order given
-    failed: list       # [(character name, why no path)]
-    conflicts: list    # [{"a", "b", "frame", "distance_m"}] closer than two radii
-    delays: dict       # character name -> frames it waits at its start
+    plans: list  # PlanResult per planned character, in the order given
+    failed: list  # [(character name, why no path)]
+    conflicts: list  # [{"a", "b", "frame", "distance_m"}] closer than two radii
+    delays: dict  # character name -> frames it waits at its start
     seconds: float
     rerouted: list = field(default_factory=list)  # names re-planned round others' stretches
 
@@ -123,10 +123,21 @@ def import_mocap(paths, scale=mocap.CMU_SCALE, armature=None, name=None):
         raise MotionPatchesError(str(exc)) from None
 
 
-def bake_locomotion_patch(scene: "bpy.types.Scene", armature, straight, turns=(),
-                          layer: str = "walk", name: str | None = None, cells: int = 8,
-                          nodes: int = 8, effort_rate: float | None = None, mirror_turns: bool = True,
-                          progress=None, bvh_files=(), fps: float | None = None) -> BakeResult:
+def bake_locomotion_patch(
+    scene: "bpy.types.Scene",
+    armature,
+    straight,
+    turns=(),
+    layer: str = "walk",
+    name: str | None = None,
+    cells: int = 8,
+    nodes: int = 8,
+    effort_rate: float | None = None,
+    mirror_turns: bool = True,
+    progress=None,
+    bvh_files=(),
+    fps: float | None = None,
+) -> BakeResult:
     """Bake and store a locomotion patch from a straight action and turn actions (none
     needed: the straight stride is bent to turns, see ``gait.STRAIGHT_BEND_RADIUS``), make
     it the active patch and remember its clips in the scene's bake settings (what the
@@ -163,20 +174,35 @@ def bake_locomotion_patch(scene: "bpy.types.Scene", armature, straight, turns=()
         if isinstance(clip, str) and clip not in stems and bpy.data.actions.get(clip) is None:
             raise MotionPatchesError(
                 f"no action named '{clip}' (have: {_some_names(bpy.data.actions)}"
-                + (f"; imported files give: {', '.join(sorted(stems))}" if stems else "") + ")")
+                + (f"; imported files give: {', '.join(sorted(stems))}" if stems else "")
+                + ")"
+            )
     with transaction.made_undone_on_error(bpy, scene):
         if fps is not None:
             scene.render.fps, scene.render.fps_base = int(fps), 1.0
         imported = {}
         if files:
-            armature, acts = import_mocap(files, armature=None if isinstance(armature, str)
-                                          else armature,
-                                          name=armature if isinstance(armature, str) else None)
+            armature, acts = import_mocap(
+                files,
+                armature=None if isinstance(armature, str) else armature,
+                name=armature if isinstance(armature, str) else None,
+            )
             imported = {f.stem: a for f, a in zip(files, acts)}
         straight = _bake_action(straight, imported)
         turns = [_bake_action(t, imported) for t in turns]
-        res = _bake(scene, armature, straight, turns, layer, name, cells, nodes, effort_rate,
-                    mirror_turns, progress)
+        res = _bake(
+            scene,
+            armature,
+            straight,
+            turns,
+            layer,
+            name,
+            cells,
+            nodes,
+            effort_rate,
+            mirror_turns,
+            progress,
+        )
     s = scene.motion_patches  # the clips this patch came from, as the panel shows them
     s.source_armature = armature
     s.straight_action = straight
@@ -199,12 +225,14 @@ def _bake_armature(scene, armature, importing):
         if ob is None:
             raise MotionPatchesError(
                 f"no armature object named '{armature}' for the clips (have: "
-                f"{_some_names([o for o in scene.objects if o.type == 'ARMATURE'])})")
+                f"{_some_names([o for o in scene.objects if o.type == 'ARMATURE'])})"
+            )
         armature = ob
     if armature is None or armature.type != "ARMATURE":
-        raise MotionPatchesError("choose the armature the clips were imported on"
-                                 + (f" ('{armature.name}' is a {armature.type.lower()})"
-                                    if armature is not None else ""))
+        raise MotionPatchesError(
+            "choose the armature the clips were imported on"
+            + (f" ('{armature.name}' is a {armature.type.lower()})" if armature is not None else "")
+        )
     return armature
 
 
@@ -214,8 +242,9 @@ def _bake_action(clip, imported):
     return imported.get(clip) or bpy.data.actions[clip]
 
 
-def _bake(scene, armature, straight, turns, layer, name, cells, nodes, effort_rate,
-          mirror_turns, progress):
+def _bake(
+    scene, armature, straight, turns, layer, name, cells, nodes, effort_rate, mirror_turns, progress
+):
     t0 = time.perf_counter()
     fps = scene_fps(scene)
     bones = {b.name for b in armature.data.bones}
@@ -226,7 +255,8 @@ def _bake(scene, armature, straight, turns, layer, name, cells, nodes, effort_ra
                 f"the action '{action.name}' animates bones the armature '{armature.name}' does "
                 f"not have ({', '.join(unknown[:6])}{', ...' if len(unknown) > 6 else ''}): its "
                 f"bone names differ; import its BVH onto this armature (it is then retargeted) "
-                f"or rename its bones")
+                f"or rename its bones"
+            )
     try:
         clips = [act_io.clip_from_action(a, armature, fps) for a in (straight,) + tuple(turns)]
         gait = build_gait(layer, clips[0], tuple(clips[1:]), fps=fps, mirror_turns=mirror_turns)
@@ -235,7 +265,8 @@ def _bake(scene, armature, straight, turns, layer, name, cells, nodes, effort_ra
                 raise ValueError(
                     f"the turn clip '{action.name}' does not turn: none of its gait cycles turns "
                     f"{np.degrees(MIN_TURN):.0f} degrees or more; give a clip that turns, or "
-                    f"bake without it (the straight stride is bent to turns)")
+                    f"bake without it (the straight stride is bent to turns)"
+                )
         if effort_rate is None:
             effort_rate = layers.effort_rate(gait)
         patch = bake(gait, cells=cells, nodes=nodes, effort_rate=effort_rate, progress=progress)
@@ -252,7 +283,7 @@ def _animated_bones(action):
     for fc in compat.fcurves(action):
         path = fc.data_path
         if path.startswith('pose.bones["'):
-            out.add(path[len('pose.bones["'):path.index('"]')])
+            out.add(path[len('pose.bones["') : path.index('"]')])
     return out
 
 
@@ -278,8 +309,9 @@ def tag_object_patch(obj, clips, patch_name=None, scene=None, context=None):
         for action, kind, effort, step in clips:
             if action is None:
                 raise ValueError("a clip has no action")
-            clip = act_io.clip_from_action(action, None, scene_fps(scene),
-                                           skeleton=patch.gait.skeleton)
+            clip = act_io.clip_from_action(
+                action, None, scene_fps(scene), skeleton=patch.gait.skeleton
+            )
             object_patch.patch_clip_from(clip, props_io.KINDS[kind], scene_fps(scene), effort)
     except ValueError as exc:
         raise MotionPatchesError(f"cannot tag '{obj.name}': {exc}") from None
@@ -337,8 +369,16 @@ def object_patches(scene, depsgraph, patch, scale=1.0):
     floor = patch.gait.floor()
     for obj in props_io.tagged(scene):
         try:
-            out.append(props_io.object_patch(obj, depsgraph, patch.gait.skeleton, patch.gait.fps,
-                                             gait_floor=floor, scale=scale))
+            out.append(
+                props_io.object_patch(
+                    obj,
+                    depsgraph,
+                    patch.gait.skeleton,
+                    patch.gait.fps,
+                    gait_floor=floor,
+                    scale=scale,
+                )
+            )
         except ValueError as exc:
             raise MotionPatchesError(str(exc)) from None
     return out
@@ -360,8 +400,11 @@ def last_analysis(obj: "bpy.types.Object | None") -> dict | None:
 def state_dict(state, name=None):
     """(x, y, heading) as JSON-friendly numbers (heading in degrees, -180..180)."""
     h = (float(np.degrees(state[2])) + 180.0) % 360.0 - 180.0
-    d = {"x": round(float(state[0]), 6), "y": round(float(state[1]), 6),
-         "heading_deg": round(h, 4) + 0.0}
+    d = {
+        "x": round(float(state[0]), 6),
+        "y": round(float(state[1]), 6),
+        "heading_deg": round(h, 4) + 0.0,
+    }
     if name is not None:
         d["object"] = name
     return d
@@ -426,8 +469,7 @@ def set_bone_map(character, mapping):
     bones = {b.name for b in character.data.bones}
     wrong = [r for r in mapping.values() if r and r not in bones]
     if wrong:
-        raise MotionPatchesError(f"armature '{character.name}' has no bones "
-                                 f"{', '.join(wrong[:6])}")
+        raise MotionPatchesError(f"armature '{character.name}' has no bones {', '.join(wrong[:6])}")
     rig_io.set_bone_map(character, dict(mapping))
 
 
@@ -462,8 +504,9 @@ def _goal(goal):
     try:
         state = np.asarray(goal, float).reshape(3)
     except (TypeError, ValueError):
-        raise MotionPatchesError("choose a goal object (its location and facing) or give "
-                                 "(x, y, heading)") from None
+        raise MotionPatchesError(
+            "choose a goal object (its location and facing) or give (x, y, heading)"
+        ) from None
     if not np.isfinite(state).all():
         raise MotionPatchesError("the goal (x, y, heading) must be finite numbers")
     return state
@@ -484,8 +527,10 @@ def _endpoints(character, goal, start_prop, by_name, skel, goal_facing="exact", 
     if isinstance(goal, bpy.types.Object) and goal.name in by_name:
         i = props_io.interaction_clip(by_name[goal.name], sitting=True)
         if i is None:
-            raise MotionPatchesError(f"the goal '{goal.name}' is a prop without a sit-down "
-                                     f"interaction clip: there is nowhere to end the path")
+            raise MotionPatchesError(
+                f"the goal '{goal.name}' is a prop without a sit-down "
+                f"interaction clip: there is nowhere to end the path"
+            )
         goal_ref = (by_name[goal.name], i)
     if start_prop is not None:
         if start_prop.name not in by_name:
@@ -495,8 +540,12 @@ def _endpoints(character, goal, start_prop, by_name, skel, goal_facing="exact", 
             raise MotionPatchesError(f"'{start_prop.name}' has no stand-up interaction clip")
         start_ref = (by_name[start_prop.name], i)
     s_state, g_state = interaction_states(start_ref, goal_ref)
-    return (start_state if s_state is None else s_state,
-            goal_state if g_state is None else g_state, start_ref, goal_ref)
+    return (
+        start_state if s_state is None else s_state,
+        goal_state if g_state is None else g_state,
+        start_ref,
+        goal_ref,
+    )
 
 
 @contextlib.contextmanager
@@ -516,8 +565,10 @@ def _without(env, names):
 
 def _check_clear(env, character, endpoints, by_name):
     """Refuse a start or goal the character cannot stand on, naming the prop in the way."""
-    for what, state, ref in (("start", endpoints[0], endpoints[2]),
-                             ("goal", endpoints[1], endpoints[3])):
+    for what, state, ref in (
+        ("start", endpoints[0], endpoints[2]),
+        ("goal", endpoints[1], endpoints[3]),
+    ):
         if ref is not None:  # sitting down / standing up: the clip's own end, beside the prop
             continue
         near = scene_io.owners(env.near(state))
@@ -529,9 +580,12 @@ def _check_clear(env, character, endpoints, by_name):
             raise MotionPatchesError(
                 f"{who} is inside the object patch '{tagged[0]}', which has no interaction "
                 f"clip that starts or ends there: move the {what} out, or give "
-                f"'{tagged[0]}' a sit-down / stand-up clip and use the prop itself")
-        raise MotionPatchesError(f"{who} is inside or within {env.radius:.2f} m of "
-                                 f"{', '.join(repr(n) for n in near[:4])}: move it into the open")
+                f"'{tagged[0]}' a sit-down / stand-up clip and use the prop itself"
+            )
+        raise MotionPatchesError(
+            f"{who} is inside or within {env.radius:.2f} m of "
+            f"{', '.join(repr(n) for n in near[:4])}: move it into the open"
+        )
 
 
 def _solve(planner, character, endpoints, explain=True):
@@ -546,10 +600,12 @@ def _solve(planner, character, endpoints, explain=True):
             plan = planner.plan(start_state, goal_state)
     except causes.NoPath as exc:
         if exc.cause == "search limit":
-            raise PathNotFound(f"no path for '{character.name}': "
-                               f"{_limit_text(causes.SEARCH_LIMIT)}", exc.cause) from None
-        raise PathNotFound(f"no path for '{character.name}': {exc}", exc.cause,
-                           scene_io.owners(exc.props)) from None
+            raise PathNotFound(
+                f"no path for '{character.name}': {_limit_text(causes.SEARCH_LIMIT)}", exc.cause
+            ) from None
+        raise PathNotFound(
+            f"no path for '{character.name}': {exc}", exc.cause, scene_io.owners(exc.props)
+        ) from None
     except PlanError as exc:
         raise PathNotFound(f"no path for '{character.name}': {exc}") from None
     return with_interactions(plan, start_ref, goal_ref)
@@ -557,17 +613,24 @@ def _solve(planner, character, endpoints, explain=True):
 
 def _body_clear(planner, plan, motions, ends):
     """(plan, its motions) whose hips keep the radius too (:mod:`body_clearance`)."""
-    return body_clearance.keep_clear(planner, plan, motions, ends[0], ends[1],
-                                     lambda p: plan_motions(planner.patch, p),
-                                     lambda p: with_interactions(p, ends[2], ends[3]))
+    return body_clearance.keep_clear(
+        planner,
+        plan,
+        motions,
+        ends[0],
+        ends[1],
+        lambda p: plan_motions(planner.patch, p),
+        lambda p: with_interactions(p, ends[2], ends[3]),
+    )
 
 
 def _writable(character, first=None, frames=None):
     """Refuse, before anything is written, a plan on ``character`` that writing could not
     carry out or that would delete user data (:func:`adapter.transaction.check_writable`);
     ``first``: its first frame, ``frames``: how many."""
-    why = transaction.check_writable(bpy, character, first,
-                                     None if first is None else first + frames - 1)
+    why = transaction.check_writable(
+        bpy, character, first, None if first is None else first + frames - 1
+    )
     if why:
         raise MotionPatchesError(why)
 
@@ -583,16 +646,17 @@ def _frame_start(scene, frame_start):
     except (TypeError, ValueError):
         raise MotionPatchesError(f"the start frame must be a number, not {frame_start!r}") from None
     if not (math.isfinite(f) and lo <= f <= hi):
-        raise MotionPatchesError(f"the start frame {frame_start} is outside what Blender holds "
-                                 f"({lo} to {hi})")
+        raise MotionPatchesError(
+            f"the start frame {frame_start} is outside what Blender holds ({lo} to {hi})"
+        )
     return int(round(f))
 
 
-MAX_WEIGHT = 1e6      # alpha, beta, gamma above this overflow the search's costs
-MAX_RADIUS = 10.0     # metres: a character's radius
+MAX_WEIGHT = 1e6  # alpha, beta, gamma above this overflow the search's costs
+MAX_RADIUS = 10.0  # metres: a character's radius
 MAX_COORDINATE = 1e5  # metres from the origin a start or goal may lie
 MAX_DISTANCE = 2000.0  # metres between start and goal of one plan (plan longer walks in legs)
-SAME_PLACE = 0.05     # metres: a goal this near the start, facing the same way, is the start
+SAME_PLACE = 0.05  # metres: a goal this near the start, facing the same way, is the start
 SAME_FACING = np.radians(2.0)
 
 
@@ -605,15 +669,18 @@ def _check_weights(alpha, beta, gamma, radius, where=""):
         except (TypeError, ValueError):
             ok = False
         if not ok:
-            raise MotionPatchesError(f"{where}{name} must be a number from 0 to {MAX_WEIGHT:g}, "
-                                     f"not {v!r}")
+            raise MotionPatchesError(
+                f"{where}{name} must be a number from 0 to {MAX_WEIGHT:g}, not {v!r}"
+            )
     try:
         ok = math.isfinite(float(radius)) and 0.0 < float(radius) <= MAX_RADIUS
     except (TypeError, ValueError):
         ok = False
     if not ok:
-        raise MotionPatchesError(f"{where}radius must be a number of metres above 0 and at most "
-                                 f"{MAX_RADIUS:g}, not {radius!r}")
+        raise MotionPatchesError(
+            f"{where}radius must be a number of metres above 0 and at most "
+            f"{MAX_RADIUS:g}, not {radius!r}"
+        )
 
 
 def planning_settings(scene: "bpy.types.Scene", **given) -> dict:
@@ -634,8 +701,10 @@ def planning_settings(scene: "bpy.types.Scene", **given) -> dict:
         out[key] = float(out[key])
     for key, allowed in (("stitching", STITCHING), ("goal_facing", GOAL_FACING)):
         if out[key] not in allowed:
-            raise MotionPatchesError(f"{key.replace('_', ' ')} must be "
-                                     f"{' or '.join(repr(a) for a in allowed)}, not {out[key]!r}")
+            raise MotionPatchesError(
+                f"{key.replace('_', ' ')} must be "
+                f"{' or '.join(repr(a) for a in allowed)}, not {out[key]!r}"
+            )
     if out["foot_lock"] not in (True, False):
         raise MotionPatchesError(f"foot lock must be True or False, not {out['foot_lock']!r}")
     out["foot_lock"] = bool(out["foot_lock"])
@@ -655,6 +724,7 @@ def _fills_planning_settings(fn):
         a = bound.arguments
         a.update(planning_settings(a["scene"], **{k: a[k] for k in DEFAULTS}))
         return fn(*bound.args, **bound.kwargs)
+
     return run
 
 
@@ -665,16 +735,22 @@ def _check_far(start, goal, who, scale=1.0):
     for what, state in (("start", start), ("goal", goal)):
         far = float(np.abs(np.asarray(state[:2], float)).max()) * scale
         if not far <= MAX_COORDINATE:
-            raise MotionPatchesError(f"the {what} of {who} lies {far:.3g} m from the origin; "
-                                     f"plans stay within {MAX_COORDINATE:g} m of it")
+            raise MotionPatchesError(
+                f"the {what} of {who} lies {far:.3g} m from the origin; "
+                f"plans stay within {MAX_COORDINATE:g} m of it"
+            )
     d = float(np.hypot(*(np.asarray(goal[:2], float) - np.asarray(start[:2], float)))) * scale
     if d > MAX_DISTANCE:
-        raise MotionPatchesError(f"the goal of {who} is {d:,.0f} m from its start; one plan "
-                                 f"walks at most {MAX_DISTANCE:,.0f} m: plan the walk in legs")
+        raise MotionPatchesError(
+            f"the goal of {who} is {d:,.0f} m from its start; one plan "
+            f"walks at most {MAX_DISTANCE:,.0f} m: plan the walk in legs"
+        )
     turn = abs((float(goal[2]) - float(start[2]) + np.pi) % (2 * np.pi) - np.pi)
     if d < SAME_PLACE and (np.isnan(goal[2]) or turn < SAME_FACING):
-        raise MotionPatchesError(f"the goal of {who} is where it stands ({d * 100:.0f} cm away, "
-                                 f"facing the same way): there is nothing to plan")
+        raise MotionPatchesError(
+            f"the goal of {who} is where it stands ({d * 100:.0f} cm away, "
+            f"facing the same way): there is nothing to plan"
+        )
 
 
 def _check_ends(character, endpoints, scale):
@@ -685,9 +761,11 @@ def _check_ends(character, endpoints, scale):
 
 
 def _limit_text(nodes):
-    return (f"search limit reached after {nodes:,} nodes: the search stopped before finding a "
-            f"way, which does not mean the props close it; plan to a nearer goal first and on "
-            f"from there")
+    return (
+        f"search limit reached after {nodes:,} nodes: the search stopped before finding a "
+        f"way, which does not mean the props close it; plan to a nearer goal first and on "
+        f"from there"
+    )
 
 
 def _placed(scene, patch, rig, motions):
@@ -697,14 +775,15 @@ def _placed(scene, patch, rig, motions):
     character's :class:`~motion_patches.retarget.RigMap` (None: the patch skeleton)."""
     if rig is not None:
         motions = [rig.motion(m) for m in motions]
-    patch_bounds, bounds = scene_rate.piece_bounds([m.frames for m in motions],
-                                                   scene_fps(scene) / patch.gait.fps)
+    patch_bounds, bounds = scene_rate.piece_bounds(
+        [m.frames for m in motions], scene_fps(scene) / patch.gait.fps
+    )
     world = scene_rate.at_scene_rate(concatenate(motions), patch_bounds, bounds)
     return motions, bounds, world
 
 
 FRAME_RANGE_KEY = "motion_patches_frame_range"  # the scene frame range last set by a plan
-BLENDER_DEFAULT_RANGE = (1, 250)                 # a new scene's: not a range anyone chose
+BLENDER_DEFAULT_RANGE = (1, 250)  # a new scene's: not a range anyone chose
 
 
 def fitted_frame_range(current, plans, ours=None):
@@ -723,18 +802,33 @@ def _fit_frame_range(scene):
     """Apply :func:`fitted_frame_range` to ``scene`` when its Fit Frame Range is on."""
     if not getattr(scene.motion_patches, "fit_frame_range", True):
         return
-    plans = [(m["frame_start"], m["frame_end"]) for m in
-             (storage.plan_meta(ob) for ob in scene.objects if storage.has_plan(ob))]
+    plans = [
+        (m["frame_start"], m["frame_end"])
+        for m in (storage.plan_meta(ob) for ob in scene.objects if storage.has_plan(ob))
+    ]
     if plans:
         ours = scene.get(FRAME_RANGE_KEY)
-        start, end = fitted_frame_range((scene.frame_start, scene.frame_end), plans,
-                                        tuple(ours) if ours is not None else None)
+        start, end = fitted_frame_range(
+            (scene.frame_start, scene.frame_end), plans, tuple(ours) if ours is not None else None
+        )
         scene.frame_start, scene.frame_end = start, end
         scene[FRAME_RANGE_KEY] = [start, end]
 
 
-def _write(scene, character, patch, patch_name, plan, placed, frame_start, env, radius,
-           lock=True, rig=None, fit=True):
+def _write(
+    scene,
+    character,
+    patch,
+    patch_name,
+    plan,
+    placed,
+    frame_start,
+    env,
+    radius,
+    lock=True,
+    rig=None,
+    fit=True,
+):
     """NLA strips and the plan record of one planned character (``placed``: its motion,
     :func:`_placed`; ``env``: the planner's world, shrunk by the character's size).
     ``fit``: fit the scene's frame range now (a crowd fits it once, after every write)."""
@@ -743,31 +837,65 @@ def _write(scene, character, patch, patch_name, plan, placed, frame_start, env, 
     skel = rig.target if rig is not None else patch.gait.skeleton
     motions, bounds, world = placed
     locked = foot_lock.lock_feet(skel, world) if lock else None
-    strips, stashed = nla.write_plan(bpy, character, patch, storage.patch_key(scene, patch_name),
-                                     plan, motions, world, frame_start, locked, rig, bounds)
+    strips, stashed = nla.write_plan(
+        bpy,
+        character,
+        patch,
+        storage.patch_key(scene, patch_name),
+        plan,
+        motions,
+        world,
+        frame_start,
+        locked,
+        rig,
+        bounds,
+    )
     wm = world.world_matrices(skel)
     foot = contacts.foot_joints(skel)
     frame_end = frame_start + world.frames - 1
     if rig is not None:
         plan.stats["retarget"] = rig.note()
     if abs(scene_fps(scene) - patch.gait.fps) > 1e-3:
-        plan.stats["frame_rate"] = (f"patch baked at {patch.gait.fps:g} fps, played at the "
-                                    f"scene's {scene_fps(scene):g} fps (strips scaled)")
-    storage.store_plan(character, {
-        "ground": world.ground, "root": wm[:, skel.root, :3, 3], "contacts": world.contacts,
-        "foot_names": [skel.names[i] for i in foot], "root_name": skel.names[skel.root],
-        "frame_start": frame_start, "frame_end": frame_end, "goal": goal_state.tolist(),
-        "boundaries": [s["start"] for s in strips[1:]], "radius": radius,
-        "facing": nla.facing_angle(skel), "foot_lock": bool(lock),
-        "traversals": [[s["start"], s["end"]] for s in strips if s["kind"] == "traversal"],
-        "interactions": [[s["start"], s["end"]] for s in strips if s["kind"] == "interaction"],
-        "obstacles": {o.name: (o.polygon * scale).tolist() for o in env.obstacles.values()},
-    })
+        plan.stats["frame_rate"] = (
+            f"patch baked at {patch.gait.fps:g} fps, played at the "
+            f"scene's {scene_fps(scene):g} fps (strips scaled)"
+        )
+    storage.store_plan(
+        character,
+        {
+            "ground": world.ground,
+            "root": wm[:, skel.root, :3, 3],
+            "contacts": world.contacts,
+            "foot_names": [skel.names[i] for i in foot],
+            "root_name": skel.names[skel.root],
+            "frame_start": frame_start,
+            "frame_end": frame_end,
+            "goal": goal_state.tolist(),
+            "boundaries": [s["start"] for s in strips[1:]],
+            "radius": radius,
+            "facing": nla.facing_angle(skel),
+            "foot_lock": bool(lock),
+            "traversals": [[s["start"], s["end"]] for s in strips if s["kind"] == "traversal"],
+            "interactions": [[s["start"], s["end"]] for s in strips if s["kind"] == "interaction"],
+            "obstacles": {o.name: (o.polygon * scale).tolist() for o in env.obstacles.values()},
+        },
+    )
     if fit:
         _fit_frame_range(scene)
-    return PlanResult(character.name, frame_start, frame_end, [p.label for p in plan.pieces],
-                      plan.cost, plan.seconds, plan.expansions, strips, stashed, plan.stats,
-                      path_length(world.ground), tuple(goal_state))
+    return PlanResult(
+        character.name,
+        frame_start,
+        frame_end,
+        [p.label for p in plan.pieces],
+        plan.cost,
+        plan.seconds,
+        plan.expansions,
+        strips,
+        stashed,
+        plan.stats,
+        path_length(world.ground),
+        tuple(goal_state),
+    )
 
 
 def _avoid_moving(planner, patch, plan, tracks, character, frame_start, fps):
@@ -775,30 +903,46 @@ def _avoid_moving(planner, patch, plan, tracks, character, frame_start, fps):
     (:mod:`moving_props`: a wait or a repaired run); :class:`PathNotFound` naming the prop
     and the frame when neither keeps clear of it. ``fps``: the scene's rate."""
     scene_fps_ratio = fps / patch.gait.fps
-    plan, wait, repairs, left = moving_props.avoid(planner, patch, plan, tracks,
-                                                   lambda p: plan_motions(patch, p))
+    plan, wait, repairs, left = moving_props.avoid(
+        planner, patch, plan, tracks, lambda p: plan_motions(patch, p)
+    )
     if left:
-        raise PathNotFound(f"no path for '{character.name}' clear of moving props: "
-                           + "; ".join(c.describe(patch.gait.fps, frame_start, fps) for c in left)
-                           + " (move the prop's keyframes, or start later with Frame Start)",
-                           "moving", [c.prop for c in left])
+        raise PathNotFound(
+            f"no path for '{character.name}' clear of moving props: "
+            + "; ".join(c.describe(patch.gait.fps, frame_start, fps) for c in left)
+            + " (move the prop's keyframes, or start later with Frame Start)",
+            "moving",
+            [c.prop for c in left],
+        )
     plan.stats["moving_props"] = {
         "props": [t.name for t in tracks],
         "awake_at_start": [t.name for t in tracks if t.awake_at(0.0)],
         "wait_s": wait,
-        "repairs": [dict(r, frame=frame_start + int(round(r["frame"] * scene_fps_ratio)))
-                    for r in repairs]}
+        "repairs": [
+            dict(r, frame=frame_start + int(round(r["frame"] * scene_fps_ratio))) for r in repairs
+        ],
+    }
     return plan, wait
 
 
 @_fills_planning_settings
-def plan_path(scene: "bpy.types.Scene", character: "bpy.types.Object", goal,
-              patch_name: str | None = None, alpha: float | None = None,
-              beta: float | None = None, gamma: float | None = None,
-              radius: float | None = None, frame_start: int | None = None, context=None,
-              stitching: str | None = None, start_prop: "bpy.types.Object | None" = None,
-              foot_lock: bool | None = None, goal_facing: str | None = None,
-              gait: str | None = None) -> PlanResult:
+def plan_path(
+    scene: "bpy.types.Scene",
+    character: "bpy.types.Object",
+    goal,
+    patch_name: str | None = None,
+    alpha: float | None = None,
+    beta: float | None = None,
+    gamma: float | None = None,
+    radius: float | None = None,
+    frame_start: int | None = None,
+    context=None,
+    stitching: str | None = None,
+    start_prop: "bpy.types.Object | None" = None,
+    foot_lock: bool | None = None,
+    goal_facing: str | None = None,
+    gait: str | None = None,
+) -> PlanResult:
     """Plan ``character`` to ``goal`` (an object or (x, y, heading); None: the scene's goal)
     and write it as NLA. Settings left None are the scene's (:func:`planning_settings`).
 
@@ -822,8 +966,9 @@ def plan_path(scene: "bpy.types.Scene", character: "bpy.types.Object", goal,
     if goal is None:
         goal = scene.motion_patches.goal
     if goal is None:
-        raise MotionPatchesError("no goal: choose a goal object (its location and facing) "
-                                 "or set the scene's goal")
+        raise MotionPatchesError(
+            "no goal: choose a goal object (its location and facing) or set the scene's goal"
+        )
     if goal == character:
         raise MotionPatchesError("the goal cannot be the character itself")
     frame_start = _frame_start(scene, frame_start)
@@ -831,17 +976,33 @@ def plan_path(scene: "bpy.types.Scene", character: "bpy.types.Object", goal,
     tried, failures = [], []
     for name, patch in candidates:
         try:
-            tried.append(_plan_in_layer(scene, character, goal, patch, alpha, beta, gamma,
-                                        radius, frame_start, context, stitching, start_prop,
-                                        goal_facing) + (name,))
+            tried.append(
+                _plan_in_layer(
+                    scene,
+                    character,
+                    goal,
+                    patch,
+                    alpha,
+                    beta,
+                    gamma,
+                    radius,
+                    frame_start,
+                    context,
+                    stitching,
+                    start_prop,
+                    goal_facing,
+                )
+                + (name,)
+            )
         except PathNotFound as exc:
             if len(candidates) == 1:
                 raise
             failures.append((patch.layer, exc))
     if not tried:
         first = failures[0][1]
-        raise PathNotFound("; ".join(f"{layer}: {exc}" for layer, exc in failures),
-                           first.cause, first.props)
+        raise PathNotFound(
+            "; ".join(f"{layer}: {exc}" for layer, exc in failures), first.cause, first.props
+        )
     best = layers.choose([t[3].cost for t in tried])
     patch, rig, env, plan, motions, start_frame, name = tried[best]
     if gait is not None:
@@ -851,8 +1012,9 @@ def plan_path(scene: "bpy.types.Scene", character: "bpy.types.Object", goal,
     placed = _placed(scene, patch, rig, motions)
     _writable(character, start_frame, placed[2].frames)
     with transaction.kept(bpy, scene, [character], (PLAN_KEY, FRAME_RANGE_KEY)):
-        return _write(scene, character, patch, name, plan, placed, start_frame, env,
-                      radius, foot_lock, rig)
+        return _write(
+            scene, character, patch, name, plan, placed, start_frame, env, radius, foot_lock, rig
+        )
 
 
 def _layer_patches(scene, patch_name, gait):
@@ -874,8 +1036,9 @@ def _layer_patches(scene, patch_name, gait):
         if item is None:
             _patch_for_planning(scene, patch_name)  # raises naming the patches there are
         if gait != "auto" and item.layer != gait:
-            raise MotionPatchesError(f"the patch '{patch_name}' is of layer '{item.layer}', not "
-                                     f"'{gait}' (have: {have})")
+            raise MotionPatchesError(
+                f"the patch '{patch_name}' is of layer '{item.layer}', not '{gait}' (have: {have})"
+            )
         if gait != "auto":
             return [(item.name, _patch_for_planning(scene, item.name))]
     active = scene.motion_patches.active_patch_index
@@ -889,14 +1052,29 @@ def _layer_patches(scene, patch_name, gait):
     elif gait in by_layer:
         chosen = [by_layer[gait]]
     else:
-        raise MotionPatchesError(f"no locomotion patch of layer '{gait}' is baked in this scene "
-                                 f"(have: {have}); bake one with that layer, or plan with "
-                                 f"gait 'auto' or one of the layers there are")
+        raise MotionPatchesError(
+            f"no locomotion patch of layer '{gait}' is baked in this scene "
+            f"(have: {have}); bake one with that layer, or plan with "
+            f"gait 'auto' or one of the layers there are"
+        )
     return [(item.name, _patch_for_planning(scene, item.name)) for item in chosen]
 
 
-def _plan_in_layer(scene, character, goal, patch, alpha, beta, gamma, radius, frame_start,
-                   context, stitching, start_prop, goal_facing):
+def _plan_in_layer(
+    scene,
+    character,
+    goal,
+    patch,
+    alpha,
+    beta,
+    gamma,
+    radius,
+    frame_start,
+    context,
+    stitching,
+    start_prop,
+    goal_facing,
+):
     """(patch, rig map, planner world, plan, piece motions, first frame) of one character
     planned in the layer of ``patch``; its props offer only the traversal clips that
     serve that layer (:func:`motion_patches.layers.serves`)."""
@@ -904,13 +1082,22 @@ def _plan_in_layer(scene, character, goal, patch, alpha, beta, gamma, radius, fr
     scale = _size(rig)
     depsgraph = context.evaluated_depsgraph_get()
     goal_obj = goal if isinstance(goal, bpy.types.Object) else None
-    env = scene_io.environment(scene, depsgraph, patch, radius,
-                               _not_obstacles((character, goal_obj)), scale)
-    props = [layers.for_layer(p, patch.layer)
-             for p in object_patches(scene, depsgraph, patch, scale)]
+    env = scene_io.environment(
+        scene, depsgraph, patch, radius, _not_obstacles((character, goal_obj)), scale
+    )
+    props = [
+        layers.for_layer(p, patch.layer) for p in object_patches(scene, depsgraph, patch, scale)
+    ]
     by_name = {p.name: p for p in props}
-    ends = _endpoints(character, goal, start_prop, by_name,
-                      rig.target if rig else patch.gait.skeleton, goal_facing, scale)
+    ends = _endpoints(
+        character,
+        goal,
+        start_prop,
+        by_name,
+        rig.target if rig else patch.gait.skeleton,
+        goal_facing,
+        scale,
+    )
     _check_ends(character, ends, scale)
     tracks = moving_io.tracks(scene, depsgraph, list(env.obstacles), frame_start, scale)
     awake = [t.name for t in tracks if t.awake_at(0.0)]
@@ -923,8 +1110,9 @@ def _plan_in_layer(scene, character, goal, patch, alpha, beta, gamma, radius, fr
         plan = _solve(planner, character, ends)
         plan, motions = _body_clear(planner, plan, plan_motions(patch, plan), ends)
     if tracks:
-        plan, wait = _avoid_moving(planner, patch, plan, tracks, character, frame_start,
-                                   scene_fps(scene))
+        plan, wait = _avoid_moving(
+            planner, patch, plan, tracks, character, frame_start, scene_fps(scene)
+        )
         frame_start += int(round(wait * scene_fps(scene)))
         motions = plan_motions(patch, plan)
     plan.stats["glitches"] = validate.count(validate.plan_glitches(patch, plan, motions))
@@ -942,11 +1130,16 @@ def crowd_members(scene: "bpy.types.Scene", characters=None) -> list[tuple]:
     and so is a choice with no armature in it."""
     scene_goal = scene.motion_patches.goal
     if characters is None:
-        chosen = [ob for ob in scene.objects
-                  if ob.type == "ARMATURE" and ob.motion_patches_character.goal is not None]
+        chosen = [
+            ob
+            for ob in scene.objects
+            if ob.type == "ARMATURE" and ob.motion_patches_character.goal is not None
+        ]
         if not chosen:
-            raise MotionPatchesError("no crowd: no armature in the scene has its own goal; "
-                                     "choose the characters, or give each its own goal")
+            raise MotionPatchesError(
+                "no crowd: no armature in the scene has its own goal; "
+                "choose the characters, or give each its own goal"
+            )
     else:
         chosen = [ob for ob in characters if ob is not None and ob.type == "ARMATURE"]
         if not chosen:
@@ -957,8 +1150,9 @@ def crowd_members(scene: "bpy.types.Scene", characters=None) -> list[tuple]:
             raise MotionPatchesError(f"'{ob.name}' is not in the scene '{scene.name}'")
         goal = ob.motion_patches_character.goal or scene_goal
         if goal is None:
-            raise MotionPatchesError(f"'{ob.name}' has no goal: give it its own goal or set "
-                                     f"the scene's goal")
+            raise MotionPatchesError(
+                f"'{ob.name}' has no goal: give it its own goal or set the scene's goal"
+            )
         if goal == ob:
             raise MotionPatchesError(f"the goal of '{ob.name}' is the character itself")
         pairs.append((ob, goal))
@@ -966,12 +1160,23 @@ def crowd_members(scene: "bpy.types.Scene", characters=None) -> list[tuple]:
 
 
 @_fills_planning_settings
-def plan_crowd(scene: "bpy.types.Scene", pairs, patch_name: str | None = None,
-               alpha: float | None = None, beta: float | None = None,
-               gamma: float | None = None, radius: float | None = None,
-               frame_start: int | None = None, context=None, stitching: str | None = None,
-               progress=None, max_wait_seconds: float = 4.0, spacing: float | None = None,
-               foot_lock: bool | None = None, goal_facing: str | None = None) -> CrowdResult:
+def plan_crowd(
+    scene: "bpy.types.Scene",
+    pairs,
+    patch_name: str | None = None,
+    alpha: float | None = None,
+    beta: float | None = None,
+    gamma: float | None = None,
+    radius: float | None = None,
+    frame_start: int | None = None,
+    context=None,
+    stitching: str | None = None,
+    progress=None,
+    max_wait_seconds: float = 4.0,
+    spacing: float | None = None,
+    foot_lock: bool | None = None,
+    goal_facing: str | None = None,
+) -> CrowdResult:
     """Plan several characters and write each one's NLA; ``pairs`` = [(armature, goal)] or
     [(armature, goal, options)], a goal being an object or (x, y, heading); ``options``:
     {"start_prop": a tagged prop with a stand-up clip to start seated on, "priority":
@@ -1000,8 +1205,9 @@ def plan_crowd(scene: "bpy.types.Scene", pairs, patch_name: str | None = None,
     if not pairs:
         raise MotionPatchesError("a crowd needs at least one character with a goal")
     if any(len(p) not in (2, 3) for p in pairs):
-        raise MotionPatchesError("each crowd entry is (character, goal) or (character, goal, "
-                                 "options)")
+        raise MotionPatchesError(
+            "each crowd entry is (character, goal) or (character, goal, options)"
+        )
     options = [dict(p[2]) if len(p) == 3 and p[2] else {} for p in pairs]
     pairs = [p[:2] for p in pairs]
     spacing = 2 * radius if spacing is None else float(spacing)
@@ -1011,8 +1217,10 @@ def plan_crowd(scene: "bpy.types.Scene", pairs, patch_name: str | None = None,
     for (character, goal), opt in zip(pairs, options):
         unknown = set(opt) - {"start_prop", "priority"}
         if unknown:
-            raise MotionPatchesError(f"unknown crowd option(s) {', '.join(sorted(unknown))} "
-                                     f"for '{getattr(character, 'name', character)}'")
+            raise MotionPatchesError(
+                f"unknown crowd option(s) {', '.join(sorted(unknown))} "
+                f"for '{getattr(character, 'name', character)}'"
+            )
         rigs.append(_check_character(character, patch))
         if character.name in seen:
             raise MotionPatchesError(f"'{character.name}' appears twice in the crowd")
@@ -1026,14 +1234,16 @@ def plan_crowd(scene: "bpy.types.Scene", pairs, patch_name: str | None = None,
         try:
             opt["priority"] = float(opt.get("priority", 0.0))
         except (TypeError, ValueError):
-            raise MotionPatchesError(f"the priority of '{character.name}' must be a number") \
-                from None
+            raise MotionPatchesError(
+                f"the priority of '{character.name}' must be a number"
+            ) from None
         for what, ob in (("goal", goal), ("start seat", opt.get("start_prop"))):
             if isinstance(ob, bpy.types.Object):
                 if ob.name in taken:
                     raise MotionPatchesError(
                         f"'{ob.name}' is the {what} of both '{taken[ob.name]}' and "
-                        f"'{character.name}': one spot, one character; give each its own")
+                        f"'{character.name}': one spot, one character; give each its own"
+                    )
                 taken[ob.name] = character.name
     first = _frame_start(scene, frame_start)
     depsgraph = context.evaluated_depsgraph_get()
@@ -1046,16 +1256,33 @@ def plan_crowd(scene: "bpy.types.Scene", pairs, patch_name: str | None = None,
 
     def world_of(size):
         if size not in worlds:
-            env = scene_io.environment(scene, depsgraph, patch, radius,
-                                       _not_obstacles([c for c, _ in pairs]), size)
+            env = scene_io.environment(
+                scene, depsgraph, patch, radius, _not_obstacles([c for c, _ in pairs]), size
+            )
             props = object_patches(scene, depsgraph, patch, size)
             worlds[size] = [env, props, {p.name: p for p in props}, None]
         return worlds[size]
-    ends = [_endpoints(c, g, opt.get("start_prop"), world_of(sz)[2],
-                       r.target if r else patch.gait.skeleton, goal_facing, sz)
-            for (c, g), opt, r, sz in zip(pairs, options, rigs, sizes)]
-    own = [[o.name for o in _not_obstacles([g, opt.get("start_prop")])
-            if isinstance(o, bpy.types.Object)] for (_, g), opt in zip(pairs, options)]
+
+    ends = [
+        _endpoints(
+            c,
+            g,
+            opt.get("start_prop"),
+            world_of(sz)[2],
+            r.target if r else patch.gait.skeleton,
+            goal_facing,
+            sz,
+        )
+        for (c, g), opt, r, sz in zip(pairs, options, rigs, sizes)
+    ]
+    own = [
+        [
+            o.name
+            for o in _not_obstacles([g, opt.get("start_prop")])
+            if isinstance(o, bpy.types.Object)
+        ]
+        for (_, g), opt in zip(pairs, options)
+    ]
     for (c, _), e, mine, sz in zip(pairs, ends, own, sizes):
         _check_ends(c, e, sz)
         with _without(world_of(sz)[0], mine):
@@ -1071,10 +1298,16 @@ def plan_crowd(scene: "bpy.types.Scene", pairs, patch_name: str | None = None,
                 raise MotionPatchesError(
                     f"the goals of '{pairs[j][0].name}' and '{pairs[i][0].name}' are {gap:.2f} m "
                     f"apart, closer than the spacing ({spacing:.2f} m): the one arriving second "
-                    f"would never find its goal free; move one of them")
+                    f"would never find its goal free; move one of them"
+                )
     # priority order: the given priority, then the longer way first
-    order = sorted(range(len(pairs)), key=lambda n: (
-        -options[n]["priority"], -float(np.linalg.norm(world_ends[n][1][:2] - world_ends[n][0][:2]))))
+    order = sorted(
+        range(len(pairs)),
+        key=lambda n: (
+            -options[n]["priority"],
+            -float(np.linalg.norm(world_ends[n][1][:2] - world_ends[n][0][:2])),
+        ),
+    )
     rank_ends = [world_ends[n] for n in order]
 
     def solve_one(n, ghosts=()):
@@ -1082,12 +1315,14 @@ def plan_crowd(scene: "bpy.types.Scene", pairs, patch_name: str | None = None,
         when re-routing, round ``ghosts`` (world polygons; PathNotFound if they box it in)."""
         character, e = pairs[n][0], ends[n]
         env, _, _, planner = world_of(sizes[n])
-        spots = [Obstacle(f"{CROWD_SPOT}{pairs[order[m]][0].name}", polygon / sizes[n])
-                 for m, polygon in crowd.standing_spots(rank_ends, order.index(n), spacing,
-                                                        radius)]
+        spots = [
+            Obstacle(f"{CROWD_SPOT}{pairs[order[m]][0].name}", polygon / sizes[n])
+            for m, polygon in crowd.standing_spots(rank_ends, order.index(n), spacing, radius)
+        ]
         mine = np.array([e[0][:2], e[1][:2]], float)
-        extra = [Obstacle(f"{CROWD_GHOST}{k}", polygon / sizes[n]) for k, polygon in
-                 enumerate(ghosts)]
+        extra = [
+            Obstacle(f"{CROWD_GHOST}{k}", polygon / sizes[n]) for k, polygon in enumerate(ghosts)
+        ]
         extra = [g for g in extra if not g.within(mine, radius).any()]  # not on its own ends
         with _without(env, own[n]):
             for ob in spots + extra:  # where the others stand still while this one walks
@@ -1142,10 +1377,16 @@ def plan_crowd(scene: "bpy.types.Scene", pairs, patch_name: str | None = None,
     # Resolved a little wider than reported: a hold is laid into the written motion by a time
     # warp, which may bring a pair a few millimetres nearer than the track the table saw.
     schedules, _ = crowd.resolve(
-        [_root_track(patch, rigs[p[0]], p[3]) for p in planned], replan,
-        spacing + CROWD_RESOLVE_SLACK, radius, fps,
-        round(max_wait_seconds * fps), max(1, round(0.2 * fps)), ramp=ramp,
-        holdable=[p[4] for p in planned])
+        [_root_track(patch, rigs[p[0]], p[3]) for p in planned],
+        replan,
+        spacing + CROWD_RESOLVE_SLACK,
+        radius,
+        fps,
+        round(max_wait_seconds * fps),
+        max(1, round(0.2 * fps)),
+        ramp=ramp,
+        holdable=[p[4] for p in planned],
+    )
     planned = [v[s.version] for v, s in zip(versions, schedules)]
     holds = {}
     for p, s in zip(planned, schedules):
@@ -1159,21 +1400,36 @@ def plan_crowd(scene: "bpy.types.Scene", pairs, patch_name: str | None = None,
             holds[pairs[p[0]][0].name] = sorted(at)
     # what is reported is checked on the motion written, whatever resolved it
     ranked = sorted(range(len(planned)), key=lambda k: schedules[k].rank)  # order kept
-    conflicts = crowd.conflicts_of([_root_track(patch, rigs[planned[k][0]], planned[k][3])
-                                    for k in ranked], [schedules[k].delay for k in ranked],
-                                   spacing)
+    conflicts = crowd.conflicts_of(
+        [_root_track(patch, rigs[planned[k][0]], planned[k][3]) for k in ranked],
+        [schedules[k].delay for k in ranked],
+        spacing,
+    )
     if progress is not None:
         progress(0.9)
     written = {}
     for (n, plan, _, placed, _), s in zip(planned, schedules):
         _writable(pairs[n][0], first + s.delay, placed[2].frames)
-    with transaction.kept(bpy, scene, [pairs[n][0] for n, *_ in planned],
-                          (PLAN_KEY, FRAME_RANGE_KEY)):
+    with transaction.kept(
+        bpy, scene, [pairs[n][0] for n, *_ in planned], (PLAN_KEY, FRAME_RANGE_KEY)
+    ):
         for (n, plan, _, placed, _), s in zip(planned, schedules):
             env = world_of(sizes[n])[0]
             with _without(env, own[n]):  # the plan record lists what it walked around
-                written[n] = _write(scene, pairs[n][0], patch, patch_name, plan, placed,
-                                    first + s.delay, env, radius, foot_lock, rigs[n], fit=False)
+                written[n] = _write(
+                    scene,
+                    pairs[n][0],
+                    patch,
+                    patch_name,
+                    plan,
+                    placed,
+                    first + s.delay,
+                    env,
+                    radius,
+                    foot_lock,
+                    rigs[n],
+                    fit=False,
+                )
         if written:
             _fit_frame_range(scene)  # once: it reads every character's plan record
     if progress is not None:
@@ -1186,17 +1442,25 @@ def plan_crowd(scene: "bpy.types.Scene", pairs, patch_name: str | None = None,
     for p in planned:  # holds on the scene's frames (a character that holds starts at once)
         name = pairs[p[0]][0].name
         if name in holds:
-            holds[name] = [{"frame": written[p[0]].frame_start + f + ramp // 2,
-                            "frames": int(n)} for f, n in holds[name]]
+            holds[name] = [
+                {"frame": written[p[0]].frame_start + f + ramp // 2, "frames": int(n)}
+                for f, n in holds[name]
+            ]
     return CrowdSchedule(
-        [written[n] for n in sorted(written)], failed, conflicts,
-        {nm: s.delay for nm, s in zip(names, schedules)}, time.perf_counter() - t0,
-        [nm for nm, s in zip(names, schedules) if s.rerouted], holds,
-        [names[k] for k in ranked])
+        [written[n] for n in sorted(written)],
+        failed,
+        conflicts,
+        {nm: s.delay for nm, s in zip(names, schedules)},
+        time.perf_counter() - t0,
+        [nm for nm, s in zip(names, schedules) if s.rerouted],
+        holds,
+        [names[k] for k in ranked],
+    )
 
 
-def analyse(context: "bpy.types.Context", character: "bpy.types.Object",
-            keep: bool = False) -> dict:
+def analyse(
+    context: "bpy.types.Context", character: "bpy.types.Object", keep: bool = False
+) -> dict:
     """Figures of the evaluated (depsgraph) motion against the last plan on ``character``;
     ``keep`` stores them on it (:func:`last_analysis`, the Analysis panel)."""
     figures = _analyse(context, character)
@@ -1230,11 +1494,16 @@ def _analyse(context, character):
         "frames": int(frames.size),
         "seconds": float((frames.size - 1) / fps),
         "foot_skate": skate,
-        "root_from_plan_cm": {"mean": float(root_err.mean() * 100), "max": float(root_err.max() * 100)},
+        "root_from_plan_cm": {
+            "mean": float(root_err.mean() * 100),
+            "max": float(root_err.max() * 100),
+        },
         "ground_from_path_cm": {"max": float(path_err.max() * 100)},
         "goal_position_error_cm": float(np.linalg.norm(ground[-1, :2] - goal[:2]) * 100),
         "goal_root_position_error_cm": float(np.linalg.norm(root[-1, :2] - goal[:2]) * 100),
-        "goal_heading_error_deg": float(abs(np.degrees(metrics.angle_difference(end_heading, goal[2])))),
+        "goal_heading_error_deg": float(
+            abs(np.degrees(metrics.angle_difference(end_heading, goal[2])))
+        ),
         "frames_root_inside_obstacle": inside,
         "frames_root_over_prop_in_traversal": int((inside_mask & during).sum()),
         "traversals": len(meta.get("traversals", [])),
@@ -1255,8 +1524,10 @@ def _resolve(scene, place, what, patch):
         return np.array([place[0], place[1], math.radians(place[2])]), None
     ob = scene.objects.get(place)
     if ob is None:
-        raise MotionPatchesError(f"layout spec: no object named '{place}' for a {what} "
-                                 f"(have: {_some_names(scene.objects)})")
+        raise MotionPatchesError(
+            f"layout spec: no object named '{place}' for a {what} "
+            f"(have: {_some_names(scene.objects)})"
+        )
     if what == "character" or (what == "start" and ob.type == "ARMATURE"):
         rig = _check_character(ob, patch)  # the rule plan_path applies to its character
         return scene_io.character_state(ob, rig.target if rig else patch.gait.skeleton), ob
@@ -1270,13 +1541,16 @@ def planned_pairs(scene: "bpy.types.Scene", characters=(), goals=()) -> list[dic
     that has a plan."""
     characters, goals = list(characters), list(goals)
     if goals and len(goals) != len(characters):
-        raise MotionPatchesError(f"give one goal per character ({len(characters)} characters, "
-                                 f"{len(goals)} goals), or none to use each one's planned goal")
+        raise MotionPatchesError(
+            f"give one goal per character ({len(characters)} characters, "
+            f"{len(goals)} goals), or none to use each one's planned goal"
+        )
     if not characters:
         characters = [ob for ob in scene.objects if ob.type == "ARMATURE" and storage.has_plan(ob)]
         if not characters:
-            raise MotionPatchesError("nothing to check: no pairs given and no character in the "
-                                     "scene has a planned path")
+            raise MotionPatchesError(
+                "nothing to check: no pairs given and no character in the scene has a planned path"
+            )
     pairs = []
     for n, ob in enumerate(characters):
         if ob is None or ob.type != "ARMATURE":
@@ -1286,10 +1560,14 @@ def planned_pairs(scene: "bpy.types.Scene", characters=(), goals=()) -> list[dic
             continue
         meta, arrays = load_plan_record(ob)
         g0, goal = arrays["ground"][0], meta["goal"]
-        pairs.append({"name": ob.name,
-                      "start": [float(g0[0]), float(g0[1]), math.degrees(g0[2])],
-                      "goal": [float(goal[0]), float(goal[1]), math.degrees(goal[2])],
-                      "exclude": [ob.name]})
+        pairs.append(
+            {
+                "name": ob.name,
+                "start": [float(g0[0]), float(g0[1]), math.degrees(g0[2])],
+                "goal": [float(goal[0]), float(goal[1]), math.degrees(goal[2])],
+                "exclude": [ob.name],
+            }
+        )
     return pairs
 
 
@@ -1317,17 +1595,22 @@ def check_layout(scene: "bpy.types.Scene", spec: dict, context=None) -> list[dic
     depsgraph = (context or bpy.context).evaluated_depsgraph_get()
     jobs = []
     for p in spec["pairs"]:
-        start, sob = _resolve(scene, p["start"], "character" if p.get("character") else "start",
-                              patch)
+        start, sob = _resolve(
+            scene, p["start"], "character" if p.get("character") else "start", patch
+        )
         goal, gob = _resolve(scene, p["goal"], "goal", patch)
         # A retargeted character plans in the world shrunk by its size (see _size).
-        size = (_size(_check_character(sob, patch))
-                if sob is not None and sob.type == "ARMATURE" else 1.0)
+        size = (
+            _size(_check_character(sob, patch))
+            if sob is not None and sob.type == "ARMATURE"
+            else 1.0
+        )
         # Not obstacles: the start and goal objects with their children (a character's own
         # body mesh) and whatever the spec excludes.
         exclude = {}
-        for ob in [sob, gob] + [_resolve(scene, n, "exclude", patch)[1]
-                                for n in spec["exclude"] + p["exclude"]]:
+        for ob in [sob, gob] + [
+            _resolve(scene, n, "exclude", patch)[1] for n in spec["exclude"] + p["exclude"]
+        ]:
             if ob is not None:
                 for o in (ob, *ob.children_recursive):
                     exclude[o.name] = o
@@ -1337,23 +1620,38 @@ def check_layout(scene: "bpy.types.Scene", spec: dict, context=None) -> list[dic
         allow = bool(p["limits"]["allow_traversal"])
         key = (tuple(sorted(exclude)), allow, size)
         if key not in envs:
-            env = scene_io.environment(scene, depsgraph, patch, w["radius"],
-                                       tuple(exclude.values()), size)
+            env = scene_io.environment(
+                scene, depsgraph, patch, w["radius"], tuple(exclude.values()), size
+            )
             if size not in props:  # tagged props offer traversals
                 props[size] = object_patches(scene, depsgraph, patch, size)
             usable = [pr for pr in props[size] if pr.name not in exclude] if allow else []
             try:
-                planner = SegmentPlanner(patch, env, w["alpha"], w["beta"], w["gamma"],
-                                         props=usable)
+                planner = SegmentPlanner(
+                    patch, env, w["alpha"], w["beta"], w["gamma"], props=usable
+                )
             except PlanError as exc:
                 raise MotionPatchesError(str(exc)) from None
             envs[key] = env, planner
         env, planner = envs[key]
-        r = {"name": p["name"], "start": state_dict(start, sob and sob.name),
-             "goal": state_dict(goal, gob and gob.name), "reachable": False,
-             "seconds": None, "frames": None, "length_m": None, "cost": None, "pieces": None,
-             "traversals": 0, "expansions": None, "plan_seconds": None, "blocked_by": [],
-             "blocked_reason": None, "error": None, "limits": p["limits"]}
+        r = {
+            "name": p["name"],
+            "start": state_dict(start, sob and sob.name),
+            "goal": state_dict(goal, gob and gob.name),
+            "reachable": False,
+            "seconds": None,
+            "frames": None,
+            "length_m": None,
+            "cost": None,
+            "pieces": None,
+            "traversals": 0,
+            "expansions": None,
+            "plan_seconds": None,
+            "blocked_by": [],
+            "blocked_reason": None,
+            "error": None,
+            "limits": p["limits"],
+        }
         r["goal_facing"] = p["goal_facing"]
         if p["goal_facing"] == "any":
             goal = np.array([goal[0], goal[1], np.nan])
@@ -1375,12 +1673,17 @@ def check_layout(scene: "bpy.types.Scene", spec: dict, context=None) -> list[dic
             world = concatenate(plan_motions(patch, plan))
             r["goal"] = state_dict(_shrunk(plan.goal, 1.0 / size), gob and gob.name)
             seconds = (world.frames - 1) / patch.gait.fps
-            r.update(reachable=True, frames=int(round(seconds * scene_fps(scene))) + 1,
-                     seconds=seconds,
-                     length_m=path_length(world.ground) * size, cost=float(plan.cost),
-                     pieces=len(plan.pieces), expansions=int(plan.expansions),
-                     plan_seconds=float(plan.seconds),
-                     traversals=sum(pc.kind == "traversal" for pc in plan.pieces))
+            r.update(
+                reachable=True,
+                frames=int(round(seconds * scene_fps(scene))) + 1,
+                seconds=seconds,
+                length_m=path_length(world.ground) * size,
+                cost=float(plan.cost),
+                pieces=len(plan.pieces),
+                expansions=int(plan.expansions),
+                plan_seconds=float(plan.seconds),
+                traversals=sum(pc.kind == "traversal" for pc in plan.pieces),
+            )
         r["failures"] = layout_spec.judge(r, p["limits"])
         r["passed"] = not r["failures"]
         results.append(r)
@@ -1400,6 +1703,7 @@ CROWD_HOLD_RAMP_SECONDS = 0.5  # slowing to an idle hold and walking on again, e
 @dataclass
 class CrowdSchedule(CrowdResult):
     """A :class:`CrowdResult` with how the crowd was kept apart beyond waits."""
+
     # name -> [{"frame": first scene frame standing still, "frames": how many}]
     holds: dict = field(default_factory=dict)
     order: list = field(default_factory=list)  # planned names in the order they were placed
@@ -1429,7 +1733,7 @@ def _holdable(plan, placed, ramp):
     half = ramp // 2
     for i, p in enumerate(plan.pieces):
         if p.kind not in _CLIPS:
-            inside[bounds[i] + half:bounds[i + 1] - half + 1] = True
+            inside[bounds[i] + half : bounds[i + 1] - half + 1] = True
     return ok & inside
 
 
@@ -1441,6 +1745,7 @@ def _with_hold(plan, raw, bounds, at, hold, ramp):
     import dataclasses
 
     from .motion_patches import retime
+
     i = _piece_holding(plan, bounds, at, ramp)
     if i is None:
         raise MotionPatchesError(f"internal: frame {at} is in no walking piece to hold in")
@@ -1459,14 +1764,23 @@ def _root_track(patch, rig, placed):
     return world.world_matrices(skel)[:, skel.root, :2, 3]
 
 
-
 # --- crowds: duplicating a source armature ---------------------------------------------------
 
 CROWD_COLLECTION = "MP Crowd"
 
 
-def duplicate_crowd(scene, source, count, region, goal_region, seed=0, radius=0.25,
-                    spacing=None, patch_name=None, context=None):
+def duplicate_crowd(
+    scene,
+    source,
+    count,
+    region,
+    goal_region,
+    seed=0,
+    radius=0.25,
+    spacing=None,
+    patch_name=None,
+    context=None,
+):
     """[(character, goal empty)]: ``count`` copies of the armature ``source`` sharing its
     armature data (linked, as Alt+D makes them), scattered over ``region`` ((x0, y0), (x1,
     y1)) and each sent to a goal empty scattered over ``goal_region``, facing the way it
@@ -1484,14 +1798,16 @@ def duplicate_crowd(scene, source, count, region, goal_region, seed=0, radius=0.
         region = np.asarray(region, float).reshape(2, 2)
         goal_region = np.asarray(goal_region, float).reshape(2, 2)
     except (TypeError, ValueError):
-        raise MotionPatchesError("a crowd needs a count and two regions ((x0, y0), (x1, y1))") \
-            from None
+        raise MotionPatchesError(
+            "a crowd needs a count and two regions ((x0, y0), (x1, y1))"
+        ) from None
     if count < 1:
         raise MotionPatchesError("a crowd needs at least one character")
     for what, r in (("region", region), ("goal region", goal_region)):
         if not np.isfinite(r).all() or (r[1] <= r[0]).any():
-            raise MotionPatchesError(f"the {what} must have its second corner above and right "
-                                     f"of its first")
+            raise MotionPatchesError(
+                f"the {what} must have its second corner above and right of its first"
+            )
     spacing = 2 * radius if spacing is None else float(spacing)
     context.view_layer.update()
     depsgraph = context.evaluated_depsgraph_get()
@@ -1510,7 +1826,9 @@ def duplicate_crowd(scene, source, count, region, goal_region, seed=0, radius=0.
                 return pts
         raise MotionPatchesError(
             f"the {what} holds only {len(pts)} of {count} characters {gap:.2f} m apart and "
-            f"clear of the props: make it larger or the crowd smaller")
+            f"clear of the props: make it larger or the crowd smaller"
+        )
+
     starts, goals = scatter(region, "region"), scatter(goal_region, "goal region")
     rng.shuffle(goals)
     skel = rig.target if rig is not None else patch.gait.skeleton

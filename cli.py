@@ -102,7 +102,6 @@ class _Parser(argparse.ArgumentParser):
         raise _UsageError(self.prog, message)
 
 
-
 class Result:
     """What a command hands back: a JSON document, its exit code and a text summary."""
 
@@ -142,6 +141,7 @@ def _fflush_c():
     """Flush C stdio buffers, so text Blender printed lands where fd 1 points now."""
     try:
         import ctypes
+
         ctypes.CDLL(None).fflush(None)
     except (OSError, AttributeError, TypeError):  # no libc by that name (Windows)
         pass
@@ -231,8 +231,10 @@ def _object(name, what, types=None):
     if ob is None or (types and ob.type not in types):
         kind = " / ".join(t.lower() for t in types) + " object" if types else "object"
         found = "" if ob is None else f" ('{name}' is a {ob.type.lower()})"
-        raise BadInput(f"no {kind} named '{name}' for the {what}{found} (have: "
-                       f"{_names(objects, lambda o: not types or o.type in types)})")
+        raise BadInput(
+            f"no {kind} named '{name}' for the {what}{found} (have: "
+            f"{_names(objects, lambda o: not types or o.type in types)})"
+        )
     return ob
 
 
@@ -260,8 +262,10 @@ def _save_target(args):
         return p.resolve()
     if getattr(args, "save_in_place", False):
         if not bpy.data.filepath:
-            raise BadInput("--save-in-place needs a .blend that was opened from a file "
-                           "(or use --save OUT.blend)")
+            raise BadInput(
+                "--save-in-place needs a .blend that was opened from a file "
+                "(or use --save OUT.blend)"
+            )
         return Path(bpy.data.filepath)
     return None
 
@@ -291,20 +295,40 @@ def cmd_bake(args):
     save = _save_target(args)
     progress = Progress("bake", enabled=not args.json)
     try:
-        res = api.bake_locomotion_patch(scene, args.armature, args.straight, args.turn or (),
-                                        layer=args.layer, name=args.name, cells=args.cells,
-                                        nodes=args.nodes, progress=progress,
-                                        bvh_files=args.import_bvh or (), fps=args.fps)
+        res = api.bake_locomotion_patch(
+            scene,
+            args.armature,
+            args.straight,
+            args.turn or (),
+            layer=args.layer,
+            name=args.name,
+            cells=args.cells,
+            nodes=args.nodes,
+            progress=progress,
+            bvh_files=args.import_bvh or (),
+            fps=args.fps,
+        )
     finally:
         progress.close()
     saved = _save(save)
     st = res.stats
-    doc = {"patch": res.name, "layer": res.layer, "armature": res.armature,
-           "straight": res.straight, "turns": res.turns, "imported": res.imported,
-           "fps": api.scene_fps(scene), "seconds": res.seconds, "stats": st,
-           "notes": res.notes, "saved": saved}
-    text = [f"baked '{res.name}' ({res.layer}) in {res.seconds:.1f} s: {st.get('kept')} "
-            f"segments kept, {st.get('culled')} culled"]
+    doc = {
+        "patch": res.name,
+        "layer": res.layer,
+        "armature": res.armature,
+        "straight": res.straight,
+        "turns": res.turns,
+        "imported": res.imported,
+        "fps": api.scene_fps(scene),
+        "seconds": res.seconds,
+        "stats": st,
+        "notes": res.notes,
+        "saved": saved,
+    }
+    text = [
+        f"baked '{res.name}' ({res.layer}) in {res.seconds:.1f} s: {st.get('kept')} "
+        f"segments kept, {st.get('culled')} culled"
+    ]
     text += ["  " + n for n in res.notes]
     if saved:
         text.append(f"saved {saved}")
@@ -327,18 +351,29 @@ def _goal_of(args, scene):
 
 
 def _plan_doc(res, fps):
-    return {"character": res.character, "frame_start": res.frame_start,
-            "frame_end": res.frame_end, "frames": res.frame_end - res.frame_start + 1,
-            "seconds_of_motion": (res.frame_end - res.frame_start) / fps,
-            "length_m": res.length_m, "cost": res.cost, "plan_seconds": res.seconds,
-            "expansions": res.expansions, "pieces": res.pieces, "strips": len(res.strips),
-            "stashed_action_track": res.stashed_action_track, "stats": res.stats}
+    return {
+        "character": res.character,
+        "frame_start": res.frame_start,
+        "frame_end": res.frame_end,
+        "frames": res.frame_end - res.frame_start + 1,
+        "seconds_of_motion": (res.frame_end - res.frame_start) / fps,
+        "length_m": res.length_m,
+        "cost": res.cost,
+        "plan_seconds": res.seconds,
+        "expansions": res.expansions,
+        "pieces": res.pieces,
+        "strips": len(res.strips),
+        "stashed_action_track": res.stashed_action_track,
+        "stats": res.stats,
+    }
 
 
 def _plan_line(res, fps):
-    return (f"planned '{res.character}': {len(res.pieces)} pieces, frames {res.frame_start}-"
-            f"{res.frame_end} ({(res.frame_end - res.frame_start) / fps:.1f} s of motion, "
-            f"{res.length_m:.1f} m), cost {res.cost:.2f}, {res.seconds * 1000:.0f} ms")
+    return (
+        f"planned '{res.character}': {len(res.pieces)} pieces, frames {res.frame_start}-"
+        f"{res.frame_end} ({(res.frame_end - res.frame_start) / fps:.1f} s of motion, "
+        f"{res.length_m:.1f} m), cost {res.cost:.2f}, {res.seconds * 1000:.0f} ms"
+    )
 
 
 def cmd_plan(args):
@@ -348,8 +383,15 @@ def cmd_plan(args):
     w = api.planning_settings(scene, **_settings(args))  # what is used: the flags over the scene's
     save = _save_target(args)
     try:
-        res = api.plan_path(scene, char, goal, patch_name=args.patch, frame_start=args.frame_start,
-                            gait=args.gait, **w)
+        res = api.plan_path(
+            scene,
+            char,
+            goal,
+            patch_name=args.patch,
+            frame_start=args.frame_start,
+            gait=args.gait,
+            **w,
+        )
     except api.PathNotFound as exc:
         raise Failed(str(exc)) from None
     fps = api.scene_fps(scene)
@@ -357,16 +399,26 @@ def cmd_plan(args):
     doc = _plan_doc(res, fps)
     if args.gait:
         doc.update(layer=res.stats.get("layer"), layer_costs=res.stats.get("layers"))
-    doc.update(goal=api.state_dict(res.goal, goal_obj and goal_obj.name),
-               patch=args.patch or api.active_patch_name(scene), weights=w, saved=saved)
+    doc.update(
+        goal=api.state_dict(res.goal, goal_obj and goal_obj.name),
+        patch=args.patch or api.active_patch_name(scene),
+        weights=w,
+        saved=saved,
+    )
     text = [_plan_line(res, fps)]
     if args.gait:
-        text.append(f"  layer '{res.stats.get('layer')}' (Eq. 5 cost per layer: "
-                    + ", ".join(f"{k} {'no path' if v is None else f'{v:.2f}'}"
-                                for k, v in res.stats.get("layers", {}).items()) + ")")
+        text.append(
+            f"  layer '{res.stats.get('layer')}' (Eq. 5 cost per layer: "
+            + ", ".join(
+                f"{k} {'no path' if v is None else f'{v:.2f}'}"
+                for k, v in res.stats.get("layers", {}).items()
+            )
+            + ")"
+        )
     if res.stashed_action_track:
-        text.append(f"  its active action was moved to the muted track "
-                    f"'{res.stashed_action_track}'")
+        text.append(
+            f"  its active action was moved to the muted track '{res.stashed_action_track}'"
+        )
     if saved:
         text.append(f"saved {saved}")
     return Result(doc, OK, text)
@@ -383,8 +435,9 @@ def _crowd_pairs(args, scene):
     if args.pair:
         return [(_object(c, "character", {"ARMATURE"}), _object(g, "goal")) for c, g in args.pair]
     if args.character:
-        return api.crowd_members(scene, [_object(c, "character", {"ARMATURE"})
-                                         for c in args.character])
+        return api.crowd_members(
+            scene, [_object(c, "character", {"ARMATURE"}) for c in args.character]
+        )
     return api.crowd_members(scene)
 
 
@@ -396,29 +449,52 @@ def cmd_crowd(args):
     progress = Progress("crowd", enabled=not args.json)
     wait = {} if args.max_wait is None else {"max_wait_seconds": args.max_wait}
     try:
-        res = api.plan_crowd(scene, pairs, patch_name=args.patch, frame_start=args.frame_start,
-                             progress=progress, spacing=args.spacing, **wait, **w)
+        res = api.plan_crowd(
+            scene,
+            pairs,
+            patch_name=args.patch,
+            frame_start=args.frame_start,
+            progress=progress,
+            spacing=args.spacing,
+            **wait,
+            **w,
+        )
     finally:
         progress.close()
     fps = api.scene_fps(scene)
     ok = not res.failed and not res.conflicts
     saved = _save(save) if ok else None
-    doc = {"characters": len(pairs), "planned": [_plan_doc(p, fps) for p in res.plans],
-           "failed": [{"character": c, "error": e} for c, e in res.failed],
-           "conflicts": res.conflicts, "delays_frames": res.delays, "rerouted": res.rerouted,
-           "seconds": res.seconds,
-           "patch": args.patch or api.active_patch_name(scene), "weights": w, "saved": saved}
-    text = [f"crowd: {len(res.plans)} of {len(pairs)} characters planned in "
-            f"{res.seconds:.1f} s, {len(res.conflicts)} conflict(s)"]
+    doc = {
+        "characters": len(pairs),
+        "planned": [_plan_doc(p, fps) for p in res.plans],
+        "failed": [{"character": c, "error": e} for c, e in res.failed],
+        "conflicts": res.conflicts,
+        "delays_frames": res.delays,
+        "rerouted": res.rerouted,
+        "seconds": res.seconds,
+        "patch": args.patch or api.active_patch_name(scene),
+        "weights": w,
+        "saved": saved,
+    }
+    text = [
+        f"crowd: {len(res.plans)} of {len(pairs)} characters planned in "
+        f"{res.seconds:.1f} s, {len(res.conflicts)} conflict(s)"
+    ]
     for p in res.plans:
         wait = res.delays[p.character]
-        text.append("  " + _plan_line(p, fps) + (f", waits {wait} frames" if wait else "")
-                    + (", re-routed round the others" if p.character in res.rerouted else ""))
+        text.append(
+            "  "
+            + _plan_line(p, fps)
+            + (f", waits {wait} frames" if wait else "")
+            + (", re-routed round the others" if p.character in res.rerouted else "")
+        )
     for c, e in res.failed:
         text.append(f"  FAILED {e}")
     for c in res.conflicts:
-        text.append(f"  CONFLICT '{c['a']}' and '{c['b']}' come {c['distance_m'] * 100:.0f} cm "
-                    f"apart at frame {c['frame']}")
+        text.append(
+            f"  CONFLICT '{c['a']}' and '{c['b']}' come {c['distance_m'] * 100:.0f} cm "
+            f"apart at frame {c['frame']}"
+        )
     if saved:
         text.append(f"saved {saved}")
     elif save is not None:
@@ -432,8 +508,7 @@ def cmd_crowd(args):
 def cmd_export(args):
     out = Path(args.file).expanduser()
     name = api.export_patch(bpy.context.scene, out, args.patch)
-    return Result({"patch": name, "file": str(out.resolve())}, OK,
-                  [f"exported '{name}' to {out}"])
+    return Result({"patch": name, "file": str(out.resolve())}, OK, [f"exported '{name}' to {out}"])
 
 
 def cmd_import(args):
@@ -456,53 +531,67 @@ def cmd_analyse(args):
         raise BadInput(str(exc)) from None
     f = figures
     sk = f["foot_skate"]
-    text = [f"'{char.name}': {f['frames']} frames ({f['seconds']:.1f} s), evaluated",
-            f"  foot skate while planted: {sk.get('mean_cm_per_frame', float('nan')):.2f} "
-            f"cm/frame mean, {sk.get('p95_cm_per_frame', float('nan')):.2f} p95",
-            f"  goal error: {f['goal_position_error_cm']:.1f} cm, "
-            f"{f['goal_heading_error_deg']:.1f} deg "
-            f"(hips {f['goal_root_position_error_cm']:.1f} cm)",
-            f"  root from plan: max {f['root_from_plan_cm']['max']:.2f} cm; frames inside an "
-            f"obstacle: {f['frames_root_inside_obstacle']}",
-            f"  largest joint jump at a strip boundary: "
-            f"{f['boundary_pop'].get('max_boundary_jump_deg', float('nan')):.1f} deg"]
+    text = [
+        f"'{char.name}': {f['frames']} frames ({f['seconds']:.1f} s), evaluated",
+        f"  foot skate while planted: {sk.get('mean_cm_per_frame', float('nan')):.2f} "
+        f"cm/frame mean, {sk.get('p95_cm_per_frame', float('nan')):.2f} p95",
+        f"  goal error: {f['goal_position_error_cm']:.1f} cm, "
+        f"{f['goal_heading_error_deg']:.1f} deg "
+        f"(hips {f['goal_root_position_error_cm']:.1f} cm)",
+        f"  root from plan: max {f['root_from_plan_cm']['max']:.2f} cm; frames inside an "
+        f"obstacle: {f['frames_root_inside_obstacle']}",
+        f"  largest joint jump at a strip boundary: "
+        f"{f['boundary_pop'].get('max_boundary_jump_deg', float('nan')):.1f} deg",
+    ]
     return Result({"character": char.name, "figures": figures}, OK, text)
 
 
 # --- check -----------------------------------------------------------------------------------
+
 
 def _load_spec(path):
     p = Path(path).expanduser()
     if not p.is_file():
         raise BadInput(f"layout spec not found: {p}")
     if p.suffix.lower() in (".yaml", ".yml"):
-        raise BadInput(f"layout spec {p.name}: specs are JSON or TOML (.json, .toml), not "
-                       f"YAML; see --help for the keys")
+        raise BadInput(
+            f"layout spec {p.name}: specs are JSON or TOML (.json, .toml), not "
+            f"YAML; see --help for the keys"
+        )
     try:
         if p.suffix.lower() == ".toml":
             import tomllib
+
             with open(p, "rb") as fh:
                 return tomllib.load(fh)
         with open(p, encoding="utf-8") as fh:
             return json.load(fh)
     except (ValueError, UnicodeDecodeError) as exc:  # JSONDecodeError, TOMLDecodeError
         kind = "TOML" if p.suffix.lower() == ".toml" else "JSON"
-        raise BadInput(f"cannot read layout spec {p.name} as {kind} (specs are JSON, or TOML "
-                       f"with a .toml name): {exc}") from None
+        raise BadInput(
+            f"cannot read layout spec {p.name} as {kind} (specs are JSON, or TOML "
+            f"with a .toml name): {exc}"
+        ) from None
 
 
 def _planned_pairs(scene, characters, goals):
     """Spec pairs from --character/--goal, or from the stored plans (api.planned_pairs)."""
-    return api.planned_pairs(scene, [_object(c, "character", {"ARMATURE"}) for c in characters],
-                             [_object(g, "goal") for g in goals])
+    return api.planned_pairs(
+        scene,
+        [_object(c, "character", {"ARMATURE"}) for c in characters],
+        [_object(g, "goal") for g in goals],
+    )
 
 
 def cmd_check(args):
     scene = bpy.context.scene
     if args.spec and (args.character or args.goal):
         raise BadInput("give either --spec or --character/--goal, not both")
-    spec = _load_spec(args.spec) if args.spec else {
-        "pairs": _planned_pairs(scene, args.character or [], args.goal or [])}
+    spec = (
+        _load_spec(args.spec)
+        if args.spec
+        else {"pairs": _planned_pairs(scene, args.character or [], args.goal or [])}
+    )
     if isinstance(spec, dict):
         spec = dict(spec)
         if args.patch:
@@ -520,19 +609,29 @@ def cmd_check(args):
     except api.MotionPatchesError as exc:
         raise BadInput(str(exc)) from None
     failed = [r for r in results if not r["passed"]]
-    doc = {"ok": not failed, "pairs": results, "passed": len(results) - len(failed),
-           "failed": len(failed)}
-    text = [f"check: {len(results)} pair(s), {len(results) - len(failed)} passed, "
-            f"{len(failed)} failed"]
+    doc = {
+        "ok": not failed,
+        "pairs": results,
+        "passed": len(results) - len(failed),
+        "failed": len(failed),
+    }
+    text = [
+        f"check: {len(results)} pair(s), {len(results) - len(failed)} passed, {len(failed)} failed"
+    ]
     for r in results:
         if r["reachable"]:
-            what = (f"reachable, {r['length_m']:.1f} m, {r['seconds']:.1f} s of motion, "
-                    f"cost {r['cost']:.2f}")
+            what = (
+                f"reachable, {r['length_m']:.1f} m, {r['seconds']:.1f} s of motion, "
+                f"cost {r['cost']:.2f}"
+            )
         else:
-            what = "UNREACHABLE" + (f", blocked by {', '.join(r['blocked_by'][:6])}"
-                                    + (", ..." if len(r["blocked_by"]) > 6 else "")
-                                    + f" ({r['blocked_reason']})" if r["blocked_by"] else
-                                    f" ({r['error']})")
+            what = "UNREACHABLE" + (
+                f", blocked by {', '.join(r['blocked_by'][:6])}"
+                + (", ..." if len(r["blocked_by"]) > 6 else "")
+                + f" ({r['blocked_reason']})"
+                if r["blocked_by"]
+                else f" ({r['error']})"
+            )
         text.append(f"  {'PASS' if r['passed'] else 'FAIL'}  {r['name']}: {what}")
         for f in r["failures"] if r["reachable"] else ():
             text.append(f"        {f}")
@@ -544,133 +643,244 @@ def cmd_check(args):
 
 def build_parser():
     common = _Parser(add_help=False)
-    common.add_argument("--json", action="store_true",
-                        help="print one JSON document on stdout (and nothing else there)")
-    common.add_argument("--verbose", action="store_true",
-                        help="pass on what Blender prints while working (to stderr)")
-    common.add_argument("--blend", metavar="FILE",
-                        help="open this .blend first (the file given to Blender before -c is "
-                             "already open)")
+    common.add_argument(
+        "--json",
+        action="store_true",
+        help="print one JSON document on stdout (and nothing else there)",
+    )
+    common.add_argument(
+        "--verbose",
+        action="store_true",
+        help="pass on what Blender prints while working (to stderr)",
+    )
+    common.add_argument(
+        "--blend",
+        metavar="FILE",
+        help="open this .blend first (the file given to Blender before -c is already open)",
+    )
     fmt = argparse.RawDescriptionHelpFormatter
-    p = _Parser(prog=PROG, formatter_class=fmt,
-                description="Dynamic Motion Patches: bake locomotion patches, plan characters "
-                            "and check layouts without the UI.",
-                epilog=INVOCATION)
-    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND",
-                           parser_class=_Parser)
+    p = _Parser(
+        prog=PROG,
+        formatter_class=fmt,
+        description="Dynamic Motion Patches: bake locomotion patches, plan characters "
+        "and check layouts without the UI.",
+        epilog=INVOCATION,
+    )
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=_Parser)
 
-    b = sub.add_parser("bake", parents=[common], formatter_class=fmt, epilog=INVOCATION,
-                       help="bake a locomotion patch from actions (optionally import BVH first)",
-                       description="Bake a locomotion patch from a straight action and turn "
-                                   "actions on an armature and store it in the .blend.")
-    b.add_argument("--armature", required=True, metavar="NAME",
-                   help="armature holding the clips (created by --import-bvh if missing)")
+    b = sub.add_parser(
+        "bake",
+        parents=[common],
+        formatter_class=fmt,
+        epilog=INVOCATION,
+        help="bake a locomotion patch from actions (optionally import BVH first)",
+        description="Bake a locomotion patch from a straight action and turn "
+        "actions on an armature and store it in the .blend.",
+    )
+    b.add_argument(
+        "--armature",
+        required=True,
+        metavar="NAME",
+        help="armature holding the clips (created by --import-bvh if missing)",
+    )
     b.add_argument("--straight", required=True, metavar="ACTION", help="straight clip")
-    b.add_argument("--turn", action="append", metavar="ACTION",
-                   help="turn clip (repeat for several; mirrored turns are added)")
+    b.add_argument(
+        "--turn",
+        action="append",
+        metavar="ACTION",
+        help="turn clip (repeat for several; mirrored turns are added)",
+    )
     b.add_argument("--layer", default="walk", help="gait of the patch (default: walk)")
     b.add_argument("--name", help="patch name (default: the layer)")
-    b.add_argument("--import-bvh", action="append", metavar="FILE",
-                   help="import this BVH file first (repeat); its action is named after the "
-                        "file, e.g. 16_15.bvh -> 16_15")
-    b.add_argument("--fps", type=int,
-                   help="set the scene frame rate first (the patch is baked at the scene rate)")
-    b.add_argument("--cells", type=int, default=8, metavar="2..8",
-                   help="cells per side of the patch (default 8)")
-    b.add_argument("--nodes", type=int, default=8, metavar="2..8",
-                   help="entry/exit nodes per edge (default 8)")
+    b.add_argument(
+        "--import-bvh",
+        action="append",
+        metavar="FILE",
+        help="import this BVH file first (repeat); its action is named after the "
+        "file, e.g. 16_15.bvh -> 16_15",
+    )
+    b.add_argument(
+        "--fps",
+        type=int,
+        help="set the scene frame rate first (the patch is baked at the scene rate)",
+    )
+    b.add_argument(
+        "--cells",
+        type=int,
+        default=8,
+        metavar="2..8",
+        help="cells per side of the patch (default 8)",
+    )
+    b.add_argument(
+        "--nodes", type=int, default=8, metavar="2..8", help="entry/exit nodes per edge (default 8)"
+    )
     _save_options(b)
     b.set_defaults(run=cmd_bake)
 
-    pl = sub.add_parser("plan", parents=[common], formatter_class=fmt, epilog=INVOCATION,
-                        help="plan a character to a goal and write it as NLA strips",
-                        description="Plan an armature's walk to a goal object or position "
-                                    "and write it as NLA strips.")
+    pl = sub.add_parser(
+        "plan",
+        parents=[common],
+        formatter_class=fmt,
+        epilog=INVOCATION,
+        help="plan a character to a goal and write it as NLA strips",
+        description="Plan an armature's walk to a goal object or position "
+        "and write it as NLA strips.",
+    )
     pl.add_argument("--character", required=True, metavar="NAME", help="armature to plan")
     g = pl.add_mutually_exclusive_group()
-    g.add_argument("--goal", metavar="OBJECT",
-                   help="goal object: its location and -Y axis (default: the scene's goal)")
-    g.add_argument("--goal-xyh", nargs=3, type=float, metavar=("X", "Y", "HEADING_DEG"),
-                   help="goal position (m) and facing (degrees counter-clockwise from +X)")
+    g.add_argument(
+        "--goal",
+        metavar="OBJECT",
+        help="goal object: its location and -Y axis (default: the scene's goal)",
+    )
+    g.add_argument(
+        "--goal-xyh",
+        nargs=3,
+        type=float,
+        metavar=("X", "Y", "HEADING_DEG"),
+        help="goal position (m) and facing (degrees counter-clockwise from +X)",
+    )
     pl.add_argument("--patch", metavar="NAME", help="locomotion patch (default: the active one)")
-    pl.add_argument("--gait", metavar="walk|run|auto",
-                    help="plan in the patch of this layer, or 'auto': in every layer baked, "
-                         "keeping the cheapest (default: the --patch or active patch)")
+    pl.add_argument(
+        "--gait",
+        metavar="walk|run|auto",
+        help="plan in the patch of this layer, or 'auto': in every layer baked, "
+        "keeping the cheapest (default: the --patch or active patch)",
+    )
     _weight_options(pl)
     _planning_options(pl)
-    pl.add_argument("--frame-start", type=int, metavar="N",
-                    help="first frame of the motion (default: the current frame)")
+    pl.add_argument(
+        "--frame-start",
+        type=int,
+        metavar="N",
+        help="first frame of the motion (default: the current frame)",
+    )
     _save_options(pl)
     pl.set_defaults(run=cmd_plan)
 
-    a = sub.add_parser("analyse", parents=[common], formatter_class=fmt, epilog=INVOCATION,
-                       help="figures of a planned character's evaluated motion",
-                       description="Evaluate a planned character through the depsgraph frame "
-                                   "by frame and print figures (foot skate, goal error, ...).")
+    a = sub.add_parser(
+        "analyse",
+        parents=[common],
+        formatter_class=fmt,
+        epilog=INVOCATION,
+        help="figures of a planned character's evaluated motion",
+        description="Evaluate a planned character through the depsgraph frame "
+        "by frame and print figures (foot skate, goal error, ...).",
+    )
     a.add_argument("--character", required=True, metavar="NAME")
     a.set_defaults(run=cmd_analyse)
 
-    c = sub.add_parser("check", parents=[common], formatter_class=fmt,
-                       epilog=SPEC_HELP + "\n" + INVOCATION,
-                       help="layout test: plan start/goal pairs without writing anything",
-                       description="Plan every start/goal pair without writing to the scene and "
-                                   "report reachable or not, path length, seconds of motion, "
-                                   "cost and the blocking props; exit 1 when a pair fails its "
-                                   "limits. Pairs come from --spec, from --character/--goal, or "
-                                   "(neither given) from every character with a planned path "
-                                   "and its planned goal.")
+    c = sub.add_parser(
+        "check",
+        parents=[common],
+        formatter_class=fmt,
+        epilog=SPEC_HELP + "\n" + INVOCATION,
+        help="layout test: plan start/goal pairs without writing anything",
+        description="Plan every start/goal pair without writing to the scene and "
+        "report reachable or not, path length, seconds of motion, "
+        "cost and the blocking props; exit 1 when a pair fails its "
+        "limits. Pairs come from --spec, from --character/--goal, or "
+        "(neither given) from every character with a planned path "
+        "and its planned goal.",
+    )
     c.add_argument("--spec", metavar="FILE", help="JSON or TOML file of pairs and limits")
-    c.add_argument("--character", action="append", metavar="NAME",
-                   help="check this armature (repeat); with no --goal, against its planned goal")
-    c.add_argument("--goal", action="append", metavar="OBJECT",
-                   help="goal object for the --character at the same position (repeat)")
+    c.add_argument(
+        "--character",
+        action="append",
+        metavar="NAME",
+        help="check this armature (repeat); with no --goal, against its planned goal",
+    )
+    c.add_argument(
+        "--goal",
+        action="append",
+        metavar="OBJECT",
+        help="goal object for the --character at the same position (repeat)",
+    )
     c.add_argument("--patch", metavar="NAME")
     _weight_options(c)
-    c.add_argument("--max-seconds", type=float, metavar="S",
-                   help="default limit for every pair (a pair's own limit wins): at most S "
-                        "seconds of motion")
+    c.add_argument(
+        "--max-seconds",
+        type=float,
+        metavar="S",
+        help="default limit for every pair (a pair's own limit wins): at most S seconds of motion",
+    )
     c.add_argument("--max-length", type=float, metavar="M", help="limit: at most M metres")
     c.add_argument("--max-cost", type=float, metavar="C", help="limit: at most this cost")
     c.set_defaults(run=cmd_check)
 
-    cr = sub.add_parser("crowd", parents=[common], formatter_class=fmt, epilog=INVOCATION,
-                        help="plan several characters, each to its goal, kept apart in time",
-                        description="Plan every character to its goal against the props, then "
-                                    "let later characters wait at their start until they keep "
-                                    "--spacing from the earlier ones at every frame; exit 1 when "
-                                    "a character finds no path or a conflict remains (then "
-                                    "nothing is saved).")
-    cr.add_argument("--pair", nargs=2, action="append", metavar=("CHARACTER", "GOAL"),
-                    help="an armature and its goal object (repeat; the order is the priority)")
-    cr.add_argument("--character", action="append", metavar="NAME",
-                    help="an armature of the crowd (repeat), walking to its own goal, else to "
-                         "the scene's (as Plan Crowd does with the selected armatures); "
-                         "neither --pair nor --character: every armature with its own goal")
+    cr = sub.add_parser(
+        "crowd",
+        parents=[common],
+        formatter_class=fmt,
+        epilog=INVOCATION,
+        help="plan several characters, each to its goal, kept apart in time",
+        description="Plan every character to its goal against the props, then "
+        "let later characters wait at their start until they keep "
+        "--spacing from the earlier ones at every frame; exit 1 when "
+        "a character finds no path or a conflict remains (then "
+        "nothing is saved).",
+    )
+    cr.add_argument(
+        "--pair",
+        nargs=2,
+        action="append",
+        metavar=("CHARACTER", "GOAL"),
+        help="an armature and its goal object (repeat; the order is the priority)",
+    )
+    cr.add_argument(
+        "--character",
+        action="append",
+        metavar="NAME",
+        help="an armature of the crowd (repeat), walking to its own goal, else to "
+        "the scene's (as Plan Crowd does with the selected armatures); "
+        "neither --pair nor --character: every armature with its own goal",
+    )
     cr.add_argument("--patch", metavar="NAME", help="locomotion patch (default: the active one)")
     _weight_options(cr)
     _planning_options(cr)
-    cr.add_argument("--frame-start", type=int, metavar="N",
-                    help="first frame of the motion (default: the current frame)")
-    cr.add_argument("--max-wait", type=float, metavar="S",
-                    help="longest wait at the start, in seconds (default 4)")
-    cr.add_argument("--spacing", type=float, metavar="M",
-                    help="closest two characters' roots may come, in metres (default: two "
-                         "radii)")
+    cr.add_argument(
+        "--frame-start",
+        type=int,
+        metavar="N",
+        help="first frame of the motion (default: the current frame)",
+    )
+    cr.add_argument(
+        "--max-wait",
+        type=float,
+        metavar="S",
+        help="longest wait at the start, in seconds (default 4)",
+    )
+    cr.add_argument(
+        "--spacing",
+        type=float,
+        metavar="M",
+        help="closest two characters' roots may come, in metres (default: two radii)",
+    )
     _save_options(cr)
     cr.set_defaults(run=cmd_crowd)
 
-    ex = sub.add_parser("export", parents=[common], formatter_class=fmt, epilog=INVOCATION,
-                        help="write a baked patch to a file",
-                        description="Write a baked locomotion patch to a file that 'import' (or "
-                                    "the panel) reads into another .blend.")
+    ex = sub.add_parser(
+        "export",
+        parents=[common],
+        formatter_class=fmt,
+        epilog=INVOCATION,
+        help="write a baked patch to a file",
+        description="Write a baked locomotion patch to a file that 'import' (or "
+        "the panel) reads into another .blend.",
+    )
     ex.add_argument("file", metavar="FILE", help="patch file to write (e.g. walk.mpatch)")
     ex.add_argument("--patch", metavar="NAME", help="patch to export (default: the active one)")
     ex.set_defaults(run=cmd_export)
 
-    im = sub.add_parser("import", parents=[common], formatter_class=fmt, epilog=INVOCATION,
-                        help="store a patch file in the .blend",
-                        description="Store a locomotion patch file written by 'export' in the "
-                                    "open .blend (replacing a patch of the same name).")
+    im = sub.add_parser(
+        "import",
+        parents=[common],
+        formatter_class=fmt,
+        epilog=INVOCATION,
+        help="store a patch file in the .blend",
+        description="Store a locomotion patch file written by 'export' in the "
+        "open .blend (replacing a patch of the same name).",
+    )
     im.add_argument("file", metavar="FILE", help="patch file to read")
     im.add_argument("--name", help="name to store it under (default: its layer)")
     _save_options(im)
@@ -682,33 +892,56 @@ def _weight_options(p):
     p.add_argument("--alpha", type=float, help="cost per metre (default: the scene's setting)")
     p.add_argument("--beta", type=float, help="cost per radian turned (default: the scene's)")
     p.add_argument("--gamma", type=float, help="cost per unit of effort (default: the scene's)")
-    p.add_argument("--radius", type=float,
-                   help="character radius in metres (default: the scene's)")
+    p.add_argument("--radius", type=float, help="character radius in metres (default: the scene's)")
 
 
 def _planning_options(p):
     """Flags over the scene's Planning settings; a setting not given is the scene's."""
-    p.add_argument("--stitching", choices=("dynamic", "static"),
-                   help="stitch traversal clips lazily (dynamic, the paper's method) or all "
-                        "before the search (static, Lee 2006); default: the scene's setting")
+    p.add_argument(
+        "--stitching",
+        choices=("dynamic", "static"),
+        help="stitch traversal clips lazily (dynamic, the paper's method) or all "
+        "before the search (static, Lee 2006); default: the scene's setting",
+    )
     g = p.add_mutually_exclusive_group()
-    g.add_argument("--foot-lock", dest="foot_lock", action="store_const", const=True,
-                   help="pin planted feet with leg IK (default: the scene's setting)")
-    g.add_argument("--no-foot-lock", dest="foot_lock", action="store_const", const=False,
-                   help="leave planted feet as synthesised (no leg IK track)")
+    g.add_argument(
+        "--foot-lock",
+        dest="foot_lock",
+        action="store_const",
+        const=True,
+        help="pin planted feet with leg IK (default: the scene's setting)",
+    )
+    g.add_argument(
+        "--no-foot-lock",
+        dest="foot_lock",
+        action="store_const",
+        const=False,
+        help="leave planted feet as synthesised (no leg IK track)",
+    )
     g = p.add_mutually_exclusive_group()
-    g.add_argument("--any-facing", dest="goal_facing", action="store_const", const="any",
-                   help="end facing whichever way is cheapest (the goal's own facing is "
-                        "ignored); default: the scene's Goal Facing")
-    g.add_argument("--exact-facing", dest="goal_facing", action="store_const", const="exact",
-                   help="end facing the goal's facing")
+    g.add_argument(
+        "--any-facing",
+        dest="goal_facing",
+        action="store_const",
+        const="any",
+        help="end facing whichever way is cheapest (the goal's own facing is "
+        "ignored); default: the scene's Goal Facing",
+    )
+    g.add_argument(
+        "--exact-facing",
+        dest="goal_facing",
+        action="store_const",
+        const="exact",
+        help="end facing the goal's facing",
+    )
 
 
 def _save_options(p):
     g = p.add_mutually_exclusive_group()
     g.add_argument("--save", metavar="OUT.blend", help="save the .blend here on success")
-    g.add_argument("--save-in-place", action="store_true",
-                   help="save over the open .blend on success")
+    g.add_argument(
+        "--save-in-place", action="store_true", help="save over the open .blend on success"
+    )
 
 
 # --- entry point -----------------------------------------------------------------------------
@@ -738,12 +971,18 @@ def main(argv):
         return _fail(BAD_INPUT, str(exc), args.json, args.command)
     except Exception:
         traceback.print_exc()
-        return _fail(INTERNAL, "internal error (a bug; the traceback is above)", args.json,
-                     args.command)
+        return _fail(
+            INTERNAL, "internal error (a bug; the traceback is above)", args.json, args.command
+        )
     if args.json:
-        doc = {"command": args.command, "ok": result.code == OK, "exit_code": result.code,
-               "blender": bpy.app.version_string, "file": bpy.data.filepath or None,
-               "wall_seconds": time.perf_counter() - t0}
+        doc = {
+            "command": args.command,
+            "ok": result.code == OK,
+            "exit_code": result.code,
+            "blender": bpy.app.version_string,
+            "file": bpy.data.filepath or None,
+            "wall_seconds": time.perf_counter() - t0,
+        }
         doc.update(result.doc)
         print(_dump(doc))
     else:

@@ -32,45 +32,86 @@ def _overlay_toggle(on):
 
 
 PLANNING = {  # name -> factory of the bpy property (one fresh definition per class)
-    "alpha": lambda: FloatProperty(name="Distance (α)", default=DEFAULTS["alpha"], min=0.0,
-                                   description="Cost per metre walked"),
-    "beta": lambda: FloatProperty(name="Turning (β)", default=DEFAULTS["beta"], min=0.0,
-                                  description="Cost per radian turned"),
-    "gamma": lambda: FloatProperty(name="Effort (γ)", default=DEFAULTS["gamma"], min=0.0,
-                                   description="Cost per unit of effort (jumping a prop costs "
-                                               "its clip's effort)"),
-    "radius": lambda: FloatProperty(name="Character Radius", default=DEFAULTS["radius"], min=0.05, max=2.0,
-                                    unit='LENGTH',
-                                    description="Clearance kept between the root and props"),
-    "stitching": lambda: EnumProperty(name="Stitching", default=DEFAULTS["stitching"].upper(), items=(
-        ('DYNAMIC', "Dynamic", "Stitch traversal clips lazily, when the search needs them"),
-        ('STATIC', "Static", "Stitch every traversal clip before searching (Lee 2006 baseline)"))),
-    "goal_facing": lambda: EnumProperty(name="Goal Facing", default=DEFAULTS["goal_facing"].upper(), items=(
-        ('EXACT', "Exact", "Arrive facing the goal object's facing (its -Y axis)"),
-        ('ANY', "Any", "Arrive facing whichever way is cheapest (e.g. a goal in a dead end)"))),
-    "foot_lock": lambda: BoolProperty(name="Lock Planted Feet", default=DEFAULTS["foot_lock"],
-                                      description="Pin each planted foot with leg IK (a Combine "
-                                                  "track over the walk) so it does not slide"),
+    "alpha": lambda: FloatProperty(
+        name="Distance (α)", default=DEFAULTS["alpha"], min=0.0, description="Cost per metre walked"
+    ),
+    "beta": lambda: FloatProperty(
+        name="Turning (β)", default=DEFAULTS["beta"], min=0.0, description="Cost per radian turned"
+    ),
+    "gamma": lambda: FloatProperty(
+        name="Effort (γ)",
+        default=DEFAULTS["gamma"],
+        min=0.0,
+        description="Cost per unit of effort (jumping a prop costs its clip's effort)",
+    ),
+    "radius": lambda: FloatProperty(
+        name="Character Radius",
+        default=DEFAULTS["radius"],
+        min=0.05,
+        max=2.0,
+        unit="LENGTH",
+        description="Clearance kept between the root and props",
+    ),
+    "stitching": lambda: EnumProperty(
+        name="Stitching",
+        default=DEFAULTS["stitching"].upper(),
+        items=(
+            ("DYNAMIC", "Dynamic", "Stitch traversal clips lazily, when the search needs them"),
+            (
+                "STATIC",
+                "Static",
+                "Stitch every traversal clip before searching (Lee 2006 baseline)",
+            ),
+        ),
+    ),
+    "goal_facing": lambda: EnumProperty(
+        name="Goal Facing",
+        default=DEFAULTS["goal_facing"].upper(),
+        items=(
+            ("EXACT", "Exact", "Arrive facing the goal object's facing (its -Y axis)"),
+            ("ANY", "Any", "Arrive facing whichever way is cheapest (e.g. a goal in a dead end)"),
+        ),
+    ),
+    "foot_lock": lambda: BoolProperty(
+        name="Lock Planted Feet",
+        default=DEFAULTS["foot_lock"],
+        description="Pin each planted foot with leg IK (a Combine "
+        "track over the walk) so it does not slide",
+    ),
     "fit_frame_range": lambda: BoolProperty(
-        name="Fit Frame Range", default=True,
+        name="Fit Frame Range",
+        default=True,
         description="After planning, set the scene's frame range to the planned motion "
-                    "(every planned character's); a range you set yourself is only extended, "
-                    "never shortened"),
+        "(every planned character's); a range you set yourself is only extended, "
+        "never shortened",
+    ),
 }
 BAKE = {
-    "cells": lambda **kw: IntProperty(name="Cells", default=8, min=2, max=8, description=
-                                      "Cells per side of the patch's square", **kw),
-    "nodes": lambda **kw: IntProperty(name="Nodes per Edge", default=8, min=2, max=8,
-                                      description="Entry/exit points along each side of the "
-                                                  "patch", **kw),
+    "cells": lambda **kw: IntProperty(
+        name="Cells",
+        default=8,
+        min=2,
+        max=8,
+        description="Cells per side of the patch's square",
+        **kw,
+    ),
+    "nodes": lambda **kw: IntProperty(
+        name="Nodes per Edge",
+        default=8,
+        min=2,
+        max=8,
+        description="Entry/exit points along each side of the patch",
+        **kw,
+    ),
 }
 
 
 class MOTION_PATCHES_PG_patch(bpy.types.PropertyGroup):
     layer: StringProperty(name="Layer", description="Gait of this locomotion patch")
-    payload: StringProperty(name="Payload", description="Baked patch (base64 npz)",
-                            options={'HIDDEN'})
-    stats: StringProperty(name="Statistics", description="Bake report (JSON)", options={'HIDDEN'})
+    payload: StringProperty(
+        name="Payload", description="Baked patch (base64 npz)", options={"HIDDEN"}
+    )
+    stats: StringProperty(name="Statistics", description="Bake report (JSON)", options={"HIDDEN"})
     fps: FloatProperty(name="Frame Rate", description="Frame rate the patch was baked at")
 
 
@@ -79,71 +120,110 @@ class MOTION_PATCHES_PG_action_ref(bpy.types.PropertyGroup):
 
 
 class MOTION_PATCHES_PG_patch_clip(bpy.types.PropertyGroup):
-    action: PointerProperty(type=bpy.types.Action, name="Action",
-                            description="Clip recorded on the patch's skeleton")
-    kind: EnumProperty(name="Kind", items=(
-        ('TRAVERSAL', "Traversal", "Passes the prop (hurdle, vault): used by the planner"),
-        ('INTERACTION', "Interaction", "Starts or ends a path at the prop (sit, stand)")))
-    effort: FloatProperty(name="Effort (T)", default=8.0, min=0.0,
-                          description="Effort of the whole clip, in walking seconds")
-    layer_in: StringProperty(name="Layer In", default="walk",
-                             description="Gait layer(s) the clip is entered from: a name, "
-                                         "names separated by commas, or * for any")
-    layer_out: StringProperty(name="Layer Out", default="walk",
-                              description="Gait layer(s) the clip is left in: a name, names "
-                                          "separated by commas, or * for any")
-    copy_step: FloatProperty(name="Copies Every (°)", default=10.0, min=0.0, max=180.0,
-                             description="Copy the clip around the prop every so many "
-                                         "degrees (0: no copies)")
+    action: PointerProperty(
+        type=bpy.types.Action, name="Action", description="Clip recorded on the patch's skeleton"
+    )
+    kind: EnumProperty(
+        name="Kind",
+        items=(
+            ("TRAVERSAL", "Traversal", "Passes the prop (hurdle, vault): used by the planner"),
+            ("INTERACTION", "Interaction", "Starts or ends a path at the prop (sit, stand)"),
+        ),
+    )
+    effort: FloatProperty(
+        name="Effort (T)",
+        default=8.0,
+        min=0.0,
+        description="Effort of the whole clip, in walking seconds",
+    )
+    layer_in: StringProperty(
+        name="Layer In",
+        default="walk",
+        description="Gait layer(s) the clip is entered from: a name, "
+        "names separated by commas, or * for any",
+    )
+    layer_out: StringProperty(
+        name="Layer Out",
+        default="walk",
+        description="Gait layer(s) the clip is left in: a name, names "
+        "separated by commas, or * for any",
+    )
+    copy_step: FloatProperty(
+        name="Copies Every (°)",
+        default=10.0,
+        min=0.0,
+        max=180.0,
+        description="Copy the clip around the prop every so many degrees (0: no copies)",
+    )
 
 
 class MOTION_PATCHES_PG_object(bpy.types.PropertyGroup):
-    enabled: BoolProperty(name="Object Patch", default=False,
-                          description="This prop carries clips the planner may use")
+    enabled: BoolProperty(
+        name="Object Patch",
+        default=False,
+        description="This prop carries clips the planner may use",
+    )
     clips: CollectionProperty(type=MOTION_PATCHES_PG_patch_clip)
     active_clip_index: IntProperty(default=0)
 
 
 class MOTION_PATCHES_PG_bone_pair(bpy.types.PropertyGroup):
     """One row of a character's bone map: which of its bones plays a patch bone."""
-    patch_bone: StringProperty(name="Patch Bone",
-                               description="Bone of the locomotion patch's skeleton")
-    rig_bone: StringProperty(name="Rig Bone",
-                             description="Bone of this armature that plays the patch bone "
-                                         "(empty: the patch bone is left out)")
+
+    patch_bone: StringProperty(
+        name="Patch Bone", description="Bone of the locomotion patch's skeleton"
+    )
+    rig_bone: StringProperty(
+        name="Rig Bone",
+        description="Bone of this armature that plays the patch bone "
+        "(empty: the patch bone is left out)",
+    )
 
 
 class MOTION_PATCHES_PG_character(bpy.types.PropertyGroup):
-    goal: PointerProperty(type=bpy.types.Object, name="Own Goal",
-                          description="Where this character walks when it is planned in a "
-                                      "crowd (empty: the scene's goal; a character with "
-                                      "neither is refused, named)")
+    goal: PointerProperty(
+        type=bpy.types.Object,
+        name="Own Goal",
+        description="Where this character walks when it is planned in a "
+        "crowd (empty: the scene's goal; a character with "
+        "neither is refused, named)",
+    )
 
 
 class MOTION_PATCHES_PG_rig(bpy.types.PropertyGroup):
     """Stored on the armature data (``Armature.motion_patches_rig``), so every character
     made from one rig shares it."""
+
     bone_map: CollectionProperty(
-        type=MOTION_PATCHES_PG_bone_pair, name="Bone Map",
+        type=MOTION_PATCHES_PG_bone_pair,
+        name="Bone Map",
         description="Which bone of this armature plays each bone of the patch skeleton; "
-                    "patch bones not listed are paired by their names (naming conventions)")
+        "patch bones not listed are paired by their names (naming conventions)",
+    )
     active_bone_index: IntProperty(default=0)
 
 
 class MOTION_PATCHES_PG_scene(bpy.types.PropertyGroup):
     patches: CollectionProperty(type=MOTION_PATCHES_PG_patch)
-    active_patch_index: IntProperty(name="Active Patch", default=0,
-                                    description="The patch the planner uses")
+    active_patch_index: IntProperty(
+        name="Active Patch", default=0, description="The patch the planner uses"
+    )
     source_armature: PointerProperty(
-        type=bpy.types.Object, name="Source Armature",
+        type=bpy.types.Object,
+        name="Source Armature",
         description="Armature the mocap clips were imported on",
-        poll=lambda self, ob: ob.type == 'ARMATURE')
-    straight_action: PointerProperty(type=bpy.types.Action, name="Straight",
-                                     description="Straight locomotion clip of the layer")
+        poll=lambda self, ob: ob.type == "ARMATURE",
+    )
+    straight_action: PointerProperty(
+        type=bpy.types.Action, name="Straight", description="Straight locomotion clip of the layer"
+    )
     turn_actions: CollectionProperty(type=MOTION_PATCHES_PG_action_ref)
     active_turn_index: IntProperty(default=0)
-    goal: PointerProperty(type=bpy.types.Object, name="Goal",
-                          description="Object whose location and facing (-Y) is the goal")
+    goal: PointerProperty(
+        type=bpy.types.Object,
+        name="Goal",
+        description="Object whose location and facing (-Y) is the goal",
+    )
     alpha: PLANNING["alpha"]()
     beta: PLANNING["beta"]()
     gamma: PLANNING["gamma"]()
@@ -153,10 +233,12 @@ class MOTION_PATCHES_PG_scene(bpy.types.PropertyGroup):
     goal_facing: PLANNING["goal_facing"]()
     fit_frame_range: PLANNING["fit_frame_range"]()
     show_overlay: BoolProperty(
-        name="Show Planner Overlay", default=False,
+        name="Show Planner Overlay",
+        default=False,
         description="Draw the tile grid, occluded cells, planned paths, stitches and where "
-                    "the props' clips start and end",
-        update=lambda self, context: _overlay_toggle(self.show_overlay))
+        "the props' clips start and end",
+        update=lambda self, context: _overlay_toggle(self.show_overlay),
+    )
 
 
 class MOTION_PATCHES_AP_preferences(bpy.types.AddonPreferences):
@@ -177,9 +259,10 @@ class MOTION_PATCHES_AP_preferences(bpy.types.AddonPreferences):
         # One headed section each (a column's heading= would only label its first
         # checkbox, and show nothing before a number field).
         layout = self.layout
-        for idname, title, names in (("motion_patches_prefs_planning", "Planning Defaults",
-                                      PLANNING),
-                                     ("motion_patches_prefs_bake", "Bake Defaults", BAKE)):
+        for idname, title, names in (
+            ("motion_patches_prefs_planning", "Planning Defaults", PLANNING),
+            ("motion_patches_prefs_bake", "Bake Defaults", BAKE),
+        ):
             body = _section(layout, idname, title)
             if body is None:  # collapsed
                 continue
@@ -187,8 +270,10 @@ class MOTION_PATCHES_AP_preferences(bpy.types.AddonPreferences):
             body.use_property_decorate = False
             for name in names:
                 body.prop(self, name)
-        layout.label(text="Planning > Reset to Preferences copies the planning defaults into "
-                          "a scene", icon='INFO')
+        layout.label(
+            text="Planning > Reset to Preferences copies the planning defaults into a scene",
+            icon="INFO",
+        )
 
 
 def _section(layout, idname, title):
@@ -208,9 +293,17 @@ def preferences(context):
     return addon.preferences if addon is not None else None
 
 
-classes = (MOTION_PATCHES_PG_patch, MOTION_PATCHES_PG_action_ref, MOTION_PATCHES_PG_patch_clip,
-           MOTION_PATCHES_PG_object, MOTION_PATCHES_PG_bone_pair, MOTION_PATCHES_PG_rig,
-           MOTION_PATCHES_PG_character, MOTION_PATCHES_PG_scene, MOTION_PATCHES_AP_preferences)
+classes = (
+    MOTION_PATCHES_PG_patch,
+    MOTION_PATCHES_PG_action_ref,
+    MOTION_PATCHES_PG_patch_clip,
+    MOTION_PATCHES_PG_object,
+    MOTION_PATCHES_PG_bone_pair,
+    MOTION_PATCHES_PG_rig,
+    MOTION_PATCHES_PG_character,
+    MOTION_PATCHES_PG_scene,
+    MOTION_PATCHES_AP_preferences,
+)
 _register, _unregister = bpy.utils.register_classes_factory(classes)
 
 

@@ -22,8 +22,10 @@ from ..motion_patches.clip import Clip
 from ..motion_patches.skeleton import Skeleton, root_location_to_position
 from . import compat
 
-_PATH = re.compile(r'^pose\.bones\["(.+)"\]\.'
-                   r'(rotation_quaternion|rotation_euler|rotation_axis_angle|location)$')
+_PATH = re.compile(
+    r'^pose\.bones\["(.+)"\]\.'
+    r"(rotation_quaternion|rotation_euler|rotation_axis_angle|location)$"
+)
 
 EULER_ORDERS = ("XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX")
 _AXES = {"X": 0, "Y": 1, "Z": 2}
@@ -42,6 +44,7 @@ def skeleton_of(armature_obj):
             visit(b.parent)
         seen.add(b.name)
         order.append(b)
+
     for b in bones:
         visit(b)
     names = [b.name for b in order]
@@ -49,8 +52,9 @@ def skeleton_of(armature_obj):
     parents = np.array([index[b.parent.name] if b.parent else -1 for b in order])
     rest = np.array([np.array(b.matrix_local) for b in order])
     if np.sum(parents < 0) != 1:
-        raise ValueError(f"armature '{armature_obj.name}' has {np.sum(parents < 0)} root bones; "
-                         f"one is needed")
+        raise ValueError(
+            f"armature '{armature_obj.name}' has {np.sum(parents < 0)} root bones; one is needed"
+        )
     return Skeleton(names, parents, rest)
 
 
@@ -80,8 +84,10 @@ def clip_from_action(action, armature_obj, scene_fps, skeleton=None):
             key_frames = co[:, 0]
             break
     if key_frames is None:
-        raise ValueError(f"action '{action.name}' does not move the root bone '{root}' "
-                         f"(no location keys): it has no root motion")
+        raise ValueError(
+            f"action '{action.name}' does not move the root bone '{root}' "
+            f"(no location keys): it has no root motion"
+        )
     frames = key_frames
     step = np.median(np.diff(frames)) if frames.size > 1 else 1.0
     fps = scene_fps / step
@@ -118,11 +124,16 @@ def _keyed_mode(action, bone, mode, curves):
     if "rotation_axis_angle" in keyed:
         return "AXIS_ANGLE"
     if "rotation_euler" in keyed:
-        why = (f"the bone's rotation mode is {mode}" if mode is not None else
-               "no armature gives its Euler order")
-        raise ValueError(f"action '{action.name}' keys bone '{bone}' in Euler angles but {why}: "
-                         f"read it on the armature it was imported on (bones in the Euler "
-                         f"order of the keys)")
+        why = (
+            f"the bone's rotation mode is {mode}"
+            if mode is not None
+            else "no armature gives its Euler order"
+        )
+        raise ValueError(
+            f"action '{action.name}' keys bone '{bone}' in Euler angles but {why}: "
+            f"read it on the armature it was imported on (bones in the Euler "
+            f"order of the keys)"
+        )
     return "QUATERNION"  # not keyed: the rest pose
 
 
@@ -198,6 +209,7 @@ def _euler_pair(q, order):
 
     def at(r, c):
         return m[..., r, c]
+
     cy = np.hypot(at(i, i), at(j, i))
     e1 = np.empty(np.shape(cy) + (3,))
     e2 = np.empty_like(e1)
@@ -262,8 +274,7 @@ LINEAR = 1  # Keyframe.interpolation enum value of 'LINEAR' (4.5 and 5.0)
 COMPACT = 1e-5  # tolerance of compact keys (metres, radians, quaternion components)
 
 
-def key_curve(action, slot, data_path, index, frames, values, group=None, tol=None,
-              stored=None):
+def key_curve(action, slot, data_path, index, frames, values, group=None, tol=None, stored=None):
     """Create one F-curve keyed at ``frames`` with ``values`` in one bulk write.
 
     With ``tol`` the curve is stored compactly (:mod:`motion_patches.keys`): one key when
@@ -310,21 +321,28 @@ def key_pose(action, slot, skel, frames, root_location, rotations, modes=None, t
     ``tol``: store the curves compactly (:func:`key_curve`)."""
     modes = modes or {}
     root = skel.names[skel.root]
-    curves = [(f'pose.bones["{root}"].location', i, root, root_location[:, i])
-              for i in range(3)]
+    curves = [(f'pose.bones["{root}"].location', i, root, root_location[:, i]) for i in range(3)]
     by_mode = {}
     for j, name in enumerate(skel.names):
         by_mode.setdefault(modes.get(name, "QUATERNION"), []).append(j)
     for mode, joints in by_mode.items():
         path = rotation_path(mode)
-        values = (rotations[:, joints] if mode == "QUATERNION"
-                  else rotation_channels(rotations[:, joints], mode))
+        values = (
+            rotations[:, joints]
+            if mode == "QUATERNION"
+            else rotation_channels(rotations[:, joints], mode)
+        )
         for c, j in enumerate(joints):
             name = skel.names[j]
-            curves += [(f'pose.bones["{name}"].{path}', i, name, values[:, c, i])
-                       for i in range(values.shape[-1])]
-    stored = (key_plan.plan_columns(np.column_stack([c[3] for c in curves]), tol)
-              if tol is not None else [None] * len(curves))
+            curves += [
+                (f'pose.bones["{name}"].{path}', i, name, values[:, c, i])
+                for i in range(values.shape[-1])
+            ]
+    stored = (
+        key_plan.plan_columns(np.column_stack([c[3] for c in curves]), tol)
+        if tol is not None
+        else [None] * len(curves)
+    )
     for (path, i, group, v), how in zip(curves, stored):
         key_curve(action, slot, path, i, frames, v, group=group, tol=tol, stored=how)
 
@@ -339,8 +357,9 @@ def read_channels(action, slot, bone, mode, frames, cache=None):
     key = (action.name, slot.handle if slot is not None else None)
     points = cache.get(key) if cache is not None else None
     if points is None:
-        points = {(fc.data_path, fc.array_index): curve_points(fc)
-                  for fc in compat.fcurves(action, slot)}
+        points = {
+            (fc.data_path, fc.array_index): curve_points(fc) for fc in compat.fcurves(action, slot)
+        }
         if cache is not None:
             cache[key] = points
     for i in range(rest.size):

@@ -34,13 +34,20 @@ def import_bvh(paths, scale=CMU_SCALE, armature=None, name=None):
         before = set(bpy.data.objects)
         try:
             result = bpy.ops.import_anim.bvh(
-                filepath=str(p), global_scale=scale, rotate_mode="QUATERNION",
-                use_fps_scale=True, update_scene_fps=False, update_scene_duration=False)
+                filepath=str(p),
+                global_scale=scale,
+                rotate_mode="QUATERNION",
+                use_fps_scale=True,
+                update_scene_fps=False,
+                update_scene_duration=False,
+            )
         except RuntimeError as exc:
             lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
-            raise ValueError(f"Blender's BVH importer could not read {p.name}: "
-                             f"{lines[-1] if lines else 'unknown error'} (a damaged or "
-                             f"truncated file?)") from None
+            raise ValueError(
+                f"Blender's BVH importer could not read {p.name}: "
+                f"{lines[-1] if lines else 'unknown error'} (a damaged or "
+                f"truncated file?)"
+            ) from None
         new = [o for o in bpy.data.objects if o not in before]
         if result != {"FINISHED"} or len(new) != 1 or new[0].type != "ARMATURE":
             for o in new:
@@ -63,8 +70,10 @@ def import_bvh(paths, scale=CMU_SCALE, armature=None, name=None):
                     act = _retargeted(act, ob, armature, p)
             except ValueError as exc:
                 bpy.data.actions.remove(act)
-                raise ValueError(f"{p.name} cannot go on armature '{armature.name}': {exc}; "
-                                 f"import it on its own armature") from None
+                raise ValueError(
+                    f"{p.name} cannot go on armature '{armature.name}': {exc}; "
+                    f"import it on its own armature"
+                ) from None
             finally:
                 data = ob.data
                 bpy.data.objects.remove(ob)
@@ -76,10 +85,15 @@ def import_bvh(paths, scale=CMU_SCALE, armature=None, name=None):
 def _same_rest(a, b, tol=1e-3):
     """Whether two armatures with the same bone names have the same rest offsets."""
     ha = {bn.name: bn.head_local for bn in a.data.bones}
-    return all((ha[bn.name] - bn.head_local).length < tol and
-               abs((bn.tail_local - bn.head_local).length -
-                   (a.data.bones[bn.name].tail_local - a.data.bones[bn.name].head_local).length) < tol
-               for bn in b.data.bones)
+    return all(
+        (ha[bn.name] - bn.head_local).length < tol
+        and abs(
+            (bn.tail_local - bn.head_local).length
+            - (a.data.bones[bn.name].tail_local - a.data.bones[bn.name].head_local).length
+        )
+        < tol
+        for bn in b.data.bones
+    )
 
 
 def _retargeted(action, source_obj, target_obj, path):
@@ -94,6 +108,7 @@ def _retargeted(action, source_obj, target_obj, path):
     from . import actions as act_io
     from . import compat
     from . import rig as rig_io
+
     fps = bpy.context.scene.render.fps / bpy.context.scene.render.fps_base
     src = act_io.clip_from_action(action, source_obj, fps)
     target = act_io.skeleton_of(target_obj)
@@ -106,11 +121,19 @@ def _retargeted(action, source_obj, target_obj, path):
     new, slot = compat.new_action(name)
     frames = np.arange(clip.frames) * (fps / clip.fps) + 1.0
     modes = {pb.name: pb.rotation_mode for pb in target_obj.pose.bones}
-    act_io.key_pose(new, slot, skel, frames, root_position_to_location(skel, clip.root_pos),
-                    clip.rotations, modes)
+    act_io.key_pose(
+        new,
+        slot,
+        skel,
+        frames,
+        root_position_to_location(skel, clip.root_pos),
+        clip.rotations,
+        modes,
+    )
     new[SOURCE_KEY] = str(path.name)
-    new["motion_patches_retargeted"] = (f"from the skeleton of {path.name}, root scaled by "
-                                        f"hip height: {rm.note()}")
+    new["motion_patches_retargeted"] = (
+        f"from the skeleton of {path.name}, root scaled by hip height: {rm.note()}"
+    )
     new.use_fake_user = True
     action.use_fake_user = False
     bpy.data.actions.remove(action)

@@ -71,8 +71,10 @@ def tracks(scene, depsgraph, names, frame_start, scale=1.0):
     if not objs:
         return []
     fps = scene.render.fps / scene.render.fps_base
-    ends = {o.name: min(max(_last_frame(o, scene), frame_start),
-                        frame_start + int(LONGEST_S * fps)) for o in objs}
+    ends = {
+        o.name: min(max(_last_frame(o, scene), frame_start), frame_start + int(LONGEST_S * fps))
+        for o in objs
+    }
     last = max(ends.values())
     frame0, sub0 = scene.frame_current, scene.frame_subframe
     polygons, poses = {}, {o.name: [] for o in objs}
@@ -102,6 +104,7 @@ def tracks(scene, depsgraph, names, frame_start, scale=1.0):
         for k, poly in enumerate(parts):
             d = poly - (x, y)
             local = np.column_stack((c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]))
-            out.append(PropTrack(scene_io.part_name(o.name, k, len(parts)), local / scale,
-                                 times, p))
+            out.append(
+                PropTrack(scene_io.part_name(o.name, k, len(parts)), local / scale, times, p)
+            )
     return out

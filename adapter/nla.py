@@ -60,12 +60,15 @@ def check_rig(obj, skel, floor=0.0):
     if obj is None or obj.type != "ARMATURE":
         raise ValueError("the character must be an armature object")
     if not np.allclose(np.array(obj.scale), 1.0, atol=1e-4):
-        raise ValueError(f"armature '{obj.name}' is scaled {tuple(round(s, 3) for s in obj.scale)}; "
-                         f"apply its scale first (the patch is in metres)")
+        raise ValueError(
+            f"armature '{obj.name}' is scaled {tuple(round(s, 3) for s in obj.scale)}; "
+            f"apply its scale first (the patch is in metres)"
+        )
     m = np.array(obj.matrix_world)
     if abs(m[2, 2] - 1.0) > 1e-6:
-        raise ValueError(f"armature '{obj.name}' is tilted (X/Y rotation); the planned root "
-                         f"turns about Z only")
+        raise ValueError(
+            f"armature '{obj.name}' is tilted (X/Y rotation); the planned root turns about Z only"
+        )
     return rig_io.rig_for(obj, skel, floor)
 
 
@@ -142,16 +145,18 @@ def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None, index
     many strips does not search every action of the file for each."""
     sig = rotation_signature(skel, modes or {})
     rig_sig = rig.signature() if rig is not None else ""
-    key = (f"{patch_key}:{seg}" + (f":rig-{rig_sig}" if rig_sig else "")
-           + (f":{sig}" if sig else ""))
+    key = f"{patch_key}:{seg}" + (f":rig-{rig_sig}" if rig_sig else "") + (f":{sig}" if sig else "")
     found = (segment_index(bpy) if index is None else index).get(key)
     if found is not None:
         return found, compat.action_slot(found)
     motion = patch.motion(seg)
     if rig is not None:
         motion = rig.motion(motion)
-    name = (f"MP {patch.layer} seg{seg:04d}" + (f" rig-{rig_sig[:6]}" if rig_sig else "")
-            + (f" {sig}" if sig else ""))
+    name = (
+        f"MP {patch.layer} seg{seg:04d}"
+        + (f" rig-{rig_sig[:6]}" if rig_sig else "")
+        + (f" {sig}" if sig else "")
+    )
     action, slot = _inplace_action(name, skel, motion, {SEGMENT_KEY: key}, modes)
     if index is not None:
         index[key] = action
@@ -174,13 +179,32 @@ def _inplace_action(name, skel, motion, tags, modes=None):
     for k, v in tags.items():
         action[k] = v
     frames = np.arange(motion.frames, dtype=float)
-    act_io.key_pose(action, slot, skel, frames, loc, quat.make_continuous(rot, axis=0), modes,
-                    tol=act_io.COMPACT)
+    act_io.key_pose(
+        action,
+        slot,
+        skel,
+        frames,
+        loc,
+        quat.make_continuous(rot, axis=0),
+        modes,
+        tol=act_io.COMPACT,
+    )
     return action, slot
 
 
-def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start, locked=None,
-               rig=None, bounds=None):
+def write_plan(
+    bpy,
+    obj,
+    patch,
+    patch_key,
+    plan,
+    motions,
+    world,
+    frame_start,
+    locked=None,
+    rig=None,
+    bounds=None,
+):
     """Write a plan's strips and root trajectory on ``obj``; returns strip records.
 
     ``motions``: each piece's motion at the patch's frame rate, on the rig's skeleton (put
@@ -211,11 +235,13 @@ def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start, lo
     index = segment_index(bpy)
     for n, (piece, m) in enumerate(zip(plan.pieces, motions)):
         if piece.kind == "segment":
-            action, slot = segment_action(bpy, patch, patch_key, piece.segment, skel, modes,
-                                          rig, index)
+            action, slot = segment_action(
+                bpy, patch, patch_key, piece.segment, skel, modes, rig, index
+            )
         else:
-            action, slot = _inplace_action(f"MP {obj.name} {piece.kind}", skel, m,
-                                           {CHARACTER_KEY: obj.name}, modes)
+            action, slot = _inplace_action(
+                f"MP {obj.name} {piece.kind}", skel, m, {CHARACTER_KEY: obj.name}, modes
+            )
         start, end = first + int(bounds[n]), first + int(bounds[n + 1])
         scale = (end - start) / float(max(m.frames - 1, 1))
         played.append((action, slot, int(bounds[n]), end - start + 1, scale))
@@ -223,11 +249,19 @@ def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start, lo
         compat.set_strip_slot(strip, slot)
         if abs(scale - 1.0) > 1e-9:
             strip.scale = scale
-        strip.extrapolation = "HOLD" if n == 0 else (
-            "HOLD_FORWARD" if n == len(plan.pieces) - 1 else "NOTHING")
+        strip.extrapolation = (
+            "HOLD" if n == 0 else ("HOLD_FORWARD" if n == len(plan.pieces) - 1 else "NOTHING")
+        )
         strip.blend_in = strip.blend_out = 0.0
-        strips.append({"name": strip.name, "start": start, "end": end,
-                       "action": action.name, "kind": piece.kind})
+        strips.append(
+            {
+                "name": strip.name,
+                "start": start,
+                "end": end,
+                "action": action.name,
+                "kind": piece.kind,
+            }
+        )
 
     root_action, root_slot = compat.new_action(f"MP {obj.name} root")
     root_action[CHARACTER_KEY] = obj.name
@@ -235,8 +269,16 @@ def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start, lo
     frames = np.arange(world.frames, dtype=float)
     z0 = float(obj.location[2])
     for i, v in enumerate((world.ground[:, 0], world.ground[:, 1], np.full(world.frames, z0))):
-        act_io.key_curve(root_action, root_slot, "location", i, frames, v,
-                         group="Object Transforms", tol=act_io.COMPACT)
+        act_io.key_curve(
+            root_action,
+            root_slot,
+            "location",
+            i,
+            frames,
+            v,
+            group="Object Transforms",
+            tol=act_io.COMPACT,
+        )
     # A turn about Z only: (0, 0, heading) is that turn in every Euler order, (heading, +Z)
     # in axis-angle; the heading is unwrapped, so no channel jumps by a turn.
     zero = np.zeros(world.frames)
@@ -248,8 +290,16 @@ def write_plan(bpy, obj, patch, patch_key, plan, motions, world, frame_start, lo
     else:
         rot_path, rot_values = "rotation_euler", (zero, zero, heading)
     for i, v in enumerate(rot_values):
-        act_io.key_curve(root_action, root_slot, rot_path, i, frames, v,
-                         group="Object Transforms", tol=act_io.COMPACT)
+        act_io.key_curve(
+            root_action,
+            root_slot,
+            rot_path,
+            i,
+            frames,
+            v,
+            group="Object Transforms",
+            tol=act_io.COMPACT,
+        )
     root_track = ad.nla_tracks.new()
     root_track.name = TRACK_ROOT
     rs = root_track.strips.new(f"{obj.name} root", first, root_action)
@@ -275,8 +325,7 @@ def _lower_channels(played, bone, mode, n_frames, cache=None):
     for action, slot, start, frames, scale in played:
         idx = np.arange(start, min(start + frames, n_frames))
         idx = idx[~done[idx]]
-        out[idx] = act_io.read_channels(action, slot, bone, mode, (idx - start) / scale,
-                                        cache)
+        out[idx] = act_io.read_channels(action, slot, bone, mode, (idx - start) / scale, cache)
         done[idx] = True
     return out
 
@@ -313,11 +362,11 @@ def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=(
         path = f'pose.bones["{name}"].{act_io.rotation_path(mode)}'
         curves += [(path, i, name, delta[:, i]) for i in range(delta.shape[1])]
     if curves:
-        stored = key_plan.plan_columns(np.column_stack([c[3] for c in curves]),
-                                       act_io.COMPACT)
+        stored = key_plan.plan_columns(np.column_stack([c[3] for c in curves]), act_io.COMPACT)
         for (path, i, name, v), how in zip(curves, stored):
-            act_io.key_curve(action, slot, path, i, frames, v, group=name,
-                             tol=act_io.COMPACT, stored=how)
+            act_io.key_curve(
+                action, slot, path, i, frames, v, group=name, tol=act_io.COMPACT, stored=how
+            )
     track = obj.animation_data.nla_tracks.new()
     track.name = TRACK_FOOT
     strip = track.strips.new(f"{obj.name} foot lock", int(frame_start), action)

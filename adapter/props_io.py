@@ -27,8 +27,9 @@ def footprint(obj, depsgraph):
     vertices, at least ``footprint.MIN_THICKNESS`` wide: :func:`motion_patches.footprint.
     outline`, the rule every footprint follows); ValueError if it has no vertices."""
     if obj.type != "MESH":
-        raise ValueError(f"'{obj.name}' is not a mesh object: an object patch needs geometry "
-                         f"for its footprint")
+        raise ValueError(
+            f"'{obj.name}' is not a mesh object: an object patch needs geometry for its footprint"
+        )
     world = scene_io.mesh_arrays(obj, depsgraph)[0]
     if not len(world):
         raise ValueError(f"'{obj.name}' has no footprint: its mesh has no vertices")
@@ -43,27 +44,32 @@ def object_patch(obj, depsgraph, skeleton, fps, gait_floor=None, scale=1.0):
     are put down on the walk's floor (``gait_floor``) when given. ``scale``: as
     :func:`adapter.scene.environment`'s, the prop placed in the world shrunk by it."""
     x, y, h = prop_pose(obj)
-    patch = op.ObjectPatch(obj.name, footprint(obj, depsgraph) / scale,
-                           pose=(x / scale, y / scale, h))
+    patch = op.ObjectPatch(
+        obj.name, footprint(obj, depsgraph) / scale, pose=(x / scale, y / scale, h)
+    )
     for item in obj.motion_patch.clips:
         if item.action is None:
             raise ValueError(f"object patch '{obj.name}' has a clip without an action")
         clip = act_io.clip_from_action(item.action, None, fps, skeleton=skeleton)
-        pc = op.patch_clip_from(clip, KINDS[item.kind], fps, effort=item.effort,
-                                name=item.action.name, floor=gait_floor)
+        pc = op.patch_clip_from(
+            clip, KINDS[item.kind], fps, effort=item.effort, name=item.action.name, floor=gait_floor
+        )
         pc.layer_in, pc.layer_out = item.layer_in, item.layer_out
         if pc.kind == op.TRAVERSAL and item.copy_step > 0:
             if patch.add_traversal_copies(pc, item.copy_step) == 0:
-                raise ValueError(f"every copy of '{item.action.name}' around '{obj.name}' "
-                                 f"takes off or lands on the prop: the prop is too large for it")
+                raise ValueError(
+                    f"every copy of '{item.action.name}' around '{obj.name}' "
+                    f"takes off or lands on the prop: the prop is too large for it"
+                )
         else:
             patch.clips.append(pc)
     return patch
 
 
 def tagged(scene):
-    return [o for o in scene.objects if o.type == "MESH" and o.motion_patch.enabled
-            and o.visible_get()]
+    return [
+        o for o in scene.objects if o.type == "MESH" and o.motion_patch.enabled and o.visible_get()
+    ]
 
 
 def interaction_clip(patch, sitting):

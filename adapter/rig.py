@@ -41,8 +41,9 @@ def _plays_itself(skel, rig_skel):
     if any(n not in index for n in skel.names):
         return False
     sub = [index[n] for n in skel.names]
-    parents = [rig_skel.names[rig_skel.parents[i]] if rig_skel.parents[i] >= 0 else None
-               for i in sub]
+    parents = [
+        rig_skel.names[rig_skel.parents[i]] if rig_skel.parents[i] >= 0 else None for i in sub
+    ]
     want = [skel.names[p] if p >= 0 else None for p in skel.parents]
     return parents == want and np.allclose(rig_skel.rest[sub], skel.rest, atol=1e-4)
 
@@ -73,7 +74,7 @@ def guessed_map(obj, skel):
         mapping = rig_map(skel, own).mapping
     except ValueError:
         from ..motion_patches.retarget import roles
+
         s_roles, t_roles = roles(skel)[1], roles(own)[1]
-        mapping = {skel.names[i]: own.names[t_roles[r]] for r, i in s_roles.items()
-                   if r in t_roles}
+        mapping = {skel.names[i]: own.names[t_roles[r]] for r, i in s_roles.items() if r in t_roles}
     return {n: mapping.get(n, "") for n in skel.names}

@@ -99,6 +99,7 @@ def character_state(obj, skel):
     """(x, y, heading) of a character: its root's ground position and its rest facing
     turned by the object's rotation."""
     from ..motion_patches.inplace import rest_facing
+
     m = np.array(obj.matrix_world)
     f = m[:3, :3] @ rest_facing(skel)
     root = m @ np.append(skel.rest[skel.root, :3, 3], 1.0)

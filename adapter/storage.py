@@ -16,8 +16,8 @@ import numpy as np
 from ..motion_patches import serialize
 from ..motion_patches.environment import Environment, Obstacle
 
-PLAN_KEY = "motion_patches_plan"            # custom property: the last plan written
-ANALYSIS_KEY = "motion_patches_analysis"    # custom property: the last analysis figures
+PLAN_KEY = "motion_patches_plan"  # custom property: the last plan written
+ANALYSIS_KEY = "motion_patches_analysis"  # custom property: the last analysis figures
 
 _cache = {}
 
@@ -61,8 +61,9 @@ def _item(scene, name=None):
         raise ValueError("no locomotion patch is baked in this scene; bake one first")
     item = items.get(name or active_name(scene))
     if item is None:
-        raise ValueError(f"no locomotion patch named '{name}' (have: "
-                         f"{', '.join(i.name for i in items)})")
+        raise ValueError(
+            f"no locomotion patch named '{name}' (have: {', '.join(i.name for i in items)})"
+        )
     return item
 
 
@@ -101,8 +102,7 @@ def store_plan(obj, data):
     buf = io.BytesIO()
     np.savez_compressed(buf, **{k: v for k, v in data.items() if isinstance(v, np.ndarray)})
     meta = {k: v for k, v in data.items() if not isinstance(v, np.ndarray)}
-    obj[PLAN_KEY] = json.dumps({"meta": meta,
-                                "arrays": base64.b64encode(buf.getvalue()).decode()})
+    obj[PLAN_KEY] = json.dumps({"meta": meta, "arrays": base64.b64encode(buf.getvalue()).decode()})
 
 
 def has_plan(obj):

@@ -18,9 +18,23 @@ import re
 
 from . import compat, nla
 
-_STRIP_FIELDS = ("action_frame_start", "action_frame_end", "scale", "repeat", "blend_type",
-                 "extrapolation", "blend_in", "blend_out", "use_auto_blend", "influence",
-                 "use_animated_influence", "mute", "use_reverse", "use_sync_length", "select")
+_STRIP_FIELDS = (
+    "action_frame_start",
+    "action_frame_end",
+    "scale",
+    "repeat",
+    "blend_type",
+    "extrapolation",
+    "blend_in",
+    "blend_out",
+    "use_auto_blend",
+    "influence",
+    "use_animated_influence",
+    "mute",
+    "use_reverse",
+    "use_sync_length",
+    "select",
+)
 _TRACK_FIELDS = ("mute", "is_solo", "lock", "select")
 _AD_FIELDS = ("action_blend_type", "action_extrapolation", "action_influence")
 _SUFFIX = re.compile(r"^(.*)\.\d{3}$")
@@ -37,32 +51,41 @@ def check_writable(bpy, obj, first=None, last=None):
     data (a sentence), or None when it can be written."""
     lo, hi = frame_limits(bpy)
     if first is not None and not (lo <= first and last <= hi):
-        return (f"frames {first}-{last} are outside what Blender holds ({lo} to {hi}): "
-                f"choose a start frame between {lo} and {hi - (last - first)}")
+        return (
+            f"frames {first}-{last} are outside what Blender holds ({lo} to {hi}): "
+            f"choose a start frame between {lo} and {hi - (last - first)}"
+        )
     ad = obj.animation_data
     if ad is None:
         return None
     if ad.use_tweak_mode:
-        return (f"'{obj.name}' is in NLA tweak mode (a strip's action is being edited): leave "
-                f"tweak mode (Tab in the NLA editor) and plan again")
+        return (
+            f"'{obj.name}' is in NLA tweak mode (a strip's action is being edited): leave "
+            f"tweak mode (Tab in the NLA editor) and plan again"
+        )
     owned = set(_owned(obj))
     for tr in ad.nla_tracks:
         if tr.name in (nla.TRACK_MOTION, nla.TRACK_ROOT, nla.TRACK_FOOT) and tr.name not in owned:
-            return (f"'{obj.name}' has a track named '{tr.name}' that the add-on did not make "
-                    f"(planning names its own tracks so): rename that track")
+            return (
+                f"'{obj.name}' has a track named '{tr.name}' that the add-on did not make "
+                f"(planning names its own tracks so): rename that track"
+            )
         if tr.name in owned and tr.name.startswith(nla.TRACK_PREFIX):
             for st in tr.strips:
                 if not _ours(st.action, obj):
-                    return (f"the strip '{st.name}' (action "
-                            f"'{st.action.name if st.action else 'none'}') on the add-on's "
-                            f"track '{tr.name}' of '{obj.name}' was not made by the add-on and "
-                            f"planning again would delete that track: move the strip to a "
-                            f"track of your own")
+                    return (
+                        f"the strip '{st.name}' (action "
+                        f"'{st.action.name if st.action else 'none'}') on the add-on's "
+                        f"track '{tr.name}' of '{obj.name}' was not made by the add-on and "
+                        f"planning again would delete that track: move the strip to a "
+                        f"track of your own"
+                    )
     return None
 
 
 def _owned(obj):
     import json
+
     try:
         return list(json.loads(obj.get(nla.TRACKS_KEY, "[]")))
     except (TypeError, ValueError):
@@ -70,14 +93,20 @@ def _owned(obj):
 
 
 def _ours(action, obj):
-    return action is not None and (action.get(nla.SEGMENT_KEY) is not None
-                                    or action.get(nla.CHARACTER_KEY) == obj.name)
+    return action is not None and (
+        action.get(nla.SEGMENT_KEY) is not None or action.get(nla.CHARACTER_KEY) == obj.name
+    )
 
 
 def _strip_record(st):
     rec = {k: getattr(st, k) for k in _STRIP_FIELDS if hasattr(st, k)}
-    rec.update(name=st.name, action=st.action, frame_start=st.frame_start,
-               frame_end=st.frame_end, slot=getattr(st, "action_slot", None))
+    rec.update(
+        name=st.name,
+        action=st.action,
+        frame_start=st.frame_start,
+        frame_end=st.frame_end,
+        slot=getattr(st, "action_slot", None),
+    )
     return rec
 
 
@@ -89,10 +118,17 @@ def _track_record(tr):
 
 def _same(tr, rec):
     """A track as recorded (its name and its strips' names, actions and frames)."""
-    return (tr.name == rec["name"] and len(tr.strips) == len(rec["strips"])
-            and all(s.name == r["name"] and s.action == r["action"]
-                    and s.frame_start == r["frame_start"] and s.frame_end == r["frame_end"]
-                    for s, r in zip(tr.strips, rec["strips"])))
+    return (
+        tr.name == rec["name"]
+        and len(tr.strips) == len(rec["strips"])
+        and all(
+            s.name == r["name"]
+            and s.action == r["action"]
+            and s.frame_start == r["frame_start"]
+            and s.frame_end == r["frame_end"]
+            for s, r in zip(tr.strips, rec["strips"])
+        )
+    )
 
 
 class Snapshot:
@@ -113,9 +149,11 @@ class Snapshot:
             rec = {"object": ob, "props": {k: ob.get(k) for k in self.keys}, "ad": None}
             if ad is not None:
                 rec["ad"] = {k: getattr(ad, k) for k in _AD_FIELDS}
-                rec["ad"].update(action=ad.action, slot=getattr(ad, "action_slot", None),
-                                 tracks=[(tr.as_pointer(), _track_record(tr))
-                                         for tr in ad.nla_tracks])
+                rec["ad"].update(
+                    action=ad.action,
+                    slot=getattr(ad, "action_slot", None),
+                    tracks=[(tr.as_pointer(), _track_record(tr)) for tr in ad.nla_tracks],
+                )
                 for _, t in rec["ad"]["tracks"]:
                     for s in t["strips"]:
                         self._hold(s["action"])

@@ -51,16 +51,30 @@ CROWD = 100
 
 def parse_args(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--sections", default=",".join(SECTIONS),
-                   help=f"comma-separated sections (default all: {','.join(SECTIONS)})")
-    p.add_argument("--mocap", default=os.environ.get("MOTION_PATCHES_MOCAP",
-                                                     str(REPO.parent / "shared" / "mocap")))
-    p.add_argument("--crowd", type=int, default=CROWD, help=f"crowd characters (default {CROWD}, "
-                   f"a multiple of 10)")
+    p.add_argument(
+        "--sections",
+        default=",".join(SECTIONS),
+        help=f"comma-separated sections (default all: {','.join(SECTIONS)})",
+    )
+    p.add_argument(
+        "--mocap",
+        default=os.environ.get("MOTION_PATCHES_MOCAP", str(REPO.parent / "shared" / "mocap")),
+    )
+    p.add_argument(
+        "--crowd",
+        type=int,
+        default=CROWD,
+        help=f"crowd characters (default {CROWD}, a multiple of 10)",
+    )
     p.add_argument("--strips", type=int, default=STRIPS, help=f"strips to write (default {STRIPS})")
     p.add_argument("--json", metavar="PATH", help="also write every figure as JSON")
-    p.add_argument("--profile", type=int, default=0, metavar="N",
-                   help="print the N most expensive functions of each section (cProfile)")
+    p.add_argument(
+        "--profile",
+        type=int,
+        default=0,
+        metavar="N",
+        help="print the N most expensive functions of each section (cProfile)",
+    )
     a = p.parse_args(argv)
     a.sections = [s for s in a.sections.split(",") if s]
     bad = set(a.sections) - set(SECTIONS)
@@ -105,6 +119,7 @@ def character(bpy, source, name, x, y):
 def goal_empty(bpy, name, x, y, heading):
     """An empty facing ``heading`` along its -Y axis (the add-on's goal convention)."""
     import math
+
     ob = bpy.data.objects.new(name, None)
     bpy.context.scene.collection.objects.link(ob)
     ob.location = (x, y, 0.0)
@@ -131,11 +146,13 @@ def section_strips(bpy, addon, args):
     def spy(*a, **kw):
         captured["args"], captured["kw"] = a, kw
         return write(*a, **kw)
+
     planner = addon.motion_patches.planner.SegmentPlanner
     plan = planner.plan
 
     def unshortened(self, *a, **kw):  # the search's own chain of segments, one strip each
         return plan(self, *a, **dict(kw, shorten=False))
+
     api._write, planner.plan = spy, unshortened
     try:
         res = api.plan_path(scene, first, goal, frame_start=1)
@@ -143,12 +160,17 @@ def section_strips(bpy, addon, args):
         api._write, planner.plan = write, plan
     pieces = len(res.pieces)
     a, kw = captured["args"], captured["kw"]
-    out = {"pieces": pieces, "piece_labels": res.pieces, "plan_frames": res.frame_end - res.frame_start + 1}
+    out = {
+        "pieces": pieces,
+        "piece_labels": res.pieces,
+        "plan_frames": res.frame_end - res.frame_start + 1,
+    }
     for lock in (True, False):
         # fresh segment actions: the first write creates them, as in a new file
         nla = addon.adapter.nla
-        for act in [x for x in bpy.data.actions if x.get(nla.SEGMENT_KEY)
-                    or x.get(nla.CHARACTER_KEY)]:
+        for act in [
+            x for x in bpy.data.actions if x.get(nla.SEGMENT_KEY) or x.get(nla.CHARACTER_KEY)
+        ]:
             act.user_clear()
             bpy.data.actions.remove(act)
         count = -(-args.strips // pieces)
@@ -158,22 +180,31 @@ def section_strips(bpy, addon, args):
             t = []
             for c in chars:
                 t0 = time.perf_counter()
-                write(a[0], c, *a[2:9], lock, *a[10:], **{k: v for k, v in kw.items()
-                                                            if k != "lock"})
+                write(
+                    a[0], c, *a[2:9], lock, *a[10:], **{k: v for k, v in kw.items() if k != "lock"}
+                )
                 t.append(time.perf_counter() - t0)
             return t
+
         t0 = time.perf_counter()
         per = profiled(args.profile, write_all)
         total = time.perf_counter() - t0
         strips = sum(len(c.animation_data.nla_tracks[nla.TRACK_MOTION].strips) for c in chars)
         key = "foot_lock" if lock else "no_foot_lock"
-        out[key] = {"characters": count, "strips": strips, "seconds": total,
-                    "s_per_1000_strips": total * 1000.0 / strips,
-                    "first_write_s": per[0], "later_write_ms_median": 1e3 * sorted(per[1:])[len(per[1:]) // 2]}
-        print(f"  {key}: {strips} strips on {count} characters in {total:.3f} s "
-              f"({out[key]['s_per_1000_strips']:.3f} s per 1,000; first write "
-              f"{per[0] * 1e3:.0f} ms, later {out[key]['later_write_ms_median']:.1f} ms median)",
-              flush=True)
+        out[key] = {
+            "characters": count,
+            "strips": strips,
+            "seconds": total,
+            "s_per_1000_strips": total * 1000.0 / strips,
+            "first_write_s": per[0],
+            "later_write_ms_median": 1e3 * sorted(per[1:])[len(per[1:]) // 2],
+        }
+        print(
+            f"  {key}: {strips} strips on {count} characters in {total:.3f} s "
+            f"({out[key]['s_per_1000_strips']:.3f} s per 1,000; first write "
+            f"{per[0] * 1e3:.0f} ms, later {out[key]['later_write_ms_median']:.1f} ms median)",
+            flush=True,
+        )
     return out
 
 
@@ -185,8 +216,12 @@ def section_crowd(bpy, addon, args):
     for i in range(args.crowd // 10):
         for j in range(10):
             x0, y = 14.0 * i, 1.6 * j
-            pairs.append((character(bpy, source, f"C{i}{j}", x0, y),
-                          goal_empty(bpy, f"G{i}{j}", x0 + 8.0, y + 0.3, 0.0)))
+            pairs.append(
+                (
+                    character(bpy, source, f"C{i}{j}", x0, y),
+                    goal_empty(bpy, f"G{i}{j}", x0 + 8.0, y + 0.3, 0.0),
+                )
+            )
         pillar(bpy, f"P{i}", 14.0 * i + 11.0, -1.5)
     t0 = time.perf_counter()
     writes = []
@@ -198,6 +233,7 @@ def section_crowd(bpy, addon, args):
             return write(*a, **kw)
         finally:
             writes.append(time.perf_counter() - t)
+
     api._write = timed_write
     try:
         res = profiled(args.profile, api.plan_crowd, scene, pairs, frame_start=1)
@@ -205,36 +241,55 @@ def section_crowd(bpy, addon, args):
         api._write = write
     total = time.perf_counter() - t0
     strips = sum(len(p.strips) for p in res.plans)
-    out = {"characters": len(pairs), "planned": len(res.plans), "failed": len(res.failed),
-           "conflicts": len(res.conflicts), "strips": strips, "seconds": total,
-           "write_seconds": sum(writes), "plan_seconds": total - sum(writes)}
-    print(f"  {len(res.plans)} of {len(pairs)} planned ({len(res.failed)} failed), {strips} strips "
-          f"in {total:.2f} s: writing {sum(writes):.2f} s, the rest (search, synthesis, "
-          f"staggering) {total - sum(writes):.2f} s", flush=True)
+    out = {
+        "characters": len(pairs),
+        "planned": len(res.plans),
+        "failed": len(res.failed),
+        "conflicts": len(res.conflicts),
+        "strips": strips,
+        "seconds": total,
+        "write_seconds": sum(writes),
+        "plan_seconds": total - sum(writes),
+    }
+    print(
+        f"  {len(res.plans)} of {len(pairs)} planned ({len(res.failed)} failed), {strips} strips "
+        f"in {total:.2f} s: writing {sum(writes):.2f} s, the rest (search, synthesis, "
+        f"staggering) {total - sum(writes):.2f} s",
+        flush=True,
+    )
     return out
 
 
 def rows(res):
     def met(ok):
         return "met" if ok else "NOT met"
+
     out = []
     if "strips" in res:
         s = res["strips"]
         lock, free = s["foot_lock"], s["no_foot_lock"]
-        out.append(("write 1,000 NLA strips (api write path, foot lock on)",
-                    f"< {TARGETS['strips_s']:g} s",
-                    f"{lock['s_per_1000_strips']:.2f} s per 1,000 ({lock['strips']} strips of a "
-                    f"{s['pieces']}-piece plan on {lock['characters']} characters; without the "
-                    f"foot lock {free['s_per_1000_strips']:.2f} s)",
-                    met(lock["s_per_1000_strips"] < TARGETS["strips_s"])))
+        out.append(
+            (
+                "write 1,000 NLA strips (api write path, foot lock on)",
+                f"< {TARGETS['strips_s']:g} s",
+                f"{lock['s_per_1000_strips']:.2f} s per 1,000 ({lock['strips']} strips of a "
+                f"{s['pieces']}-piece plan on {lock['characters']} characters; without the "
+                f"foot lock {free['s_per_1000_strips']:.2f} s)",
+                met(lock["s_per_1000_strips"] < TARGETS["strips_s"]),
+            )
+        )
     if "crowd" in res:
         c = res["crowd"]
-        out.append(("plan and write 100 characters (api.plan_crowd)",
-                    f"< {TARGETS['crowd_s']:g} s",
-                    f"{c['seconds']:.2f} s ({c['planned']} planned, {c['strips']} strips; "
-                    f"writing {c['write_seconds']:.2f} s, search + synthesis + staggering "
-                    f"{c['plan_seconds']:.2f} s)",
-                    met(c["seconds"] < TARGETS["crowd_s"] and c["planned"] == c["characters"])))
+        out.append(
+            (
+                "plan and write 100 characters (api.plan_crowd)",
+                f"< {TARGETS['crowd_s']:g} s",
+                f"{c['seconds']:.2f} s ({c['planned']} planned, {c['strips']} strips; "
+                f"writing {c['write_seconds']:.2f} s, search + synthesis + staggering "
+                f"{c['plan_seconds']:.2f} s)",
+                met(c["seconds"] < TARGETS["crowd_s"] and c["planned"] == c["characters"]),
+            )
+        )
     return out
 
 
@@ -248,9 +303,12 @@ def main(argv=None):
     args = parse_args(argv)
     bpy, addon = blender_session.start()
     import numpy as np
-    res = {"machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-                      f"Python {platform.python_version()}, numpy {np.__version__}, "
-                      f"Blender {bpy.app.version_string}"}
+
+    res = {
+        "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+        f"Python {platform.python_version()}, numpy {np.__version__}, "
+        f"Blender {bpy.app.version_string}"
+    }
     for name in args.sections:
         print(f"{name} ...", flush=True)
         res[name] = (section_strips if name == "strips" else section_crowd)(bpy, addon, args)

@@ -51,24 +51,50 @@ def parse_args(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--layouts", type=int, default=20, help="random layouts to plan (default 20)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the layouts (default 0)")
-    p.add_argument("--density", type=float, default=0.1,
-                   help="pillars per square metre of the field (default 0.1)")
-    p.add_argument("--field", type=float, default=30.0,
-                   help="side of the square pillar field in metres (default 30)")
-    p.add_argument("--radius", type=float, default=DEFAULTS["radius"],
-                   help=f"character radius (default {DEFAULTS['radius']:g} m)")
-    p.add_argument("--weights", type=float, nargs=3, default=WEIGHTS,
-                   metavar=("ALPHA", "BETA", "GAMMA"), help="Eq. 5 weights (default %s)" % " ".join(f"{w:g}" for w in WEIGHTS))
-    p.add_argument("--mocap", default=os.environ.get("MOTION_PATCHES_MOCAP",
-                                                     str(REPO.parent / "shared" / "mocap")),
-                   help="folder holding cmu/16_15.bvh and cmu/16_18.bvh")
+    p.add_argument(
+        "--density",
+        type=float,
+        default=0.1,
+        help="pillars per square metre of the field (default 0.1)",
+    )
+    p.add_argument(
+        "--field",
+        type=float,
+        default=30.0,
+        help="side of the square pillar field in metres (default 30)",
+    )
+    p.add_argument(
+        "--radius",
+        type=float,
+        default=DEFAULTS["radius"],
+        help=f"character radius (default {DEFAULTS['radius']:g} m)",
+    )
+    p.add_argument(
+        "--weights",
+        type=float,
+        nargs=3,
+        default=WEIGHTS,
+        metavar=("ALPHA", "BETA", "GAMMA"),
+        help="Eq. 5 weights (default %s)" % " ".join(f"{w:g}" for w in WEIGHTS),
+    )
+    p.add_argument(
+        "--mocap",
+        default=os.environ.get("MOTION_PATCHES_MOCAP", str(REPO.parent / "shared" / "mocap")),
+        help="folder holding cmu/16_15.bvh and cmu/16_18.bvh",
+    )
     p.add_argument("--json", metavar="PATH", help="also write all figures as JSON")
-    p.add_argument("--profile", type=int, default=0, metavar="N",
-                   help="run cProfile over the first N plans and print the top functions")
+    p.add_argument(
+        "--profile",
+        type=int,
+        default=0,
+        metavar="N",
+        help="run cProfile over the first N plans and print the top functions",
+    )
     return p.parse_args(argv)
 
 
 # -- helpers ------------------------------------------------------------------------------
+
 
 def pillar(name, x, y, r, sides=PILLAR_SIDES):
     a = np.linspace(0.0, 2.0 * np.pi, sides + 1)[:-1]
@@ -100,7 +126,7 @@ def layouts(patch, args):
     of them from ``args.seed``. Every bench that says "bench_core's layouts" takes them
     from here, so the same seed gives the same layouts everywhere."""
     rng = np.random.default_rng(args.seed)
-    count = int(round(args.density * args.field ** 2))
+    count = int(round(args.density * args.field**2))
     for _ in range(args.layouts):
         env = Environment(patch.side, patch.cells, args.radius)
         pillar_field(env, rng, count, 0.0, args.field)
@@ -120,10 +146,20 @@ def missing_mocap(mocap, names=("16_15", "16_18")):
 def stats(values):
     v = np.asarray(values, float)
     if v.size == 0:
-        return {"mean": float("nan"), "median": float("nan"), "p95": float("nan"),
-                "max": float("nan"), "n": 0}
-    return {"mean": float(v.mean()), "median": float(np.median(v)),
-            "p95": float(np.percentile(v, 95)), "max": float(v.max()), "n": int(v.size)}
+        return {
+            "mean": float("nan"),
+            "median": float("nan"),
+            "p95": float("nan"),
+            "max": float("nan"),
+            "n": 0,
+        }
+    return {
+        "mean": float(v.mean()),
+        "median": float(np.median(v)),
+        "p95": float(np.percentile(v, 95)),
+        "max": float(v.max()),
+        "n": int(v.size),
+    }
 
 
 def foot_positions(motion, skel):
@@ -135,18 +171,25 @@ def pooled_skate(records, key="skate"):
     records = [{"skate": r[key]} for r in records]
     steps = np.array([r["skate"]["planted_steps"] for r in records], float)
     if steps.sum() == 0:
-        return {"mean_cm_per_frame": float("nan"), "mean_cm_per_s": float("nan"),
-                "worst_path_mean_cm_per_s": float("nan"), "planted_steps": 0}
+        return {
+            "mean_cm_per_frame": float("nan"),
+            "mean_cm_per_s": float("nan"),
+            "worst_path_mean_cm_per_s": float("nan"),
+            "planted_steps": 0,
+        }
     per_frame = np.array([r["skate"]["mean_cm_per_frame"] for r in records])
     per_s = np.array([r["skate"]["mean_cm_per_s"] for r in records])
     ok = steps > 0
-    return {"mean_cm_per_frame": float(np.sum(per_frame[ok] * steps[ok]) / steps.sum()),
-            "mean_cm_per_s": float(np.sum(per_s[ok] * steps[ok]) / steps.sum()),
-            "worst_path_mean_cm_per_s": float(per_s[ok].max()),
-            "planted_steps": int(steps.sum())}
+    return {
+        "mean_cm_per_frame": float(np.sum(per_frame[ok] * steps[ok]) / steps.sum()),
+        "mean_cm_per_s": float(np.sum(per_s[ok] * steps[ok]) / steps.sum()),
+        "worst_path_mean_cm_per_s": float(per_s[ok].max()),
+        "planted_steps": int(steps.sum()),
+    }
 
 
 # -- sections -----------------------------------------------------------------------------
+
 
 def bench_bake(mocap):
     straight = bvh.read(mocap / "cmu" / "16_15.bvh")
@@ -157,12 +200,25 @@ def bench_bake(mocap):
     patch = locomotion_patch.bake(gait)
     t2 = time.perf_counter()
     st = patch.stats
-    return patch, straight, {
-        "gait_seconds": t1 - t0, "bake_seconds": t2 - t1, "candidates": st["candidates"],
-        "kept": st["kept"], "culled": st["culled"], "culled_by": st["culled_by"],
-        "side_m": patch.side, "cells": patch.cells, "nodes": patch.nodes, "fps": gait.fps,
-        "cycle_frames": gait.frames, "cycle_distance_m": gait.cycle_distance,
-        "loops": len(gait.loops)}
+    return (
+        patch,
+        straight,
+        {
+            "gait_seconds": t1 - t0,
+            "bake_seconds": t2 - t1,
+            "candidates": st["candidates"],
+            "kept": st["kept"],
+            "culled": st["culled"],
+            "culled_by": st["culled_by"],
+            "side_m": patch.side,
+            "cells": patch.cells,
+            "nodes": patch.nodes,
+            "fps": gait.fps,
+            "cycle_frames": gait.frames,
+            "cycle_distance_m": gait.cycle_distance,
+            "loops": len(gait.loops),
+        },
+    )
 
 
 def bench_source_skate(straight, fps):
@@ -173,7 +229,7 @@ def bench_source_skate(straight, fps):
 
 
 def bench_plans(patch, args, profiler=None):
-    count = int(round(args.density * args.field ** 2))
+    count = int(round(args.density * args.field**2))
     alpha, beta, gamma = args.weights
     skel, fps = patch.gait.skeleton, patch.gait.fps
     records, failures = [], []
@@ -195,13 +251,22 @@ def bench_plans(patch, args, profiler=None):
                 any_facing = time.perf_counter() - t1
             except PlanError:
                 any_facing = None
-            failures.append({"layout": layout, "seconds": dt, "start": start.tolist(),
-                             "goal": goal.tolist(), "message": str(e),
-                             "occlusion_computations": plan.stats["occlusion_computations"],
-                             "any_facing_seconds": any_facing})
-            print(f"  layout {layout:3d}: FAILED after {dt * 1000:7.1f} ms: {e}; with any goal "
-                  f"facing: " + ("no path" if any_facing is None else
-                                 f"found in {any_facing * 1000:.0f} ms"))
+            failures.append(
+                {
+                    "layout": layout,
+                    "seconds": dt,
+                    "start": start.tolist(),
+                    "goal": goal.tolist(),
+                    "message": str(e),
+                    "occlusion_computations": plan.stats["occlusion_computations"],
+                    "any_facing_seconds": any_facing,
+                }
+            )
+            print(
+                f"  layout {layout:3d}: FAILED after {dt * 1000:7.1f} ms: {e}; with any goal "
+                f"facing: "
+                + ("no path" if any_facing is None else f"found in {any_facing * 1000:.0f} ms")
+            )
             continue
         dt = time.perf_counter() - t0
         if prof:
@@ -223,26 +288,37 @@ def bench_plans(patch, args, profiler=None):
         lock_s = time.perf_counter() - t2
         skate_locked = metrics.foot_skate(foot_positions(locked, skel), fps, m.contacts)
         rec = {
-            "layout": layout, "seconds": dt, "synthesis_seconds": synth,
+            "layout": layout,
+            "seconds": dt,
+            "synthesis_seconds": synth,
             "any_facing_seconds": any_s,
-            "expansions": plan.expansions, "pieces": len(plan.pieces),
+            "expansions": plan.expansions,
+            "pieces": len(plan.pieces),
             "segments": sum(p.kind == "segment" for p in plan.pieces),
-            "frames": m.frames, "motion_seconds": (m.frames - 1) / fps,
+            "frames": m.frames,
+            "motion_seconds": (m.frames - 1) / fps,
             "metres": float(np.linalg.norm(np.diff(ground, axis=0), axis=1).sum()),
             "straight_line_m": float(np.linalg.norm(goal[:2] - start[:2])),
             "occlusion_computations": plan.stats["occlusion_computations"],
             "frames_inside_obstacle": int(env.blocked(ground).sum()),
-            "cost": plan.cost, "start": start.tolist(), "goal": goal.tolist(),
+            "cost": plan.cost,
+            "start": start.tolist(),
+            "goal": goal.tolist(),
             "start_connectors": plan.stats.get("start_connectors"),
             "goal_connectors": plan.stats.get("goal_connectors"),
-            "skate": skate, "skate_locked": skate_locked, "foot_lock_seconds": lock_s}
+            "skate": skate,
+            "skate_locked": skate_locked,
+            "foot_lock_seconds": lock_s,
+        }
         records.append(rec)
-        print(f"  layout {layout:3d}: {dt * 1000:7.1f} ms, {plan.expansions:6d} nodes, "
-              f"{rec['pieces']:3d} pieces, {rec['motion_seconds']:5.1f} s / {rec['metres']:5.1f} m "
-              f"of motion ({rec['straight_line_m']:4.1f} m apart), "
-              f"{plan.stats['occlusion_computations']:4d} tiles occluded, skate "
-              f"{skate['mean_cm_per_frame']:.2f} cm/frame ({skate_locked['mean_cm_per_frame']:.2f} "
-              f"locked)")
+        print(
+            f"  layout {layout:3d}: {dt * 1000:7.1f} ms, {plan.expansions:6d} nodes, "
+            f"{rec['pieces']:3d} pieces, {rec['motion_seconds']:5.1f} s / {rec['metres']:5.1f} m "
+            f"of motion ({rec['straight_line_m']:4.1f} m apart), "
+            f"{plan.stats['occlusion_computations']:4d} tiles occluded, skate "
+            f"{skate['mean_cm_per_frame']:.2f} cm/frame ({skate_locked['mean_cm_per_frame']:.2f} "
+            f"locked)"
+        )
     return records, failures, count
 
 
@@ -298,18 +374,23 @@ def bench_placement(density, sizes=(10, 1000), seed=1, min_ops=2000, reocc_moves
             reocc += time.perf_counter() - t0
             tiles += len(touched)
             members += sum(len(env.members(t)) for t in touched)
-        out[n] = {"field_m": field, "repeats": reps, "tiles_with_obstacles": len(env._members),
-                  "place_scene_ms": place * 1e3,
-                  "place_us_per_obstacle": place / n * 1e6,
-                  "move_us_per_obstacle": move / n * 1e6,
-                  "reoccluded_tiles_per_moved_obstacle": tiles / reocc_moves,
-                  "reocclude_ms_per_moved_obstacle": reocc / reocc_moves * 1e3,
-                  "reocclude_ms_per_tile": reocc / max(tiles, 1) * 1e3,
-                  "obstacles_per_reoccluded_tile": members / max(tiles, 1)}
+        out[n] = {
+            "field_m": field,
+            "repeats": reps,
+            "tiles_with_obstacles": len(env._members),
+            "place_scene_ms": place * 1e3,
+            "place_us_per_obstacle": place / n * 1e6,
+            "move_us_per_obstacle": move / n * 1e6,
+            "reoccluded_tiles_per_moved_obstacle": tiles / reocc_moves,
+            "reocclude_ms_per_moved_obstacle": reocc / reocc_moves * 1e3,
+            "reocclude_ms_per_tile": reocc / max(tiles, 1) * 1e3,
+            "obstacles_per_reoccluded_tile": members / max(tiles, 1),
+        }
     return out
 
 
 # -- report -------------------------------------------------------------------------------
+
 
 def fmt_ms(s):
     return f"{s * 1000:.0f} ms"
@@ -321,53 +402,88 @@ def markdown(res):
     t, ex, oc = pl["seconds"], pl["expansions"], pl["occlusion_computations"]
     rows = [
         ("machine", f"{res['machine']}"),
-        ("bake (walk patch, {:,} candidate curves)".format(b["candidates"]),
-         f"{b['bake_seconds']:.1f} s; {b['kept']:,} segments kept, {b['culled']:,} culled ("
-         + ", ".join(f"{k} {v:,}" for k, v in b["culled_by"].items()) + ")"),
-        ("layouts", f"{a['layouts']} on a {a['field']:.0f} × {a['field']:.0f} m field, "
-                    f"{pl['pillars']} pillars each ({a['density']:g}/m², 12-sided, "
-                    f"r 0.2–0.4 m), "
-                    f"start–goal 8–20 m apart, radius {a['radius']:g} m, seed {a['seed']}"),
-        ("paths found", f"{pl['found']} / {a['layouts']} ({pl['failed']} PlanError"
-                        + (f": {pl['failure_kinds']}" if pl["failed"] else "") + ")"
-                        + (f"; with any goal facing {pl['found_any_facing']} of those "
-                           f"{pl['failed']} are found" if pl["failed"] else "")),
-        ("plan time", f"mean {fmt_ms(t['mean'])}, median {fmt_ms(t['median'])}, "
-                      f"p95 {fmt_ms(t['p95'])}, max {fmt_ms(t['max'])}"),
-        ("plan time with any goal facing", f"median {fmt_ms(pl['any_facing_seconds']['median'])}; "
-                                           f"{pl['any_facing_ratio']['median']:.2f}x the exact-facing "
-                                           f"plan (median), {pl['any_facing_ratio']['max']:.2f}x at most"),
-        ("nodes expanded", f"mean {ex['mean']:,.0f}, median {ex['median']:,.0f}, "
-                           f"p95 {ex['p95']:,.0f}, max {ex['max']:,.0f}"),
+        (
+            "bake (walk patch, {:,} candidate curves)".format(b["candidates"]),
+            f"{b['bake_seconds']:.1f} s; {b['kept']:,} segments kept, {b['culled']:,} culled ("
+            + ", ".join(f"{k} {v:,}" for k, v in b["culled_by"].items())
+            + ")",
+        ),
+        (
+            "layouts",
+            f"{a['layouts']} on a {a['field']:.0f} × {a['field']:.0f} m field, "
+            f"{pl['pillars']} pillars each ({a['density']:g}/m², 12-sided, "
+            f"r 0.2–0.4 m), "
+            f"start–goal 8–20 m apart, radius {a['radius']:g} m, seed {a['seed']}",
+        ),
+        (
+            "paths found",
+            f"{pl['found']} / {a['layouts']} ({pl['failed']} PlanError"
+            + (f": {pl['failure_kinds']}" if pl["failed"] else "")
+            + ")"
+            + (
+                f"; with any goal facing {pl['found_any_facing']} of those {pl['failed']} are found"
+                if pl["failed"]
+                else ""
+            ),
+        ),
+        (
+            "plan time",
+            f"mean {fmt_ms(t['mean'])}, median {fmt_ms(t['median'])}, "
+            f"p95 {fmt_ms(t['p95'])}, max {fmt_ms(t['max'])}",
+        ),
+        (
+            "plan time with any goal facing",
+            f"median {fmt_ms(pl['any_facing_seconds']['median'])}; "
+            f"{pl['any_facing_ratio']['median']:.2f}x the exact-facing "
+            f"plan (median), {pl['any_facing_ratio']['max']:.2f}x at most",
+        ),
+        (
+            "nodes expanded",
+            f"mean {ex['mean']:,.0f}, median {ex['median']:,.0f}, "
+            f"p95 {ex['p95']:,.0f}, max {ex['max']:,.0f}",
+        ),
         ("tile occlusions computed per plan", f"mean {oc['mean']:.0f}, max {oc['max']:.0f}"),
-        ("path length", f"mean {pl['motion_seconds']['mean']:.1f} s of motion "
-                        f"(max {pl['motion_seconds']['max']:.1f} s), "
-                        f"{pl['metres']['mean']:.1f} m (straight line "
-                        f"{pl['straight_line_m']['mean']:.1f} m)"),
+        (
+            "path length",
+            f"mean {pl['motion_seconds']['mean']:.1f} s of motion "
+            f"(max {pl['motion_seconds']['max']:.1f} s), "
+            f"{pl['metres']['mean']:.1f} m (straight line "
+            f"{pl['straight_line_m']['mean']:.1f} m)",
+        ),
         ("pieces per path", f"mean {pl['pieces']['mean']:.1f} (start + segments + goal)"),
         ("motion synthesis per path", f"mean {fmt_ms(pl['synthesis_seconds']['mean'])}"),
         ("frames within the radius of a pillar", f"{pl['frames_inside_obstacle']}"),
-        ("foot skate while planted", f"{pl['skate']['mean_cm_per_frame']:.2f} cm/frame, "
-                                     f"{pl['skate']['mean_cm_per_s']:.1f} cm/s (worst path "
-                                     f"{pl['skate']['worst_path_mean_cm_per_s']:.1f} cm/s); "
-                                     f"source clip 16_15: "
-                                     f"{res['source_skate']['mean_cm_per_frame']:.2f} cm/frame, "
-                                     f"{res['source_skate']['mean_cm_per_s']:.1f} cm/s"),
-        ("foot skate with foot locking", f"{pl['skate_locked']['mean_cm_per_frame']:.2f} cm/frame, "
-                                         f"{pl['skate_locked']['mean_cm_per_s']:.1f} cm/s (worst "
-                                         f"path {pl['skate_locked']['worst_path_mean_cm_per_s']:.1f}"
-                                         f" cm/s); leg IK {fmt_ms(pl['foot_lock_seconds']['mean'])}"
-                                         f" per path"),
+        (
+            "foot skate while planted",
+            f"{pl['skate']['mean_cm_per_frame']:.2f} cm/frame, "
+            f"{pl['skate']['mean_cm_per_s']:.1f} cm/s (worst path "
+            f"{pl['skate']['worst_path_mean_cm_per_s']:.1f} cm/s); "
+            f"source clip 16_15: "
+            f"{res['source_skate']['mean_cm_per_frame']:.2f} cm/frame, "
+            f"{res['source_skate']['mean_cm_per_s']:.1f} cm/s",
+        ),
+        (
+            "foot skate with foot locking",
+            f"{pl['skate_locked']['mean_cm_per_frame']:.2f} cm/frame, "
+            f"{pl['skate_locked']['mean_cm_per_s']:.1f} cm/s (worst "
+            f"path {pl['skate_locked']['worst_path_mean_cm_per_s']:.1f}"
+            f" cm/s); leg IK {fmt_ms(pl['foot_lock_seconds']['mean'])}"
+            f" per path",
+        ),
     ]
     for n, p in res["placement"].items():
-        rows.append((f"placement, scene of {int(n):,} obstacles",
-                     f"place {p['place_us_per_obstacle']:.0f} µs, move "
-                     f"{p['move_us_per_obstacle']:.0f} µs per obstacle (whole scene "
-                     f"{p['place_scene_ms']:.2f} ms); lazy re-occlusion by the next plan "
-                     f"{p['reocclude_ms_per_moved_obstacle']:.1f} ms per moved obstacle "
-                     f"({p['reoccluded_tiles_per_moved_obstacle']:.1f} tiles of "
-                     f"{p['obstacles_per_reoccluded_tile']:.1f} obstacles, "
-                     f"{p['reocclude_ms_per_tile']:.1f} ms each)"))
+        rows.append(
+            (
+                f"placement, scene of {int(n):,} obstacles",
+                f"place {p['place_us_per_obstacle']:.0f} µs, move "
+                f"{p['move_us_per_obstacle']:.0f} µs per obstacle (whole scene "
+                f"{p['place_scene_ms']:.2f} ms); lazy re-occlusion by the next plan "
+                f"{p['reocclude_ms_per_moved_obstacle']:.1f} ms per moved obstacle "
+                f"({p['reoccluded_tiles_per_moved_obstacle']:.1f} tiles of "
+                f"{p['obstacles_per_reoccluded_tile']:.1f} obstacles, "
+                f"{p['reocclude_ms_per_tile']:.1f} ms each)",
+            )
+        )
     out = ["| figure | value |", "|---|---|"]
     out += [f"| {k} | {v} |" for k, v in rows]
     return "\n".join(out)
@@ -383,8 +499,10 @@ def main(argv=None):
     t_all = time.perf_counter()
     print("bake ...", flush=True)
     patch, straight, bake = bench_bake(mocap)
-    print(f"  {bake['bake_seconds']:.1f} s: {bake['kept']} segments kept, "
-          f"{bake['culled']} culled {bake['culled_by']}")
+    print(
+        f"  {bake['bake_seconds']:.1f} s: {bake['kept']} segments kept, "
+        f"{bake['culled']} culled {bake['culled_by']}"
+    )
     print(f"plans on {args.layouts} random layouts ...", flush=True)
     profiler = cProfile.Profile() if args.profile else None
     records, failures, pillars = bench_plans(patch, args, profiler)
@@ -395,23 +513,38 @@ def main(argv=None):
 
     kinds = {}
     for f in failures:
-        k = ("unreachable" if "unreachable" in f["message"] else
-             "no way out of the start" if "out of the start" in f["message"] else
-             "no way into the goal" if "into the goal" in f["message"] else
-             "no walk can arrive facing the goal's way" if "arrive at the goal facing" in f["message"] else
-             "no walk can leave facing the start's way" if "leave the start facing" in f["message"] else
-             "other")
+        k = (
+            "unreachable"
+            if "unreachable" in f["message"]
+            else "no way out of the start"
+            if "out of the start" in f["message"]
+            else "no way into the goal"
+            if "into the goal" in f["message"]
+            else "no walk can arrive facing the goal's way"
+            if "arrive at the goal facing" in f["message"]
+            else "no walk can leave facing the start's way"
+            if "leave the start facing" in f["message"]
+            else "other"
+        )
         kinds[k] = kinds.get(k, 0) + 1
     plans = {
-        "pillars": pillars, "found": len(records), "failed": len(failures),
+        "pillars": pillars,
+        "found": len(records),
+        "failed": len(failures),
         "found_any_facing": sum(f["any_facing_seconds"] is not None for f in failures),
         "failure_kinds": ", ".join(f"{k} {v}" for k, v in kinds.items()),
         "failure_seconds": stats([f["seconds"] for f in failures]),
         "seconds": stats([r["seconds"] for r in records]),
-        "any_facing_seconds": stats([r["any_facing_seconds"] for r in records
-                                     if r["any_facing_seconds"] is not None]),
-        "any_facing_ratio": stats([r["any_facing_seconds"] / r["seconds"] for r in records
-                                   if r["any_facing_seconds"] is not None]),
+        "any_facing_seconds": stats(
+            [r["any_facing_seconds"] for r in records if r["any_facing_seconds"] is not None]
+        ),
+        "any_facing_ratio": stats(
+            [
+                r["any_facing_seconds"] / r["seconds"]
+                for r in records
+                if r["any_facing_seconds"] is not None
+            ]
+        ),
         "expansions": stats([r["expansions"] for r in records]),
         "occlusion_computations": stats([r["occlusion_computations"] for r in records]),
         "motion_seconds": stats([r["motion_seconds"] for r in records]),
@@ -426,12 +559,21 @@ def main(argv=None):
     }
     res = {
         "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-                   f"Python {platform.python_version()}, numpy {np.__version__}",
-        "args": {"layouts": args.layouts, "seed": args.seed, "density": args.density,
-                 "field": args.field, "radius": args.radius, "weights": list(args.weights)},
-        "bake": bake, "plans": plans, "source_skate": floor,
+        f"Python {platform.python_version()}, numpy {np.__version__}",
+        "args": {
+            "layouts": args.layouts,
+            "seed": args.seed,
+            "density": args.density,
+            "field": args.field,
+            "radius": args.radius,
+            "weights": list(args.weights),
+        },
+        "bake": bake,
+        "plans": plans,
+        "source_skate": floor,
         "placement": {str(k): v for k, v in placement.items()},
-        "records": records, "failures": failures,
+        "records": records,
+        "failures": failures,
         "total_seconds": time.perf_counter() - t_all,
     }
     if profiler is not None:

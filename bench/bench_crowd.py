@@ -57,10 +57,18 @@ def parse_args(argv=None):
     p.add_argument("--area", type=float, default=12.0, help="plaza m² per character")
     p.add_argument("--seed", type=int, default=17)
     p.add_argument("--max-wait", type=float, default=4.0, help="longest wait / hold, s")
-    p.add_argument("--mocap", type=Path, default=Path(os.environ.get(
-        "MOTION_PATCHES_MOCAP", REPO.parent / "shared" / "mocap")))
-    p.add_argument("--profile", type=int, default=0, metavar="N",
-                   help="cProfile the crowd of size N and print the top functions")
+    p.add_argument(
+        "--mocap",
+        type=Path,
+        default=Path(os.environ.get("MOTION_PATCHES_MOCAP", REPO.parent / "shared" / "mocap")),
+    )
+    p.add_argument(
+        "--profile",
+        type=int,
+        default=0,
+        metavar="N",
+        help="cProfile the crowd of size N and print the top functions",
+    )
     p.add_argument("--json", type=Path, help="also write the full results here")
     return p.parse_args(argv)
 
@@ -75,8 +83,19 @@ def plaza(patch, n, args):
     for k in range(int(0.01 * side * side)):  # benches: 1.6 x 0.5 m boxes, any direction
         c, a = rng.uniform(2.0, side - 2.0, 2), rng.uniform(0, np.pi)
         u, v = np.array([np.cos(a), np.sin(a)]), np.array([-np.sin(a), np.cos(a)])
-        env.place(Obstacle(f"bench{k}", np.array([c + 0.8 * u + 0.25 * v, c - 0.8 * u + 0.25 * v,
-                                                  c - 0.8 * u - 0.25 * v, c + 0.8 * u - 0.25 * v])))
+        env.place(
+            Obstacle(
+                f"bench{k}",
+                np.array(
+                    [
+                        c + 0.8 * u + 0.25 * v,
+                        c - 0.8 * u + 0.25 * v,
+                        c - 0.8 * u - 0.25 * v,
+                        c + 0.8 * u - 0.25 * v,
+                    ]
+                ),
+            )
+        )
     taken, ends = np.empty((0, 2)), []
     while len(ends) < n:
         east = len(ends) % 2 == 0
@@ -101,7 +120,7 @@ def holdable(patch, plan, world, bounds, ramp):
     inside = np.zeros_like(ok)
     for i, p in enumerate(plan.pieces):
         if p.kind not in CLIPS:
-            inside[bounds[i] + ramp // 2:bounds[i + 1] - ramp // 2 + 1] = True
+            inside[bounds[i] + ramp // 2 : bounds[i + 1] - ramp // 2 + 1] = True
     return ok & inside
 
 
@@ -114,8 +133,9 @@ def run_crowd(patch, n, args):
     t = {"paths": 0.0, "synthesis": 0.0, "replan": 0.0}
 
     def solve(i, extra=()):
-        spots = [Obstacle(f"spot{m}", poly) for m, poly in
-                 crowd.standing_spots(ends, i, SPACING, RADIUS)]
+        spots = [
+            Obstacle(f"spot{m}", poly) for m, poly in crowd.standing_spots(ends, i, SPACING, RADIUS)
+        ]
         ghosts = [Obstacle(f"ghost{k}", poly) for k, poly in enumerate(extra)]
         mine = np.array([ends[i][0][:2], ends[i][1][:2]])
         ghosts = [g for g in ghosts if not g.within(mine, RADIUS).any()]
@@ -167,8 +187,17 @@ def run_crowd(patch, n, args):
 
     wait = round(args.max_wait * fps)
     t0 = time.perf_counter()
-    schedules, left = crowd.resolve(list(tracks), replan, SPACING, RADIUS, fps, wait,
-                                    max(1, round(0.2 * fps)), ramp=ramp, holdable=masks)
+    schedules, left = crowd.resolve(
+        list(tracks),
+        replan,
+        SPACING,
+        RADIUS,
+        fps,
+        wait,
+        max(1, round(0.2 * fps)),
+        ramp=ramp,
+        holdable=masks,
+    )
     t_resolve = time.perf_counter() - t0 - t["replan"]  # re-plans count as paths
     finals = [s.track for s in schedules]
     delays = [s.delay for s in schedules]
@@ -177,40 +206,62 @@ def run_crowd(patch, n, args):
     t_check = time.perf_counter() - t0
     # memory of resolution and check, traced (a second run: tracing slows it)
     tracemalloc.start()
-    crowd.resolve(list(tracks), lambda k, d: None, SPACING, RADIUS, fps, wait,
-                  max(1, round(0.2 * fps)), ramp=ramp, holdable=masks)
+    crowd.resolve(
+        list(tracks),
+        lambda k, d: None,
+        SPACING,
+        RADIUS,
+        fps,
+        wait,
+        max(1, round(0.2 * fps)),
+        ramp=ramp,
+        holdable=masks,
+    )
     crowd.conflicts_of(finals, delays, SPACING)
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
     frames = [len(s.track) + s.delay for s in schedules]
     return {
-        "characters": n, "plaza_m": round(side, 1), "props": len(env.obstacles),
-        "planned": len(tracks), "no_path": failed,
+        "characters": n,
+        "plaza_m": round(side, 1),
+        "props": len(env.obstacles),
+        "planned": len(tracks),
+        "no_path": failed,
         "holds": sum(bool(s.holds) for s in schedules),
         "waits": sum(s.delay > 0 for s in schedules),
         "rerouted": sum(s.rerouted for s in schedules),
-        "conflicts_left": len(final), "conflicts_resolve": len(left),
+        "conflicts_left": len(final),
+        "conflicts_resolve": len(left),
         "frames_max": int(max(frames)) if frames else 0,
-        "seconds": {"paths": t["paths"], "synthesis": t["synthesis"], "resolve": t_resolve,
-                    "check": t_check,
-                    "total": t["paths"] + t["synthesis"] + t_resolve + t_check},
+        "seconds": {
+            "paths": t["paths"],
+            "synthesis": t["synthesis"],
+            "resolve": t_resolve,
+            "check": t_check,
+            "total": t["paths"] + t["synthesis"] + t_resolve + t_check,
+        },
         "resolve_ms_per_character": 1000 * t_resolve / max(len(tracks), 1),
-        "resolve_peak_mb": peak / 2 ** 20,
+        "resolve_peak_mb": peak / 2**20,
         "process_max_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
     }
 
 
 def markdown(rows):
-    out = ["| characters | plaza | planned | no path | holds | waits | re-routed | conflicts "
-           "left | paths s | synthesis s | resolve s | check s | total s | resolve peak MB "
-           "| max RSS MB |", "|" + "---|" * 15]
+    out = [
+        "| characters | plaza | planned | no path | holds | waits | re-routed | conflicts "
+        "left | paths s | synthesis s | resolve s | check s | total s | resolve peak MB "
+        "| max RSS MB |",
+        "|" + "---|" * 15,
+    ]
     for r in rows:
         s = r["seconds"]
-        out.append(f"| {r['characters']} | {r['plaza_m']} m | {r['planned']} | {r['no_path']} "
-                   f"| {r['holds']} | {r['waits']} | {r['rerouted']} | {r['conflicts_left']} "
-                   f"| {s['paths']:.1f} | {s['synthesis']:.1f} | {s['resolve']:.2f} "
-                   f"| {s['check']:.2f} | {s['total']:.1f} | {r['resolve_peak_mb']:.1f} "
-                   f"| {r['process_max_rss_mb']:.0f} |")
+        out.append(
+            f"| {r['characters']} | {r['plaza_m']} m | {r['planned']} | {r['no_path']} "
+            f"| {r['holds']} | {r['waits']} | {r['rerouted']} | {r['conflicts_left']} "
+            f"| {s['paths']:.1f} | {s['synthesis']:.1f} | {s['resolve']:.2f} "
+            f"| {s['check']:.2f} | {s['total']:.1f} | {r['resolve_peak_mb']:.1f} "
+            f"| {r['process_max_rss_mb']:.0f} |"
+        )
     return "\n".join(out)
 
 
@@ -222,9 +273,12 @@ def main(argv=None):
         return 2
     print("bake ...", flush=True)
     patch, _, bake = core.bench_bake(args.mocap)
-    res = {"machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-                      f"Python {platform.python_version()}, numpy {np.__version__}",
-           "args": {k: str(v) for k, v in vars(args).items() if k != "json"}, "crowds": []}
+    res = {
+        "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+        f"Python {platform.python_version()}, numpy {np.__version__}",
+        "args": {k: str(v) for k, v in vars(args).items() if k != "json"},
+        "crowds": [],
+    }
     for n in sorted(int(s) for s in args.sizes.split(",")):
         print(f"{n} characters ...", flush=True)
         if n == args.profile:

@@ -75,30 +75,68 @@ TARGETS = {  # figure: (comparison, value, shown)
 
 def parse_args(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--layouts", type=int, default=20,
-                   help="random pillar fields of bench_core (default 20; 0: none)")
-    p.add_argument("--seed", type=int, default=0,
-                   help="seed of the random fields and the 40-pillar scene (default 0)")
-    p.add_argument("--density", type=float, default=0.1,
-                   help="pillars per square metre of the random fields (default 0.1)")
-    p.add_argument("--field", type=float, default=30.0,
-                   help="side of the random pillar fields in metres (default 30)")
-    p.add_argument("--radius", type=float, default=DEFAULTS["radius"],
-                   help=f"character radius (default {DEFAULTS['radius']:g} m)")
-    p.add_argument("--weights", type=float, nargs=3, default=WEIGHTS,
-                   metavar=("ALPHA", "BETA", "GAMMA"), help="Eq. 5 weights (default %s)" % " ".join(f"{w:g}" for w in WEIGHTS))
-    p.add_argument("--variants", nargs="+", choices=VARIANTS, default=list(VARIANTS),
-                   help="heading variants to plan (default both)")
-    p.add_argument("--only", metavar="SCENE", default=None,
-                   help="comma-separated scene names or prefixes ('random' for the fields)")
-    p.add_argument("--mocap", default=os.environ.get("MOTION_PATCHES_MOCAP",
-                                                     str(REPO.parent / "shared" / "mocap")),
-                   help="folder holding cmu/16_15.bvh and cmu/16_18.bvh")
+    p.add_argument(
+        "--layouts",
+        type=int,
+        default=20,
+        help="random pillar fields of bench_core (default 20; 0: none)",
+    )
+    p.add_argument(
+        "--seed",
+        type=int,
+        default=0,
+        help="seed of the random fields and the 40-pillar scene (default 0)",
+    )
+    p.add_argument(
+        "--density",
+        type=float,
+        default=0.1,
+        help="pillars per square metre of the random fields (default 0.1)",
+    )
+    p.add_argument(
+        "--field",
+        type=float,
+        default=30.0,
+        help="side of the random pillar fields in metres (default 30)",
+    )
+    p.add_argument(
+        "--radius",
+        type=float,
+        default=DEFAULTS["radius"],
+        help=f"character radius (default {DEFAULTS['radius']:g} m)",
+    )
+    p.add_argument(
+        "--weights",
+        type=float,
+        nargs=3,
+        default=WEIGHTS,
+        metavar=("ALPHA", "BETA", "GAMMA"),
+        help="Eq. 5 weights (default %s)" % " ".join(f"{w:g}" for w in WEIGHTS),
+    )
+    p.add_argument(
+        "--variants",
+        nargs="+",
+        choices=VARIANTS,
+        default=list(VARIANTS),
+        help="heading variants to plan (default both)",
+    )
+    p.add_argument(
+        "--only",
+        metavar="SCENE",
+        default=None,
+        help="comma-separated scene names or prefixes ('random' for the fields)",
+    )
+    p.add_argument(
+        "--mocap",
+        default=os.environ.get("MOTION_PATCHES_MOCAP", str(REPO.parent / "shared" / "mocap")),
+        help="folder holding cmu/16_15.bvh and cmu/16_18.bvh",
+    )
     p.add_argument("--json", metavar="PATH", help="also write all figures as JSON")
     return p.parse_args(argv)
 
 
 # -- geometry -----------------------------------------------------------------------------
+
 
 def unit(a):
     return np.array([np.cos(a), np.sin(a)])
@@ -152,8 +190,8 @@ class Polygons:
             e = np.roll(p, -1, axis=0) - p
             nrm = np.column_stack((e[:, 1], -e[:, 0])) / np.linalg.norm(e, axis=1)[:, None]
             c = np.sum(nrm * p, axis=1) - eps  # interior: n.x < c (shrunk by eps)
-            self.normal[i, :len(p)], self.offset[i, :len(p)] = nrm, c
-            self.normal[i, len(p):], self.offset[i, len(p):] = nrm[-1], c[-1]
+            self.normal[i, : len(p)], self.offset[i, : len(p)] = nrm, c
+            self.normal[i, len(p) :], self.offset[i, len(p) :] = nrm[-1], c[-1]
             self.lo[i], self.hi[i] = p.min(axis=0), p.max(axis=0)
 
     def __len__(self):
@@ -182,13 +220,14 @@ class Polygons:
         slo, shi = np.minimum(a, b), np.maximum(a, b)
         for s in range(0, a.shape[0], chunk):
             sl = slice(s, s + chunk)
-            near = (np.all(slo[sl, None] <= self.hi[None], axis=2)
-                    & np.all(shi[sl, None] >= self.lo[None], axis=2))
+            near = np.all(slo[sl, None] <= self.hi[None], axis=2) & np.all(
+                shi[sl, None] >= self.lo[None], axis=2
+            )
             ei, pi = np.nonzero(near)
             if ei.size == 0:
                 continue
             ei = ei + s
-            n, c = self.normal[pi], self.offset[pi]              # (M, K, 2), (M, K)
+            n, c = self.normal[pi], self.offset[pi]  # (M, K, 2), (M, K)
             d = b[ei] - a[ei]
             num = c - np.einsum("mkd,md->mk", n, a[ei])
             den = np.einsum("mkd,md->mk", n, d)
@@ -281,8 +320,11 @@ def reference_path(obstacles, radius, start, goal):
     s, g = np.asarray(start[:2], float), np.asarray(goal[:2], float)
     grown = [inflate(o.polygon, radius) for o in obstacles]
     if not grown:
-        return {"length": float(np.linalg.norm(g - s)), "points": np.array([s, g]),
-                "footprints_used": 0}
+        return {
+            "length": float(np.linalg.norm(g - s)),
+            "points": np.array([s, g]),
+            "footprints_used": 0,
+        }
     centre = np.array([q.mean(axis=0) for q in grown])
     rho = np.array([np.linalg.norm(q - c, axis=1).max() for q, c in zip(grown, centre)])
     near = np.linalg.norm(centre - s, axis=1) + np.linalg.norm(centre - g, axis=1) - 2 * rho
@@ -383,16 +425,17 @@ def dubins(start, goal, rho):
 
 # -- scenes -------------------------------------------------------------------------------
 
+
 @dataclass
 class Scene:
     name: str
-    group: str                     # "scenes" or "random"
+    group: str  # "scenes" or "random"
     obstacles: list
-    start: np.ndarray              # (x, y)
+    start: np.ndarray  # (x, y)
     goal: np.ndarray
-    headings: tuple = None         # fixed (start, goal) headings: planned once, variant "given"
-    straight: bool = False         # a straight walk in the open: lateral deviation measured
-    probe: object = None           # callable(ground) -> dict of scene-specific figures
+    headings: tuple = None  # fixed (start, goal) headings: planned once, variant "given"
+    straight: bool = False  # a straight walk in the open: lateral deviation measured
+    probe: object = None  # callable(ground) -> dict of scene-specific figures
     notes: dict = field(default_factory=dict)
 
 
@@ -407,6 +450,7 @@ def gap_probe(x, centre, width):
             return {"crosses_wall_at_y": None, "through_gap": False}
         y = float(xy[k[0], 1])
         return {"crosses_wall_at_y": y, "through_gap": bool(abs(y - centre) < width / 2)}
+
     return probe
 
 
@@ -417,22 +461,36 @@ def build_scenes(radius, seed):
         return OFF + np.asarray(p, float)
 
     for deg in (0, 17, 45, 90):
-        S.append(Scene(f"straight_{deg}", "scenes", [], at(0, 0), at(*(16 * unit(np.radians(deg)))),
-                       straight=True))
+        S.append(
+            Scene(
+                f"straight_{deg}",
+                "scenes",
+                [],
+                at(0, 0),
+                at(*(16 * unit(np.radians(deg)))),
+                straight=True,
+            )
+        )
     for width in (1.0, 0.8):
         c, x = 1.0, 6.0
-        obs = [wall("wall_lo", at(x, -10), at(x, c - width / 2)),
-               wall("wall_hi", at(x, c + width / 2), at(x, 10))]
-        S.append(Scene(f"gap_{width:.1f}", "scenes", obs, at(0, 0), at(12, 0),
-                       probe=gap_probe(x, c, width)))
+        obs = [
+            wall("wall_lo", at(x, -10), at(x, c - width / 2)),
+            wall("wall_hi", at(x, c + width / 2), at(x, 10)),
+        ]
+        S.append(
+            Scene(
+                f"gap_{width:.1f}", "scenes", obs, at(0, 0), at(12, 0), probe=gap_probe(x, c, width)
+            )
+        )
     rng = np.random.default_rng(seed + 1000)
     obs = []
     while len(obs) < 40:
         x, y = rng.uniform((3, -6), (15, 6))
         obs.append(core.pillar(f"p{len(obs)}", *(OFF + (x, y)), rng.uniform(0.2, 0.4)))
     S.append(Scene("pillars_40", "scenes", obs, at(0, 0), at(18, 0)))
-    S.append(Scene("uturn", "scenes", [wall("wall", at(0, 0), at(6, 0))], at(3.5, 1.0),
-                   at(3.5, -1.0)))
+    S.append(
+        Scene("uturn", "scenes", [wall("wall", at(0, 0), at(6, 0))], at(3.5, 1.0), at(3.5, -1.0))
+    )
     # Chicane: three parallel walls 30 degrees off the y axis, alternately from below and
     # from above, 1 m past the line start-goal.
     u = unit(np.radians(120))
@@ -441,19 +499,30 @@ def build_scenes(radius, seed):
         if k % 2 == 0:  # from below, upper end at y = +1
             p = np.array([x, 1.0])
             obs.append(wall(f"chicane{k}", OFF + p - 7 * u, OFF + p))
-        else:           # from above, lower end at y = -1
+        else:  # from above, lower end at y = -1
             p = np.array([x, -1.0])
             obs.append(wall(f"chicane{k}", OFF + p, OFF + p + 7 * u))
     S.append(Scene("chicane_30deg", "scenes", obs, at(0, 0), at(16, 0)))
     # Corridor 30 degrees off the grid: two parallel walls 12 m long, 1.6 m apart.
     d, n = unit(np.radians(30)), unit(np.radians(120))
-    obs = [wall("side_a", at(*(-0.8 * n)), at(*(12 * d - 0.8 * n))),
-           wall("side_b", at(*(0.8 * n)), at(*(12 * d + 0.8 * n)))]
-    S.append(Scene("corridor_30deg", "scenes", obs, at(*(0.5 * d)), at(*(11.5 * d)),
-                   straight=False))
+    obs = [
+        wall("side_a", at(*(-0.8 * n)), at(*(12 * d - 0.8 * n))),
+        wall("side_b", at(*(0.8 * n)), at(*(12 * d + 0.8 * n))),
+    ]
+    S.append(
+        Scene("corridor_30deg", "scenes", obs, at(*(0.5 * d)), at(*(11.5 * d)), straight=False)
+    )
     for h0, h1 in ((90, 0), (180, 0), (-135, 0), (0, 180)):
-        S.append(Scene(f"heading_{h0}_to_{h1}", "scenes", [], at(0, 0), at(8, 0),
-                       headings=(np.radians(h0), np.radians(h1))))
+        S.append(
+            Scene(
+                f"heading_{h0}_to_{h1}",
+                "scenes",
+                [],
+                at(0, 0),
+                at(8, 0),
+                headings=(np.radians(h0), np.radians(h1)),
+            )
+        )
     return S
 
 
@@ -461,8 +530,16 @@ def random_scenes(patch, args):
     """The random pillar fields of bench_core (same calls, same seed: same layouts)."""
     out = []
     for layout, (env, s, g) in enumerate(core.layouts(patch, args)):
-        out.append(Scene(f"random_{layout:02d}", "random", list(env.obstacles.values()),
-                         s[:2], g[:2], notes={"bench_core_headings": [s[2], g[2]]}))
+        out.append(
+            Scene(
+                f"random_{layout:02d}",
+                "random",
+                list(env.obstacles.values()),
+                s[:2],
+                g[:2],
+                notes={"bench_core_headings": [s[2], g[2]]},
+            )
+        )
     return out
 
 
@@ -478,6 +555,7 @@ def selected(scene, only):
 
 # -- measuring ----------------------------------------------------------------------------
 
+
 def path_length(xy):
     return float(np.linalg.norm(np.diff(xy, axis=0), axis=1).sum())
 
@@ -486,8 +564,15 @@ def turning(h):
     return float(np.abs(np.diff(np.unwrap(h))).sum())
 
 
-CATEGORY = {"start": "start", "goal": "goal", "segment": "lattice", "part": "lattice",
-            "shortcut": "shortcut", "traversal": "clips", "interaction": "clips"}
+CATEGORY = {
+    "start": "start",
+    "goal": "goal",
+    "segment": "lattice",
+    "part": "lattice",
+    "shortcut": "shortcut",
+    "traversal": "clips",
+    "interaction": "clips",
+}
 
 
 def decompose(pieces, motions):
@@ -533,12 +618,18 @@ def measure(scene, env, patch, lim, start, goal, args, ref):
     k = list(patch.gait.kappa_limits) + list(patch.stats.get("curvature_limits", ()))
     rho = 1.0 / max(abs(v) for v in k)
     dub = dubins(start, goal, rho)
-    rec = {"scene": scene.name, "group": scene.group, "radius": args.radius,
-           "start": start.tolist(),
-           "goal": goal.tolist(), "reference_m": ref.get("length"),
-           "straight_line_m": float(np.linalg.norm(goal[:2] - start[:2])),
-           "dubins_m": dub, "min_turn_radius_m": rho,
-           "bound_m": (max(ref["length"], dub) if ref.get("length") else None)}
+    rec = {
+        "scene": scene.name,
+        "group": scene.group,
+        "radius": args.radius,
+        "start": start.tolist(),
+        "goal": goal.tolist(),
+        "reference_m": ref.get("length"),
+        "straight_line_m": float(np.linalg.norm(goal[:2] - start[:2])),
+        "dubins_m": dub,
+        "min_turn_radius_m": rho,
+        "bound_m": (max(ref["length"], dub) if ref.get("length") else None),
+    }
     if ref.get("length") is None:
         rec["reference_note"] = ref.get("reason")
     t0 = time.perf_counter()
@@ -554,9 +645,13 @@ def measure(scene, env, patch, lim, start, goal, args, ref):
     xy = g[:, :2]
     glitches = validate.motion_glitches(motions, plan.pieces, lim)
     rec.update(
-        failed=False, expansions=plan.expansions, pieces=[p.label for p in plan.pieces],
-        frames=int(m.frames), motion_seconds=(m.frames - 1) / fps,
-        path_m=path_length(xy), path_turn_deg=float(np.degrees(turning(g[:, 2]))),
+        failed=False,
+        expansions=plan.expansions,
+        pieces=[p.label for p in plan.pieces],
+        frames=int(m.frames),
+        motion_seconds=(m.frames - 1) / fps,
+        path_m=path_length(xy),
+        path_turn_deg=float(np.degrees(turning(g[:, 2]))),
         start_speed=float(np.linalg.norm(xy[1] - xy[0]) * fps),
         end_speed=float(np.linalg.norm(xy[-1] - xy[-2]) * fps),
         # over the first / last 0.1 s: the goal connector stops mid-cycle, so its last
@@ -566,12 +661,17 @@ def measure(scene, env, patch, lim, start, goal, args, ref):
         heading_error_deg=float(np.degrees(abs(wrap(g[-1, 2] - goal[2])))),
         start_heading_error_deg=float(np.degrees(abs(wrap(g[0, 2] - start[2])))),
         position_error_m=float(np.linalg.norm(xy[-1] - goal[:2])),
-        hips_position_error_m=float(np.linalg.norm(
-            to_world(patch.gait.skeleton, g[-1:], m.root_local[-1:], m.rotations[-1:])[0][0, :2]
-            - goal[:2])),
+        hips_position_error_m=float(
+            np.linalg.norm(
+                to_world(patch.gait.skeleton, g[-1:], m.root_local[-1:], m.rotations[-1:])[0][0, :2]
+                - goal[:2]
+            )
+        ),
         frames_inside=int(env.blocked(xy).sum()),
         min_clearance_m=min_clearance(scene.obstacles, xy),
-        glitches=glitches, glitch_count=validate.count(glitches))
+        glitches=glitches,
+        glitch_count=validate.count(glitches),
+    )
     rec.update(decompose(plan.pieces, motions))
     if ref.get("length"):
         L = ref["length"]
@@ -579,15 +679,20 @@ def measure(scene, env, patch, lim, start, goal, args, ref):
         rec["detour_vs_bound"] = rec["path_m"] / rec["bound_m"]
         cats = ("start", "goal", "lattice", "shortcut", "clips", "other")
         chords = sum(rec[f"{c}_chord_m"] for c in cats)
-        rec["excess_m"] = {"total": rec["path_m"] - L,
-                           "start_connector": rec["start_m"] - rec["start_chord_m"],
-                           "goal_connector": rec["goal_m"] - rec["goal_chord_m"],
-                           "lattice": rec["lattice_m"] - rec["lattice_chord_m"],
-                           "shortcut": rec["shortcut_m"] - rec["shortcut_chord_m"],
-                           "route": chords - L}
+        rec["excess_m"] = {
+            "total": rec["path_m"] - L,
+            "start_connector": rec["start_m"] - rec["start_chord_m"],
+            "goal_connector": rec["goal_m"] - rec["goal_chord_m"],
+            "lattice": rec["lattice_m"] - rec["lattice_chord_m"],
+            "shortcut": rec["shortcut_m"] - rec["shortcut_chord_m"],
+            "route": chords - L,
+        }
         legs = np.diff(ref["points"], axis=0)
-        rec["reference_turn_deg"] = float(np.degrees(np.abs(wrap(np.diff(
-            np.arctan2(legs[:, 1], legs[:, 0])))).sum())) if len(legs) > 1 else 0.0
+        rec["reference_turn_deg"] = (
+            float(np.degrees(np.abs(wrap(np.diff(np.arctan2(legs[:, 1], legs[:, 0])))).sum()))
+            if len(legs) > 1
+            else 0.0
+        )
     if scene.straight:
         d = (goal[:2] - start[:2]) / np.linalg.norm(goal[:2] - start[:2])
         rel = xy - start[:2]
@@ -603,23 +708,34 @@ def line(rec, variant):
     if rec["failed"]:
         ref = f"ref {rec['reference_m']:.1f} m" if rec["reference_m"] else "no reference"
         return f"{head} FAILED after {rec['seconds'] * 1000:6.0f} ms ({ref}): {rec['message']}"
-    ref = (f"ref {rec['reference_m']:5.1f} m detour {rec['detour']:4.2f}"
-           if rec.get("detour") else "no reference       ")
+    ref = (
+        f"ref {rec['reference_m']:5.1f} m detour {rec['detour']:4.2f}"
+        if rec.get("detour")
+        else "no reference       "
+    )
     ex = rec.get("excess_m")
-    extra = (f" [{ex['total']:+.1f} m: start {ex['start_connector']:+.1f} goal "
-             f"{ex['goal_connector']:+.1f} lattice {ex['lattice']:+.1f} shortcut "
-             f"{ex['shortcut']:+.1f} route {ex['route']:+.1f}]" if ex else "")
-    dev = f" dev {rec['straight_deviation_m'] * 100:.1f} cm" if "straight_deviation_m" in rec else ""
+    extra = (
+        f" [{ex['total']:+.1f} m: start {ex['start_connector']:+.1f} goal "
+        f"{ex['goal_connector']:+.1f} lattice {ex['lattice']:+.1f} shortcut "
+        f"{ex['shortcut']:+.1f} route {ex['route']:+.1f}]"
+        if ex
+        else ""
+    )
+    dev = (
+        f" dev {rec['straight_deviation_m'] * 100:.1f} cm" if "straight_deviation_m" in rec else ""
+    )
     if rec.get("detour_vs_bound"):
         ref += f" (bound {rec['bound_m']:.1f} m: {rec['detour_vs_bound']:.2f})"
     if rec["min_clearance_m"] is not None:
         dev += f" clear {rec['min_clearance_m']:.2f} m"
     gl = sum(rec["glitch_count"].values())
-    return (f"{head} {rec['seconds'] * 1000:6.0f} ms {rec['path_m']:5.1f} m {ref}{dev} "
-            f"glitch {gl} v0 {rec['start_speed']:.2f} v1 {rec['end_speed']:.2f} "
-            f"({rec['end_speed_01s']:.2f} over 0.1 s) m/s "
-            f"head {rec['heading_error_deg']:.1f}° pos {rec['position_error_m'] * 100:.1f} cm "
-            f"in {rec['frames_inside']}{extra}")
+    return (
+        f"{head} {rec['seconds'] * 1000:6.0f} ms {rec['path_m']:5.1f} m {ref}{dev} "
+        f"glitch {gl} v0 {rec['start_speed']:.2f} v1 {rec['end_speed']:.2f} "
+        f"({rec['end_speed_01s']:.2f} over 0.1 s) m/s "
+        f"head {rec['heading_error_deg']:.1f}° pos {rec['position_error_m'] * 100:.1f} cm "
+        f"in {rec['frames_inside']}{extra}"
+    )
 
 
 def run(patch, scenes, args):
@@ -641,8 +757,9 @@ def run(patch, scenes, args):
                     variants.append((v, (FACING_Y, FACING_Y)))
                 elif ref.get("length") is not None:
                     legs = np.diff(ref["points"], axis=0)
-                    variants.append((v, (float(np.arctan2(*legs[0][::-1])),
-                                         float(np.arctan2(*legs[-1][::-1])))))
+                    variants.append(
+                        (v, (float(np.arctan2(*legs[0][::-1])), float(np.arctan2(*legs[-1][::-1]))))
+                    )
                 else:  # no reference: face the goal
                     d = scene.goal - scene.start
                     a = float(np.arctan2(d[1], d[0]))
@@ -661,12 +778,16 @@ def run(patch, scenes, args):
 
 # -- report -------------------------------------------------------------------------------
 
+
 def summarise(recs):
     found = [r for r in recs if not r["failed"]]
     det = [r["detour"] for r in found if r.get("detour")]
     dvb = [r["detour_vs_bound"] for r in found if r.get("detour_vs_bound")]
-    dev = [r["straight_deviation_m"] for r in found if "straight_deviation_m" in r
-           and r["scene"].startswith("straight")]
+    dev = [
+        r["straight_deviation_m"]
+        for r in found
+        if "straight_deviation_m" in r and r["scene"].startswith("straight")
+    ]
 
     def mx(key):
         v = [r[key] for r in found if r.get(key) is not None]
@@ -675,7 +796,8 @@ def summarise(recs):
     ex = [r["excess_m"] for r in found if r.get("excess_m")]
     clear = [r["min_clearance_m"] for r in found if r.get("min_clearance_m") is not None]
     return {
-        "plans": len(recs), "found": len(found),
+        "plans": len(recs),
+        "found": len(found),
         "failed": len(recs) - len(found),
         "failures_with_clear_path": sum(r["failed"] and r["reference_m"] is not None for r in recs),
         "detour_median": float(np.median(det)) if det else None,
@@ -686,10 +808,14 @@ def summarise(recs):
         "straight_deviation_m": float(max(dev)) if dev else None,
         "glitches": int(sum(sum(r["glitch_count"].values()) for r in found)),
         "plans_with_glitches": int(sum(bool(r["glitch_count"]) for r in found)),
-        "glitch_kinds": {k: int(sum(r["glitch_count"].get(k, 0) for r in found))
-                         for k in ("spin", "backwards", "jump")},
-        "start_speed_max": mx("start_speed"), "end_speed_max": mx("end_speed"),
-        "start_speed_01s_max": mx("start_speed_01s"), "end_speed_01s_max": mx("end_speed_01s"),
+        "glitch_kinds": {
+            k: int(sum(r["glitch_count"].get(k, 0) for r in found))
+            for k in ("spin", "backwards", "jump")
+        },
+        "start_speed_max": mx("start_speed"),
+        "end_speed_max": mx("end_speed"),
+        "start_speed_01s_max": mx("start_speed_01s"),
+        "end_speed_01s_max": mx("end_speed_01s"),
         "heading_error_deg_max": mx("heading_error_deg"),
         "position_error_m_max": mx("position_error_m"),
         "hips_position_error_m_max": mx("hips_position_error_m"),
@@ -698,12 +824,20 @@ def summarise(recs):
         "plan_seconds_max": mx("seconds"),
         "excess_mean_m": ({k: float(np.mean([e[k] for e in ex])) for k in ex[0]} if ex else None),
         "clearance_median_m": (float(np.median(clear)) if clear else None),
-        "path_turn_deg_mean": float(np.mean([r["path_turn_deg"] for r in found])) if found else None,
-        "reference_turn_deg_mean": (float(np.mean([r["reference_turn_deg"] for r in found
-                                                   if "reference_turn_deg" in r]))
-                                    if any("reference_turn_deg" in r for r in found) else None),
-        "start_turn_deg_mean": float(np.mean([r["start_turn_deg"] for r in found])) if found else None,
-        "goal_turn_deg_mean": float(np.mean([r["goal_turn_deg"] for r in found])) if found else None,
+        "path_turn_deg_mean": float(np.mean([r["path_turn_deg"] for r in found]))
+        if found
+        else None,
+        "reference_turn_deg_mean": (
+            float(np.mean([r["reference_turn_deg"] for r in found if "reference_turn_deg" in r]))
+            if any("reference_turn_deg" in r for r in found)
+            else None
+        ),
+        "start_turn_deg_mean": float(np.mean([r["start_turn_deg"] for r in found]))
+        if found
+        else None,
+        "goal_turn_deg_mean": float(np.mean([r["goal_turn_deg"] for r in found]))
+        if found
+        else None,
     }
 
 
@@ -730,22 +864,30 @@ def fmt(key, v):
 
 
 def markdown(records, summary):
-    out = ["| scene | headings | reference | bound | path | detour (vs bound) | straight dev. | "
-           "clearance | glitches | v start / end | heading err. | pos. err. | inside | plan | "
-           "extra length from |",
-           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    out = [
+        "| scene | headings | reference | bound | path | detour (vs bound) | straight dev. | "
+        "clearance | glitches | v start / end | heading err. | pos. err. | inside | plan | "
+        "extra length from |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
     for r in records:
         if r["group"] != "scenes":
             continue
         ref = f"{r['reference_m']:.2f} m" if r["reference_m"] else "none"
         if r["failed"]:
-            out.append(f"| {r['scene']} | {r['variant']} | {ref} | | **failed**: {r['message']} "
-                       "| | | | | | | | | | |")
+            out.append(
+                f"| {r['scene']} | {r['variant']} | {ref} | | **failed**: {r['message']} "
+                "| | | | | | | | | | |"
+            )
             continue
         ex = r.get("excess_m")
-        extra = (f"start {ex['start_connector']:+.1f}, goal {ex['goal_connector']:+.1f}, "
-                 f"lattice {ex['lattice']:+.1f}, shortcut {ex['shortcut']:+.1f}, "
-                 f"route {ex['route']:+.1f} m" if ex else "")
+        extra = (
+            f"start {ex['start_connector']:+.1f}, goal {ex['goal_connector']:+.1f}, "
+            f"lattice {ex['lattice']:+.1f}, shortcut {ex['shortcut']:+.1f}, "
+            f"route {ex['route']:+.1f} m"
+            if ex
+            else ""
+        )
         if "through_gap" in r:
             extra += "; through the gap" if r["through_gap"] else "; **not through the gap**"
         dev = f"{r['straight_deviation_m'] * 100:.1f} cm" if "straight_deviation_m" in r else ""
@@ -757,21 +899,28 @@ def markdown(records, summary):
             f"{r['detour']:.2f} ({r['detour_vs_bound']:.2f}) | {dev} | {clear} | {gl or 0} | "
             f"{r['start_speed']:.2f} / {r['end_speed']:.2f} | {r['heading_error_deg']:.1f}° | "
             f"{r['position_error_m'] * 100:.1f} cm | {r['frames_inside']} | "
-            f"{r['seconds'] * 1000:.0f} ms | {extra} |")
+            f"{r['seconds'] * 1000:.0f} ms | {extra} |"
+        )
     groups = list(summary)
-    out += ["", "| figure | target | " + " | ".join(groups) + " |",
-            "|---|---|" + "---|" * len(groups)]
+    out += [
+        "",
+        "| figure | target | " + " | ".join(groups) + " |",
+        "|---|---|" + "---|" * len(groups),
+    ]
     for key, (_, _, shown) in TARGETS.items():
         cells = []
         for gname in groups:
             v = summary[gname][key]
             cells.append(f"{fmt(key, v)} ({met(key, v)})" if v is not None else "–")
         out.append(f"| {key.replace('_', ' ')} | {shown} | " + " | ".join(cells) + " |")
-    for key, label in (("plans", "plans (found)"), ("detour_mean", "detour mean"),
-                       ("detour_vs_bound_median", "detour vs heading-aware bound, median"),
-                       ("detour_vs_bound_worst", "detour vs heading-aware bound, worst"),
-                       ("plans_with_glitches", "plans with glitches"),
-                       ("plan_seconds_median", "plan time median")):
+    for key, label in (
+        ("plans", "plans (found)"),
+        ("detour_mean", "detour mean"),
+        ("detour_vs_bound_median", "detour vs heading-aware bound, median"),
+        ("detour_vs_bound_worst", "detour vs heading-aware bound, worst"),
+        ("plans_with_glitches", "plans with glitches"),
+        ("plan_seconds_median", "plan time median"),
+    ):
         cells = []
         for gname in groups:
             s = summary[gname]
@@ -789,24 +938,34 @@ def markdown(records, summary):
         sm = summary[gname]
         c = sm["clearance_median_m"]
         cells.append(f"{c:.2f} m" if c is not None else "–")
-    out.append("| closest approach to a footprint, median (the radius is "
-               f"{records[0]['radius']:g} m) | | " + " | ".join(cells) + " |")
+    out.append(
+        "| closest approach to a footprint, median (the radius is "
+        f"{records[0]['radius']:g} m) | | " + " | ".join(cells) + " |"
+    )
     cells = []
     for gname in groups:
         sm = summary[gname]
-        cells.append("–" if sm["path_turn_deg_mean"] is None else
-                     f"{sm['path_turn_deg_mean']:.0f}° (reference {sm['reference_turn_deg_mean']:.0f}°; "
-                     f"start connector {sm['start_turn_deg_mean']:.0f}°, goal connector "
-                     f"{sm['goal_turn_deg_mean']:.0f}°)" if sm["reference_turn_deg_mean"] is not None
-                     else f"{sm['path_turn_deg_mean']:.0f}°")
+        cells.append(
+            "–"
+            if sm["path_turn_deg_mean"] is None
+            else f"{sm['path_turn_deg_mean']:.0f}° "
+            f"(reference {sm['reference_turn_deg_mean']:.0f}°; "
+            f"start connector {sm['start_turn_deg_mean']:.0f}°, goal connector "
+            f"{sm['goal_turn_deg_mean']:.0f}°)"
+            if sm["reference_turn_deg_mean"] is not None
+            else f"{sm['path_turn_deg_mean']:.0f}°"
+        )
     out.append("| total turning per path, mean | | " + " | ".join(cells) + " |")
     cells = []
     for gname in groups:
         e = summary[gname]["excess_mean_m"]
-        cells.append(", ".join(f"{k.replace('_connector', '')} {v:+.2f}"
-                               for k, v in e.items()) if e else "–")
-    out.append("| extra length, mean m (total = start + goal connector loops + lattice "
-               "zig-zag + shortcut curves + route) | | " + " | ".join(cells) + " |")
+        cells.append(
+            ", ".join(f"{k.replace('_connector', '')} {v:+.2f}" for k, v in e.items()) if e else "–"
+        )
+    out.append(
+        "| extra length, mean m (total = start + goal connector loops + lattice "
+        "zig-zag + shortcut curves + route) | | " + " | ".join(cells) + " |"
+    )
     return "\n".join(out)
 
 
@@ -837,8 +996,10 @@ def main(argv=None):
     print("bake ...", flush=True)
     patch, _, bake = core.bench_bake(mocap)
     bad = validate.segment_glitches(patch)
-    print(f"  {bake['bake_seconds']:.1f} s: {bake['kept']} segments kept, {len(bad)} of them "
-          f"glitch (validate.segment_glitches)")
+    print(
+        f"  {bake['bake_seconds']:.1f} s: {bake['kept']} segments kept, {len(bad)} of them "
+        f"glitch (validate.segment_glitches)"
+    )
     scenes = [s for s in build_scenes(args.radius, args.seed) if selected(s, args.only)]
     if args.layouts:
         rnd = random_scenes(patch, args)
@@ -855,12 +1016,15 @@ def main(argv=None):
                 summary[f"{group}, {v}"] = summarise(recs)
     res = {
         "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-                   f"Python {platform.python_version()}, numpy {np.__version__}",
-        "args": {k: (list(v) if isinstance(v, (list, tuple)) else v)
-                 for k, v in vars(args).items()},
-        "bake": dict(bake, glitching_segments=bad), "limits": lim.to_dict(),
+        f"Python {platform.python_version()}, numpy {np.__version__}",
+        "args": {
+            k: (list(v) if isinstance(v, (list, tuple)) else v) for k, v in vars(args).items()
+        },
+        "bake": dict(bake, glitching_segments=bad),
+        "limits": lim.to_dict(),
         "targets": {k: {"op": o, "value": t} for k, (o, t, _) in TARGETS.items()},
-        "summary": summary, "records": records,
+        "summary": summary,
+        "records": records,
     }
     print()
     print(markdown(records, summary))

@@ -77,39 +77,82 @@ SECTIONS = ("bake", "plan", "table1", "astar", "corridor", "length", "placement"
 LENGTHS = (5.0, 15.0, 30.0, 60.0)  # seconds of motion
 CHAIR = np.array([[-0.2, -0.22], [0.2, -0.22], [0.2, 0.22], [-0.2, 0.22]])
 TARGETS = {
-    "plan_median_ms": 20.0, "plan_p95_ms": 60.0, "any_facing_ratio": 1.5,
-    "table1_overhead": 0.10, "bake_s": 5.0, "networkx_speedup": 10.0,
-    "corridor_cost_ratio": 1.05, "length_exponent": 1.1, "placement_ratio": 1.5,
+    "plan_median_ms": 20.0,
+    "plan_p95_ms": 60.0,
+    "any_facing_ratio": 1.5,
+    "table1_overhead": 0.10,
+    "bake_s": 5.0,
+    "networkx_speedup": 10.0,
+    "corridor_cost_ratio": 1.05,
+    "length_exponent": 1.1,
+    "placement_ratio": 1.5,
 }
-PAPER = {"search_dynamic_s": 0.222, "search_static_s": 0.176, "overhead": 0.25,
-         "stitches_per_path": 4.34, "ms_per_stitch": 10.0, "path_seconds": 14.6}
+PAPER = {
+    "search_dynamic_s": 0.222,
+    "search_static_s": 0.176,
+    "overhead": 0.25,
+    "stitches_per_path": 4.34,
+    "ms_per_stitch": 10.0,
+    "path_seconds": 14.6,
+}
 
 
 def parse_args(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--sections", default=",".join(SECTIONS),
-                   help=f"comma-separated sections to run (default all: {','.join(SECTIONS)})")
+    p.add_argument(
+        "--sections",
+        default=",".join(SECTIONS),
+        help=f"comma-separated sections to run (default all: {','.join(SECTIONS)})",
+    )
     p.add_argument("--layouts", type=int, default=20, help="random layouts / pairs (default 20)")
     p.add_argument("--seed", type=int, default=0, help="seed of the layouts (default 0)")
     p.add_argument("--density", type=float, default=0.1, help="pillars per m² (default 0.1)")
     p.add_argument("--field", type=float, default=30.0, help="side of the field, m (default 30)")
-    p.add_argument("--radius", type=float, default=DEFAULTS["radius"],
-                   help=f"character radius (default {DEFAULTS['radius']:g} m)")
-    p.add_argument("--weights", type=float, nargs=3, default=WEIGHTS,
-                   metavar=("ALPHA", "BETA", "GAMMA"), help="Eq. 5 weights (default %s)" % " ".join(f"{w:g}" for w in WEIGHTS))
-    p.add_argument("--repeat", type=int, default=3,
-                   help="time each plan this many times and keep the fastest (default 3)")
-    p.add_argument("--chairs", type=int, default=40, help="table1: chairs on the field (default 40)")
-    p.add_argument("--chair-pillars", type=float, default=0.03,
-                   help="table1: pillars per m² among the chairs (default 0.03)")
-    p.add_argument("--length-layouts", type=int, default=5,
-                   help="length: layouts per path length (default 5)")
-    p.add_argument("--mocap", default=os.environ.get("MOTION_PATCHES_MOCAP",
-                                                     str(REPO.parent / "shared" / "mocap")),
-                   help="folder holding cmu/16_15, 16_18, 16_06, 13_05, 13_05_standup .bvh")
+    p.add_argument(
+        "--radius",
+        type=float,
+        default=DEFAULTS["radius"],
+        help=f"character radius (default {DEFAULTS['radius']:g} m)",
+    )
+    p.add_argument(
+        "--weights",
+        type=float,
+        nargs=3,
+        default=WEIGHTS,
+        metavar=("ALPHA", "BETA", "GAMMA"),
+        help="Eq. 5 weights (default %s)" % " ".join(f"{w:g}" for w in WEIGHTS),
+    )
+    p.add_argument(
+        "--repeat",
+        type=int,
+        default=3,
+        help="time each plan this many times and keep the fastest (default 3)",
+    )
+    p.add_argument(
+        "--chairs", type=int, default=40, help="table1: chairs on the field (default 40)"
+    )
+    p.add_argument(
+        "--chair-pillars",
+        type=float,
+        default=0.03,
+        help="table1: pillars per m² among the chairs (default 0.03)",
+    )
+    p.add_argument(
+        "--length-layouts", type=int, default=5, help="length: layouts per path length (default 5)"
+    )
+    p.add_argument(
+        "--mocap",
+        default=os.environ.get("MOTION_PATCHES_MOCAP", str(REPO.parent / "shared" / "mocap")),
+        help="folder holding cmu/16_15, 16_18, 16_06, 13_05, 13_05_standup .bvh",
+    )
     p.add_argument("--json", metavar="PATH", help="also write every figure and record as JSON")
-    p.add_argument("--profile", type=int, default=0, metavar="N",
-                   help="cProfile the first N plans of the plan section, print the top functions")
+    p.add_argument(
+        "--profile",
+        type=int,
+        default=0,
+        metavar="N",
+        help="cProfile the first N plans of the plan section, print the top functions",
+    )
     args = p.parse_args(argv)
     args.sections = [s.strip() for s in args.sections.split(",") if s.strip()]
     unknown = sorted(set(args.sections) - set(SECTIONS))
@@ -119,6 +162,7 @@ def parse_args(argv=None):
 
 
 # -- helpers ------------------------------------------------------------------------------
+
 
 def stats(values):
     return core.stats(values)
@@ -154,8 +198,10 @@ def search_connectors(plan):
 def bench_layouts(patch, args):
     """bench_core's random layouts (same calls, same seed: the same layouts):
     [(obstacles, start, goal)]."""
-    return [(list(env.obstacles.values()), start, goal)
-            for env, start, goal in core.layouts(patch, args)]
+    return [
+        (list(env.obstacles.values()), start, goal)
+        for env, start, goal in core.layouts(patch, args)
+    ]
 
 
 def environment(like, obstacles, radius):
@@ -176,10 +222,13 @@ def warm_up(patch, args):
 
 # -- sections -----------------------------------------------------------------------------
 
+
 def section_bake(args):
     patch, straight, bake = core.bench_bake(Path(args.mocap))
-    print(f"  {bake['bake_seconds']:.2f} s: {bake['kept']} segments kept, {bake['culled']} culled "
-          f"{bake['culled_by']}; {bake['loops']} loops")
+    print(
+        f"  {bake['bake_seconds']:.2f} s: {bake['kept']} segments kept, {bake['culled']} culled "
+        f"{bake['culled_by']}; {bake['loops']} loops"
+    )
     return patch, bake
 
 
@@ -196,46 +245,72 @@ def section_plan(patch, layouts, args):
         any_goal = np.array([goal[0], goal[1], np.nan])
         plan_any, err_any = timed_plan(patch, env, start, any_goal, args)
         if plan is None:
-            failures.append({"layout": n, "message": err, "any_facing_found": plan_any is not None,
-                             "any_facing_ms": None if plan_any is None
-                             else search_connectors(plan_any) * 1e3})
-            print(f"  layout {n:3d}: no path ({err[:70]}...); any facing: "
-                  + ("no path" if plan_any is None else
-                     f"{search_connectors(plan_any) * 1e3:.1f} ms"))
+            failures.append(
+                {
+                    "layout": n,
+                    "message": err,
+                    "any_facing_found": plan_any is not None,
+                    "any_facing_ms": None
+                    if plan_any is None
+                    else search_connectors(plan_any) * 1e3,
+                }
+            )
+            print(
+                f"  layout {n:3d}: no path ({err[:70]}...); any facing: "
+                + ("no path" if plan_any is None else f"{search_connectors(plan_any) * 1e3:.1f} ms")
+            )
             continue
         t1 = time.perf_counter()
         m = concatenate(plan_motions(patch, plan))
         synth = time.perf_counter() - t1
         st = plan.stats
-        rec = {"layout": n, "search_connectors_ms": search_connectors(plan) * 1e3,
-               "connectors_ms": st["connector_seconds"] * 1e3,
-               "search_ms": st["search_seconds"] * 1e3,
-               "shortening_ms": st["shortening_seconds"] * 1e3, "total_ms": plan.seconds * 1e3,
-               "synthesis_ms": synth * 1e3, "expansions": plan.expansions,
-               "occlusions": st["occlusion_computations"], "cost": plan.cost,
-               "cost_shortened": st["cost_shortened"], "motion_s": (m.frames - 1) / patch.gait.fps,
-               "any_facing_ms": None if plan_any is None else search_connectors(plan_any) * 1e3,
-               "any_facing_total_ms": None if plan_any is None else plan_any.seconds * 1e3}
+        rec = {
+            "layout": n,
+            "search_connectors_ms": search_connectors(plan) * 1e3,
+            "connectors_ms": st["connector_seconds"] * 1e3,
+            "search_ms": st["search_seconds"] * 1e3,
+            "shortening_ms": st["shortening_seconds"] * 1e3,
+            "total_ms": plan.seconds * 1e3,
+            "synthesis_ms": synth * 1e3,
+            "expansions": plan.expansions,
+            "occlusions": st["occlusion_computations"],
+            "cost": plan.cost,
+            "cost_shortened": st["cost_shortened"],
+            "motion_s": (m.frames - 1) / patch.gait.fps,
+            "any_facing_ms": None if plan_any is None else search_connectors(plan_any) * 1e3,
+            "any_facing_total_ms": None if plan_any is None else plan_any.seconds * 1e3,
+        }
         records.append(rec)
-        print(f"  layout {n:3d}: search + connectors {rec['search_connectors_ms']:6.1f} ms "
-              f"(connectors {rec['connectors_ms']:5.1f}, search {rec['search_ms']:6.1f}), "
-              f"shortening {rec['shortening_ms']:5.1f} ms, synthesis {synth * 1e3:5.1f} ms, "
-              f"{plan.expansions:4d} nodes, {rec['motion_s']:4.1f} s of motion; any facing "
-              + ("no path" if plan_any is None else f"{rec['any_facing_ms']:6.1f} ms"))
+        print(
+            f"  layout {n:3d}: search + connectors {rec['search_connectors_ms']:6.1f} ms "
+            f"(connectors {rec['connectors_ms']:5.1f}, search {rec['search_ms']:6.1f}), "
+            f"shortening {rec['shortening_ms']:5.1f} ms, synthesis {synth * 1e3:5.1f} ms, "
+            f"{plan.expansions:4d} nodes, {rec['motion_s']:4.1f} s of motion; any facing "
+            + ("no path" if plan_any is None else f"{rec['any_facing_ms']:6.1f} ms")
+        )
     sc = [r["search_connectors_ms"] for r in records]
-    ratios = [r["any_facing_ms"] / r["search_connectors_ms"] for r in records
-              if r["any_facing_ms"] is not None]
-    out = {"found": len(records), "layouts": len(layouts), "failures": failures,
-           "search_connectors_ms": stats(sc),
-           "connectors_ms": stats([r["connectors_ms"] for r in records]),
-           "search_ms": stats([r["search_ms"] for r in records]),
-           "shortening_ms": stats([r["shortening_ms"] for r in records]),
-           "total_ms": stats([r["total_ms"] for r in records]),
-           "synthesis_ms": stats([r["synthesis_ms"] for r in records]),
-           "expansions": stats([r["expansions"] for r in records]),
-           "any_facing_ms": stats([r["any_facing_ms"] for r in records
-                                   if r["any_facing_ms"] is not None]),
-           "any_facing_ratio": stats(ratios), "records": records}
+    ratios = [
+        r["any_facing_ms"] / r["search_connectors_ms"]
+        for r in records
+        if r["any_facing_ms"] is not None
+    ]
+    out = {
+        "found": len(records),
+        "layouts": len(layouts),
+        "failures": failures,
+        "search_connectors_ms": stats(sc),
+        "connectors_ms": stats([r["connectors_ms"] for r in records]),
+        "search_ms": stats([r["search_ms"] for r in records]),
+        "shortening_ms": stats([r["shortening_ms"] for r in records]),
+        "total_ms": stats([r["total_ms"] for r in records]),
+        "synthesis_ms": stats([r["synthesis_ms"] for r in records]),
+        "expansions": stats([r["expansions"] for r in records]),
+        "any_facing_ms": stats(
+            [r["any_facing_ms"] for r in records if r["any_facing_ms"] is not None]
+        ),
+        "any_facing_ratio": stats(ratios),
+        "records": records,
+    }
     if profiler is not None:
         for key in ("tottime", "cumulative"):
             s = io.StringIO()
@@ -257,7 +332,7 @@ def table1_scene(patch, args, rng, clips):
         c.add_traversal_copies(hurdle)
         chairs.append(c)
         env.place(Obstacle(c.name, c.world_footprint()))
-    for n in range(int(round(args.chair_pillars * args.field ** 2))):
+    for n in range(int(round(args.chair_pillars * args.field**2))):
         x, y = rng.uniform(0.0, args.field, 2)
         env.place(core.pillar(f"p{n}", x, y, rng.uniform(0.2, 0.4)))
     return env, chairs
@@ -266,14 +341,25 @@ def table1_scene(patch, args, rng, clips):
 def table1_clips(patch, args):
     from motion_patches import bvh
     from motion_patches.clip import retarget
+
     mocap = Path(args.mocap) / "cmu"
     walk = bvh.read(mocap / "16_15.bvh")
     fps, floor = patch.gait.fps, op.floor_level(walk)
     hurdle = op.patch_clip_from(bvh.read(mocap / "16_06.bvh"), op.TRAVERSAL, fps, effort=8.0)
-    sit = op.patch_clip_from(retarget(bvh.read(mocap / "13_05.bvh"), walk.skeleton),
-                             op.INTERACTION, fps, effort=2.0, floor=floor)
-    stand = op.patch_clip_from(retarget(bvh.read(mocap / "13_05_standup.bvh"), walk.skeleton),
-                               op.INTERACTION, fps, effort=2.0, floor=floor)
+    sit = op.patch_clip_from(
+        retarget(bvh.read(mocap / "13_05.bvh"), walk.skeleton),
+        op.INTERACTION,
+        fps,
+        effort=2.0,
+        floor=floor,
+    )
+    stand = op.patch_clip_from(
+        retarget(bvh.read(mocap / "13_05_standup.bvh"), walk.skeleton),
+        op.INTERACTION,
+        fps,
+        effort=2.0,
+        floor=floor,
+    )
     return hurdle, sit, stand
 
 
@@ -304,43 +390,57 @@ def section_table1(patch, args):
         ds, ss = dyn.stats, sta.stats
         full = with_interactions(dyn, (chairs[a], stand_i), (chairs[b], sit_i))
         m = concatenate(plan_motions(patch, full))
-        rec = {"pair": (int(a), int(b)), "metres_apart": d,
-               "dynamic_search_ms": ds["search_seconds"] * 1e3,
-               "dynamic_stitch_ms": ds["stitch_seconds"] * 1e3,
-               "dynamic_copies_stitched": ds["copies_stitched"],
-               "dynamic_stitch_edges": ds["stitch_edges"],
-               "static_search_ms": (ss["search_seconds"] - ss["stitch_seconds"]) * 1e3,
-               "static_upfront_stitch_ms": ss["stitch_seconds"] * 1e3,
-               "static_copies_stitched": ss["copies_stitched"],
-               "dynamic_plan_ms": dyn.seconds * 1e3, "static_plan_ms": sta.seconds * 1e3,
-               "cost_dynamic": dyn.cost, "cost_static": sta.cost,
-               "equal_cost": bool(np.isclose(dyn.cost, sta.cost)),
-               "traversals_used": ds["traversals_used"],
-               "motion_s": (m.frames - 1) / patch.gait.fps}
+        rec = {
+            "pair": (int(a), int(b)),
+            "metres_apart": d,
+            "dynamic_search_ms": ds["search_seconds"] * 1e3,
+            "dynamic_stitch_ms": ds["stitch_seconds"] * 1e3,
+            "dynamic_copies_stitched": ds["copies_stitched"],
+            "dynamic_stitch_edges": ds["stitch_edges"],
+            "static_search_ms": (ss["search_seconds"] - ss["stitch_seconds"]) * 1e3,
+            "static_upfront_stitch_ms": ss["stitch_seconds"] * 1e3,
+            "static_copies_stitched": ss["copies_stitched"],
+            "dynamic_plan_ms": dyn.seconds * 1e3,
+            "static_plan_ms": sta.seconds * 1e3,
+            "cost_dynamic": dyn.cost,
+            "cost_static": sta.cost,
+            "equal_cost": bool(np.isclose(dyn.cost, sta.cost)),
+            "traversals_used": ds["traversals_used"],
+            "motion_s": (m.frames - 1) / patch.gait.fps,
+        }
         records.append(rec)
-        print(f"  {chairs[a].name:>7} -> {chairs[b].name:<7} ({d:4.1f} m): dynamic search "
-              f"{rec['dynamic_search_ms']:6.1f} ms ({rec['dynamic_copies_stitched']:3d} copies "
-              f"stitched in {rec['dynamic_stitch_ms']:5.1f} ms), static search "
-              f"{rec['static_search_ms']:6.1f} ms (+{rec['static_upfront_stitch_ms']:6.1f} ms "
-              f"stitching {rec['static_copies_stitched']} copies first), cost "
-              f"{dyn.cost:.3f} / {sta.cost:.3f}, {rec['traversals_used']} hurdles, "
-              f"{rec['motion_s']:.1f} s of motion")
+        print(
+            f"  {chairs[a].name:>7} -> {chairs[b].name:<7} ({d:4.1f} m): dynamic search "
+            f"{rec['dynamic_search_ms']:6.1f} ms ({rec['dynamic_copies_stitched']:3d} copies "
+            f"stitched in {rec['dynamic_stitch_ms']:5.1f} ms), static search "
+            f"{rec['static_search_ms']:6.1f} ms (+{rec['static_upfront_stitch_ms']:6.1f} ms "
+            f"stitching {rec['static_copies_stitched']} copies first), cost "
+            f"{dyn.cost:.3f} / {sta.cost:.3f}, {rec['traversals_used']} hurdles, "
+            f"{rec['motion_s']:.1f} s of motion"
+        )
     dyn_mean = float(np.mean([r["dynamic_search_ms"] for r in records])) if records else np.nan
     sta_mean = float(np.mean([r["static_search_ms"] for r in records])) if records else np.nan
     copies = sum(r["dynamic_copies_stitched"] for r in records)
-    return {"chairs": args.chairs, "pillars": int(round(args.chair_pillars * args.field ** 2)),
-            "copies": sum(len(c.traversals()) for c in chairs),
-            "scene_precomputation_s": prep, "pairs": len(records), "failures": failures,
-            "dynamic_search_ms": stats([r["dynamic_search_ms"] for r in records]),
-            "static_search_ms": stats([r["static_search_ms"] for r in records]),
-            "static_upfront_stitch_ms": stats([r["static_upfront_stitch_ms"] for r in records]),
-            "overhead": dyn_mean / sta_mean - 1.0,
-            "stitches_per_path": copies / max(len(records), 1),
-            "ms_per_stitch": (sum(r["dynamic_stitch_ms"] for r in records) / copies
-                              if copies else float("nan")),
-            "equal_costs": sum(r["equal_cost"] for r in records),
-            "traversals_used": sum(r["traversals_used"] for r in records),
-            "motion_s": stats([r["motion_s"] for r in records]), "records": records}
+    return {
+        "chairs": args.chairs,
+        "pillars": int(round(args.chair_pillars * args.field**2)),
+        "copies": sum(len(c.traversals()) for c in chairs),
+        "scene_precomputation_s": prep,
+        "pairs": len(records),
+        "failures": failures,
+        "dynamic_search_ms": stats([r["dynamic_search_ms"] for r in records]),
+        "static_search_ms": stats([r["static_search_ms"] for r in records]),
+        "static_upfront_stitch_ms": stats([r["static_upfront_stitch_ms"] for r in records]),
+        "overhead": dyn_mean / sta_mean - 1.0,
+        "stitches_per_path": copies / max(len(records), 1),
+        "ms_per_stitch": (
+            sum(r["dynamic_stitch_ms"] for r in records) / copies if copies else float("nan")
+        ),
+        "equal_costs": sum(r["equal_cost"] for r in records),
+        "traversals_used": sum(r["traversals_used"] for r in records),
+        "motion_s": stats([r["motion_s"] for r in records]),
+        "records": records,
+    }
 
 
 def unrolled_graph(planner, start, goal):
@@ -348,8 +448,11 @@ def unrolled_graph(planner, start, goal):
     only in part), in the plan frame: ({key: (succ keys, costs, payloads)}, starts
     [(key, cost)], goal links {key: cost}, seconds to build)."""
     t0 = time.perf_counter()
-    starts = [(k, planner.start_link(k)[0]) for k, _ in planner.start_connectors(start)
-              if planner.start_link(k) is not None]
+    starts = [
+        (k, planner.start_link(k)[0])
+        for k, _ in planner.start_connectors(start)
+        if planner.start_link(k) is not None
+    ]
     goals = planner.goal_connectors(goal)
     i0, j0, i1, j1 = planner.region
     entries = np.unique(planner.patch.seg_entry)
@@ -371,7 +474,9 @@ def section_astar(patch, layouts, args):
     try:
         import networkx as nx
     except ImportError:
-        print("  networkx is not installed: pip install -r requirements/bench.txt (section skipped)")
+        print(
+            "  networkx is not installed: pip install -r requirements/bench.txt (section skipped)"
+        )
         return {"skipped": "networkx not installed (pip install -r requirements/bench.txt)"}
     records = []
     for n, (obstacles, start, goal) in enumerate(layouts):
@@ -385,8 +490,12 @@ def section_astar(patch, layouts, args):
             continue
         with planner.framed(np.asarray(start, float), np.asarray(goal, float)) as (ls, lg, _):
             adj, starts, links, build_s = unrolled_graph(planner, ls, lg)
-            nodes = (set(adj) | {k for ks, _, _ in adj.values() for k in ks.tolist()}
-                     | {k for k, _ in starts} | set(links))
+            nodes = (
+                set(adj)
+                | {k for ks, _, _ in adj.values() for k in ks.tolist()}
+                | {k for k, _ in starts}
+                | set(links)
+            )
             keys = np.fromiter(nodes, np.int64, len(nodes))
             h_all = dict(zip(keys.tolist(), planner.heuristic(keys).tolist()))
         empty = (np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int64))
@@ -422,28 +531,44 @@ def section_astar(patch, layouts, args):
             path = nx.astar_path(g, "S", "G", heuristic=lambda u, v: h_nx[u], weight="weight")
             best_nx = min(best_nx, time.perf_counter() - t0)
         nx_cost = sum(g[a][b]["weight"] for a, b in zip(path[:-1], path[1:]))
-        rec = {"layout": n, "nodes": len(adj), "edges": int(sum(v[0].size for v in adj.values())),
-               "expansions": res.expansions, "ours_ms": best_ours * 1e3, "networkx_ms": best_nx * 1e3,
-               "speedup": best_nx / best_ours, "cost_ours": res.cost, "cost_networkx": nx_cost,
-               "equal_cost": bool(np.isclose(res.cost, nx_cost)), "unroll_ms": build_s * 1e3,
-               "lazy_search_ms": (lazy.stats["search_seconds"] + lazy.stats["connector_seconds"]) * 1e3}
+        rec = {
+            "layout": n,
+            "nodes": len(adj),
+            "edges": int(sum(v[0].size for v in adj.values())),
+            "expansions": res.expansions,
+            "ours_ms": best_ours * 1e3,
+            "networkx_ms": best_nx * 1e3,
+            "speedup": best_nx / best_ours,
+            "cost_ours": res.cost,
+            "cost_networkx": nx_cost,
+            "equal_cost": bool(np.isclose(res.cost, nx_cost)),
+            "unroll_ms": build_s * 1e3,
+            "lazy_search_ms": (lazy.stats["search_seconds"] + lazy.stats["connector_seconds"])
+            * 1e3,
+        }
         records.append(rec)
-        print(f"  layout {n:3d}: {rec['nodes']:6d} nodes, {rec['edges']:7d} edges; A* "
-              f"{rec['ours_ms']:6.2f} ms ({res.expansions} expansions), networkx "
-              f"{rec['networkx_ms']:7.2f} ms: {rec['speedup']:5.1f}x, costs "
-              f"{res.cost:.4f} / {nx_cost:.4f}; unrolling the graph {rec['unroll_ms']:6.0f} ms, "
-              f"lazy search + connectors {rec['lazy_search_ms']:5.1f} ms")
+        print(
+            f"  layout {n:3d}: {rec['nodes']:6d} nodes, {rec['edges']:7d} edges; A* "
+            f"{rec['ours_ms']:6.2f} ms ({res.expansions} expansions), networkx "
+            f"{rec['networkx_ms']:7.2f} ms: {rec['speedup']:5.1f}x, costs "
+            f"{res.cost:.4f} / {nx_cost:.4f}; unrolling the graph {rec['unroll_ms']:6.0f} ms, "
+            f"lazy search + connectors {rec['lazy_search_ms']:5.1f} ms"
+        )
     ours = sum(r["ours_ms"] for r in records)
     theirs = sum(r["networkx_ms"] for r in records)
-    return {"layouts": len(records), "ours_ms": stats([r["ours_ms"] for r in records]),
-            "networkx_ms": stats([r["networkx_ms"] for r in records]),
-            "speedup_total": theirs / ours if ours else float("nan"),
-            "speedup": stats([r["speedup"] for r in records]),
-            "equal_costs": sum(r["equal_cost"] for r in records),
-            "unroll_ms": stats([r["unroll_ms"] for r in records]),
-            "lazy_search_ms": stats([r["lazy_search_ms"] for r in records]),
-            "nodes": stats([r["nodes"] for r in records]),
-            "expansions": stats([r["expansions"] for r in records]), "records": records}
+    return {
+        "layouts": len(records),
+        "ours_ms": stats([r["ours_ms"] for r in records]),
+        "networkx_ms": stats([r["networkx_ms"] for r in records]),
+        "speedup_total": theirs / ours if ours else float("nan"),
+        "speedup": stats([r["speedup"] for r in records]),
+        "equal_costs": sum(r["equal_cost"] for r in records),
+        "unroll_ms": stats([r["unroll_ms"] for r in records]),
+        "lazy_search_ms": stats([r["lazy_search_ms"] for r in records]),
+        "nodes": stats([r["nodes"] for r in records]),
+        "expansions": stats([r["expansions"] for r in records]),
+        "records": records,
+    }
 
 
 def section_corridor(patch, layouts, args):
@@ -454,26 +579,37 @@ def section_corridor(patch, layouts, args):
         two, _ = timed_plan(patch, env, start, goal, args, use_corridor=True)
         if one is None or two is None:
             continue
-        rec = {"layout": n, "one_level_ms": search_connectors(one) * 1e3,
-               "two_level_ms": search_connectors(two) * 1e3,
-               "cost_ratio": two.cost / one.cost,
-               "shortened_cost_ratio": two.stats["cost_shortened"] / one.stats["cost_shortened"],
-               "fallback": bool(two.stats["corridor_fallback"]),
-               "expansions_one": one.expansions, "expansions_two": two.expansions}
+        rec = {
+            "layout": n,
+            "one_level_ms": search_connectors(one) * 1e3,
+            "two_level_ms": search_connectors(two) * 1e3,
+            "cost_ratio": two.cost / one.cost,
+            "shortened_cost_ratio": two.stats["cost_shortened"] / one.stats["cost_shortened"],
+            "fallback": bool(two.stats["corridor_fallback"]),
+            "expansions_one": one.expansions,
+            "expansions_two": two.expansions,
+        }
         records.append(rec)
-        print(f"  layout {n:3d}: one level {rec['one_level_ms']:6.1f} ms ({one.expansions:4d} "
-              f"nodes), two levels {rec['two_level_ms']:6.1f} ms ({two.expansions:4d} nodes"
-              f"{', fell back' if rec['fallback'] else ''}); cost x{rec['cost_ratio']:.3f} "
-              f"(shortened x{rec['shortened_cost_ratio']:.3f})")
+        print(
+            f"  layout {n:3d}: one level {rec['one_level_ms']:6.1f} ms ({one.expansions:4d} "
+            f"nodes), two levels {rec['two_level_ms']:6.1f} ms ({two.expansions:4d} nodes"
+            f"{', fell back' if rec['fallback'] else ''}); cost x{rec['cost_ratio']:.3f} "
+            f"(shortened x{rec['shortened_cost_ratio']:.3f})"
+        )
     one = [r["one_level_ms"] for r in records]
     two = [r["two_level_ms"] for r in records]
     default_on = inspect.signature(SegmentPlanner.plan).parameters["use_corridor"].default
-    return {"layouts": len(records), "one_level_ms": stats(one), "two_level_ms": stats(two),
-            "default_on": bool(default_on),
-            "time_ratio": float(np.sum(two) / np.sum(one)) if records else float("nan"),
-            "cost_ratio": stats([r["cost_ratio"] for r in records]),
-            "shortened_cost_ratio": stats([r["shortened_cost_ratio"] for r in records]),
-            "fallbacks": sum(r["fallback"] for r in records), "records": records}
+    return {
+        "layouts": len(records),
+        "one_level_ms": stats(one),
+        "two_level_ms": stats(two),
+        "default_on": bool(default_on),
+        "time_ratio": float(np.sum(two) / np.sum(one)) if records else float("nan"),
+        "cost_ratio": stats([r["cost_ratio"] for r in records]),
+        "shortened_cost_ratio": stats([r["shortened_cost_ratio"] for r in records]),
+        "fallbacks": sum(r["fallback"] for r in records),
+        "records": records,
+    }
 
 
 def section_length(patch, args):
@@ -490,7 +626,7 @@ def section_length(patch, args):
             if made >= args.length_layouts:
                 break
             env = Environment(patch.side, patch.cells, args.radius)
-            core.pillar_field(env, rng, int(round(args.density * field ** 2)), 0.0, field)
+            core.pillar_field(env, rng, int(round(args.density * field**2)), 0.0, field)
             ang = rng.uniform(-np.pi, np.pi)
             centre = np.full(2, field / 2) + rng.uniform(-1.0, 1.0, 2)
             half = 0.5 * dist * np.array([np.cos(ang), np.sin(ang)])
@@ -504,25 +640,31 @@ def section_length(patch, args):
                 continue
             made += 1
             m = concatenate(plan_motions(patch, plan))
-            rec = {"target_s": seconds, "motion_s": (m.frames - 1) / patch.gait.fps,
-                   "search_ms": plan.stats["search_seconds"] * 1e3,
-                   "search_connectors_ms": search_connectors(plan) * 1e3,
-                   "expansions": plan.expansions,
-                   "occlusions": plan.stats["occlusion_computations"]}
+            rec = {
+                "target_s": seconds,
+                "motion_s": (m.frames - 1) / patch.gait.fps,
+                "search_ms": plan.stats["search_seconds"] * 1e3,
+                "search_connectors_ms": search_connectors(plan) * 1e3,
+                "expansions": plan.expansions,
+                "occlusions": plan.stats["occlusion_computations"],
+            }
             rec["us_per_expansion"] = rec["search_ms"] * 1e3 / max(plan.expansions, 1)
             records.append(rec)
-            print(f"  {seconds:4.0f} s: {rec['motion_s']:5.1f} s of motion, {plan.expansions:6d} "
-                  f"nodes, search {rec['search_ms']:8.1f} ms ({rec['us_per_expansion']:5.0f} µs "
-                  f"per node), {rec['occlusions']} tiles occluded")
+            print(
+                f"  {seconds:4.0f} s: {rec['motion_s']:5.1f} s of motion, {plan.expansions:6d} "
+                f"nodes, search {rec['search_ms']:8.1f} ms ({rec['us_per_expansion']:5.0f} µs "
+                f"per node), {rec['occlusions']} tiles occluded"
+            )
     by = {}
     for seconds in LENGTHS:
         rs = [r for r in records if r["target_s"] == seconds]
         if rs:
-            by[str(seconds)] = {"motion_s": float(np.mean([r["motion_s"] for r in rs])),
-                                "expansions": float(np.mean([r["expansions"] for r in rs])),
-                                "search_ms": float(np.mean([r["search_ms"] for r in rs])),
-                                "us_per_expansion": float(np.mean([r["us_per_expansion"]
-                                                                   for r in rs]))}
+            by[str(seconds)] = {
+                "motion_s": float(np.mean([r["motion_s"] for r in rs])),
+                "expansions": float(np.mean([r["expansions"] for r in rs])),
+                "search_ms": float(np.mean([r["search_ms"] for r in rs])),
+                "us_per_expansion": float(np.mean([r["us_per_expansion"] for r in rs])),
+            }
     x = np.log([max(r["expansions"], 1) for r in records])
     y = np.log([r["search_ms"] for r in records])
     slope = float(np.polyfit(x, y, 1)[0]) if len(records) > 2 else float("nan")
@@ -532,16 +674,22 @@ def section_length(patch, args):
 def section_placement(args):
     out = core.bench_placement(args.density, sizes=(10, 100, 1000, 10000))
     for n, p in out.items():
-        print(f"  {n:6d} props: place {p['place_us_per_obstacle']:.1f} µs, move "
-              f"{p['move_us_per_obstacle']:.1f} µs per prop; re-occlusion "
-              f"{p['reocclude_ms_per_moved_obstacle']:.2f} ms per moved prop")
+        print(
+            f"  {n:6d} props: place {p['place_us_per_obstacle']:.1f} µs, move "
+            f"{p['move_us_per_obstacle']:.1f} µs per prop; re-occlusion "
+            f"{p['reocclude_ms_per_moved_obstacle']:.2f} ms per moved prop"
+        )
     place = [p["place_us_per_obstacle"] for p in out.values()]
     move = [p["move_us_per_obstacle"] for p in out.values()]
-    return {"sizes": {str(k): v for k, v in out.items()},
-            "place_ratio": max(place) / min(place), "move_ratio": max(move) / min(move)}
+    return {
+        "sizes": {str(k): v for k, v in out.items()},
+        "place_ratio": max(place) / min(place),
+        "move_ratio": max(move) / min(move),
+    }
 
 
 # -- report -------------------------------------------------------------------------------
+
 
 def met(ok):
     return "met" if ok else "**not met**"
@@ -552,101 +700,174 @@ def rows(res):
     out = [("machine", "", res["machine"], "")]
     if "bake" in res:
         b = res["bake"]
-        out.append(("bake a walk patch from 5 clips (16_15 straight, 16_18 turns and their "
-                    "mirror images: {} loops; {:,} candidate curves)".format(b["loops"], b["candidates"]),
-                    "< 5 s", f"{b['bake_seconds']:.2f} s ({b['kept']:,} segments kept)",
-                    met(b["bake_seconds"] < TARGETS["bake_s"])))
+        out.append(
+            (
+                "bake a walk patch from 5 clips (16_15 straight, 16_18 turns and their "
+                "mirror images: {} loops; {:,} candidate curves)".format(
+                    b["loops"], b["candidates"]
+                ),
+                "< 5 s",
+                f"{b['bake_seconds']:.2f} s ({b['kept']:,} segments kept)",
+                met(b["bake_seconds"] < TARGETS["bake_s"]),
+            )
+        )
     if "plan" in res:
         p = res["plan"]
         sc = p["search_connectors_ms"]
-        out.append(("plan, 8-20 m apart, 30 m field, 90 pillars (search + connectors)",
-                    "median < 20 ms, p95 < 60 ms",
-                    f"median {sc['median']:.1f} ms, p95 {sc['p95']:.1f} ms, max {sc['max']:.1f} ms "
-                    f"({p['found']} / {p['layouts']} found; connectors median "
-                    f"{p['connectors_ms']['median']:.1f} ms, search median "
-                    f"{p['search_ms']['median']:.1f} ms; {p['expansions']['median']:.0f} nodes median)",
-                    met(sc["median"] < TARGETS["plan_median_ms"] and sc["p95"] < TARGETS["plan_p95_ms"])))
-        out.append(("shortening (apart)", "reported",
-                    f"median {p['shortening_ms']['median']:.1f} ms, p95 {p['shortening_ms']['p95']:.1f} ms"
-                    f" (whole plan: median {p['total_ms']['median']:.1f} ms, p95 "
-                    f"{p['total_ms']['p95']:.1f} ms)", ""))
-        out.append(("motion synthesis per path (apart)", "reported",
-                    f"median {p['synthesis_ms']['median']:.1f} ms", ""))
+        out.append(
+            (
+                "plan, 8-20 m apart, 30 m field, 90 pillars (search + connectors)",
+                "median < 20 ms, p95 < 60 ms",
+                f"median {sc['median']:.1f} ms, p95 {sc['p95']:.1f} ms, max {sc['max']:.1f} ms "
+                f"({p['found']} / {p['layouts']} found; connectors median "
+                f"{p['connectors_ms']['median']:.1f} ms, search median "
+                f"{p['search_ms']['median']:.1f} ms; {p['expansions']['median']:.0f} nodes median)",
+                met(
+                    sc["median"] < TARGETS["plan_median_ms"] and sc["p95"] < TARGETS["plan_p95_ms"]
+                ),
+            )
+        )
+        out.append(
+            (
+                "shortening (apart)",
+                "reported",
+                f"median {p['shortening_ms']['median']:.1f} ms, "
+                f"p95 {p['shortening_ms']['p95']:.1f} ms"
+                f" (whole plan: median {p['total_ms']['median']:.1f} ms, p95 "
+                f"{p['total_ms']['p95']:.1f} ms)",
+                "",
+            )
+        )
+        out.append(
+            (
+                "motion synthesis per path (apart)",
+                "reported",
+                f"median {p['synthesis_ms']['median']:.1f} ms",
+                "",
+            )
+        )
         r = p["any_facing_ratio"]
-        out.append(("plan with goal facing \"any\"", "< 1.5x the exact-facing plan",
-                    f"{r['median']:.2f}x (median of {r['n']} layouts; max {r['max']:.2f}x); median "
-                    f"{p['any_facing_ms']['median']:.1f} ms; "
-                    f"{sum(f['any_facing_found'] for f in p['failures'])} of {len(p['failures'])} "
-                    f"exact-facing failures found", met(r["median"] < TARGETS["any_facing_ratio"])))
+        out.append(
+            (
+                'plan with goal facing "any"',
+                "< 1.5x the exact-facing plan",
+                f"{r['median']:.2f}x (median of {r['n']} layouts; max {r['max']:.2f}x); median "
+                f"{p['any_facing_ms']['median']:.1f} ms; "
+                f"{sum(f['any_facing_found'] for f in p['failures'])} of {len(p['failures'])} "
+                f"exact-facing failures found",
+                met(r["median"] < TARGETS["any_facing_ratio"]),
+            )
+        )
     if "table1" in res:
         t = res["table1"]
-        out.append(("Table 1 scene: {} chairs (hurdle every 10°: {:,} copies; sit, stand), {} "
-                    "pillars, {} pairs chair to chair".format(t["chairs"], t["copies"], t["pillars"],
-                                                              t["pairs"]),
-                    "dynamic / static search overhead < 10 % (paper 25 %)",
-                    f"{t['overhead'] * 100:+.1f} % (search mean dynamic "
-                    f"{t['dynamic_search_ms']['mean']:.1f} ms, static "
-                    f"{t['static_search_ms']['mean']:.1f} ms + "
-                    f"{t['static_upfront_stitch_ms']['mean']:.1f} ms stitching up front; paper "
-                    f"222 / 176 ms); equal costs {t['equal_costs']} / {t['pairs']}",
-                    met(t["overhead"] < TARGETS["table1_overhead"]
-                        and t["equal_costs"] == t["pairs"])))
-        out.append(("Table 1: stitches per path, ms per stitch", "printed (paper 4.34, ~10 ms)",
-                    f"{t['stitches_per_path']:.2f} per path, {t['ms_per_stitch']:.2f} ms per stitch; "
-                    f"{t['traversals_used']} hurdles used; path length mean "
-                    f"{t['motion_s']['mean']:.1f} s of motion (paper 14.6 s); scene set-up "
-                    f"{t['scene_precomputation_s']:.2f} s (paper: < 1 s dynamic, 214 s static)", ""))
+        out.append(
+            (
+                "Table 1 scene: {} chairs (hurdle every 10°: {:,} copies; sit, stand), {} "
+                "pillars, {} pairs chair to chair".format(
+                    t["chairs"], t["copies"], t["pillars"], t["pairs"]
+                ),
+                "dynamic / static search overhead < 10 % (paper 25 %)",
+                f"{t['overhead'] * 100:+.1f} % (search mean dynamic "
+                f"{t['dynamic_search_ms']['mean']:.1f} ms, static "
+                f"{t['static_search_ms']['mean']:.1f} ms + "
+                f"{t['static_upfront_stitch_ms']['mean']:.1f} ms stitching up front; paper "
+                f"222 / 176 ms); equal costs {t['equal_costs']} / {t['pairs']}",
+                met(t["overhead"] < TARGETS["table1_overhead"] and t["equal_costs"] == t["pairs"]),
+            )
+        )
+        out.append(
+            (
+                "Table 1: stitches per path, ms per stitch",
+                "printed (paper 4.34, ~10 ms)",
+                f"{t['stitches_per_path']:.2f} per path, {t['ms_per_stitch']:.2f} ms per stitch; "
+                f"{t['traversals_used']} hurdles used; path length mean "
+                f"{t['motion_s']['mean']:.1f} s of motion (paper 14.6 s); scene set-up "
+                f"{t['scene_precomputation_s']:.2f} s (paper: < 1 s dynamic, 214 s static)",
+                "",
+            )
+        )
     if "astar" in res:
         a = res["astar"]
         if "skipped" in a:
-            out.append(("segment A* vs networkx.astar_path", "≥ 10x faster", a["skipped"],
-                        "not run"))
+            out.append(
+                ("segment A* vs networkx.astar_path", "≥ 10x faster", a["skipped"], "not run")
+            )
         else:
-            out.append(("segment A* vs networkx.astar_path, same unrolled graph (search only)",
-                        "≥ 10x faster, both timed in one run",
-                        f"{a['speedup_total']:.2f}x over {a['layouts']} layouts (median "
-                        f"{a['speedup']['median']:.2f}x; A* {a['ours_ms']['median']:.2f} ms, networkx "
-                        f"{a['networkx_ms']['median']:.2f} ms median, {a['expansions']['median']:.0f} "
-                        f"expansions on graphs of {a['nodes']['median']:,.0f} nodes); equal costs "
-                        f"{a['equal_costs']} / {a['layouts']}",
-                        met(a["speedup_total"] >= TARGETS["networkx_speedup"]
-                            and a["equal_costs"] == a["layouts"])))
+            out.append(
+                (
+                    "segment A* vs networkx.astar_path, same unrolled graph (search only)",
+                    "≥ 10x faster, both timed in one run",
+                    f"{a['speedup_total']:.2f}x over {a['layouts']} layouts (median "
+                    f"{a['speedup']['median']:.2f}x; A* {a['ours_ms']['median']:.2f} ms, networkx "
+                    f"{a['networkx_ms']['median']:.2f} ms median, {a['expansions']['median']:.0f} "
+                    f"expansions on graphs of {a['nodes']['median']:,.0f} nodes); equal costs "
+                    f"{a['equal_costs']} / {a['layouts']}",
+                    met(
+                        a["speedup_total"] >= TARGETS["networkx_speedup"]
+                        and a["equal_costs"] == a["layouts"]
+                    ),
+                )
+            )
             lazy = a["lazy_search_ms"]["median"]
             unrolled = a["unroll_ms"]["median"] + a["networkx_ms"]["median"]
-            out.append(("lazy segment search vs unrolling the graph for networkx", "reported",
-                        f"lazy search + connectors {lazy:.1f} ms median vs unrolling the region "
-                        f"({a['nodes']['median']:,.0f} nodes, every tile occluded and segment "
-                        f"tested) + networkx {unrolled:.0f} ms: {unrolled / lazy:.0f}x", ""))
+            out.append(
+                (
+                    "lazy segment search vs unrolling the graph for networkx",
+                    "reported",
+                    f"lazy search + connectors {lazy:.1f} ms median vs unrolling the region "
+                    f"({a['nodes']['median']:,.0f} nodes, every tile occluded and segment "
+                    f"tested) + networkx {unrolled:.0f} ms: {unrolled / lazy:.0f}x",
+                    "",
+                )
+            )
     if "corridor" in res:
         c = res["corridor"]
         within = c["cost_ratio"]["max"] <= TARGETS["corridor_cost_ratio"]
         faster = c["time_ratio"] < 1.0
         right_default = c["default_on"] == (within and faster)
-        out.append(("two-level plan (tile corridor, use_corridor=True) vs one level",
-                    "cost within 5 %; on by default when faster at that cost",
-                    f"cost x{c['cost_ratio']['median']:.3f} median, x{c['cost_ratio']['max']:.3f} "
-                    f"worst (shortened x{c['shortened_cost_ratio']['median']:.3f} / "
-                    f"x{c['shortened_cost_ratio']['max']:.3f}); time x{c['time_ratio']:.2f} "
-                    f"(median {c['two_level_ms']['median']:.1f} vs {c['one_level_ms']['median']:.1f}"
-                    f" ms); {c['fallbacks']} fell back to one level; default "
-                    f"{'on' if c['default_on'] else 'off'} ({'faster' if faster else 'slower'})",
-                    met(within and right_default)))
+        out.append(
+            (
+                "two-level plan (tile corridor, use_corridor=True) vs one level",
+                "cost within 5 %; on by default when faster at that cost",
+                f"cost x{c['cost_ratio']['median']:.3f} median, x{c['cost_ratio']['max']:.3f} "
+                f"worst (shortened x{c['shortened_cost_ratio']['median']:.3f} / "
+                f"x{c['shortened_cost_ratio']['max']:.3f}); time x{c['time_ratio']:.2f} "
+                f"(median {c['two_level_ms']['median']:.1f} vs {c['one_level_ms']['median']:.1f}"
+                f" ms); {c['fallbacks']} fell back to one level; default "
+                f"{'on' if c['default_on'] else 'off'} ({'faster' if faster else 'slower'})",
+                met(within and right_default),
+            )
+        )
     if "length" in res:
         L = res["length"]
-        parts = [f"{float(k):.0f} s: {v['motion_s']:.0f} s walked, {v['expansions']:,.0f} nodes, "
-                 f"{v['search_ms']:.0f} ms ({v['us_per_expansion']:.0f} µs/node)"
-                 for k, v in L["by_length"].items()]
-        out.append(("search time against path length", "printed; no worse than linear in "
-                    "expanded nodes", "; ".join(parts) + f"; time ∝ nodes^{L['exponent']:.2f}",
-                    met(L["exponent"] <= TARGETS["length_exponent"])))
+        parts = [
+            f"{float(k):.0f} s: {v['motion_s']:.0f} s walked, {v['expansions']:,.0f} nodes, "
+            f"{v['search_ms']:.0f} ms ({v['us_per_expansion']:.0f} µs/node)"
+            for k, v in L["by_length"].items()
+        ]
+        out.append(
+            (
+                "search time against path length",
+                "printed; no worse than linear in expanded nodes",
+                "; ".join(parts) + f"; time ∝ nodes^{L['exponent']:.2f}",
+                met(L["exponent"] <= TARGETS["length_exponent"]),
+            )
+        )
     if "placement" in res:
         pl = res["placement"]
-        parts = [f"{int(k):,}: {v['place_us_per_obstacle']:.1f} / {v['move_us_per_obstacle']:.1f} µs"
-                 for k, v in pl["sizes"].items()]
-        out.append(("place / move a prop at 10, 100, 1,000, 10,000 props", "flat",
-                    "; ".join(parts) + f" (largest / smallest: place x{pl['place_ratio']:.2f}, "
-                    f"move x{pl['move_ratio']:.2f})",
-                    met(max(pl["place_ratio"], pl["move_ratio"]) <= TARGETS["placement_ratio"])))
+        parts = [
+            f"{int(k):,}: {v['place_us_per_obstacle']:.1f} / {v['move_us_per_obstacle']:.1f} µs"
+            for k, v in pl["sizes"].items()
+        ]
+        out.append(
+            (
+                "place / move a prop at 10, 100, 1,000, 10,000 props",
+                "flat",
+                "; ".join(parts) + f" (largest / smallest: place x{pl['place_ratio']:.2f}, "
+                f"move x{pl['move_ratio']:.2f})",
+                met(max(pl["place_ratio"], pl["move_ratio"]) <= TARGETS["placement_ratio"]),
+            )
+        )
     return out
 
 
@@ -659,9 +880,11 @@ def markdown(table):
 def main(argv=None):
     args = parse_args(argv)
     t_all = time.perf_counter()
-    res = {"machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-                      f"Python {platform.python_version()}, numpy {np.__version__}",
-           "args": {k: v for k, v in vars(args).items() if k not in ("mocap", "json")}}
+    res = {
+        "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+        f"Python {platform.python_version()}, numpy {np.__version__}",
+        "args": {k: v for k, v in vars(args).items() if k not in ("mocap", "json")},
+    }
     print("bake ...", flush=True)
     patch, bake = section_bake(args)
     if "bake" in args.sections:

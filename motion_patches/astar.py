@@ -25,12 +25,21 @@ _LAZY = -3
 class SearchResult:
     found: bool
     cost: float
-    path: list          # [(key, payload)] from the first node to GOAL; payload of the edge into key
+    path: list  # [(key, payload)] from the first node to GOAL; payload of the edge into key
     expansions: int
 
 
-def search(starts, expand, heuristic, goal_cost, max_expansions=500_000, observer=None,
-           lazy_starts=(), start_cost=None, goal_bound=None):
+def search(
+    starts,
+    expand,
+    heuristic,
+    goal_cost,
+    max_expansions=500_000,
+    observer=None,
+    lazy_starts=(),
+    start_cost=None,
+    goal_bound=None,
+):
     """Cheapest path from any of ``starts`` [(key, cost, payload)] to the virtual goal.
 
     ``expand(key) -> (keys, costs, payloads)``; ``heuristic(keys) -> h`` (admissible);

@@ -29,13 +29,14 @@ from .motion import Motion
 class Transition:
     """One entry of the blend table: layer ``source`` at pose cluster ``cluster`` (its
     straight loop's ``phase``) blended into layer ``target``."""
+
     source: str
     target: str
     cluster: int
-    phase: int                # frame of the source's straight loop the blend starts on
-    motion: Motion            # in place, ground from (0, 0, 0) going along +x
-    offset: np.ndarray        # (3,) x, y, heading of the end relative to the start
-    end_pose: int             # target pose cluster the blend ends in
+    phase: int  # frame of the source's straight loop the blend starts on
+    motion: Motion  # in place, ground from (0, 0, 0) going along +x
+    offset: np.ndarray  # (3,) x, y, heading of the end relative to the start
+    end_pose: int  # target pose cluster the blend ends in
 
     @property
     def frames(self):
@@ -51,8 +52,9 @@ def _at(loop, u):
     i1 = (i0 + 1) % n
     t = x - np.floor(x)
     root = loop.root_local[i0] * (1 - t)[:, None] + loop.root_local[i1] * t[:, None]
-    rot = quat.slerp(loop.rotations[i0], loop.rotations[i1],
-                     np.repeat(t[:, None], loop.rotations.shape[1], 1))
+    rot = quat.slerp(
+        loop.rotations[i0], loop.rotations[i1], np.repeat(t[:, None], loop.rotations.shape[1], 1)
+    )
     con = np.where((t < 0.5)[:, None], loop.contacts[i0], loop.contacts[i1])
     return root, rot, con
 
@@ -62,8 +64,10 @@ def blend(gait_a, gait_b, phase=0):
     ``gait_b``'s straight loop, ending on B's cycle start (its node pose); the ground goes
     straight along +x from the origin. Both gaits must share one skeleton."""
     if gait_a.skeleton.names != gait_b.skeleton.names:
-        raise ValueError(f"layers '{gait_a.layer}' and '{gait_b.layer}' have different "
-                         f"skeletons: a blend between them needs one skeleton")
+        raise ValueError(
+            f"layers '{gait_a.layer}' and '{gait_b.layer}' have different "
+            f"skeletons: a blend between them needs one skeleton"
+        )
     la, lb = gait_a.straight, gait_b.straight
     fa, fb = la.rotations.shape[0], lb.rotations.shape[0]
     u0 = (phase % fa) / fa
@@ -99,6 +103,15 @@ def table(patch_a, patch_b):
         phase = int(np.argmin(((feats - patch_a.pose_centres[c]) ** 2).sum(axis=1)))
         m = blend(patch_a.gait, patch_b.gait, phase)
         end = poses.pose_features(m.root_local[-1:], m.rotations[-1:])
-        out.append(Transition(patch_a.layer, patch_b.layer, c, phase, m,
-                              m.ground[-1].copy(), int(poses.nearest(patch_b.pose_centres, end)[0])))
+        out.append(
+            Transition(
+                patch_a.layer,
+                patch_b.layer,
+                c,
+                phase,
+                m,
+                m.ground[-1].copy(),
+                int(poses.nearest(patch_b.pose_centres, end)[0]),
+            )
+        )
     return out

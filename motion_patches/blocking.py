@@ -47,7 +47,7 @@ def blocking_props(env, start, goal, margin_tiles=3):
             f = np.uint64(env.free_cells((i, j)))
             block = ((f >> bit) & np.uint64(1)).astype(bool).reshape(cells, cells)  # [iy, ix]
             y0, x0 = (j - j0) * cells, (i - i0) * cells
-            free[y0:y0 + cells, x0:x0 + cells] = block
+            free[y0 : y0 + cells, x0 : x0 + cells] = block
 
     def cell_of(p):
         gx = int(np.clip(np.floor(p[0] / c) - i0 * cells, 0, W - 1))
@@ -84,7 +84,7 @@ def blocking_props(env, start, goal, margin_tiles=3):
         node = parent.get(node)
     touch = np.zeros_like(free)
     for gy, gx in path:
-        touch[max(gy - 2, 0):gy + 3, max(gx - 2, 0):gx + 3] = True
+        touch[max(gy - 2, 0) : gy + 3, max(gx - 2, 0) : gx + 3] = True
     count = owners(zip(*np.nonzero(touch & ~free)))
     return sorted(count, key=lambda n: (-count[n], n)), ("narrow" if count else "unknown")
 
@@ -114,5 +114,3 @@ def _border(comp, free):
     grow[:, 1:] |= comp[:, :-1]
     grow[:, :-1] |= comp[:, 1:]
     return list(zip(*np.nonzero(grow & ~free)))
-
-

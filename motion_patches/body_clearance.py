@@ -51,13 +51,21 @@ def keep_clear(planner, plan, motions, start, goal, motions_of, finish=lambda p:
     ``stats["hips_within_radius_frames"]``. ``motions_of(plan)``: the motions as played;
     ``finish(plan)``: what the caller adds to a fresh plan (interaction clips)."""
     from .planner import PlanError, SegmentPlanner
+
     patch, env = planner.patch, planner.world_env
     close = hips_too_close(patch, plan.pieces, motions, env)
     if not close:
         return plan, motions
     extra = sway(patch.gait)
-    wider = SegmentPlanner(patch, grown(env, extra), planner.alpha, planner.beta, planner.gamma,
-                           props=planner.world_props, mode=planner.mode)
+    wider = SegmentPlanner(
+        patch,
+        grown(env, extra),
+        planner.alpha,
+        planner.beta,
+        planner.gamma,
+        props=planner.world_props,
+        mode=planner.mode,
+    )
     try:
         again = finish(wider.plan(start, goal))
     except PlanError:
@@ -67,7 +75,8 @@ def keep_clear(planner, plan, motions, start, goal, motions_of, finish=lambda p:
         if not hips_too_close(patch, again.pieces, m, env):
             again.stats["body_clearance"] = (
                 f"planned again keeping {extra * 100:.0f} cm more: the hips came within the "
-                f"radius of a prop on {len(close)} frames")
+                f"radius of a prop on {len(close)} frames"
+            )
             return again, m
     plan.stats["hips_within_radius_frames"] = len(close)
     return plan, motions

@@ -55,18 +55,18 @@ def read(path, scale=CMU_SCALE, name=None):
             i += 1
         elif t == "OFFSET":
             if stack and stack[-1] != -2 and offsets[stack[-1]] is None:
-                offsets[stack[-1]] = np.array([float(x) for x in tokens[i + 1:i + 4]])
+                offsets[stack[-1]] = np.array([float(x) for x in tokens[i + 1 : i + 4]])
             i += 4
         elif t == "CHANNELS":
             n = int(tokens[i + 1])
-            channels[stack[-1]] = tokens[i + 2:i + 2 + n]
+            channels[stack[-1]] = tokens[i + 2 : i + 2 + n]
             i += 2 + n
         else:
             i += 1
     lines = motion.strip().splitlines()
     nframes = int(lines[0].split(":")[1])
     frame_time = float(lines[1].split(":")[1])
-    data = np.array([[float(x) for x in ln.split()] for ln in lines[2:2 + nframes]])
+    data = np.array([[float(x) for x in ln.split()] for ln in lines[2 : 2 + nframes]])
     if data.shape[0] != nframes:
         raise ValueError(f"{path}: header says {nframes} frames, found {data.shape[0]}")
 
@@ -96,5 +96,10 @@ def read(path, scale=CMU_SCALE, name=None):
         if parents[k] < 0:
             root_pos = (pos * scale) @ c.T + rest[k, :3, 3]
     rot = quat.make_continuous(rot, axis=0)
-    return Clip(name or str(path).rsplit("/", 1)[-1].rsplit(".", 1)[0],
-                Skeleton(names, parents, rest), 1.0 / frame_time, root_pos, rot)
+    return Clip(
+        name or str(path).rsplit("/", 1)[-1].rsplit(".", 1)[0],
+        Skeleton(names, parents, rest),
+        1.0 / frame_time,
+        root_pos,
+        rot,
+    )

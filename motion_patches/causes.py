@@ -63,12 +63,18 @@ def plan_explained(planner, start, goal, margin_tiles=MARGIN_TILES, max_expansio
     the planner's followed by the cause."""
     with counted(planner) as expanded:
         try:
-            return planner.plan(start, goal, margin_tiles=margin_tiles,
-                                max_expansions=max_expansions)
+            return planner.plan(
+                start, goal, margin_tiles=margin_tiles, max_expansions=max_expansions
+            )
         except PlanError as exc:
             failure = exc
-    cause, props, text = no_path_cause(planner, start, goal, margin_tiles,
-                                       max_expansions if expanded[0] >= max_expansions else None)
+    cause, props, text = no_path_cause(
+        planner,
+        start,
+        goal,
+        margin_tiles,
+        max_expansions if expanded[0] >= max_expansions else None,
+    )
     raise NoPath(f"{str(failure).rstrip('.')}. Cause: {text}", cause, props) from None
 
 
@@ -83,22 +89,40 @@ def no_path_cause(planner, start, goal, margin_tiles=MARGIN_TILES, limit_hit=Non
     stopped at, if it did."""
     patch, env = planner.patch, planner.world_env
     if limit_hit:
-        return "search limit", [], (
-            f"the search limit: the search stopped after {limit_hit:,} nodes without closing "
-            f"the way; plan to a nearer goal first and on from there")
-    walk = (f"the walk keeps {env.radius:.2f} m from props and turns no tighter than "
-            f"{_turn_radius(planner):.2f} m")
-    free = SegmentPlanner(patch, Environment(env.side, env.cells, env.radius),
-                          planner.alpha, planner.beta, planner.gamma)
+        return (
+            "search limit",
+            [],
+            (
+                f"the search limit: the search stopped after {limit_hit:,} nodes without closing "
+                f"the way; plan to a nearer goal first and on from there"
+            ),
+        )
+    walk = (
+        f"the walk keeps {env.radius:.2f} m from props and turns no tighter than "
+        f"{_turn_radius(planner):.2f} m"
+    )
+    free = SegmentPlanner(
+        patch,
+        Environment(env.side, env.cells, env.radius),
+        planner.alpha,
+        planner.beta,
+        planner.gamma,
+    )
     try:
-        found = free.plan(np.asarray(start, float), np.asarray(goal, float),
-                          margin_tiles=margin_tiles)
+        found = free.plan(
+            np.asarray(start, float), np.asarray(goal, float), margin_tiles=margin_tiles
+        )
     except PlanError:
-        return "patch", [], (
-            f"the locomotion patch: even on open ground none of its walks joins this start "
-            f"to this goal ({walk}; {entry_share(patch):.0%} of its entry states have a way "
-            f"on); give the walk more room between start and goal, or re-bake the patch with "
-            f"a turn clip so it turns tighter")
+        return (
+            "patch",
+            [],
+            (
+                f"the locomotion patch: even on open ground none of its walks joins this start "
+                f"to this goal ({walk}; {entry_share(patch):.0%} of its entry states have a way "
+                f"on); give the walk more room between start and goal, or re-bake the patch with "
+                f"a turn clip so it turns tighter"
+            ),
+        )
     names, reason = blocking_props(env, start, goal, margin_tiles)
     if not names:
         names, reason = _props_along(env, patch, found), "along"
@@ -107,15 +131,21 @@ def no_path_cause(planner, start, goal, margin_tiles=MARGIN_TILES, limit_hit=Non
     if reason in ("start", "goal"):
         text = f"the {reason} is within {env.radius:.2f} m of {who}: move it into the open"
     elif reason == "separated":
-        text = (f"{who} wall{'s' if one else ''} the goal off from the start (no way round "
-                f"within {margin_tiles} tiles, {margin_tiles * env.side:.1f} m): move "
-                f"{'it' if one else 'them'} or open a gap")
+        text = (
+            f"{who} wall{'s' if one else ''} the goal off from the start (no way round "
+            f"within {margin_tiles} tiles, {margin_tiles * env.side:.1f} m): move "
+            f"{'it' if one else 'them'} or open a gap"
+        )
     elif names:
-        text = (f"{who} leave{'s' if one else ''} no way the walk can fit and turn through "
-                f"({walk}): widen the gap or move {'it' if one else 'them'}")
+        text = (
+            f"{who} leave{'s' if one else ''} no way the walk can fit and turn through "
+            f"({walk}): widen the gap or move {'it' if one else 'them'}"
+        )
     else:
-        text = (f"the props within {margin_tiles} tiles of start and goal leave no way the "
-                f"walk can make ({walk})")
+        text = (
+            f"the props within {margin_tiles} tiles of start and goal leave no way the "
+            f"walk can make ({walk})"
+        )
     return "props", names, text
 
 

@@ -19,7 +19,7 @@ class Clip:
     name: str
     skeleton: Skeleton
     fps: float
-    root_pos: np.ndarray   # (F, 3) root head, armature space, metres
+    root_pos: np.ndarray  # (F, 3) root head, armature space, metres
     rotations: np.ndarray  # (F, J, 4) pose rotation channels
     tags: dict = field(default_factory=dict)
 
@@ -44,8 +44,10 @@ class Clip:
         if f < 2:
             raise ValueError(f"clip '{self.name}' has {f} frame(s); at least 2 are needed")
         if self.rotations.shape != (f, len(self.skeleton.names), 4):
-            raise ValueError(f"clip '{self.name}': rotation array has shape "
-                             f"{self.rotations.shape}, expected {(f, len(self.skeleton.names), 4)}")
+            raise ValueError(
+                f"clip '{self.name}': rotation array has shape "
+                f"{self.rotations.shape}, expected {(f, len(self.skeleton.names), 4)}"
+            )
         if not (np.all(np.isfinite(self.root_pos)) and np.all(np.isfinite(self.rotations))):
             raise ValueError(f"clip '{self.name}' contains NaN or infinite values")
         if self.fps <= 0:
@@ -60,7 +62,9 @@ def sample(clip, times):
     i1 = np.minimum(i0 + 1, clip.frames - 1)
     a = t - i0
     pos = clip.root_pos[i0] * (1 - a)[:, None] + clip.root_pos[i1] * a[:, None]
-    rot = quat.slerp(clip.rotations[i0], clip.rotations[i1], np.repeat(a[:, None], clip.rotations.shape[1], 1))
+    rot = quat.slerp(
+        clip.rotations[i0], clip.rotations[i1], np.repeat(a[:, None], clip.rotations.shape[1], 1)
+    )
     return pos, quat.make_continuous(rot, axis=0)
 
 
@@ -115,6 +119,7 @@ def retarget(clip, target, scale=None, name=None):
     ratio of the skeletons' standing hip heights). Raises ValueError when the skeletons
     cannot be paired."""
     from .retarget import rig_map
+
     rm = rig_map(clip.skeleton, target)
     if scale is not None:
         rm.scale = float(scale)

@@ -61,7 +61,7 @@ def ghosts(line, frame, spacing, radius, fps, window_seconds=1.5, step_m=0.3):
     grows them by ``radius``. Re-planning another character round them routes it round
     where this one is at that time (a space-time reservation of those frames, made static)."""
     w = int(round(window_seconds * fps))
-    pts = line[max(frame - w, 0):frame + w + 1]
+    pts = line[max(frame - w, 0) : frame + w + 1]
     keep = [pts[0]]
     for p in pts[1:]:
         if np.linalg.norm(p - keep[-1]) >= step_m:
@@ -89,12 +89,12 @@ class Reservations:
     def __init__(self, spacing):
         self.spacing = float(spacing)
         self.cell = max(self.spacing, 1e-6) / np.sqrt(2.0)
-        self.keys = np.empty(0, np.int64)      # moving: sorted (frame, cell) keys
+        self.keys = np.empty(0, np.int64)  # moving: sorted (frame, cell) keys
         self.owner = np.empty(0, np.int32)
         self.xy = np.empty((0, 2), float)
         self.spot_keys = np.empty(0, np.int64)  # standing spots: sorted cell keys
-        self.spots = np.empty((0, 5), float)    # x, y, first frame, end frame (inf), owner
-        self.placed = {}                        # index -> (delay, track)
+        self.spots = np.empty((0, 5), float)  # x, y, first frame, end frame (inf), owner
+        self.placed = {}  # index -> (delay, track)
         self.horizon = 0
 
     def _cells(self, xy):
@@ -132,8 +132,9 @@ class Reservations:
         q = np.unique((c[..., 0] << 21 | c[..., 1]).ravel())
         lo = np.searchsorted(self.spot_keys, q, "left")
         hi = np.searchsorted(self.spot_keys, q, "right")
-        return np.unique(np.concatenate([np.arange(a, b) for a, b in zip(lo, hi) if b > a]
-                                        or [np.empty(0, int)]))
+        return np.unique(
+            np.concatenate([np.arange(a, b) for a, b in zip(lo, hi) if b > a] or [np.empty(0, int)])
+        )
 
     def check(self, track, delay=0):
         """Conflicts of a character walking ``track`` (frames, 2) from frame ``delay`` on,
@@ -172,8 +173,9 @@ class Reservations:
                 lo, hi = np.maximum(sp[:, 2], a), np.minimum(sp[:, 3], b)
                 for k in np.nonzero((dist < s) & (lo < hi))[0]:  # both standing: every frame
                     frames = np.arange(int(lo[k]), int(min(hi[k], max(end, lo[k] + 1))))
-                    found.append((np.full(frames.size, int(sp[k, 4])), frames,
-                                  np.full(frames.size, dist[k])))
+                    found.append(
+                        (np.full(frames.size, int(sp[k, 4])), frames, np.full(frames.size, dist[k]))
+                    )
         out = {}
         if not found:
             return out
@@ -253,6 +255,7 @@ class Schedule:
     idle ``holds`` [(frame, frames)] applied in turn (each frame on the track as the holds
     before it left it), on the track of re-plan ``version`` (0: its first plan, n: the
     n-th re-plan round others); ``track`` is what it then walks."""
+
     delay: int = 0
     holds: tuple = ()
     version: int = 0
@@ -318,13 +321,20 @@ def _improve(table, s, found, max_delay, max_hold, step, ramp):
         for k in hold_frames(s.holdable, first, ramp):
             if hold(k, h):
                 h = _shortest(lambda n: hold(k, n), h, step)
-                return next(o[2:] for o in options if o[1] == h and o[2].holds[-1][0] == k
-                            and not o[3])
+                return next(
+                    o[2:] for o in options if o[1] == h and o[2].holds[-1][0] == k and not o[3]
+                )
     for d in _lengths(step, max_delay - s.delay):
         if wait(d):
             d = _shortest(wait, d, step)
-            return next(o[2:] for o in options if o[1] == d and o[2].delay == s.delay + d
-                        and not o[2].holds[len(s.holds):] and not o[3])
+            return next(
+                o[2:]
+                for o in options
+                if o[1] == d
+                and o[2].delay == s.delay + d
+                and not o[2].holds[len(s.holds) :]
+                and not o[3]
+            )
     if not options:
         return None, found
     best = min(options, key=lambda o: o[:2])
@@ -333,8 +343,22 @@ def _improve(table, s, found, max_delay, max_hold, step, ramp):
     return best[2], best[3]
 
 
-def _resolve_once(order, tracks, replan, spacing, radius, fps, max_delay, step, ramp,
-                  max_hold, holdable, rounds, stages, versions):
+def _resolve_once(
+    order,
+    tracks,
+    replan,
+    spacing,
+    radius,
+    fps,
+    max_delay,
+    step,
+    ramp,
+    max_hold,
+    holdable,
+    rounds,
+    stages,
+    versions,
+):
     """One pass of :func:`resolve` placing the characters in ``order``; ``versions``
     counts each character's re-plans over all passes (its next one's number)."""
     table = Reservations(spacing)
@@ -368,13 +392,34 @@ def _resolve_once(order, tracks, replan, spacing, radius, fps, max_delay, step, 
         table.reserve(i, s.track, s.delay)
         schedules[i] = s
         for j, (frames, frame, dist) in sorted(found.items()):
-            conflicts.append({"a": j, "b": i, "frame": frame, "first_frame": int(frames[0]),
-                              "frames": int(len(frames)), "distance_m": dist})
+            conflicts.append(
+                {
+                    "a": j,
+                    "b": i,
+                    "frame": frame,
+                    "first_frame": int(frames[0]),
+                    "frames": int(len(frames)),
+                    "distance_m": dist,
+                }
+            )
     return schedules, conflicts
 
 
-def resolve(tracks, replan, spacing, radius, fps, max_delay, step, ramp=None,
-            max_hold=None, holdable=None, rounds=2, stages=6, restarts=2):
+def resolve(
+    tracks,
+    replan,
+    spacing,
+    radius,
+    fps,
+    max_delay,
+    step,
+    ramp=None,
+    max_hold=None,
+    holdable=None,
+    rounds=2,
+    stages=6,
+    restarts=2,
+):
     """Schedules and the conflicts left for ``tracks`` [(frames, 2)] in priority order,
     all starting on frame 0: each character in turn is checked against the
     :class:`Reservations` of those before it and, while it comes closer than ``spacing``,
@@ -406,9 +451,22 @@ def resolve(tracks, replan, spacing, radius, fps, max_delay, step, ramp=None,
     holdable = list(holdable) if holdable is not None else [None] * len(tracks)
     order, versions, best = list(range(len(tracks))), [0] * len(tracks), None
     for _ in range(restarts + 1):
-        schedules, conflicts = _resolve_once(order, tracks, replan, spacing, radius, fps,
-                                             max_delay, step, ramp, max_hold, holdable,
-                                             rounds, stages, versions)
+        schedules, conflicts = _resolve_once(
+            order,
+            tracks,
+            replan,
+            spacing,
+            radius,
+            fps,
+            max_delay,
+            step,
+            ramp,
+            max_hold,
+            holdable,
+            rounds,
+            stages,
+            versions,
+        )
         for rank, i in enumerate(order):
             schedules[i].rank = rank
         left = sum(c["frames"] for c in conflicts)
@@ -429,7 +487,15 @@ def conflicts_of(tracks, delays, spacing):
     for i, (track, d) in enumerate(zip(tracks, delays)):
         track = np.asarray(track, float)[:, :2]
         for j, (frames, frame, dist) in sorted(table.check(track, d).items()):
-            out.append({"a": j, "b": i, "frame": frame, "first_frame": int(frames[0]),
-                        "frames": int(len(frames)), "distance_m": dist})
+            out.append(
+                {
+                    "a": j,
+                    "b": i,
+                    "frame": frame,
+                    "first_frame": int(frames[0]),
+                    "frames": int(len(frames)),
+                    "distance_m": dist,
+                }
+            )
         table.reserve(i, track, d)
     return out

@@ -31,7 +31,7 @@ def _combine(weights, a, b):
     """(C, M, 2) curves weights[0] x a + weights[1] x b for weights (2, M), points a, b
     (C, 2), as one matrix product laid out (C, 2, M) so each coordinate is contiguous."""
     c = a.shape[0]
-    ctrl = np.stack((a, b), axis=-1).reshape(c * 2, 2)     # rows (curve, coordinate)
+    ctrl = np.stack((a, b), axis=-1).reshape(c * 2, 2)  # rows (curve, coordinate)
     return (ctrl @ weights).reshape(c, 2, -1).transpose(0, 2, 1)
 
 
@@ -41,8 +41,10 @@ def _hermite_parts(p0, d0, p1, d1, u):
     scale s being fixed + s * per unit (the tangents are s x chord x d)."""
     p0, d0, p1, d1 = (np.atleast_2d(np.asarray(a, float)) for a in (p0, d0, p1, d1))
     chord = np.linalg.norm(p1 - p0, axis=-1)[:, None]
-    return [(_combine(b[[0, 2]], p0, p1), _combine(b[[1, 3]], d0 * chord, d1 * chord))
-            for b in _basis(u)]
+    return [
+        (_combine(b[[0, 2]], p0, p1), _combine(b[[1, 3]], d0 * chord, d1 * chord))
+        for b in _basis(u)
+    ]
 
 
 def hermite(p0, d0, p1, d1, scale, u):
@@ -88,10 +90,11 @@ def arc_lengths(pos):
 @dataclass
 class Curve:
     """One space curve sampled densely and indexed by arc length."""
-    s: np.ndarray        # (M,) cumulative arc length
-    pos: np.ndarray      # (M, 2)
+
+    s: np.ndarray  # (M,) cumulative arc length
+    pos: np.ndarray  # (M, 2)
     heading: np.ndarray  # (M,) unwrapped tangent angle
-    kappa: np.ndarray    # (M,) signed curvature
+    kappa: np.ndarray  # (M,) signed curvature
 
     @property
     def length(self):
@@ -113,15 +116,24 @@ class Curve:
 def joined(a, b):
     """One curve running along ``a`` then ``b`` (b starts where a ends)."""
     turns = np.round((a.heading[-1] - b.heading[0]) / (2 * np.pi)) * 2 * np.pi
-    return Curve(np.concatenate((a.s, a.s[-1] + b.s[1:])), np.concatenate((a.pos, b.pos[1:])),
-                 np.concatenate((a.heading, b.heading[1:] + turns)),
-                 np.concatenate((a.kappa, b.kappa[1:])))
+    return Curve(
+        np.concatenate((a.s, a.s[-1] + b.s[1:])),
+        np.concatenate((a.pos, b.pos[1:])),
+        np.concatenate((a.heading, b.heading[1:] + turns)),
+        np.concatenate((a.kappa, b.kappa[1:])),
+    )
 
 
 def hermite_curve(p0, d0, p1, d1, scale, samples=257):
     """The :class:`Curve` of one Hermite curve, ``samples`` samples evenly in its parameter."""
-    return hermite_curves(np.atleast_2d(p0), np.atleast_2d(d0), np.atleast_2d(p1),
-                          np.atleast_2d(d1), np.atleast_1d(scale), samples)[0]
+    return hermite_curves(
+        np.atleast_2d(p0),
+        np.atleast_2d(d0),
+        np.atleast_2d(p1),
+        np.atleast_2d(d1),
+        np.atleast_1d(scale),
+        samples,
+    )[0]
 
 
 def hermite_curves(p0, d0, p1, d1, scale, samples=257):
@@ -141,8 +153,9 @@ DEFAULT_SCALES = np.linspace(0.25, 4.0, 76)  # below ~0.25 a Hermite curve folds
 TABULATE_BATCH = 100_000  # samples evaluated together when tabulating few curves
 
 
-def tabulate(p0, d0, p1, d1, measure=curve_length, scales=DEFAULT_SCALES, samples=96,
-             shares_curvature=False):
+def tabulate(
+    p0, d0, p1, d1, measure=curve_length, scales=DEFAULT_SCALES, samples=96, shares_curvature=False
+):
     """``measure`` and largest |curvature| of curves (C,) at every scale of a grid (C, S).
     The curves at each scale are their fixed part plus the scale times their tangent part
     (:func:`_hermite_parts`); with ``shares_curvature`` the measure is called with the
@@ -155,18 +168,21 @@ def tabulate(p0, d0, p1, d1, measure=curve_length, scales=DEFAULT_SCALES, sample
     # Few curves: several scales in one call (as one batch of curves); many: one at a time.
     step = max(1, TABULATE_BATCH // (c * samples))
     for i in range(0, scales.size, step):
-        sc = scales[i:i + step, None, None, None]
-        pos, vel, acc = ((f[None] + sc * t[None]).reshape(-1, samples, 2)
-                         for f, t in ((pf, pu), (vf, vu), (af, au)))
+        sc = scales[i : i + step, None, None, None]
+        pos, vel, acc = (
+            (f[None] + sc * t[None]).reshape(-1, samples, 2)
+            for f, t in ((pf, pu), (vf, vu), (af, au))
+        )
         kappa = curvature(vel, acc)
         got = measure(pos, vel, acc, kappa) if shares_curvature else measure(pos, vel, acc)
-        values[:, i:i + step] = got.reshape(-1, c).T
-        bend[:, i:i + step] = np.abs(kappa).max(axis=1).reshape(-1, c).T
+        values[:, i : i + step] = got.reshape(-1, c).T
+        bend[:, i : i + step] = np.abs(kappa).max(axis=1).reshape(-1, c).T
     return values, bend
 
 
-def fit_scale(p0, d0, p1, d1, target, measure=curve_length, scales=DEFAULT_SCALES,
-              samples=96, table=None):
+def fit_scale(
+    p0, d0, p1, d1, target, measure=curve_length, scales=DEFAULT_SCALES, samples=96, table=None
+):
     """Tangent scale per curve whose ``measure`` equals ``target`` (C,), NaN where none does.
 
     ``measure(pos, vel, acc)`` maps sampled curves (C, M, 2) to (C,) (arc length by
@@ -182,7 +198,9 @@ def fit_scale(p0, d0, p1, d1, target, measure=curve_length, scales=DEFAULT_SCALE
     def evaluate(idx, sc):
         return measure(*hermite(p0[idx], d0[idx], p1[idx], d1[idx], sc, u))
 
-    values, bend = table if table is not None else tabulate(p0, d0, p1, d1, measure, scales, samples)
+    values, bend = (
+        table if table is not None else tabulate(p0, d0, p1, d1, measure, scales, samples)
+    )
     tol = 1e-6 * np.maximum(np.abs(target), 1.0)
     out = np.full(c, np.nan)
     # A straight curve keeps its chord length over a range of scales: take scale 1, where

@@ -21,13 +21,14 @@ from .inplace import facing_yaw, to_inplace
 @dataclass
 class Loop:
     """One gait cycle resampled to ``frames`` frames at the layer's frame rate."""
+
     name: str
     root_local: np.ndarray  # (N, 3) root relative to the ground arc
-    rotations: np.ndarray   # (N, J, 4) in-place rotation channels
-    distance: np.ndarray    # (N + 1,) travelled arc length at each frame, last = cycle distance
-    contacts: np.ndarray    # (N, 4) planted flags [L ankle, L toe, R ankle, R toe]
-    turn: float             # heading change over the cycle (radians, + = left)
-    seam_deg: float         # largest joint mismatch spread over the cycle by the seam fix
+    rotations: np.ndarray  # (N, J, 4) in-place rotation channels
+    distance: np.ndarray  # (N + 1,) travelled arc length at each frame, last = cycle distance
+    contacts: np.ndarray  # (N, 4) planted flags [L ankle, L toe, R ankle, R toe]
+    turn: float  # heading change over the cycle (radians, + = left)
+    seam_deg: float  # largest joint mismatch spread over the cycle by the seam fix
 
     @property
     def frames(self):
@@ -42,25 +43,38 @@ class Loop:
         return self.turn / self.cycle_distance
 
     def to_dict(self, prefix):
-        return {prefix + k: v for k, v in (
-            ("root_local", self.root_local), ("rotations", self.rotations),
-            ("distance", self.distance), ("contacts", self.contacts),
-            ("scalars", np.array([self.turn, self.seam_deg])), ("name", np.array(self.name)))}
+        return {
+            prefix + k: v
+            for k, v in (
+                ("root_local", self.root_local),
+                ("rotations", self.rotations),
+                ("distance", self.distance),
+                ("contacts", self.contacts),
+                ("scalars", np.array([self.turn, self.seam_deg])),
+                ("name", np.array(self.name)),
+            )
+        }
 
     @classmethod
     def from_dict(cls, d, prefix):
         turn, seam = d[prefix + "scalars"]
-        return cls(str(d[prefix + "name"]), d[prefix + "root_local"], d[prefix + "rotations"],
-                   d[prefix + "distance"], np.asarray(d[prefix + "contacts"], bool),
-                   float(turn), float(seam))
+        return cls(
+            str(d[prefix + "name"]),
+            d[prefix + "root_local"],
+            d[prefix + "rotations"],
+            d[prefix + "distance"],
+            np.asarray(d[prefix + "contacts"], bool),
+            float(turn),
+            float(seam),
+        )
 
 
 @dataclass
 class CycleInfo:
     strikes: np.ndarray  # frames of left-foot strikes
-    period: float        # seconds per cycle (median)
-    distance: float      # metres travelled per cycle (median)
-    speed: float         # m/s
+    period: float  # seconds per cycle (median)
+    distance: float  # metres travelled per cycle (median)
+    speed: float  # m/s
 
 
 def detect_cycles(clip):
@@ -72,12 +86,18 @@ def detect_cycles(clip):
     left = contacts[:, 0] | contacts[:, 1]
     st = strikes(left, clip.fps)
     if st.size < 2:
-        raise ValueError(f"clip '{clip.name}': found {st.size} left-foot strike(s); a locomotion "
-                         f"clip needs at least one full gait cycle")
+        raise ValueError(
+            f"clip '{clip.name}': found {st.size} left-foot strike(s); a locomotion "
+            f"clip needs at least one full gait cycle"
+        )
     periods = np.diff(st) / clip.fps
     dist = np.linalg.norm(np.diff(clip.root_pos[st, :2], axis=0), axis=1)
-    return CycleInfo(st, float(np.median(periods)), float(np.median(dist)),
-                     float(np.median(dist) / np.median(periods)))
+    return CycleInfo(
+        st,
+        float(np.median(periods)),
+        float(np.median(dist)),
+        float(np.median(dist) / np.median(periods)),
+    )
 
 
 def cycle_turns(clip, info):
@@ -112,13 +132,23 @@ def extract_loop(clip, start, end, frames, name=None):
     rot_fixed = quat.mul(quat.exp(delta[None] * ramp[:, None, None]), rot_ip)
     root_fixed = root_local + (root_local[0] - root_local[-1])[None] * ramp[:, None]
     if np.any(np.diff(s) <= 0):
-        raise ValueError(f"clip '{clip.name}': the root does not advance monotonically over the "
-                         f"cycle {start}-{end}; not a locomotion cycle")
+        raise ValueError(
+            f"clip '{clip.name}': the root does not advance monotonically over the "
+            f"cycle {start}-{end}; not a locomotion cycle"
+        )
     contacts, _, _ = foot_contacts(clip)
-    src = np.clip(np.round(start + (end - start) * np.arange(frames) / frames).astype(int),
-                  0, clip.frames - 1)
-    return Loop(name or clip.name, root_fixed[:-1], quat.make_continuous(rot_fixed[:-1]),
-                s, contacts[src], turn, seam_deg)
+    src = np.clip(
+        np.round(start + (end - start) * np.arange(frames) / frames).astype(int), 0, clip.frames - 1
+    )
+    return Loop(
+        name or clip.name,
+        root_fixed[:-1],
+        quat.make_continuous(rot_fixed[:-1]),
+        s,
+        contacts[src],
+        turn,
+        seam_deg,
+    )
 
 
 def best_cycle(clip, info, prefer="seam"):
@@ -127,5 +157,7 @@ def best_cycle(clip, info, prefer="seam"):
     if prefer == "turn":
         turns = np.abs(cycle_turns(clip, info))
         return pairs[int(np.argmax(turns))]
-    seams = [float(quat.angle_between(clip.rotations[a], clip.rotations[b]).max()) for a, b in pairs]
+    seams = [
+        float(quat.angle_between(clip.rotations[a], clip.rotations[b]).max()) for a, b in pairs
+    ]
     return pairs[int(np.argmin(seams))]

@@ -19,7 +19,7 @@ from .curves import Curve
 WORDS = ("LSL", "RSR", "LSR", "RSL", "RLR", "LRL")
 SIGN = {"L": 1.0, "R": -1.0, "S": 0.0}
 BLEND_SMOOTHING = 0.35  # metres over which the blending curvature is averaged
-SAMPLE_SPACING = 0.04   # metres between curve samples (exact footprint tests)
+SAMPLE_SPACING = 0.04  # metres between curve samples (exact footprint tests)
 
 
 def _mod2pi(a):
@@ -31,7 +31,10 @@ def words(p0, h0, p1, h1, radius):
     a word does not exist). ``p0, p1`` (N, 2), ``h0, h1`` (N,), ``radius`` a number or
     one per pair (N,)."""
     p0, p1 = np.atleast_2d(p0).astype(float), np.atleast_2d(p1).astype(float)
-    h0, h1 = np.broadcast_to(np.asarray(h0, float), p0.shape[:1]), np.broadcast_to(np.asarray(h1, float), p1.shape[:1])
+    h0, h1 = (
+        np.broadcast_to(np.asarray(h0, float), p0.shape[:1]),
+        np.broadcast_to(np.asarray(h1, float), p1.shape[:1]),
+    )
     radius = np.asarray(radius, float)
     dx, dy = p1[:, 0] - p0[:, 0], p1[:, 1] - p0[:, 1]
     d = np.hypot(dx, dy) / radius
@@ -45,18 +48,24 @@ def words(p0, h0, p1, h1, radius):
         p2 = 2 + d * d - 2 * cab + 2 * d * (sa - sb)
         t1 = np.arctan2(cb - ca, d + sa - sb)
         ok = p2 >= 0
-        out[0] = np.where(ok[:, None], np.stack((_mod2pi(-a + t1), np.sqrt(p2), _mod2pi(b - t1)), -1), np.nan)
+        out[0] = np.where(
+            ok[:, None], np.stack((_mod2pi(-a + t1), np.sqrt(p2), _mod2pi(b - t1)), -1), np.nan
+        )
         # RSR
         p2 = 2 + d * d - 2 * cab + 2 * d * (sb - sa)
         t1 = np.arctan2(ca - cb, d - sa + sb)
         ok = p2 >= 0
-        out[1] = np.where(ok[:, None], np.stack((_mod2pi(a - t1), np.sqrt(p2), _mod2pi(-b + t1)), -1), np.nan)
+        out[1] = np.where(
+            ok[:, None], np.stack((_mod2pi(a - t1), np.sqrt(p2), _mod2pi(-b + t1)), -1), np.nan
+        )
         # LSR
         p2 = -2 + d * d + 2 * cab + 2 * d * (sa + sb)
         p = np.sqrt(p2)
         t2 = np.arctan2(-ca - cb, d + sa + sb) - np.arctan2(-2.0, p)
         ok = p2 >= 0
-        out[2] = np.where(ok[:, None], np.stack((_mod2pi(-a + t2), p, _mod2pi(-_mod2pi(b) + t2)), -1), np.nan)
+        out[2] = np.where(
+            ok[:, None], np.stack((_mod2pi(-a + t2), p, _mod2pi(-_mod2pi(b) + t2)), -1), np.nan
+        )
         # RSL
         p2 = d * d - 2 + 2 * cab - 2 * d * (sa + sb)
         p = np.sqrt(p2)
@@ -74,7 +83,9 @@ def words(p0, h0, p1, h1, radius):
         ok = np.abs(tmp) <= 1
         p = _mod2pi(2 * np.pi - np.arccos(np.clip(tmp, -1, 1)))
         t = _mod2pi(-a - np.arctan2(ca - cb, d + sa - sb) + p / 2)
-        out[5] = np.where(ok[:, None], np.stack((t, p, _mod2pi(_mod2pi(b) - a - t + p)), -1), np.nan)
+        out[5] = np.where(
+            ok[:, None], np.stack((t, p, _mod2pi(_mod2pi(b) - a - t + p)), -1), np.nan
+        )
     return out * (radius[:, None] if radius.ndim else radius)
 
 
@@ -109,7 +120,7 @@ def samples(p0, h0, word, lengths, radius):
     c = lengths.shape[0]
     h0, radius = (np.broadcast_to(np.asarray(a, float), (c,)) for a in (h0, radius))
     word = np.broadcast_to(np.asarray(word, int), (c,))
-    bounds = np.cumsum(lengths, axis=1)   # ends of the three parts
+    bounds = np.cumsum(lengths, axis=1)  # ends of the three parts
     total = bounds[:, 2]
     n = np.maximum(np.ceil(total / SAMPLE_SPACING).astype(int), 2) + 1
     first = np.concatenate(([0], np.cumsum(n)))
@@ -120,11 +131,12 @@ def samples(p0, h0, word, lengths, radius):
     s[last] = total[owner[last]]
     # Which of the three parts each sample lies on; a part of zero length owns none (the
     # last sample belongs to the last part that has a length).
-    part = np.minimum((bounds[owner, 0] <= s).astype(int) + (bounds[owner, 1] <= s)
-                      + (total[owner] <= s), 2)
+    part = np.minimum(
+        (bounds[owner, 0] <= s).astype(int) + (bounds[owner, 1] <= s) + (total[owner] <= s), 2
+    )
     part = np.where((part == 2) & (lengths[owner, 2] <= 0.0), 1, part)
     part = np.where((part == 1) & (lengths[owner, 1] <= 0.0), 0, part)
-    kap = SIGNS[word] / radius[:, None]                    # (C, 3)
+    kap = SIGNS[word] / radius[:, None]  # (C, 3)
     x, y, h = [p0[:, 0]], [p0[:, 1]], [h0]
     for k in (0, 1):
         nx, ny, nh = _advance(x[-1], y[-1], h[-1], kap[:, k], lengths[:, k])
@@ -143,8 +155,9 @@ def curve(p0, h0, word, lengths, radius):
     from state (p0, h0) with segment ``lengths`` (3,)."""
     if not isinstance(word, (int, np.integer)):
         word = WORDS.index(word)
-    s, pos, heading, kappa, _ = samples(np.asarray(p0, float)[None], h0, word,
-                                        np.asarray(lengths, float)[None], radius)
+    s, pos, heading, kappa, _ = samples(
+        np.asarray(p0, float)[None], h0, word, np.asarray(lengths, float)[None], radius
+    )
     return Curve(s, pos, heading, smoothed(s, kappa))
 
 
@@ -159,4 +172,4 @@ def smoothed(s, kappa):
         return kappa
     padded = np.concatenate((np.full(half, kappa[0]), kappa, np.full(half, kappa[-1])))
     c = np.concatenate(([0.0], np.cumsum(padded)))
-    return (c[2 * half + 1:] - c[:-2 * half - 1]) / (2 * half + 1)
+    return (c[2 * half + 1 :] - c[: -2 * half - 1]) / (2 * half + 1)

@@ -26,12 +26,12 @@ import numpy as np
 
 FULL = np.uint64(0xFFFFFFFFFFFFFFFF)
 PATH_MARGIN = 0.002  # metres: sampled paths are tested this much wider (the frames between
-                     # samples run on chords a fraction of a millimetre inside the arcs)
-FINE = 4             # clearance raster cells per cell side (8 cm for the CMU walk patch)
-SUB = 4              # sub-cells per cell side of the sub-cell bitfields (a divisor of FINE)
+# samples run on chords a fraction of a millimetre inside the arcs)
+FINE = 4  # clearance raster cells per cell side (8 cm for the CMU walk patch)
+SUB = 4  # sub-cells per cell side of the sub-cell bitfields (a divisor of FINE)
 CLEARANCE_CAP = 0.15  # metres beyond the radius up to which the raster holds distances
 RASTER_MIN_POINTS = 24  # fewer points are tested exactly at once (no raster work for them)
-_EPS = 1e-7          # metres: rounding slack of the raster's decisions
+_EPS = 1e-7  # metres: rounding slack of the raster's decisions
 MAX_RASTER_TILES = 1 << 18  # largest area (in tiles) the raster's grid of slots spans
 
 
@@ -75,6 +75,7 @@ def convex_hull(points):
                 out.pop()
             out.append(p)
         return out
+
     lower, upper = half(pts), half(pts[::-1])
     return np.array(lower[:-1] + upper[:-1])
 
@@ -82,8 +83,12 @@ def convex_hull(points):
 def _segment_distance(points, a, b):
     """Distance of points (N, 2) to segments a (E, 2) -> b (E, 2): (N, E)."""
     ab = b - a
-    t = np.clip(np.einsum("nek,ek->ne", points[:, None] - a[None], ab)
-                / np.maximum((ab * ab).sum(-1), 1e-12)[None], 0.0, 1.0)
+    t = np.clip(
+        np.einsum("nek,ek->ne", points[:, None] - a[None], ab)
+        / np.maximum((ab * ab).sum(-1), 1e-12)[None],
+        0.0,
+        1.0,
+    )
     proj = a[None] + t[..., None] * ab[None]
     return np.linalg.norm(points[:, None] - proj, axis=-1)
 
@@ -92,8 +97,9 @@ def inside_convex(points, polygon):
     """(N,) True where points lie inside a counter-clockwise convex polygon."""
     a = polygon
     b = np.roll(polygon, -1, axis=0)
-    cross = ((b - a)[None, :, 0] * (points[:, None, 1] - a[None, :, 1])
-             - (b - a)[None, :, 1] * (points[:, None, 0] - a[None, :, 0]))
+    cross = (b - a)[None, :, 0] * (points[:, None, 1] - a[None, :, 1]) - (b - a)[None, :, 1] * (
+        points[:, None, 0] - a[None, :, 0]
+    )
     return np.all(cross >= 0, axis=1)
 
 
@@ -117,7 +123,7 @@ def convex_closest(points, polygon):
     keep = np.einsum("ij,ij->i", e, e) > 1e-18
     poly, e = poly[keep], e[keep]
     if poly.shape[0] < 3:  # a point or a segment: its vertices and edge directly
-        poly = np.asarray(polygon, float)[:max(poly.shape[0], 1)]
+        poly = np.asarray(polygon, float)[: max(poly.shape[0], 1)]
         a, b = poly[0], poly[-1]
         ab = b - a
         t = np.clip((points - a) @ ab / max(float(ab @ ab), 1e-18), 0.0, 1.0)
@@ -127,9 +133,9 @@ def convex_closest(points, polygon):
         poly = poly[::-1]
         e = np.roll(poly, -1, axis=0) - poly
     length2 = np.einsum("ij,ij->i", e, e)
-    normal = np.column_stack((e[:, 1], -e[:, 0])) / np.sqrt(length2)[:, None]   # outward
+    normal = np.column_stack((e[:, 1], -e[:, 0])) / np.sqrt(length2)[:, None]  # outward
     nx, ny = normal[:, 0], normal[:, 1]
-    beyond = points @ normal.T - np.einsum("ij,ij->i", normal, poly)[None]   # (N, V)
+    beyond = points @ normal.T - np.einsum("ij,ij->i", normal, poly)[None]  # (N, V)
     i = np.argmax(beyond, axis=1)
     far = np.take_along_axis(beyond, i[:, None], axis=1)[:, 0]
     t = ((px - poly[i, 0]) * e[i, 0] + (py - poly[i, 1]) * e[i, 1]) / length2[i]
@@ -140,7 +146,7 @@ def convex_closest(points, polygon):
     if corner.size:
         cx, cy = px[corner], py[corner]
         gx, gy = cx[:, None] - poly[None, :, 0], cy[:, None] - poly[None, :, 1]
-        dist2 = gx * gx + gy * gy                      # (Nc, V)
+        dist2 = gx * gx + gy * gy  # (Nc, V)
         k = np.argmin(dist2, axis=1)
         d[corner] = np.sqrt(np.take_along_axis(dist2, k[:, None], axis=1)[:, 0])
         qx[corner], qy[corner] = poly[k, 0], poly[k, 1]
@@ -153,8 +159,10 @@ def _edges_cross(poly_a, poly_b):
     b0, b1 = poly_b, np.roll(poly_b, -1, axis=0)
 
     def orient(p, q, r):
-        return ((q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1])
-                - (q[..., 1] - p[..., 1]) * (r[..., 0] - p[..., 0]))
+        return (q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1]) - (q[..., 1] - p[..., 1]) * (
+            r[..., 0] - p[..., 0]
+        )
+
     A0, A1 = a0[:, None], a1[:, None]
     B0, B1 = b0[None], b1[None]
     d1, d2 = orient(A0, A1, B0), orient(A0, A1, B1)
@@ -184,8 +192,15 @@ def cells_within(x0, y0, size, polygon, radius):
     dy = np.maximum(np.maximum(y0[:, None] - py, 0.0), py - y1[:, None])
     d = np.hypot(dx, dy).min(axis=1)
     # Cell corners to the polygon (zero when a corner is inside it).
-    corners = np.stack((np.column_stack((x0, y0)), np.column_stack((x1, y0)),
-                        np.column_stack((x1, y1)), np.column_stack((x0, y1))), axis=1)
+    corners = np.stack(
+        (
+            np.column_stack((x0, y0)),
+            np.column_stack((x1, y0)),
+            np.column_stack((x1, y1)),
+            np.column_stack((x0, y1)),
+        ),
+        axis=1,
+    )
     flat = corners.reshape(-1, 2)
     dc = distance_to_polygon(flat, polygon).reshape(-1, 4).min(axis=1)
     d = np.minimum(d, dc)
@@ -212,25 +227,25 @@ class Environment:
         self.cells = int(cells)
         self.radius = float(radius)
         self.obstacles = {}
-        self._tiles_of = {}     # obstacle name -> set of tiles
-        self._members = {}      # tile -> set of obstacle names
-        self._free = {}         # tile -> uint64 free-cell bitfield (lazy)
-        self._solid = {}        # tile -> uint64 bitfield of cells no point of which is free
-        self._pack = None       # footprints as arrays for point queries (:meth:`_packed`)
-        self._ob_raster = {}    # obstacle name -> its own distances (:meth:`_obstacle_raster`)
+        self._tiles_of = {}  # obstacle name -> set of tiles
+        self._members = {}  # tile -> set of obstacle names
+        self._free = {}  # tile -> uint64 free-cell bitfield (lazy)
+        self._solid = {}  # tile -> uint64 bitfield of cells no point of which is free
+        self._pack = None  # footprints as arrays for point queries (:meth:`_packed`)
+        self._ob_raster = {}  # obstacle name -> its own distances (:meth:`_obstacle_raster`)
         self.occlusion_computations = 0
-        self.fine = self.cells * FINE              # raster cells per tile side
-        self.fine_size = self.side / self.fine     # metres
+        self.fine = self.cells * FINE  # raster cells per tile side
+        self.fine_size = self.side / self.fine  # metres
         self.rho = self.fine_size * np.sqrt(0.5) + _EPS  # centre to corner, and slack
         self.cap = self.radius + CLEARANCE_CAP
         # Tile rasters (lazy) live in one array, a slot per tile (slot 0: a tile with no
         # footprint near), found through a grid of slots over the tiles seen so far, so
         # the points of many tiles are looked up with one gather.
-        self._atlas = np.empty((4, 8, self.fine ** 2))
+        self._atlas = np.empty((4, 8, self.fine**2))
         self._atlas[:, 0] = 0.0
         self._atlas[[0, 3], 0] = self.cap
-        self._slots = {}          # tile -> slot
-        self._sub = {}            # (tile, radius) -> (slot, free, solid) sub-cell bitfields
+        self._slots = {}  # tile -> slot
+        self._sub = {}  # (tile, radius) -> (slot, free, solid) sub-cell bitfields
         self._spare = list(range(7, 0, -1))
         self._grid = np.full((1, 1), -1, np.int64)
         self._grid_origin = (0, 0)
@@ -320,7 +335,7 @@ class Environment:
         n, k = self.cells, FINE
         dist = self.clearance(tile)[0]
         low = self._lowest(tile)
-        near = dist.reshape(n, k, n, k).min(axis=(1, 3)).ravel()   # cell index iy * cells + ix
+        near = dist.reshape(n, k, n, k).min(axis=(1, 3)).ravel()  # cell index iy * cells + ix
         low = low.reshape(n, k, n, k).min(axis=(1, 3)).ravel()
         far = dist.reshape(n, k, n, k).max(axis=(1, 3)).ravel()
         occluded = near < self.radius if self.radius > 0 else near <= 0.0
@@ -332,8 +347,13 @@ class Environment:
             hit = np.zeros(unsure.size, bool)
             for name in names:
                 ob = self.obstacles[name]
-                near = np.flatnonzero(~hit & (x0 < ob.hi[0] + self.radius) & (x0 + c > ob.lo[0] - self.radius)
-                                      & (y0 < ob.hi[1] + self.radius) & (y0 + c > ob.lo[1] - self.radius))
+                near = np.flatnonzero(
+                    ~hit
+                    & (x0 < ob.hi[0] + self.radius)
+                    & (x0 + c > ob.lo[0] - self.radius)
+                    & (y0 < ob.hi[1] + self.radius)
+                    & (y0 + c > ob.lo[1] - self.radius)
+                )
                 if near.size:
                     hit[near] = cells_within(x0[near], y0[near], c, ob.polygon, self.radius)
             occluded[unsure] = hit
@@ -346,8 +366,12 @@ class Environment:
         :meth:`decided`), the other footprints rho nearer than at the centre."""
         dist, qx, qy, other = self.clearance(tile)
         with np.errstate(divide="ignore", invalid="ignore"):
-            slack = np.where(dist > 1e-9, (np.abs(qx) + np.abs(qy)) / dist, 2.0) * (0.5 * self.fine_size)
-        return np.where(dist < self.cap, np.minimum(dist - slack, other - self.rho), dist - self.rho)
+            slack = np.where(dist > 1e-9, (np.abs(qx) + np.abs(qy)) / dist, 2.0) * (
+                0.5 * self.fine_size
+            )
+        return np.where(
+            dist < self.cap, np.minimum(dist - slack, other - self.rho), dist - self.rho
+        )
 
     def sub_states(self, tile, radius):
         """(free, solid) bitfields of the tile's sub-cells (``SUB`` x ``SUB`` per cell; bit b
@@ -431,7 +455,7 @@ class Environment:
             ni0, nj0 = min(i0, i - 4), min(j0, j - 4)
             ni1, nj1 = max(i0 + n, i + 5), max(j0 + m, j + 5)
             grid = np.full((ni1 - ni0, nj1 - nj0), -1, np.int64)
-            grid[i0 - ni0:i0 - ni0 + n, j0 - nj0:j0 - nj0 + m] = self._grid
+            grid[i0 - ni0 : i0 - ni0 + n, j0 - nj0 : j0 - nj0 + m] = self._grid
             self._grid, self._grid_origin = grid, (ni0, nj0)
             i0, j0 = ni0, nj0
         return i - i0, j - j0
@@ -451,9 +475,13 @@ class Environment:
             centres = np.column_stack((px.ravel(), py.ravel()))
             d, q = convex_closest(centres, ob.polygon)
             shape = (ys.size, xs.size)
-            got = self._ob_raster[name] = (int(fx0), int(fy0), np.minimum(d, self.cap).reshape(shape),
-                                           (q[:, 0] - centres[:, 0]).reshape(shape),
-                                           (q[:, 1] - centres[:, 1]).reshape(shape))
+            got = self._ob_raster[name] = (
+                int(fx0),
+                int(fy0),
+                np.minimum(d, self.cap).reshape(shape),
+                (q[:, 0] - centres[:, 0]).reshape(shape),
+                (q[:, 1] - centres[:, 1]).reshape(shape),
+            )
         return got
 
     def _raster_rows(self, points):
@@ -512,14 +540,20 @@ class Environment:
                 for j in range(j0, j1 + 1):
                     names |= self._members.get((i, j), set())
         lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-        return sorted(n for n in names
-                      if np.all(self.obstacles[n].lo <= hi) and np.all(self.obstacles[n].hi >= lo))
+        return sorted(
+            n
+            for n in names
+            if np.all(self.obstacles[n].lo <= hi) and np.all(self.obstacles[n].hi >= lo)
+        )
 
     def near(self, xy):
         """Sorted names of the obstacles a point (x, y) comes within the radius of."""
         p = np.asarray(xy, float)[None, :2]
-        return sorted(n for n in self.members(self.tile_of(p[0]))
-                      if self.obstacles[n].within(p, self.radius)[0])
+        return sorted(
+            n
+            for n in self.members(self.tile_of(p[0]))
+            if self.obstacles[n].within(p, self.radius)[0]
+        )
 
     def blocked(self, points, exclude=(), radius=None):
         """(N,) True where world points come within the radius (or ``radius``, at most a
@@ -528,8 +562,12 @@ class Environment:
         is the exact test's either way."""
         points = np.atleast_2d(np.asarray(points, float))
         radius = self.radius if radius is None else float(radius)
-        if (len(points) >= RASTER_MIN_POINTS and self.obstacles
-                and radius + self.rho <= self.cap and self._rasterable(points)):
+        if (
+            len(points) >= RASTER_MIN_POINTS
+            and self.obstacles
+            and radius + self.rho <= self.cap
+            and self._rasterable(points)
+        ):
             out, unsure = self.decided(*self._raster_rows(points), radius)
             if exclude:  # the raster holds every footprint: it can only clear a point
                 unsure |= out
@@ -546,8 +584,10 @@ class Environment:
         if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
             return False
         (i0, j0), (n, m) = self._grid_origin, self._grid.shape
-        span = (np.maximum(hi, (np.array([i0 + n, j0 + m]) * self.side))
-                - np.minimum(lo, np.array([i0, j0]) * self.side)) / self.side
+        span = (
+            np.maximum(hi, (np.array([i0 + n, j0 + m]) * self.side))
+            - np.minimum(lo, np.array([i0, j0]) * self.side)
+        ) / self.side
         return bool(span[0] * span[1] < MAX_RASTER_TILES)
 
     def _blocked_exact(self, points, exclude, radius):
@@ -570,8 +610,9 @@ class Environment:
         idx = np.fromiter((index[n] for n in near), int, len(near))
         # Bounding boxes first, for every (point, obstacle) pair at once; then the exact
         # distance to the convex footprint only for the pairs that pass.
-        box = (np.all(points[:, None] > lo[idx][None] - radius, axis=-1)
-               & np.all(points[:, None] < hi[idx][None] + radius, axis=-1))
+        box = np.all(points[:, None] > lo[idx][None] - radius, axis=-1) & np.all(
+            points[:, None] < hi[idx][None] + radius, axis=-1
+        )
         pi, ci = np.nonzero(box)
         if pi.size:
             a = verts[idx[ci]]
@@ -595,11 +636,14 @@ class Environment:
             verts = np.zeros((len(names), v, 2))
             for i, n in enumerate(names):
                 poly = self.obstacles[n].polygon
-                verts[i, :len(poly)] = poly
-                verts[i, len(poly):] = poly[-1]
-            self._pack = ({n: i for i, n in enumerate(names)},
-                          np.array([self.obstacles[n].lo for n in names]).reshape(-1, 2),
-                          np.array([self.obstacles[n].hi for n in names]).reshape(-1, 2), verts)
+                verts[i, : len(poly)] = poly
+                verts[i, len(poly) :] = poly[-1]
+            self._pack = (
+                {n: i for i, n in enumerate(names)},
+                np.array([self.obstacles[n].lo for n in names]).reshape(-1, 2),
+                np.array([self.obstacles[n].hi for n in names]).reshape(-1, 2),
+                verts,
+            )
         return self._pack
 
     def path_blocked(self, paths):
@@ -618,8 +662,12 @@ class Environment:
         in the patch."""
         n, m = index.shape
         flat = index.ravel()
-        blocked, unsure = self.decided(tuple(a[flat] for a in self.clearance(tile)), ox.ravel(),
-                                       oy.ravel(), self.radius + PATH_MARGIN)
+        blocked, unsure = self.decided(
+            tuple(a[flat] for a in self.clearance(tile)),
+            ox.ravel(),
+            oy.ravel(),
+            self.radius + PATH_MARGIN,
+        )
         blocked, unsure = blocked.reshape(n, m), unsure.reshape(n, m)
         hit = blocked.any(axis=1)
         rows = ~hit & unsure.any(axis=1)

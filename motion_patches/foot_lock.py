@@ -4,9 +4,10 @@
 Space-curve following turns and bends the recorded walk, so a foot that was planted in the
 source slides a little on the ground (skate). This pass pins each planted foot: during a
 run of frames where a foot is planted, its ankle is held at the mean position of that run
-and, once the heel is up, its toe where the held foot put it, and the leg reaches it by two-bone IK (the knee bends or
-opens, then the thigh swings). The hips, the body above them and the foot's own world
-orientation are kept, so only the thigh and shin channels change and bone lengths cannot.
+and, once the heel is up, its toe where the held foot put it, and the leg reaches it by
+two-bone IK (the knee bends or opens, then the thigh swings). The hips, the body above them
+and the foot's own world orientation are kept, so only the thigh and shin channels change
+and bone lengths cannot.
 The correction eases in and out over a few frames around each run, so nothing pops.
 """
 
@@ -17,7 +18,7 @@ from .contacts import foot_joints, runs
 from .skeleton import local_rotations_from_global
 
 BLEND_FRAMES = 4  # frames the correction takes to ease in before and out after a contact
-STRETCH = 0.985   # the straightest a locked leg gets, as a fraction of thigh + shin
+STRETCH = 0.985  # the straightest a locked leg gets, as a fraction of thigh + shin
 
 
 def leg_chains(skel):
@@ -25,6 +26,7 @@ def leg_chains(skel):
     joint above the ankle and the hip the joint above the knee, skipping limb segments
     (Rigify's ``DEF-shin.L.001`` under ``DEF-shin.L``)."""
     from .retarget import segment_parent
+
     feet = foot_joints(skel)
     out = []
     for ankle, toe in ((feet[0], feet[1]), (feet[2], feet[3])):
@@ -59,9 +61,9 @@ def planted_offsets(ankle_xy, toe_xy, ankle_on, toe_on, blend=BLEND_FRAMES):
     for a, b in zip(*runs(ankle_on)):
         d[a:b] = ankle_xy[a:b].mean(axis=0) - ankle_xy[a:b]
     for a, b in zip(*runs(toe_only)):
-        if a > 0 and ankle_on[a - 1]:      # heel off: the toe stays where it was
+        if a > 0 and ankle_on[a - 1]:  # heel off: the toe stays where it was
             anchor = toe_xy[a - 1] + d[a - 1]
-        elif b < n and ankle_on[b]:        # toe first: it lands where the heel will
+        elif b < n and ankle_on[b]:  # toe first: it lands where the heel will
             anchor = toe_xy[b] + d[b]
         else:
             anchor = toe_xy[a:b].mean(axis=0)
@@ -85,7 +87,7 @@ def planted_offsets(ankle_xy, toe_xy, ankle_on, toe_on, blend=BLEND_FRAMES):
     # Between two contacts close together the corrections of both blend (never a jump
     # from one to the other); a single one fades out alone.
     scale = np.where(total > 1.0, 1.0 / np.maximum(total, 1e-12), 1.0)
-    out = (d[before] * (wb * scale)[:, None] + d[after] * (wa * scale)[:, None])
+    out = d[before] * (wb * scale)[:, None] + d[after] * (wa * scale)[:, None]
     out[on] = d[on]
     return out
 
@@ -118,7 +120,7 @@ def two_bone_ik(hip, knee, ankle, target, hinge, forward=None):
     d1 = np.clip(np.linalg.norm(target - hip, axis=-1), np.abs(l1 - l2) + 1e-4, reach)
 
     def interior(d):
-        return np.arccos(np.clip((l1 ** 2 + l2 ** 2 - d ** 2) / (2 * l1 * l2), -1.0, 1.0))
+        return np.arccos(np.clip((l1**2 + l2**2 - d**2) / (2 * l1 * l2), -1.0, 1.0))
 
     # The knee's angle now, from the bones themselves (exact even for a straight leg).
     now = np.arccos(np.clip(np.sum(-a * b, axis=-1) / (l1 * l2), -1.0, 1.0))
@@ -136,8 +138,7 @@ def two_bone_ik(hip, knee, ankle, target, hinge, forward=None):
         swing = _rotation_between(u / np.linalg.norm(u, axis=-1, keepdims=True), v)
         knee_dir = np.einsum("fij,fj->fi", swing, a)
         knee_dir -= np.sum(knee_dir * v, axis=-1, keepdims=True) * v
-        ahead = (np.zeros(len(a)) if forward is None
-                 else np.sum(knee_dir * forward, axis=-1))
+        ahead = np.zeros(len(a)) if forward is None else np.sum(knee_dir * forward, axis=-1)
         options.append((err, ahead, swing, swing @ r_knee))
     (e1, f1, s1, k1), (e2, f2, s2, k2) = options
     second = np.where(np.abs(e1 - e2) > 1e-7, e2 < e1, f2 > f1)[:, None, None]
@@ -153,8 +154,13 @@ def lock_feet(skel, world, blend=BLEND_FRAMES):
     g = m[..., :3, :3].copy()
     p = m[..., :3, 3]
     for side, (hip, knee, ankle, toe) in enumerate(leg_chains(skel)):
-        d = planted_offsets(p[:, ankle, :2], p[:, toe, :2], world.contacts[:, 2 * side],
-                            world.contacts[:, 2 * side + 1], blend)
+        d = planted_offsets(
+            p[:, ankle, :2],
+            p[:, toe, :2],
+            world.contacts[:, 2 * side],
+            world.contacts[:, 2 * side + 1],
+            blend,
+        )
         moving = np.linalg.norm(d, axis=-1) > 1e-7
         if not moving.any():
             continue
@@ -163,8 +169,7 @@ def lock_feet(skel, world, blend=BLEND_FRAMES):
         hinge = g[:, hip, :, 0]  # the thigh's X axis: the knee's hinge in a rest-like leg
         h = world.ground[:, 2]
         forward = np.column_stack((np.cos(h), np.sin(h), np.zeros_like(h)))
-        r_thigh, r_shin = two_bone_ik(p[:, hip], p[:, knee], p[:, ankle], target, hinge,
-                                      forward)
+        r_thigh, r_shin = two_bone_ik(p[:, hip], p[:, knee], p[:, ankle], target, hinge, forward)
         eye = np.eye(3)
         r_thigh = np.where(moving[:, None, None], r_thigh, eye)
         r_shin = np.where(moving[:, None, None], r_shin, eye)

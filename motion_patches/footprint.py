@@ -27,11 +27,11 @@ import numpy as np
 
 from .environment import convex_hull, distance_to_polygon
 
-BODY_BAND = (0.05, 1.8)   # metres above the ground: what a walking body overlaps
-MIN_THICKNESS = 0.02      # metres: the least width of a footprint (a plane wall's board)
-MAX_PARTS = 400           # faces of one island above which parts are grouped by cells
-GROUP_CELLS = 16          # cells per side of an island's bounding box when grouping
-COVER_SAMPLES = 32        # samples per side of an island's hull in the convexity test
+BODY_BAND = (0.05, 1.8)  # metres above the ground: what a walking body overlaps
+MIN_THICKNESS = 0.02  # metres: the least width of a footprint (a plane wall's board)
+MAX_PARTS = 400  # faces of one island above which parts are grouped by cells
+GROUP_CELLS = 16  # cells per side of an island's bounding box when grouping
+COVER_SAMPLES = 32  # samples per side of an island's hull in the convexity test
 
 
 def outline(points, thickness=MIN_THICKNESS):
@@ -59,8 +59,13 @@ def width(polygon):
     if keep.sum() < 2:
         return 0.0
     e, a0, length = e[keep], a[keep], length[keep]
-    d = np.abs(e[:, None, 0] * (a[None, :, 1] - a0[:, None, 1])
-               - e[:, None, 1] * (a[None, :, 0] - a0[:, None, 0])) / length[:, None]
+    d = (
+        np.abs(
+            e[:, None, 0] * (a[None, :, 1] - a0[:, None, 1])
+            - e[:, None, 1] * (a[None, :, 0] - a0[:, None, 0])
+        )
+        / length[:, None]
+    )
     return float(d.max(axis=1).min())
 
 
@@ -162,7 +167,7 @@ def parts(vertices, face_vertex=(), face_start=(), face_total=(), edges=(), band
         if isl in open_islands:
             faces = faces[in_band_face[faces]]
         if len(faces):
-            elements = [fv[fs[f]:fs[f] + ft[f]] for f in faces]
+            elements = [fv[fs[f] : fs[f] + ft[f]] for f in faces]
         else:  # edges or loose vertices only: the band's vertices
             elements = [verts[(z[verts] >= band[0]) & (z[verts] <= band[1])]]
             if not len(elements[0]):
@@ -182,8 +187,9 @@ def _island_parts(xy, elements):
         centre = np.array([xy[e].mean(axis=0) for e in elements])
         key = np.floor((centre - lo) / cell).astype(np.int64)
         key = key[:, 0] * (GROUP_CELLS + 1) + key[:, 1]
-        elements = [np.concatenate([elements[i] for i in np.flatnonzero(key == k)])
-                    for k in np.unique(key)]
+        elements = [
+            np.concatenate([elements[i] for i in np.flatnonzero(key == k)]) for k in np.unique(key)
+        ]
     polys = [outline(xy[e]) for e in elements]
     if _covered(polys, hull):
         return [hull]

@@ -27,10 +27,10 @@ class Gait:
     layer: str
     fps: float
     skeleton: Skeleton
-    loops: list                 # Loop, sorted by curvature; exactly one is straight
+    loops: list  # Loop, sorted by curvature; exactly one is straight
     notes: list = field(default_factory=list)  # provenance, e.g. "right turn mirrored from 16_18"
-    turn_range: tuple = None    # sharpest (right, left) curvature: turn clips' one-cycle
-                                # windows, at least the straight stride's bend
+    turn_range: tuple = None  # sharpest (right, left) curvature: turn clips' one-cycle
+    # windows, at least the straight stride's bend
 
     @property
     def frames(self):
@@ -95,6 +95,7 @@ class Gait:
         """Floor height under the straight loop (where interaction clips are put down)."""
         from .clip import Clip
         from .object_patch import floor_level
+
         lp = self.straight
         return floor_level(Clip("loop", self.skeleton, self.fps, lp.root_local, lp.rotations))
 
@@ -111,7 +112,7 @@ class Gait:
         ph = np.asarray(phase) % self.frames
         root = np.zeros((ph.size, 3))
         for i, lp in enumerate(self.loops):
-            root += lp.root_local[ph] * weights[:, i:i + 1]
+            root += lp.root_local[ph] * weights[:, i : i + 1]
         # Blend rotations pairwise: accumulate a running slerp in order of weight.
         order = np.argsort(-weights, axis=1)
         rot = np.empty((ph.size,) + self.loops[0].rotations.shape[1:])
@@ -134,9 +135,13 @@ class Gait:
         return root, quat.make_continuous(rot), contacts
 
     def to_dict(self):
-        d = {"gait_layer": np.array(self.layer), "gait_fps": np.array(self.fps),
-             "gait_turn_range": np.array(self.turn_range if self.turn_range else (0.0, 0.0)),
-             "gait_count": np.array(len(self.loops)), "gait_notes": np.array(self.notes, dtype=str)}
+        d = {
+            "gait_layer": np.array(self.layer),
+            "gait_fps": np.array(self.fps),
+            "gait_turn_range": np.array(self.turn_range if self.turn_range else (0.0, 0.0)),
+            "gait_count": np.array(len(self.loops)),
+            "gait_notes": np.array(self.notes, dtype=str),
+        }
         d.update({"skel_" + k: v for k, v in self.skeleton.to_dict().items()})
         for i, lp in enumerate(self.loops):
             d.update(lp.to_dict(f"loop{i}_"))
@@ -147,8 +152,14 @@ class Gait:
         skel = Skeleton.from_dict({k[5:]: d[k] for k in d if k.startswith("skel_")})
         loops = [Loop.from_dict(d, f"loop{i}_") for i in range(int(d["gait_count"]))]
         tr = tuple(float(v) for v in d["gait_turn_range"]) if "gait_turn_range" in d else None
-        return cls(str(d["gait_layer"]), float(d["gait_fps"]), skel, loops,
-                   [str(n) for n in d["gait_notes"]], tr if tr and any(tr) else None)
+        return cls(
+            str(d["gait_layer"]),
+            float(d["gait_fps"]),
+            skel,
+            loops,
+            [str(n) for n in d["gait_notes"]],
+            tr if tr and any(tr) else None,
+        )
 
 
 MIN_TURN = np.radians(10.0)  # a cycle turning less than this counts as straight
@@ -192,8 +203,9 @@ def sharpest_turn(clip, cycle_frames):
     return float(min(k.min(), 0.0)), float(max(k.max(), 0.0))
 
 
-def build_gait(layer, straight, turns=(), fps=30.0, mirror_turns=True,
-               bend_radius=STRAIGHT_BEND_RADIUS):
+def build_gait(
+    layer, straight, turns=(), fps=30.0, mirror_turns=True, bend_radius=STRAIGHT_BEND_RADIUS
+):
     """Gait of a layer from a straight clip and turn clips (all one skeleton).
 
     Every cycle of a turn clip that turns by at least ``MIN_TURN`` becomes a loop; when
@@ -208,21 +220,31 @@ def build_gait(layer, straight, turns=(), fps=30.0, mirror_turns=True,
     for c in (straight,) + tuple(turns):
         c.validate()
         if c.skeleton.names != straight.skeleton.names:
-            raise ValueError(f"clip '{c.name}' has a different skeleton from '{straight.name}'; "
-                             f"one locomotion patch takes clips of one skeleton")
+            raise ValueError(
+                f"clip '{c.name}' has a different skeleton from '{straight.name}'; "
+                f"one locomotion patch takes clips of one skeleton"
+            )
     info = detect_cycles(straight)
     a, b = best_cycle(straight, info, "seam")
     frames = int(round((b - a) / straight.fps * fps))
     loops = [extract_loop(straight, a, b, frames, name=f"{straight.name} straight")]
     notes.append(f"straight: {straight.name} frames {a}-{b}")
+
     def turning_cycles(c, label=""):
         ci = detect_cycles(c)
         out = []
         for (s, e), t in zip(zip(ci.strikes[:-1], ci.strikes[1:]), cycle_turns(c, ci)):
             if abs(t) >= MIN_TURN:
                 side = "left" if t > 0 else "right"
-                out.append((c, s, e, f"{c.tags.get('mirrored_from', c.name)} {side} turn "
-                                     f"{np.degrees(abs(t)):.0f} deg{label}"))
+                out.append(
+                    (
+                        c,
+                        s,
+                        e,
+                        f"{c.tags.get('mirrored_from', c.name)} {side} turn "
+                        f"{np.degrees(abs(t)):.0f} deg{label}",
+                    )
+                )
         return out
 
     turn_loops = [tc for c in turns for tc in turning_cycles(c)]
@@ -242,6 +264,8 @@ def build_gait(layer, straight, turns=(), fps=30.0, mirror_turns=True,
         loops.append(extract_loop(c, s, e, frames, name=nm))
         notes.append(f"turn: {nm}, frames {s}-{e}")
     loops.sort(key=lambda lp: lp.curvature)
-    notes.append(f"turns: radius {1 / max(hi, 1e-9):.2f} m left, {1 / max(-lo, 1e-9):.2f} m right "
-                 f"at the sharpest (the straight stride alone bends to {bend_radius:.2f} m)")
+    notes.append(
+        f"turns: radius {1 / max(hi, 1e-9):.2f} m left, {1 / max(-lo, 1e-9):.2f} m right "
+        f"at the sharpest (the straight stride alone bends to {bend_radius:.2f} m)"
+    )
     return Gait(layer, float(fps), straight.skeleton, loops, notes, (lo, hi))

@@ -29,7 +29,9 @@ def edge_samples(patch, samples=SAMPLES):
         for k in range(4):
             idx = np.flatnonzero((e0 == j) & (e1 == k))
             if idx.size:
-                take = np.unique(np.linspace(0, idx.size - 1, min(samples, idx.size)).round().astype(int))
+                take = np.unique(
+                    np.linspace(0, idx.size - 1, min(samples, idx.size)).round().astype(int)
+                )
                 out[(j, k)] = idx[take]
     return out
 
@@ -106,8 +108,9 @@ class TilePlanner:
                 if not np.isfinite(cost):
                     continue
                 nt = (tile[0] + STEP[k][0], tile[1] + STEP[k][1])
-                if region is not None and not (region[0] <= nt[0] <= region[2]
-                                               and region[1] <= nt[1] <= region[3]):
+                if region is not None and not (
+                    region[0] <= nt[0] <= region[2] and region[1] <= nt[1] <= region[3]
+                ):
                     continue
                 ns = (nt, OPPOSITE[k])
                 c = g[state] + cost

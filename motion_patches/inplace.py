@@ -48,7 +48,9 @@ def to_inplace(clip, ground):
     ground = np.asarray(ground, float)
     c, s = np.cos(ground[:, 2]), np.sin(ground[:, 2])
     d = clip.root_pos[:, :2] - ground[:, :2]
-    local = np.stack((c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1], clip.root_pos[:, 2]), 1)
+    local = np.stack(
+        (c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1], clip.root_pos[:, 2]), 1
+    )
     rot = clip.rotations.copy()
     r = clip.skeleton.root
     rot[:, r] = root_channel_to_ground(clip.skeleton, rot[:, r], ground[:, 2])

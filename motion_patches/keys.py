@@ -17,9 +17,9 @@ so the choice changes the file, not the motion.
 
 import numpy as np
 
-KEY_BYTES = 72     # a BezTriple in a .blend
+KEY_BYTES = 72  # a BezTriple in a .blend
 SAMPLE_BYTES = 16  # an FPoint
-BASE = 64          # the coarsest key spacing tried, frames
+BASE = 64  # the coarsest key spacing tried, frames
 
 
 def linear_keys(values, tol, base=BASE):
@@ -68,6 +68,9 @@ def plan_columns(values, tol):
         keep = linear_keys(v[:, cols], tol)
         for c, k in zip(cols, keep.T):
             kept = np.flatnonzero(k)
-            out[c] = (("keys", kept) if kept.size * KEY_BYTES < v.shape[0] * SAMPLE_BYTES
-                      else ("samples", None))
+            out[c] = (
+                ("keys", kept)
+                if kept.size * KEY_BYTES < v.shape[0] * SAMPLE_BYTES
+                else ("samples", None)
+            )
     return out

@@ -29,8 +29,8 @@ RUN_COST_PER_METRE = 2.0
 (Margaria et al. 1963: about 1 kcal/kg/km running at any speed, 0.5 walking near
 1.2 m/s), so a run's effort per second is 2 x its speed / ``REFERENCE_WALK_SPEED``."""
 
-REFERENCE_WALK_SPEED = 1.2   # m/s: the walking pace ``WALK_EFFORT_RATE`` is counted at
-FLIGHT_SHARE = 0.05          # share of a cycle with no foot planted that makes a gait a run
+REFERENCE_WALK_SPEED = 1.2  # m/s: the walking pace ``WALK_EFFORT_RATE`` is counted at
+FLIGHT_SHARE = 0.05  # share of a cycle with no foot planted that makes a gait a run
 
 
 def has_flight(gait):
@@ -60,15 +60,20 @@ def serves(clip, layer):
     """A traversal clip is used by the patch of ``layer`` when both its incoming and its
     outgoing layer name it (each a name, a comma-separated list of names, or "*" for
     every layer: the 16_06 standing jump may serve "walk, run")."""
+
     def names(text):
         return {n.strip() for n in str(text).split(",") if n.strip()}
-    return all("*" in names(side) or layer in names(side) for side in (clip.layer_in, clip.layer_out))
+
+    return all(
+        "*" in names(side) or layer in names(side) for side in (clip.layer_in, clip.layer_out)
+    )
 
 
 def for_layer(prop, layer):
     """The object patch with only the traversal clips that serve ``layer`` (interaction
     clips are kept: they start or end a path in whatever layer it walks)."""
     from dataclasses import replace
+
     keep = [c for c in prop.clips if c.kind != "traversal" or serves(c, layer)]
     if len(keep) == len(prop.clips):
         return prop
@@ -78,7 +83,9 @@ def for_layer(prop, layer):
 def check_gait(gait_choice):
     """Refuse a layer choice that is not a layer name or "auto"; returns it stripped."""
     if not isinstance(gait_choice, str) or not gait_choice.strip():
-        raise ValueError(f"the gait must be a layer name (walk, run) or 'auto', not {gait_choice!r}")
+        raise ValueError(
+            f"the gait must be a layer name (walk, run) or 'auto', not {gait_choice!r}"
+        )
     return gait_choice.strip()
 
 

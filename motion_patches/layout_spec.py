@@ -10,12 +10,26 @@ class SpecError(ValueError):
     """A spec that cannot be checked; the message names the key and the pair."""
 
 
-TOP_KEYS = {"patch", "alpha", "beta", "gamma", "radius", "margin_tiles", "limits", "exclude",
-            "pairs"}
+TOP_KEYS = {
+    "patch",
+    "alpha",
+    "beta",
+    "gamma",
+    "radius",
+    "margin_tiles",
+    "limits",
+    "exclude",
+    "pairs",
+}
 LIMIT_KEYS = {"must_reach", "max_seconds", "max_length", "max_cost", "allow_traversal"}
 PAIR_KEYS = {"name", "character", "start", "goal", "goal_facing", "exclude"} | LIMIT_KEYS
-LIMIT_DEFAULTS = {"must_reach": True, "max_seconds": None, "max_length": None,
-                  "max_cost": None, "allow_traversal": True}
+LIMIT_DEFAULTS = {
+    "must_reach": True,
+    "max_seconds": None,
+    "max_length": None,
+    "max_cost": None,
+    "allow_traversal": True,
+}
 
 
 def _spec_error(msg):
@@ -40,9 +54,14 @@ def _limits(d, where, base):
 def _place(value, where):
     if isinstance(value, str) and value:
         return value
-    if (isinstance(value, (list, tuple)) and len(value) == 3
-            and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-                    for v in value)):
+    if (
+        isinstance(value, (list, tuple))
+        and len(value) == 3
+        and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            for v in value
+        )
+    ):
         return [float(v) for v in value]
     raise _spec_error(f"{where} must be an object name or [x, y, heading_deg]")
 
@@ -53,15 +72,17 @@ def normalise(spec):
         raise _spec_error("the top level must be a table / object")
     unknown = set(spec) - TOP_KEYS
     if unknown:
-        raise _spec_error(f"unknown key(s) {', '.join(sorted(unknown))} (known: "
-                          f"{', '.join(sorted(TOP_KEYS))})")
+        raise _spec_error(
+            f"unknown key(s) {', '.join(sorted(unknown))} (known: {', '.join(sorted(TOP_KEYS))})"
+        )
     out = {"patch": spec.get("patch")}
     if out["patch"] is not None and not isinstance(out["patch"], str):
         raise _spec_error("patch must be a name")
     for k in ("alpha", "beta", "gamma", "radius", "margin_tiles"):
         v = spec.get(k)
-        if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float))
-                              or not 0 <= v < math.inf):
+        if v is not None and (
+            isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v < math.inf
+        ):
             raise _spec_error(f"{k} must be a number >= 0")
         out[k] = v
     limits = spec.get("limits", {})
@@ -79,8 +100,10 @@ def normalise(spec):
             raise _spec_error(f"{where} must be a table / object")
         unknown = set(p) - PAIR_KEYS
         if unknown:
-            raise _spec_error(f"{where}: unknown key(s) {', '.join(sorted(unknown))} (known: "
-                              f"{', '.join(sorted(PAIR_KEYS))})")
+            raise _spec_error(
+                f"{where}: unknown key(s) {', '.join(sorted(unknown))} (known: "
+                f"{', '.join(sorted(PAIR_KEYS))})"
+            )
         if ("character" in p) == ("start" in p):
             raise _spec_error(f"{where}: give either 'character' or 'start'")
         if "goal" not in p:
@@ -93,12 +116,18 @@ def normalise(spec):
         name = p.get("name") or f"{_label(start)} -> {_label(goal)}"
         facing = p.get("goal_facing", "exact")
         if facing not in ("exact", "any"):
-            raise _spec_error(f"{where}: goal_facing must be \"exact\" or \"any\"")
-        out["pairs"].append({"name": str(name), "start": start, "goal": goal,
-                             "character": "character" in p,
-                             "goal_facing": facing,
-                             "exclude": _names_list(p.get("exclude"), where),
-                             "limits": _limits(p, where, base)})
+            raise _spec_error(f'{where}: goal_facing must be "exact" or "any"')
+        out["pairs"].append(
+            {
+                "name": str(name),
+                "start": start,
+                "goal": goal,
+                "character": "character" in p,
+                "goal_facing": facing,
+                "exclude": _names_list(p.get("exclude"), where),
+                "limits": _limits(p, where, base),
+            }
+        )
     return out
 
 
@@ -123,16 +152,20 @@ def judge(r, lim):
             return []
         why = f"unreachable ({r['error']})"
         if r["blocked_by"]:
-            why = f"unreachable: blocked by {', '.join(r['blocked_by'][:6])}" + (
-                ", ..." if len(r["blocked_by"]) > 6 else "") + f" ({r['blocked_reason']})"
+            why = (
+                f"unreachable: blocked by {', '.join(r['blocked_by'][:6])}"
+                + (", ..." if len(r["blocked_by"]) > 6 else "")
+                + f" ({r['blocked_reason']})"
+            )
         return [why]
     out = []
-    for key, value, unit in (("max_seconds", r["seconds"], " s of motion"),
-                             ("max_length", r["length_m"], " m"), ("max_cost", r["cost"], "")):
+    for key, value, unit in (
+        ("max_seconds", r["seconds"], " s of motion"),
+        ("max_length", r["length_m"], " m"),
+        ("max_cost", r["cost"], ""),
+    ):
         if lim[key] is not None and value > lim[key]:
             out.append(f"{value:.2f}{unit} exceeds {key} {lim[key]:g}")
     if not lim["allow_traversal"] and r["traversals"]:
         out.append(f"{r['traversals']} traversal(s) but allow_traversal is false")
     return out
-
-

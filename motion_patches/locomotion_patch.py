@@ -61,16 +61,16 @@ class LocomotionPatch:
     side: float
     cells: int
     nodes: int
-    effort_rate: float       # effort T per second of motion for this layer
-    seg_entry: np.ndarray    # (S,) local node id of the entry state
-    seg_exit: np.ndarray     # (S,) local node id of the exit state
-    seg_scale: np.ndarray    # (S,) Hermite tangent scale
-    seg_cycles: np.ndarray   # (S,) whole gait cycles
-    seg_mask: np.ndarray     # (S,) uint64 cell bitmask B_P
-    seg_length: np.ndarray   # (S,) metres, integral of ds
-    seg_turn: np.ndarray     # (S,) radians, integral of |d theta|
-    seg_effort: np.ndarray   # (S,) effort T
-    seg_pose: np.ndarray     # (S, 2) pose cluster of entry and exit node
+    effort_rate: float  # effort T per second of motion for this layer
+    seg_entry: np.ndarray  # (S,) local node id of the entry state
+    seg_exit: np.ndarray  # (S,) local node id of the exit state
+    seg_scale: np.ndarray  # (S,) Hermite tangent scale
+    seg_cycles: np.ndarray  # (S,) whole gait cycles
+    seg_mask: np.ndarray  # (S,) uint64 cell bitmask B_P
+    seg_length: np.ndarray  # (S,) metres, integral of ds
+    seg_turn: np.ndarray  # (S,) radians, integral of |d theta|
+    seg_effort: np.ndarray  # (S,) effort T
+    seg_pose: np.ndarray  # (S, 2) pose cluster of entry and exit node
     pose_centres: np.ndarray
     stats: dict = field(default_factory=dict)
 
@@ -86,8 +86,12 @@ class LocomotionPatch:
         """p0, d0, p1, d1 arrays of segments (local coordinates, unit directions)."""
         e0, k0, h0 = split_node_id(self.seg_entry[seg], self.nodes)
         e1, k1, h1 = split_node_id(self.seg_exit[seg], self.nodes)
-        return (node_position(e0, k0, self.side, self.nodes), curves.unit(h0 * np.pi / 4),
-                node_position(e1, k1, self.side, self.nodes), curves.unit(h1 * np.pi / 4))
+        return (
+            node_position(e0, k0, self.side, self.nodes),
+            curves.unit(h0 * np.pi / 4),
+            node_position(e1, k1, self.side, self.nodes),
+            curves.unit(h1 * np.pi / 4),
+        )
 
     def curve(self, seg):
         p0, d0, p1, d1 = self.endpoints(np.array([seg]))
@@ -113,8 +117,11 @@ class LocomotionPatch:
                 self.ground(seg, c)
             parts = [self.ground(s) for s in range(self.segment_count)]
             start = np.concatenate(([0], np.cumsum([p[0].shape[0] for p in parts])))
-            cache = (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
-                     start)
+            cache = (
+                np.concatenate([p[0] for p in parts]),
+                np.concatenate([p[1] for p in parts]),
+                start,
+            )
             self.__dict__["_all_ground"] = cache
         return cache
 
@@ -125,8 +132,9 @@ class LocomotionPatch:
         pts = self.__dict__.get("_path_points")
         if pts is None:
             p0, d0, p1, d1 = self.endpoints(np.arange(self.segment_count))
-            pts, _, _ = curves.hermite(p0, d0, p1, d1, self.seg_scale,
-                                       np.linspace(0.0, 1.0, PATH_SAMPLES))
+            pts, _, _ = curves.hermite(
+                p0, d0, p1, d1, self.seg_scale, np.linspace(0.0, 1.0, PATH_SAMPLES)
+            )
             pts = self.__dict__["_path_points"] = np.ascontiguousarray(pts)
         return pts
 
@@ -146,12 +154,31 @@ class LocomotionPatch:
     def without(self, segments):
         """The patch with the given segments removed (caches dropped)."""
         keep = np.setdiff1d(np.arange(self.segment_count), np.asarray(segments, int))
-        arrays = {name: getattr(self, name)[keep] for name in
-                  ("seg_entry", "seg_exit", "seg_scale", "seg_cycles", "seg_mask", "seg_length",
-                   "seg_turn", "seg_effort", "seg_pose")}
-        return LocomotionPatch(self.layer, self.gait, self.side, self.cells, self.nodes,
-                               self.effort_rate, pose_centres=self.pose_centres,
-                               stats=self.stats, **arrays)
+        arrays = {
+            name: getattr(self, name)[keep]
+            for name in (
+                "seg_entry",
+                "seg_exit",
+                "seg_scale",
+                "seg_cycles",
+                "seg_mask",
+                "seg_length",
+                "seg_turn",
+                "seg_effort",
+                "seg_pose",
+            )
+        }
+        return LocomotionPatch(
+            self.layer,
+            self.gait,
+            self.side,
+            self.cells,
+            self.nodes,
+            self.effort_rate,
+            pose_centres=self.pose_centres,
+            stats=self.stats,
+            **arrays,
+        )
 
     def costs(self, alpha, beta, gamma):
         """Eq. 5 cost of every segment for the weights of one character."""
@@ -189,8 +216,7 @@ def candidate_states(nodes):
     return entries[ei[keep]], exits[xi[keep]]
 
 
-def bake(gait, cells=8, nodes=8, side=None, effort_rate=1.0, curvature_margin=1.0,
-         progress=None):
+def bake(gait, cells=8, nodes=8, side=None, effort_rate=1.0, curvature_margin=1.0, progress=None):
     """Bake the locomotion patch of a gait; ``progress(fraction)`` is called as it goes."""
     if cells * cells > 64:
         raise ValueError(f"{cells}x{cells} cells do not fit a 64-bit cell bitmask")
@@ -218,15 +244,25 @@ def bake(gait, cells=8, nodes=8, side=None, effort_rate=1.0, curvature_margin=1.
         todo = np.flatnonzero(np.isnan(scale))
         if todo.size == 0:
             break
-        sc = curves.fit_scale(p0[todo], d0[todo], p1[todo], d1[todo], float(n), measure=measure,
-                              table=(table[0][todo], table[1][todo]))
+        sc = curves.fit_scale(
+            p0[todo],
+            d0[todo],
+            p1[todo],
+            d1[todo],
+            float(n),
+            measure=measure,
+            table=(table[0][todo], table[1][todo]),
+        )
         fitted = ~np.isnan(sc)
         idx, sc = todo[fitted], sc[fitted]
         if idx.size:
             pos, vel, acc = curves.hermite(p0[idx], d0[idx], p1[idx], d1[idx], sc, u)
             kap = curves.curvature(vel, acc)
-            bends = ((kap.min(axis=1) < kmin) | (kap.max(axis=1) > kmax)
-                     | ~curves.follows_turn_limits(pos, vel, kmin, kmax))
+            bends = (
+                (kap.min(axis=1) < kmin)
+                | (kap.max(axis=1) > kmax)
+                | ~curves.follows_turn_limits(pos, vel, kmin, kmax)
+            )
             eps = 1e-6
             outside = np.any((pos < -eps) | (pos > side + eps), axis=(1, 2))
             good = ~bends & ~outside
@@ -249,27 +285,52 @@ def bake(gait, cells=8, nodes=8, side=None, effort_rate=1.0, curvature_margin=1.
     # Pose clusters over the node poses the loops offer; each segment's first and last
     # synthesised frame is then labelled with its nearest cluster.
     phase0 = np.zeros(len(gait.loops), int)
-    feats = poses.pose_features(np.stack([lp.root_local[0] for lp in gait.loops]),
-                                np.stack([lp.rotations[0] for lp in gait.loops]))
+    feats = poses.pose_features(
+        np.stack([lp.root_local[0] for lp in gait.loops]),
+        np.stack([lp.rotations[0] for lp in gait.loops]),
+    )
     centres, _ = poses.cluster_until(feats, max_spread=0.5)
     straight_end = gait.pose(phase0[:1], gait.straight_weights(1))
     end_label = poses.nearest(centres, poses.pose_features(straight_end[0], straight_end[1]))[0]
     seg_pose = np.full((keep.size, 2), end_label, int)
 
-    culled = {r: int(np.sum(reason[np.isnan(scale)] == r)) for r in ("curvature", "outside", "no fit")}
-    stats = {"candidates": int(ncand), "kept": int(keep.size), "culled": int(ncand - keep.size),
-             "culled_by": culled, "pose_clusters": int(centres.shape[0]),
-             "cycles_histogram": {int(n): int(np.sum(cycles[keep] == n)) for n in range(1, MAX_CYCLES + 1)},
-             "curvature_limits": [kmin, kmax]}
+    culled = {
+        r: int(np.sum(reason[np.isnan(scale)] == r)) for r in ("curvature", "outside", "no fit")
+    }
+    stats = {
+        "candidates": int(ncand),
+        "kept": int(keep.size),
+        "culled": int(ncand - keep.size),
+        "culled_by": culled,
+        "pose_clusters": int(centres.shape[0]),
+        "cycles_histogram": {
+            int(n): int(np.sum(cycles[keep] == n)) for n in range(1, MAX_CYCLES + 1)
+        },
+        "curvature_limits": [kmin, kmax],
+    }
     patch = LocomotionPatch(
-        gait.layer, gait, side, cells, nodes, float(effort_rate),
+        gait.layer,
+        gait,
+        side,
+        cells,
+        nodes,
+        float(effort_rate),
         node_id(entries[keep, 0], entries[keep, 1], entries[keep, 2], nodes),
         node_id(exits[keep, 0], exits[keep, 1], exits[keep, 2], nodes),
-        scale[keep], cycles[keep], seg_mask, seg_length, seg_turn, seg_effort, seg_pose,
-        centres, stats)
+        scale[keep],
+        cycles[keep],
+        seg_mask,
+        seg_length,
+        seg_turn,
+        seg_effort,
+        seg_pose,
+        centres,
+        stats,
+    )
     # The validator looks at every kept segment's frames: a spin, a backward step or a
     # jump the curve checks missed is culled here rather than played.
     from .validate import segment_glitches
+
     bad = segment_glitches(patch)
     culled["glitch"] = len(bad)
     if bad:
@@ -295,12 +356,19 @@ def sparse_message(patch):
     by, kmin, kmax = stats["culled_by"], *stats["curvature_limits"]
     radius = 1.0 / max(min(-kmin, kmax), 1e-9)
     why = [f"{by['curvature']:,} bend tighter than the gait turns (radius {radius:.2f} m)"]
-    why += [f"{by[k]:,} {what}" for k, what in (
-        ("no fit", "fit no whole number of cycles"), ("outside", "leave the patch"),
-        ("glitch", "spin, step back or jump")) if by.get(k)]
-    return (f"the patch is too sparse to plan with: only {stats['entry_share']:.0%} of entry "
-            f"states have a way on (at least {MIN_ENTRY_SHARE:.0%} are needed). Of "
-            f"{stats['candidates']:,} candidate segments {stats['kept']:,} are kept; "
-            f"{', '.join(why)}. Add a turn clip (a walk turning left or right) so segments "
-            f"can bend tighter" + (", or bake with more nodes per edge" if patch.nodes < 4
-                                   else ""))
+    why += [
+        f"{by[k]:,} {what}"
+        for k, what in (
+            ("no fit", "fit no whole number of cycles"),
+            ("outside", "leave the patch"),
+            ("glitch", "spin, step back or jump"),
+        )
+        if by.get(k)
+    ]
+    return (
+        f"the patch is too sparse to plan with: only {stats['entry_share']:.0%} of entry "
+        f"states have a way on (at least {MIN_ENTRY_SHARE:.0%} are needed). Of "
+        f"{stats['candidates']:,} candidate segments {stats['kept']:,} are kept; "
+        f"{', '.join(why)}. Add a turn clip (a walk turning left or right) so segments "
+        f"can bend tighter" + (", or bake with more nodes per edge" if patch.nodes < 4 else "")
+    )

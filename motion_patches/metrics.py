@@ -22,9 +22,14 @@ def foot_skate(foot_pos, fps, planted):
     step = np.linalg.norm(np.diff(foot_pos[..., :2], axis=0), axis=-1)
     v = step[both] * 100.0  # cm per frame
     if v.size == 0:
-        return {"mean_cm_per_frame": float("nan"), "p95_cm_per_frame": float("nan"),
-                "mean_cm_per_s": float("nan"), "p95_cm_per_s": float("nan"),
-                "max_cm_per_s": float("nan"), "planted_steps": 0}
+        return {
+            "mean_cm_per_frame": float("nan"),
+            "p95_cm_per_frame": float("nan"),
+            "mean_cm_per_s": float("nan"),
+            "p95_cm_per_s": float("nan"),
+            "max_cm_per_s": float("nan"),
+            "planted_steps": 0,
+        }
     return {
         "mean_cm_per_frame": float(v.mean()),
         "p95_cm_per_frame": float(np.percentile(v, 95)),
@@ -59,6 +64,7 @@ def boundary_pops(local_rotations, boundaries, fps):
     elsewhere, so a pop shows as a boundary step far above ordinary motion.
     """
     from . import quat
+
     q = np.asarray(local_rotations, float)
     steps = np.degrees(quat.angle_between(q[1:], q[:-1])).max(axis=1)  # (F-1,)
     b = np.asarray([i - 1 for i in boundaries if 1 <= i < q.shape[0]], int)

@@ -11,10 +11,10 @@ from .skeleton import forward_kinematics
 
 @dataclass
 class Motion:
-    ground: np.ndarray      # (F, 3) x, y, heading of the ground frame (the armature object)
+    ground: np.ndarray  # (F, 3) x, y, heading of the ground frame (the armature object)
     root_local: np.ndarray  # (F, 3) root position in ground coordinates
-    rotations: np.ndarray   # (F, J, 4) in-place rotation channels
-    contacts: np.ndarray    # (F, 4) planted flags from the source loops
+    rotations: np.ndarray  # (F, J, 4) in-place rotation channels
+    contacts: np.ndarray  # (F, 4) planted flags from the source loops
 
     @property
     def frames(self):
@@ -45,16 +45,17 @@ def ease_to(m, target, frames, at_end=True):
     (or last) frame: ground offset and body channels, smoothstep weights, so a stitch
     between two clips lands without a jump."""
     from . import quat
+
     n = min(frames, m.frames - 1)
     w = np.zeros(m.frames)
     t = np.linspace(0.0, 1.0, n + 1)
     ramp = t * t * (3 - 2 * t)
     if at_end:
-        w[-(n + 1):] = ramp
+        w[-(n + 1) :] = ramp
         src = m.frames - 1
         tgt = 0
     else:
-        w[:n + 1] = ramp[::-1]
+        w[: n + 1] = ramp[::-1]
         src = 0
         tgt = target.frames - 1
     g = m.ground.copy()
@@ -70,10 +71,14 @@ def ease_to(m, target, frames, at_end=True):
 
 def concatenate(parts):
     """Join motions end to start; each part's first frame repeats the previous last frame."""
-    keep = [parts[0]] + [Motion(p.ground[1:], p.root_local[1:], p.rotations[1:], p.contacts[1:])
-                         for p in parts[1:]]
+    keep = [parts[0]] + [
+        Motion(p.ground[1:], p.root_local[1:], p.rotations[1:], p.contacts[1:]) for p in parts[1:]
+    ]
     g = np.concatenate([p.ground for p in keep])
     g[:, 2] = np.unwrap(g[:, 2])
-    return Motion(g, np.concatenate([p.root_local for p in keep]),
-                  np.concatenate([p.rotations for p in keep]),
-                  np.concatenate([p.contacts for p in keep]))
+    return Motion(
+        g,
+        np.concatenate([p.root_local for p in keep]),
+        np.concatenate([p.rotations for p in keep]),
+        np.concatenate([p.contacts for p in keep]),
+    )

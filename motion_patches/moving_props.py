@@ -27,21 +27,22 @@ import numpy as np
 from .environment import Obstacle, convex_hull
 from .motion import concatenate
 
-STILL_SPEED = 1e-3     # m/s (and rad/s x 1 m) under which a prop is asleep
-SWEEP_AHEAD_S = 2.5    # seconds of a prop's motion swept ahead of a conflict (its velocity)
-SWEEP_BEHIND_S = 0.5   # and behind it (the way it came is free again soon after)
-MAX_ROUNDS = 6         # repairs tried per plan before the remaining conflicts are reported
-MAX_DELAY_S = 6.0      # longest wait at the start offered instead of a detour
+STILL_SPEED = 1e-3  # m/s (and rad/s x 1 m) under which a prop is asleep
+SWEEP_AHEAD_S = 2.5  # seconds of a prop's motion swept ahead of a conflict (its velocity)
+SWEEP_BEHIND_S = 0.5  # and behind it (the way it came is free again soon after)
+MAX_ROUNDS = 6  # repairs tried per plan before the remaining conflicts are reported
+MAX_DELAY_S = 6.0  # longest wait at the start offered instead of a detour
 DELAY_STEP_S = 0.25
 
 
 @dataclass
 class PropTrack:
     """A prop's footprint moving rigidly over time."""
+
     name: str
-    polygon: np.ndarray    # (P, 2) convex footprint in the prop's own frame (pose 0, 0, 0)
-    times: np.ndarray      # (K,) seconds from the plan's first frame, increasing
-    poses: np.ndarray      # (K, 3) world x, y, yaw at those times
+    polygon: np.ndarray  # (P, 2) convex footprint in the prop's own frame (pose 0, 0, 0)
+    times: np.ndarray  # (K,) seconds from the plan's first frame, increasing
+    poses: np.ndarray  # (K, 3) world x, y, yaw at those times
     _hull_cache: dict = field(default_factory=dict, repr=False)
 
     def __post_init__(self):
@@ -58,9 +59,14 @@ class PropTrack:
         and after the last (a prop rests before and after its keyframes)."""
         t = np.atleast_1d(np.asarray(t, float))
         yaw = np.unwrap(self.poses[:, 2])
-        return np.stack([np.interp(t, self.times, self.poses[:, 0]),
-                         np.interp(t, self.times, self.poses[:, 1]),
-                         np.interp(t, self.times, yaw)], -1)
+        return np.stack(
+            [
+                np.interp(t, self.times, self.poses[:, 0]),
+                np.interp(t, self.times, self.poses[:, 1]),
+                np.interp(t, self.times, yaw),
+            ],
+            -1,
+        )
 
     def polygon_at(self, pose):
         c, s = np.cos(pose[2]), np.sin(pose[2])
@@ -73,8 +79,9 @@ class PropTrack:
             return np.zeros(0, bool)
         dt = np.diff(self.times)
         reach = np.abs(self.polygon).max() if self.polygon.size else 0.0
-        step = (np.linalg.norm(np.diff(self.poses[:, :2], axis=0), axis=1)
-                + reach * np.abs(np.diff(np.unwrap(self.poses[:, 2]))))
+        step = np.linalg.norm(np.diff(self.poses[:, :2], axis=0), axis=1) + reach * np.abs(
+            np.diff(np.unwrap(self.poses[:, 2]))
+        )
         return step / dt > STILL_SPEED
 
     def awake_at(self, t):
@@ -104,8 +111,9 @@ class PropTrack:
         """Obstacles covering the footprint over times ``t0``-``t1``: the convex hull of
         the footprints at each pair of neighbouring instants (``step`` s apart, and every
         sample between), which is the area a convex footprint sweeps while it translates."""
-        ts = np.concatenate((np.arange(t0, t1, step), [t1],
-                             self.times[(self.times > t0) & (self.times < t1)]))
+        ts = np.concatenate(
+            (np.arange(t0, t1, step), [t1], self.times[(self.times > t0) & (self.times < t1)])
+        )
         ts = np.unique(ts)
         polys = [self.polygon_at(p) for p in self.pose_at(ts)]
         out = []
@@ -120,16 +128,18 @@ class PropTrack:
 @dataclass
 class Conflict:
     prop: str
-    frame: int             # frame of the planned motion (from 0) where the walk meets the prop
-    piece: int             # index of the plan piece walked then
-    distance: float        # metres from the character's ground point to the prop's footprint
+    frame: int  # frame of the planned motion (from 0) where the walk meets the prop
+    piece: int  # index of the plan piece walked then
+    distance: float  # metres from the character's ground point to the prop's footprint
 
     def describe(self, fps, frame_start=0, scene_fps=None):
         """Where and when, in the scene's frames (``frame`` counts the motion's frames at
         ``fps`` from ``frame_start``; the scene may run at ``scene_fps``)."""
         at = frame_start + int(round(self.frame * (scene_fps or fps) / fps))
-        return (f"'{self.prop}' meets the walk at frame {at} ({self.frame / fps:.1f} s in, "
-                f"{self.distance:.2f} m from its footprint)")
+        return (
+            f"'{self.prop}' meets the walk at frame {at} ({self.frame / fps:.1f} s in, "
+            f"{self.distance:.2f} m from its footprint)"
+        )
 
 
 def piece_frames(motions):
@@ -154,8 +164,9 @@ def conflicts(motions, tracks, radius, fps, delay=0.0):
         d = _distances(xy, tr.pose_at(t), tr.polygon)
         if delay > 0:  # standing at the start meanwhile
             wait = np.arange(0.0, delay, 0.1)
-            if (_distances(np.repeat(xy[:1], wait.size, 0), tr.pose_at(wait), tr.polygon)
-                    < radius).any():
+            if (
+                _distances(np.repeat(xy[:1], wait.size, 0), tr.pose_at(wait), tr.polygon) < radius
+            ).any():
                 out.append(Conflict(tr.name, 0, 0, 0.0))
                 continue
         hit = np.flatnonzero(d < radius)
@@ -192,14 +203,16 @@ def wait_needed(motions, tracks, radius, fps, longest=MAX_DELAY_S):
     return None
 
 
-def avoid(planner, patch, plan, tracks, motions_of, max_rounds=MAX_ROUNDS,
-          longest_wait=MAX_DELAY_S):
+def avoid(
+    planner, patch, plan, tracks, motions_of, max_rounds=MAX_ROUNDS, longest_wait=MAX_DELAY_S
+):
     """``plan`` made clear of the moving props ``tracks``: (plan, wait, repairs, unresolved).
 
     ``motions_of(plan)`` gives the plan's piece motions as they will be played (eased
     starts and stops included; see :func:`~.planner.plan_motions`). Each round finds the
     earliest conflict and weighs two answers: waiting at the start until the prop has
-    gone by (:func:`wait_needed`, up to ``longest_wait`` seconds), and a detour: that prop's footprint swept from
+    gone by (:func:`wait_needed`, up to ``longest_wait`` seconds), and a detour: that
+    prop's footprint swept from
     ``SWEEP_BEHIND_S`` before the conflict to ``SWEEP_AHEAD_S`` after (its bounds extended
     along its velocity, as the paper's local avoidance does, so the way passes behind a
     moving prop) and only the piece walked then re-planned round it, with every footprint
@@ -209,6 +222,7 @@ def avoid(planner, patch, plan, tracks, motions_of, max_rounds=MAX_ROUNDS,
     kept}]; ``unresolved``: the conflicts left, by prop and frame."""
     from .planner import PlanError
     from .shortcut import LOCOMOTION
+
     fps = patch.gait.fps
     radius = planner.world_env.radius
     repairs, extra = [], []
@@ -236,13 +250,24 @@ def avoid(planner, patch, plan, tracks, motions_of, max_rounds=MAX_ROUNDS,
                 if first == 0 and last == n - 1:
                     break
                 first, last = max(first - 1, 0), min(last + 1, n - 1)
-        longer = (None if done is None else
-                  (sum(m.frames - 1 for m in motions_of(done)) - sum(m.frames - 1 for m in motions)) / fps)
+        longer = (
+            None
+            if done is None
+            else (sum(m.frames - 1 for m in motions_of(done)) - sum(m.frames - 1 for m in motions))
+            / fps
+        )
         if wait is not None and (done is None or wait <= longer):
             return plan, wait, repairs, []
         if done is None:
             return plan, 0.0, repairs, found
-        repairs.append({"prop": c.prop, "frame": c.frame, "pieces": [first, last],
-                        "kept": n - (last + 1 - first), "seconds_longer": float(longer)})
+        repairs.append(
+            {
+                "prop": c.prop,
+                "frame": c.frame,
+                "pieces": [first, last],
+                "kept": n - (last + 1 - first),
+                "seconds_longer": float(longer),
+            }
+        )
         plan = done
     return plan, 0.0, repairs, conflicts(motions_of(plan), tracks, radius, fps)

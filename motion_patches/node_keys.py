@@ -17,7 +17,9 @@ TILE_STEP = np.array([[0, -1], [1, 0], [0, 1], [-1, 0]])
 
 
 def pack(i, j, local):
-    return ((np.asarray(i, np.int64) + BIAS) * (2 * BIAS) + (np.asarray(j, np.int64) + BIAS)) * LOCAL + local
+    return (
+        (np.asarray(i, np.int64) + BIAS) * (2 * BIAS) + (np.asarray(j, np.int64) + BIAS)
+    ) * LOCAL + local
 
 
 def unpack(key):
@@ -30,5 +32,8 @@ def next_entry(patch, tile, seg):
     """(i, j, local entry id) of the node a segment walked in ``tile`` leads to."""
     e1, k1, h1 = split_node_id(patch.seg_exit[seg], patch.nodes)
     step = TILE_STEP[e1]
-    return (tile[0] + int(step[0]), tile[1] + int(step[1]),
-            int(node_id(NEXT_EDGE[e1], k1, h1, patch.nodes)))
+    return (
+        tile[0] + int(step[0]),
+        tile[1] + int(step[1]),
+        int(node_id(NEXT_EDGE[e1], k1, h1, patch.nodes)),
+    )

@@ -27,13 +27,14 @@ BINS = 4  # density bins per side of the extended bounds
 @dataclass
 class PatchClip:
     """A clip in prop coordinates; its first and last frames are the stitch keyframes."""
+
     name: str
     kind: str
-    motion: Motion          # ground frames relative to the prop, in-place channels
-    effort: float = 1.0     # user-supplied T of Eq. 5 for the whole clip
+    motion: Motion  # ground frames relative to the prop, in-place channels
+    effort: float = 1.0  # user-supplied T of Eq. 5 for the whole clip
     layer_in: str = "walk"  # layers the clip is entered from / left in (names, "a, b" or "*";
     layer_out: str = "walk"  # motion_patches.layers.serves)
-    angle: float = 0.0      # rotation of this copy about the prop (radians)
+    angle: float = 0.0  # rotation of this copy about the prop (radians)
 
     @property
     def entry(self):
@@ -48,20 +49,24 @@ class PatchClip:
         got = self.__dict__.get("_length")
         if got is None:
             got = self.__dict__["_length"] = float(
-                np.linalg.norm(np.diff(self.motion.ground[:, :2], axis=0), axis=1).sum())
+                np.linalg.norm(np.diff(self.motion.ground[:, :2], axis=0), axis=1).sum()
+            )
         return got
 
     def turn(self):
         """Radians the ground frame turns in all (computed once)."""
         got = self.__dict__.get("_turn")
         if got is None:
-            got = self.__dict__["_turn"] = float(np.abs(np.diff(np.unwrap(self.motion.ground[:, 2]))).sum())
+            got = self.__dict__["_turn"] = float(
+                np.abs(np.diff(np.unwrap(self.motion.ground[:, 2]))).sum()
+            )
         return got
 
     def rotated(self, angle):
         m = self.motion.transformed(0.0, 0.0, angle)
-        return PatchClip(self.name, self.kind, m, self.effort, self.layer_in, self.layer_out,
-                         self.angle + angle)
+        return PatchClip(
+            self.name, self.kind, m, self.effort, self.layer_in, self.layer_out, self.angle + angle
+        )
 
 
 def clip_ground(clip):
@@ -108,8 +113,10 @@ def patch_clip_from(clip, kind, fps, effort=1.0, anchor=None, name=None, floor=N
     ground = clip_ground(c)
     travel = np.linalg.norm(c.root_pos[-1, :2] - c.root_pos[0, :2])
     if kind == TRAVERSAL and travel < 0.3:
-        raise ValueError(f"clip '{clip.name}' moves the root only {travel:.2f} m: a traversal "
-                         f"clip must carry the character past the prop (no root motion)")
+        raise ValueError(
+            f"clip '{clip.name}' moves the root only {travel:.2f} m: a traversal "
+            f"clip must carry the character past the prop (no root motion)"
+        )
     root_local, rot = to_inplace(c, ground)
     if floor is not None:
         root_local = root_local.copy()
@@ -120,8 +127,12 @@ def patch_clip_from(clip, kind, fps, effort=1.0, anchor=None, name=None, floor=N
         anchor = ground[int(pick(c.root_pos[:, 2])), :2]
     h0 = ground[0, 2]
     m = Motion(ground, root_local, rot, con).transformed(0.0, 0.0, -h0)
-    a = np.array([np.cos(-h0) * anchor[0] - np.sin(-h0) * anchor[1],
-                  np.sin(-h0) * anchor[0] + np.cos(-h0) * anchor[1]])
+    a = np.array(
+        [
+            np.cos(-h0) * anchor[0] - np.sin(-h0) * anchor[1],
+            np.sin(-h0) * anchor[0] + np.cos(-h0) * anchor[1],
+        ]
+    )
     m = m.transformed(-a[0], -a[1], 0.0)
     return PatchClip(name or clip.name, kind, m, float(effort))
 
@@ -129,16 +140,19 @@ def patch_clip_from(clip, kind, fps, effort=1.0, anchor=None, name=None, floor=N
 @dataclass
 class ObjectPatch:
     """A prop instance: footprint, pose on the ground, clips (with copies), density bins."""
+
     name: str
-    footprint: np.ndarray        # (P, 2) convex, counter-clockwise, prop coordinates
-    clips: list = field(default_factory=list)   # PatchClip in prop coordinates (copies included)
-    pose: tuple = (0.0, 0.0, 0.0)               # x, y, heading of the prop on the ground
+    footprint: np.ndarray  # (P, 2) convex, counter-clockwise, prop coordinates
+    clips: list = field(default_factory=list)  # PatchClip in prop coordinates (copies included)
+    pose: tuple = (0.0, 0.0, 0.0)  # x, y, heading of the prop on the ground
 
     def to_world(self, xy):
         x, y, h = self.pose
         c, s = np.cos(h), np.sin(h)
         xy = np.asarray(xy, float)
-        return np.stack((x + c * xy[..., 0] - s * xy[..., 1], y + s * xy[..., 0] + c * xy[..., 1]), -1)
+        return np.stack(
+            (x + c * xy[..., 0] - s * xy[..., 1], y + s * xy[..., 0] + c * xy[..., 1]), -1
+        )
 
     def world_footprint(self):
         return self.to_world(self.footprint)
@@ -173,10 +187,13 @@ class ObjectPatch:
     def occluded_bins(self, obstacles):
         """(BINS*BINS,) True for the density bins another prop's footprint overlaps."""
         from .environment import polygons_within
+
         rects, _ = self.density_bins()
         out = np.zeros(len(rects), bool)
         lo, hi = self.extended_bounds()
-        corners = self.to_world(np.array([[lo[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]], [hi[0], lo[1]]]))
+        corners = self.to_world(
+            np.array([[lo[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]], [hi[0], lo[1]]])
+        )
         wlo, whi = corners.min(axis=0), corners.max(axis=0)
         for ob in obstacles:
             if ob.name == self.name:
@@ -211,5 +228,6 @@ class ObjectPatch:
         def bin_of(p):
             b = np.clip(((np.asarray(p) - lo) / np.maximum(size, 1e-9)).astype(int), 0, BINS - 1)
             return int(b[1] * BINS + b[0])
+
         idx = np.array([(bin_of(c.entry[:2]), bin_of(c.exit[:2])) for c in self.clips], int)
         return rects, idx.reshape(-1, 2)

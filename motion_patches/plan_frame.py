@@ -24,8 +24,9 @@ def lattice_frame(start, goal, side, nodes):
     angle = float(np.arctan2(d[1], d[0])) if np.hypot(*d) > 1e-6 else float(start[2])
     anchor = np.array([0.5 * side, (nodes // 2 + 0.5) * side / nodes])
     c, s = np.cos(angle), np.sin(angle)
-    origin = np.asarray(start[:2], float) - np.array([c * anchor[0] - s * anchor[1],
-                                                      s * anchor[0] + c * anchor[1]])
+    origin = np.asarray(start[:2], float) - np.array(
+        [c * anchor[0] - s * anchor[1], s * anchor[0] + c * anchor[1]]
+    )
     return (float(origin[0]), float(origin[1]), angle)
 
 
@@ -55,8 +56,9 @@ def local_environment(env, frame, lo, hi):
     """An environment in the plan frame holding the obstacles of ``env`` that come within
     its radius of the local box ``lo``-``hi`` (found through ``env``'s tile membership, so a
     scene of many props costs only the ones near the plan)."""
-    corners = to_world(frame, np.array([[lo[0], lo[1]], [hi[0], lo[1]],
-                                        [hi[0], hi[1]], [lo[0], hi[1]]], float))
+    corners = to_world(
+        frame, np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]]], float)
+    )
     wlo, whi = corners.min(axis=0) - env.radius, corners.max(axis=0) + env.radius
     out = Environment(env.side, env.cells, env.radius)
     for name in env.names_in_box(wlo, whi):
@@ -68,6 +70,7 @@ def local_environment(env, frame, lo, hi):
 def local_prop(prop, frame):
     """An object patch moved into the plan frame (its own clips and footprint unchanged)."""
     from dataclasses import replace
+
     x, y, h = prop.pose
     p = to_local(frame, np.array([x, y]))
     out = replace(prop, pose=(float(p[0]), float(p[1]), float(h - frame[2])))

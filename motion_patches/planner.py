@@ -43,15 +43,15 @@ CONNECTOR_SCALES = np.linspace(0.25, 4.0, 40)  # coarser than the bake: fitted a
 ANY_FACING = np.radians(np.arange(0, 360, 45))  # goal headings tried when any facing will do
 HEADING_SLACK = 0.02  # radians, for sampling error in precomputed turn sums
 DUBINS_CURVATURE_SHARE = 0.8  # connectors turn at this share of the gait's sharpest turn
-MAX_CONNECTOR_TILES = 2.0     # longest start / goal connector, in tile sides
-MIN_CONNECTOR_CYCLES = 0.5    # shortest start connector (room to ease in from standing)
-KAPPA_ROUNDING = 1e-9         # relative slack on the curvature limits (floating point only)
-START_CONNECTORS = 48         # valid start connectors offered to the search (best f first)
-APPROACH = 0.35               # metres of the way into the goal (out of the start) checked first
-DUBINS_TRIES = 3              # Dubins words of a node sampled and tested together
-START_BATCH = 24              # start nodes whose connectors are tested together
-GOAL_BATCH = 8                # goal links tested together
-CORRIDOR_TILES = 2            # tiles either side of the high-level path the corridor holds
+MAX_CONNECTOR_TILES = 2.0  # longest start / goal connector, in tile sides
+MIN_CONNECTOR_CYCLES = 0.5  # shortest start connector (room to ease in from standing)
+KAPPA_ROUNDING = 1e-9  # relative slack on the curvature limits (floating point only)
+START_CONNECTORS = 48  # valid start connectors offered to the search (best f first)
+APPROACH = 0.35  # metres of the way into the goal (out of the start) checked first
+DUBINS_TRIES = 3  # Dubins words of a node sampled and tested together
+START_BATCH = 24  # start nodes whose connectors are tested together
+GOAL_BATCH = 8  # goal links tested together
+CORRIDOR_TILES = 2  # tiles either side of the high-level path the corridor holds
 
 
 class PlanError(ValueError):
@@ -64,16 +64,16 @@ _NONE = (np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int64))  # no succes
 
 @dataclass
 class Piece:
-    kind: str                 # "segment", "part", "traversal", "start" or "goal"
-    segment: int = -1         # patch segment index (kinds "segment" and "part")
+    kind: str  # "segment", "part", "traversal", "start" or "goal"
+    segment: int = -1  # patch segment index (kinds "segment" and "part")
     tile: tuple = (0, 0)
-    curve: object = None      # curves.Curve in world coordinates (connectors)
-    cycles: int = 0           # whole cycles (segments and start connectors)
+    curve: object = None  # curves.Curve in world coordinates (connectors)
+    cycles: int = 0  # whole cycles (segments and start connectors)
     cost: float = 0.0
-    frames: tuple = None      # (first, last) frame of a segment used in part ("part")
-    prop: object = None       # ObjectPatch of a traversal
+    frames: tuple = None  # (first, last) frame of a segment used in part ("part")
+    prop: object = None  # ObjectPatch of a traversal
     clip_index: int = -1
-    frame: tuple = IDENTITY   # plan frame (x, y, angle) taking the piece to the world
+    frame: tuple = IDENTITY  # plan frame (x, y, angle) taking the piece to the world
 
     @property
     def label(self):
@@ -101,8 +101,16 @@ class Plan:
 class SegmentPlanner:
     """Plans one character's path on an environment with a baked locomotion patch."""
 
-    def __init__(self, patch, env, alpha=DEFAULTS["alpha"], beta=DEFAULTS["beta"],
-                 gamma=DEFAULTS["gamma"], props=(), mode=DEFAULTS["stitching"]):
+    def __init__(
+        self,
+        patch,
+        env,
+        alpha=DEFAULTS["alpha"],
+        beta=DEFAULTS["beta"],
+        gamma=DEFAULTS["gamma"],
+        props=(),
+        mode=DEFAULTS["stitching"],
+    ):
         if mode not in ("dynamic", "static"):
             raise PlanError(f"unknown stitching mode '{mode}' (dynamic or static)")
         self.props, self.mode = list(props), mode
@@ -132,10 +140,12 @@ class SegmentPlanner:
         # Per local entry state: its segments, their cell masks, costs, and the key of the
         # node each leads to relative to the key of the entry's tile (keys are linear in
         # the tile coordinates), so an expansion is a few array operations.
-        rel = ((self.step[:, 0] * (2 * BIAS) + self.step[:, 1]) * LOCAL + self.next_local).astype(np.int64)
+        rel = ((self.step[:, 0] * (2 * BIAS) + self.step[:, 1]) * LOCAL + self.next_local).astype(
+            np.int64
+        )
         self._out = [None] * LOCAL
         for local in range(LOCAL):
-            segs = self.order[self.first[local]:self.first[local + 1]]
+            segs = self.order[self.first[local] : self.first[local + 1]]
             if segs.size:
                 self._out[local] = (segs, patch.seg_mask[segs], rel[segs], self.costs[segs])
         self._cos, self._sin = np.cos(self.local_heading), np.sin(self.local_heading)
@@ -207,8 +217,9 @@ class SegmentPlanner:
     def _sub_masks(self):
         """(S, W) sub-cell bitmasks of the segments' sampled paths."""
         env = self.env
-        return _patch_cache(self.patch, ("sub", env.cells, SUB),
-                            lambda: env.sub_mask(self.patch.path_points()))
+        return _patch_cache(
+            self.patch, ("sub", env.cells, SUB), lambda: env.sub_mask(self.patch.path_points())
+        )
 
     def _path_clear(self, tile, segs):
         """(n,) True where the paths of segments walked in ``tile`` keep the radius from
@@ -229,6 +240,7 @@ class SegmentPlanner:
             off = pts - (f + 0.5) * h
             f = f.astype(np.int32)
             return f[..., 1] * g + f[..., 0], off[..., 0].copy(), off[..., 1].copy()
+
         return _patch_cache(self.patch, ("raster", g, h), make)
 
     def in_region(self, i, j):
@@ -266,8 +278,9 @@ class SegmentPlanner:
         tol = KAPPA_ROUNDING * max(-self.kmin, self.kmax)
         if curve.kappa.min() < self.kmin - tol or curve.kappa.max() > self.kmax + tol:
             return False
-        return bool(curves.follows_turn_limits(curve.pos, curves.unit(curve.heading),
-                                               self.kmin, self.kmax))
+        return bool(
+            curves.follows_turn_limits(curve.pos, curves.unit(curve.heading), self.kmin, self.kmax)
+        )
 
     def _valid(self, curve):
         """The curve bends within the gait's limits and keeps the radius from every
@@ -280,8 +293,12 @@ class SegmentPlanner:
         the stop (:mod:`.retime`) has a cycle to slow down over."""
         out = list(pieces)
         need = self.patch.gait.cycle_distance
-        while (len(out) > 1 and out[-1].kind == "goal" and out[-1].curve.length < need
-               and out[-2].kind in ("segment", "shortcut", "start")):
+        while (
+            len(out) > 1
+            and out[-1].kind == "goal"
+            and out[-1].curve.length < need
+            and out[-2].kind in ("segment", "shortcut", "start")
+        ):
             before = out[-2]
             c = before.curve if before.curve is not None else self._segment_curve(before)
             merged = curves.joined(c, out[-1].curve)
@@ -291,8 +308,9 @@ class SegmentPlanner:
     def _segment_curve(self, piece):
         """A segment piece's curve in plan-frame coordinates."""
         c = self.patch.curve(piece.segment)
-        return curves.Curve(c.s, c.pos + np.array(piece.tile, float) * self.patch.side,
-                            c.heading, c.kappa)
+        return curves.Curve(
+            c.s, c.pos + np.array(piece.tile, float) * self.patch.side, c.heading, c.kappa
+        )
 
     def _cycles(self, curve):
         """Gait cycles (fractional) that following ``curve`` takes."""
@@ -308,16 +326,24 @@ class SegmentPlanner:
         :meth:`_dubins_table`). The connectors themselves (:meth:`start_link`) are sampled
         and tested only when the search gets to them."""
         keys, p, h = self._entries(self._block(self.env.tile_of(start[:2])))
-        table = self._dubins_table(np.tile(start[:2], (keys.size, 1)),
-                                   np.full(keys.size, start[2]), p, h)
+        table = self._dubins_table(
+            np.tile(start[:2], (keys.size, 1)), np.full(keys.size, start[2]), p, h
+        )
         bound = table[0].min(axis=0)
         f = bound + self.heuristic(keys)
         ranked = np.argsort(f, kind="stable")
         ranked = ranked[np.isfinite(f[ranked])]
-        self._start_table = {"start": start, "table": table, "keys": keys, "ranked": ranked,
-                             "rank": {int(keys[m]): r for r, m in enumerate(ranked)},
-                             "done": 0, "valid": 0, "links": {},
-                             "shortest": MIN_CONNECTOR_CYCLES * self.patch.gait.cycle_distance}
+        self._start_table = {
+            "start": start,
+            "table": table,
+            "keys": keys,
+            "ranked": ranked,
+            "rank": {int(keys[m]): r for r, m in enumerate(ranked)},
+            "done": 0,
+            "valid": 0,
+            "links": {},
+            "shortest": MIN_CONNECTOR_CYCLES * self.patch.gait.cycle_distance,
+        }
         return [(int(keys[m]), float(bound[m])) for m in ranked]
 
     def start_link(self, key):
@@ -336,17 +362,26 @@ class SegmentPlanner:
         while t["done"] <= r:
             if t["valid"] >= START_CONNECTORS:
                 return None
-            batch = t["ranked"][t["done"]:t["done"] + START_BATCH]
+            batch = t["ranked"][t["done"] : t["done"] + START_BATCH]
             n = batch.size
-            found = self._first_valids(np.tile(start[:2], (n, 1)), np.full(n, start[2]),
-                                       t["table"], batch, shortest,
-                                       limit=START_CONNECTORS - t["valid"])
+            found = self._first_valids(
+                np.tile(start[:2], (n, 1)),
+                np.full(n, start[2]),
+                t["table"],
+                batch,
+                shortest,
+                limit=START_CONNECTORS - t["valid"],
+            )
             for m, got in zip(batch.tolist(), found):
                 link = None
                 if got is not None:
                     cost, cycles, make = got
-                    link = (cost, lambda make=make, cost=cost, cycles=cycles:
-                            Piece("start", curve=make(), cycles=cycles, cost=cost))
+                    link = (
+                        cost,
+                        lambda make=make, cost=cost, cycles=cycles: Piece(
+                            "start", curve=make(), cycles=cycles, cost=cost
+                        ),
+                    )
                     t["valid"] += 1
                 t["links"][int(keys[m])] = link
             t["done"] += n
@@ -361,8 +396,11 @@ class SegmentPlanner:
         headings = ANY_FACING if np.isnan(goal[2]) else np.array([goal[2]])
         n, nh = keys.size, headings.size
         cost, lens, radii, words, _ = self._dubins_table(
-            np.tile(p, (nh, 1)), np.tile(h, nh), np.tile(goal[:2], (nh * n, 1)),
-            np.repeat(headings, n))
+            np.tile(p, (nh, 1)),
+            np.tile(h, nh),
+            np.tile(goal[:2], (nh * n, 1)),
+            np.repeat(headings, n),
+        )
         # Any facing: every heading's words in one table (rows heading by heading), wider
         # turns first throughout.
         rows = cost.shape[0]
@@ -372,10 +410,15 @@ class SegmentPlanner:
         rank = np.where(np.isfinite(cost), cost + 1e6 * (radii < radii.max())[:, None], np.inf)
         table = (cost, lens, radii, words, np.argsort(rank, axis=0, kind="stable"))
         too_close = np.linalg.norm(p - goal[:2], axis=1) < 0.2 * self.patch.gait.cycle_distance
-        self._goal_table = {"index": {int(k): m for m, k in enumerate(keys) if not too_close[m]},
-                            "p": p, "h": h, "table": table, "bound": cost.min(axis=0)}
+        self._goal_table = {
+            "index": {int(k): m for m, k in enumerate(keys) if not too_close[m]},
+            "p": p,
+            "h": h,
+            "table": table,
+            "bound": cost.min(axis=0),
+        }
         self._goal_links = {}
-        self._goal_asked = []   # nodes whose bound the search asked for (it expanded them)
+        self._goal_asked = []  # nodes whose bound the search asked for (it expanded them)
         return self._goal_table["index"]
 
     def goal_bound(self, key):
@@ -407,7 +450,10 @@ class SegmentPlanner:
         for k, got in zip(batch, found):
             link = None
             if got is not None:
-                link = (got[0], lambda cost=got[0], make=got[2]: Piece("goal", curve=make(), cost=cost))
+                link = (
+                    got[0],
+                    lambda cost=got[0], make=got[2]: Piece("goal", curve=make(), cost=cost),
+                )
             self._goal_links[k] = link
         return self._goal_links[key]
 
@@ -431,26 +477,36 @@ class SegmentPlanner:
                 hit.update(self.env.near(p))
         names = ", ".join(repr(n) for n in sorted(hit)[:4]) or "an obstacle"
         way = "leave the start facing" if what == "start" else "arrive at the goal facing"
-        raise PlanError(f"no walk can {way} {np.degrees(state[2] + self._frame_angle):.0f} "
-                        f"degrees: {names} stand(s) in the way within {APPROACH:.2f} m and the "
-                        f"walk cannot turn tighter than {1 / max(self.kmax, -self.kmin):.2f} m; "
-                        f"turn the {what} or move {'it' if len(hit) <= 1 else 'them'}"
-                        + (" (or plan with goal facing 'any')" if what == "goal" else ""))
+        raise PlanError(
+            f"no walk can {way} {np.degrees(state[2] + self._frame_angle):.0f} "
+            f"degrees: {names} stand(s) in the way within {APPROACH:.2f} m and the "
+            f"walk cannot turn tighter than {1 / max(self.kmax, -self.kmin):.2f} m; "
+            f"turn the {what} or move {'it' if len(hit) <= 1 else 'them'}"
+            + (" (or plan with goal facing 'any')" if what == "goal" else "")
+        )
 
     def _boxed_in(self, what, state):
         """Why no connector leaves the start (enters the goal), naming the props around."""
         reach = 2.0 / min(-self.kmin, self.kmax) + self.env.radius
         p = np.asarray(state[:2], float)
-        names = [n for n in self.env.names_in_box(p - reach, p + reach)
-                 if self.env.obstacles[n].within(p[None], reach)[0]]
+        names = [
+            n
+            for n in self.env.names_in_box(p - reach, p + reach)
+            if self.env.obstacles[n].within(p[None], reach)[0]
+        ]
         way = "turn out of it" if what == "start" else "turn into it"
-        facing = ("" if np.isnan(state[2]) else
-                  f" facing {np.degrees(state[2] + self._frame_angle):.0f} degrees")
+        facing = (
+            ""
+            if np.isnan(state[2])
+            else f" facing {np.degrees(state[2] + self._frame_angle):.0f} degrees"
+        )
         who = ", ".join(repr(n) for n in names[:4]) if names else "nothing near"
-        return (f"the walk cannot {way}{facing} (it turns no tighter than "
-                f"{1 / max(self.kmax, -self.kmin):.2f} m and keeps {self.env.radius:.2f} m from "
-                f"props; within {reach:.1f} m: {who}); move or turn the {what}, or move those props"
-                + (", or plan with goal facing 'any'" if what == "goal" else ""))
+        return (
+            f"the walk cannot {way}{facing} (it turns no tighter than "
+            f"{1 / max(self.kmax, -self.kmin):.2f} m and keeps {self.env.radius:.2f} m from "
+            f"props; within {reach:.1f} m: {who}); move or turn the {what}, or move those props"
+            + (", or plan with goal facing 'any'" if what == "goal" else "")
+        )
 
     @property
     def turn_radii(self):
@@ -468,8 +524,13 @@ class SegmentPlanner:
         n, w, r = p0.shape[0], len(dubins.WORDS), np.array(self.turn_radii)
         # Every radius in one call: pairs repeated radius by radius.
         radius = np.repeat(r, n)
-        lengths = dubins.words(np.tile(p0, (r.size, 1)), np.tile(h0, r.size), np.tile(p1, (r.size, 1)),
-                               np.tile(h1, r.size), radius)
+        lengths = dubins.words(
+            np.tile(p0, (r.size, 1)),
+            np.tile(h0, r.size),
+            np.tile(p1, (r.size, 1)),
+            np.tile(h1, r.size),
+            radius,
+        )
         total = lengths.sum(axis=-1)
         turn = dubins.turns(lengths, radius)
         effort = self.patch.effort_rate * total / self.max_speed
@@ -481,18 +542,23 @@ class SegmentPlanner:
         lens = lengths.reshape(w, r.size, n, 3).transpose(1, 0, 2, 3).reshape(r.size * w, n, 3)
         rank = np.repeat(np.arange(r.size), w)[:, None]
         key = np.where(np.isfinite(cost), cost + 1e6 * rank, np.inf)
-        return (cost, lens, np.repeat(r, w), np.tile(np.arange(w), r.size),
-                np.argsort(key, axis=0, kind="stable"))
+        return (
+            cost,
+            lens,
+            np.repeat(r, w),
+            np.tile(np.arange(w), r.size),
+            np.argsort(key, axis=0, kind="stable"),
+        )
 
     def _first_valid(self, p0, h0, table, m, min_length=0.0):
         """(curve, Eq. 5 cost, gait cycles) of the first valid Dubins word of column ``m``
         of a :meth:`_dubins_table` from state (p0, h0), or None."""
-        found = self._first_valids(np.asarray(p0, float)[None], np.atleast_1d(h0), table,
-                                   np.array([m]), min_length)[0]
+        found = self._first_valids(
+            np.asarray(p0, float)[None], np.atleast_1d(h0), table, np.array([m]), min_length
+        )[0]
         return None if found is None else (found[2](), found[0], found[1])
 
-    def _first_valids(self, p0, h0, table, columns, min_length=0.0, tries=DUBINS_TRIES,
-                      limit=None):
+    def _first_valids(self, p0, h0, table, columns, min_length=0.0, tries=DUBINS_TRIES, limit=None):
         """:meth:`_first_valid` of many columns at once (start states ``p0`` (n, 2),
         ``h0`` (n,)): per column (Eq. 5 cost, gait cycles, a function making its curve) or
         None. The words of every column are tried in their order, ``tries`` per column at
@@ -503,14 +569,14 @@ class SegmentPlanner:
         ``limit`` columns that have a valid word get it (the rest None)."""
         cost, lengths, radii, words, order = table
         wide = radii.max()
-        chosen = {}                           # column position -> (arc, pos, heading, kappa)
-        rank = np.zeros(len(columns), int)    # how far down its order each column has got
+        chosen = {}  # column position -> (arc, pos, heading, kappa)
+        rank = np.zeros(len(columns), int)  # how far down its order each column has got
         todo = list(range(len(columns)))
         while todo:
             rows, who = [], []
             for i in todo:
                 m = columns[i]
-                r = order[rank[i]:rank[i] + tries, m]
+                r = order[rank[i] : rank[i] + tries, m]
                 r = r[np.isfinite(cost[r, m])]
                 rows.append(r)
                 who.append(np.full(r.size, i))
@@ -523,7 +589,8 @@ class SegmentPlanner:
             at = np.full(rows.size, -1)
             if k.size:
                 arc, pos, heading, kappa, first = dubins.samples(
-                    p0[who[k]], h0[who[k]], words[rows[k]], lens[k], radii[rows[k]])
+                    p0[who[k]], h0[who[k]], words[rows[k]], lens[k], radii[rows[k]]
+                )
                 hit = self.env.blocked(pos, radius=self.env.radius + PATH_MARGIN)
                 clear[k] = ~np.logical_or.reduceat(hit, first[:-1])
                 at[k] = np.arange(k.size)
@@ -546,7 +613,9 @@ class SegmentPlanner:
         if use:
             parts = [chosen[i] for i in use]
             first = np.concatenate(([0], np.cumsum([p[0].size for p in parts])))
-            cycles = cycles_along_many(self.patch.gait, np.concatenate([p[1] for p in parts]), first)
+            cycles = cycles_along_many(
+                self.patch.gait, np.concatenate([p[1] for p in parts]), first
+            )
             for i, part, n in zip(use, parts, cycles.tolist()):
                 turn = float(np.sum(np.abs(np.diff(part[2]))))
                 frames = n * self.patch.gait.frames
@@ -556,22 +625,25 @@ class SegmentPlanner:
         return found
 
     # -- search ---------------------------------------------------------------------------
-    def plan(self, start, goal, margin_tiles=3, max_expansions=400_000, use_corridor=False,
-             shorten=True):
+    def plan(
+        self, start, goal, margin_tiles=3, max_expansions=400_000, use_corridor=False, shorten=True
+    ):
         """Cheapest path from ``start`` to ``goal`` (x, y, heading); raises PlanError.
 
         The search runs in the plan frame (:mod:`.plan_frame`): the lattice anchored at the
         start and turned to the goal; the obstacles and props near the way are moved into
         it, and every piece of the result carries the frame back to the world.
-"""
+        """
         t0 = time.perf_counter()
         start, goal = np.asarray(start, float), np.asarray(goal, float)
         for what, pt in (("start", start), ("goal", goal)):
             if not np.isfinite(pt[:2]).all():
                 raise PlanError(f"the {what} position must be finite numbers")
             if self.world_env.blocked(pt[None, :2])[0]:
-                raise PlanError(f"the {what} ({pt[0]:.2f}, {pt[1]:.2f}) is inside or within "
-                                f"{self.world_env.radius:.2f} m of an obstacle")
+                raise PlanError(
+                    f"the {what} ({pt[0]:.2f}, {pt[1]:.2f}) is inside or within "
+                    f"{self.world_env.radius:.2f} m of an obstacle"
+                )
         with self.framed(start, goal, margin_tiles) as (ls, lg, frame):
             plan = self._plan_local(ls, lg, margin_tiles, max_expansions, use_corridor)
             searched = len(plan.pieces)
@@ -604,7 +676,7 @@ class SegmentPlanner:
         pieces = plan.pieces
         if not (0 <= first <= last < len(pieces)):
             raise PlanError(f"no run {first}-{last} in a plan of {len(pieces)} pieces")
-        if any(p.kind not in shortcut.LOCOMOTION for p in pieces[first:last + 1]):
+        if any(p.kind not in shortcut.LOCOMOTION for p in pieces[first : last + 1]):
             raise PlanError("a run holding a traversal or interaction clip is not re-planned")
         start, goal = np.asarray(plan.start, float), np.asarray(plan.goal, float)
         t0 = time.perf_counter()
@@ -620,21 +692,31 @@ class SegmentPlanner:
                 p, h = shortcut.exit_state(self, pieces[last])
                 end = self._node_key(p, h)
                 lg = np.array([p[0], p[1], h])
-            run = self._plan_local(ls, lg, margin_tiles, max_expansions, False,
-                                   start_key=begin, goal_key=end)
+            run = self._plan_local(
+                ls, lg, margin_tiles, max_expansions, False, start_key=begin, goal_key=end
+            )
             new = shortcut.shorten(self, run.pieces, ls, lg)
             if end is None:
                 new = shortcut.pull_tail(self, new, lg)
-            out = list(pieces[:first]) + new + list(pieces[last + 1:])
+            out = list(pieces[:first]) + new + list(pieces[last + 1 :])
             if end is None:
                 out = self._long_last_piece(out)
         for piece in out:
             piece.frame = frame
-        stats = dict(plan.stats, repaired=plan.stats.get("repaired", 0) + 1,
-                     kept_pieces=len(pieces) - (last + 1 - first))
-        return Plan(out, plan.cost - sum(p.cost for p in pieces[first:last + 1]) + run.cost,
-                    plan.expansions + run.expansions, plan.seconds + time.perf_counter() - t0,
-                    plan.start, plan.goal, stats)
+        stats = dict(
+            plan.stats,
+            repaired=plan.stats.get("repaired", 0) + 1,
+            kept_pieces=len(pieces) - (last + 1 - first),
+        )
+        return Plan(
+            out,
+            plan.cost - sum(p.cost for p in pieces[first : last + 1]) + run.cost,
+            plan.expansions + run.expansions,
+            plan.seconds + time.perf_counter() - t0,
+            plan.start,
+            plan.goal,
+            stats,
+        )
 
     def _node_key(self, p, h):
         """Key of the lattice node at plan-frame position ``p`` with heading ``h`` (a piece
@@ -654,10 +736,18 @@ class SegmentPlanner:
         frame = lattice_frame(start, goal, side, self.patch.nodes)
         ls, lg = state_to_local(frame, start), state_to_local(frame, goal)
         ts, tg = self.world_env.tile_of(ls[:2]), self.world_env.tile_of(lg[:2])
-        region = (min(ts[0], tg[0]) - margin_tiles, min(ts[1], tg[1]) - margin_tiles,
-                  max(ts[0], tg[0]) + margin_tiles, max(ts[1], tg[1]) + margin_tiles)
-        self.env = local_environment(self.world_env, frame, (region[0] * side, region[1] * side),
-                                     ((region[2] + 1) * side, (region[3] + 1) * side))
+        region = (
+            min(ts[0], tg[0]) - margin_tiles,
+            min(ts[1], tg[1]) - margin_tiles,
+            max(ts[0], tg[0]) + margin_tiles,
+            max(ts[1], tg[1]) + margin_tiles,
+        )
+        self.env = local_environment(
+            self.world_env,
+            frame,
+            (region[0] * side, region[1] * side),
+            ((region[2] + 1) * side, (region[3] + 1) * side),
+        )
         self.props = [local_prop(p, frame) for p in self.world_props]
         self.goal, self.region = lg, region
         self._frame_angle = frame[2]
@@ -666,8 +756,9 @@ class SegmentPlanner:
         finally:
             self.env, self.props = self.world_env, self.world_props
 
-    def _plan_local(self, start, goal, margin_tiles, max_expansions, use_corridor,
-                    start_key=None, goal_key=None):
+    def _plan_local(
+        self, start, goal, margin_tiles, max_expansions, use_corridor, start_key=None, goal_key=None
+    ):
         """The search of :meth:`plan`, in plan-frame coordinates.
 
         With ``start_key`` (``goal_key``) the search begins (ends) on that node instead of
@@ -685,8 +776,12 @@ class SegmentPlanner:
         t0 = time.perf_counter()
         self.goal = goal
         ts, tg = self.env.tile_of(start[:2]), self.env.tile_of(goal[:2])
-        self.region = (min(ts[0], tg[0]) - margin_tiles, min(ts[1], tg[1]) - margin_tiles,
-                       max(ts[0], tg[0]) + margin_tiles, max(ts[1], tg[1]) + margin_tiles)
+        self.region = (
+            min(ts[0], tg[0]) - margin_tiles,
+            min(ts[1], tg[1]) - margin_tiles,
+            max(ts[0], tg[0]) + margin_tiles,
+            max(ts[1], tg[1]) + margin_tiles,
+        )
         for what, state, key in (("start", start, start_key), ("goal", goal, goal_key)):
             if key is None:
                 self._check_turning_room(what, state)
@@ -700,16 +795,20 @@ class SegmentPlanner:
 
         def no_start():
             return start_key is None and not any(self.start_link(k) is not None for k, _ in starts)
+
         if not goals:
             if no_start():
-                raise PlanError("no walkable way out of the start: " + self._boxed_in("start", start))
+                raise PlanError(
+                    "no walkable way out of the start: " + self._boxed_in("start", start)
+                )
             raise PlanError("no walkable way into the goal: every node around it is too close")
         payloads = {}
         self.corridor = None
         tiles = None
         if use_corridor:
-            tiles = TilePlanner(self.patch, self.env,
-                                traversal=self._tile_traversal).plan(start[:2], goal[:2], self.region)
+            tiles = TilePlanner(self.patch, self.env, traversal=self._tile_traversal).plan(
+                start[:2], goal[:2], self.region
+            )
             if tiles is not None:
                 w = range(-CORRIDOR_TILES, CORRIDOR_TILES + 1)
                 self.corridor = {(t[0] + di, t[1] + dj) for t in tiles for di in w for dj in w}
@@ -722,8 +821,9 @@ class SegmentPlanner:
             if (pi, ci) not in stitched:
                 t_s = time.perf_counter()
                 edges = []
-                for st in stitch(self.patch, self.env, self.props[pi], ci,
-                                 self.alpha, self.beta, self.gamma):
+                for st in stitch(
+                    self.patch, self.env, self.props[pi], ci, self.alpha, self.beta, self.gamma
+                ):
                     edges.append((st.from_key, st.to_key, st.cost, STITCH_PAYLOAD - len(stitches)))
                     stitches.append(st)
                 stitched[(pi, ci)] = edges
@@ -748,14 +848,24 @@ class SegmentPlanner:
 
         def search():
             copies = self._traversal_estimates(start)
-            observer = TraversalObserver(copies, stitch_copy, self.across,
-                                         up_front=self.mode == "static")
+            observer = TraversalObserver(
+                copies, stitch_copy, self.across, up_front=self.mode == "static"
+            )
             first = [] if start_key is None else [(int(start_key), 0.0, -1)]
-            bound = (self.goal_bound if goal_key is None
-                     else (lambda k: 0.0 if k == goal_key else None))
-            result = astar.search(first, self.expand, self.heuristic, goal_cost, max_expansions,
-                                  observer if copies else None, lazy_starts=starts,
-                                  start_cost=start_cost, goal_bound=bound)
+            bound = (
+                self.goal_bound if goal_key is None else (lambda k: 0.0 if k == goal_key else None)
+            )
+            result = astar.search(
+                first,
+                self.expand,
+                self.heuristic,
+                goal_cost,
+                max_expansions,
+                observer if copies else None,
+                lazy_starts=starts,
+                start_cost=start_cost,
+                goal_bound=bound,
+            )
             return result, observer
 
         connector_seconds = time.perf_counter() - t_conn
@@ -767,13 +877,18 @@ class SegmentPlanner:
             result, observer = search()
         if not result.found and no_start():
             raise PlanError("no walkable way out of the start: " + self._boxed_in("start", start))
-        if (not result.found and goal_key is None
-                and not any(self.goal_link(k) is not None for k in goals)):
+        if (
+            not result.found
+            and goal_key is None
+            and not any(self.goal_link(k) is not None for k in goals)
+        ):
             raise PlanError("no walkable way into the goal: " + self._boxed_in("goal", goal))
         if not result.found:
-            raise PlanError(f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is unreachable: obstacles "
-                            f"close every path within {margin_tiles} tiles of start and goal "
-                            f"({result.expansions} nodes searched)")
+            raise PlanError(
+                f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is unreachable: obstacles "
+                f"close every path within {margin_tiles} tiles of start and goal "
+                f"({result.expansions} nodes searched)"
+            )
         pieces = []
         keys = [k for k, _ in result.path]
         first = keys[0]
@@ -789,45 +904,78 @@ class SegmentPlanner:
                 a, b = st.entry, st.exit
                 pieces += [
                     Piece("part", segment=a.segment, tile=a.tile, frames=(0, a.frame), cost=a.cost),
-                    Piece("traversal", prop=prop, clip_index=st.clip_index,
-                          cost=st.cost - a.cost - b.cost),
-                    Piece("part", segment=b.segment, tile=b.tile,
-                          frames=(b.frame, int(self.patch.seg_cycles[b.segment]) * self.patch.gait.frames),
-                          cost=b.cost)]
+                    Piece(
+                        "traversal",
+                        prop=prop,
+                        clip_index=st.clip_index,
+                        cost=st.cost - a.cost - b.cost,
+                    ),
+                    Piece(
+                        "part",
+                        segment=b.segment,
+                        tile=b.tile,
+                        frames=(
+                            b.frame,
+                            int(self.patch.seg_cycles[b.segment]) * self.patch.gait.frames,
+                        ),
+                        cost=b.cost,
+                    ),
+                ]
             else:
                 i, j, _ = unpack(prev)
-                pieces.append(Piece("segment", segment=int(payload), tile=(int(i), int(j)),
-                                    cycles=int(self.patch.seg_cycles[payload]),
-                                    cost=float(self.costs[payload])))
+                pieces.append(
+                    Piece(
+                        "segment",
+                        segment=int(payload),
+                        tile=(int(i), int(j)),
+                        cycles=int(self.patch.seg_cycles[payload]),
+                        cost=float(self.costs[payload]),
+                    )
+                )
         seconds = time.perf_counter() - t0
         if np.isnan(goal[2]):  # any facing: the plan ends facing along its last connector
             goal = np.array([goal[0], goal[1], pieces[-1].curve.heading[-1]])
-        return Plan(pieces, float(result.cost), result.expansions, seconds,
-                    tuple(start), tuple(goal),
-                    {"start_connectors": self._start_table["valid"],
-                     "start_nodes_tested": self._start_table["done"], "goal_connectors": len(goals),
-                     "goal_links_tested": len(self._goal_links),
-                     "connector_seconds": connector_seconds,
-                     "search_seconds": time.perf_counter() - t_search,
-                     "occlusion_computations": self.env.occlusion_computations,
-                     "high_level_tiles": len(tiles) if tiles else 0,
-                     "corridor_fallback": corridor_fallback,
-                     "mode": self.mode,
-                     "copies_stitched": len(stitched),
-                     "copies_stitched_by_tile": observer.by_tile,
-                     "copies_stitched_at_goal": observer.at_goal,
-                     "copies_culled_by_bins": self.bin_culled,
-                     "stitch_edges": len(stitches),
-                     "stitch_seconds": counters["stitch_seconds"],
-                     "traversals_used": sum(p.kind == "traversal" for p in pieces)})
+        return Plan(
+            pieces,
+            float(result.cost),
+            result.expansions,
+            seconds,
+            tuple(start),
+            tuple(goal),
+            {
+                "start_connectors": self._start_table["valid"],
+                "start_nodes_tested": self._start_table["done"],
+                "goal_connectors": len(goals),
+                "goal_links_tested": len(self._goal_links),
+                "connector_seconds": connector_seconds,
+                "search_seconds": time.perf_counter() - t_search,
+                "occlusion_computations": self.env.occlusion_computations,
+                "high_level_tiles": len(tiles) if tiles else 0,
+                "corridor_fallback": corridor_fallback,
+                "mode": self.mode,
+                "copies_stitched": len(stitched),
+                "copies_stitched_by_tile": observer.by_tile,
+                "copies_stitched_at_goal": observer.at_goal,
+                "copies_culled_by_bins": self.bin_culled,
+                "stitch_edges": len(stitches),
+                "stitch_seconds": counters["stitch_seconds"],
+                "traversals_used": sum(p.kind == "traversal" for p in pieces),
+            },
+        )
 
     def _tile_traversal(self, tile):
         """tau (Eq. 3) of a tile, from the traversable props overlapping it (lazy)."""
         names = self.env.members(tile)
         props = [p for p in self.props if p.name in names and p.traversals()]
-        return tile_traversal(self.patch, self.env, props, tile,
-                              lambda p: accessibility(self.patch, p, self.env.radius,
-                                                      weights=(self.alpha, self.beta, self.gamma)))
+        return tile_traversal(
+            self.patch,
+            self.env,
+            props,
+            tile,
+            lambda p: accessibility(
+                self.patch, p, self.env.radius, weights=(self.alpha, self.beta, self.gamma)
+            ),
+        )
 
     def _traversal_estimates(self, start):
         """[(f lower bound, prop, clip copy, tile id)] of every traversal copy in the region.
@@ -842,13 +990,20 @@ class SegmentPlanner:
             x, y, heading = prop.pose
             if not self.in_region(*self.env.tile_of((x, y))):
                 continue
-            which = np.array([ci for ci, clip in enumerate(prop.clips) if clip.kind == "traversal"], int)
+            which = np.array(
+                [ci for ci, clip in enumerate(prop.clips) if clip.kind == "traversal"], int
+            )
             if which.size == 0:
                 continue
             # Density bins: another prop there culls the copies starting or ending in them.
             lo, hi = prop.extended_bounds()
-            box = prop.to_world(np.array([[lo[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]], [hi[0], lo[1]]]))
-            near = [self.env.obstacles[n] for n in self.env.names_in_box(box.min(axis=0), box.max(axis=0))]
+            box = prop.to_world(
+                np.array([[lo[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]], [hi[0], lo[1]]])
+            )
+            near = [
+                self.env.obstacles[n]
+                for n in self.env.names_in_box(box.min(axis=0), box.max(axis=0))
+            ]
             occluded = prop.occluded_bins(near)
             _, clip_bins = prop.density_bins()
             keep = ~occluded[clip_bins[which]].any(axis=1)
@@ -858,19 +1013,31 @@ class SegmentPlanner:
                 continue
             c, s = np.cos(heading), np.sin(heading)
             ends = np.array([(prop.clips[ci].entry, prop.clips[ci].exit) for ci in which.tolist()])
-            wx = c * ends[..., 0] - s * ends[..., 1] + x   # as ObjectPatch.world_clip moves them
+            wx = c * ends[..., 0] - s * ends[..., 1] + x  # as ObjectPatch.world_clip moves them
             wy = s * ends[..., 0] + c * ends[..., 1] + y
             wh = ends[..., 2] + heading
             approach = per_metre * np.hypot(wx[:, 0] - start[0], wy[:, 0] - start[1])
-            cost = np.array([self.alpha * prop.clips[ci].length() + self.beta * prop.clips[ci].turn()
-                             + self.gamma * prop.clips[ci].effort for ci in which.tolist()])
+            cost = np.array(
+                [
+                    self.alpha * prop.clips[ci].length()
+                    + self.beta * prop.clips[ci].turn()
+                    + self.gamma * prop.clips[ci].effort
+                    for ci in which.tolist()
+                ]
+            )
             h = self.state_heuristic(np.column_stack((wx[:, 1], wy[:, 1])), wh[:, 1])
             # The tile stitching indexes for the entry, as a node key's tile id.
             ti = np.floor(wx[:, 0] / self.env.side).astype(np.int64)
             tj = np.floor(wy[:, 0] / self.env.side).astype(np.int64)
             tiles = pack(ti, tj, 0) // LOCAL
-            out += list(zip((approach + cost + h).tolist(), [pi] * which.size, which.tolist(),
-                            tiles.tolist()))
+            out += list(
+                zip(
+                    (approach + cost + h).tolist(),
+                    [pi] * which.size,
+                    which.tolist(),
+                    tiles.tolist(),
+                )
+            )
         return out
 
 
@@ -912,8 +1079,8 @@ class TraversalObserver:
         edges``; ``across[local]``: tile id offset of the other tile of a node; with
         ``up_front`` (static mode) every copy is stitched now and added at the first call."""
         self.stitch_copy, self.across = stitch_copy, across
-        self.pending = {}   # tile id -> heap of (estimate, prop, copy)
-        self.tile_f = {}    # tile id -> f of the last node taken off in it (tiles with copies)
+        self.pending = {}  # tile id -> heap of (estimate, prop, copy)
+        self.tile_f = {}  # tile id -> f of the last node taken off in it (tiles with copies)
         self.by_tile = self.at_goal = 0
         self.ready = []
         if up_front:
@@ -1000,7 +1167,10 @@ def plan_motions(patch, plan, standing=True):
     clips = ("traversal", "interaction")
     if standing:
         ramp = patch.gait.frames
-        first_walks, last_walks = plan.pieces[0].kind not in clips, plan.pieces[-1].kind not in clips
+        first_walks, last_walks = (
+            plan.pieces[0].kind not in clips,
+            plan.pieces[-1].kind not in clips,
+        )
         if len(ms) == 1:
             ms[0] = retime.eased(ms[0], first_walks, last_walks, ramp)
         else:
@@ -1047,13 +1217,25 @@ def with_interactions(plan, start=None, goal=None):
     """The plan with an interaction clip before it (stand up) and/or after it (sit down):
     ``start`` / ``goal`` are (ObjectPatch, clip index); the plan must run from the start
     clip's last frame to the goal clip's first frame (see :func:`interaction_states`)."""
+
     def piece(ref):
         prop, ci = ref
         return Piece("interaction", prop=prop, clip_index=ci, cost=prop.clips[ci].effort)
-    pieces = ([piece(start)] if start is not None else []) + list(plan.pieces) \
+
+    pieces = (
+        ([piece(start)] if start is not None else [])
+        + list(plan.pieces)
         + ([piece(goal)] if goal is not None else [])
-    return Plan(pieces, plan.cost, plan.expansions, plan.seconds, plan.start, plan.goal,
-                dict(plan.stats, interactions=[p.label for p in pieces if p.kind == "interaction"]))
+    )
+    return Plan(
+        pieces,
+        plan.cost,
+        plan.expansions,
+        plan.seconds,
+        plan.start,
+        plan.goal,
+        dict(plan.stats, interactions=[p.label for p in pieces if p.kind == "interaction"]),
+    )
 
 
 def interaction_states(start=None, goal=None):

@@ -59,8 +59,7 @@ class RetargetError(ValueError):
 SIDES = ("Left", "Right")
 # Roles every character must have for a walk to be planned on it (root motion, contacts,
 # foot locking, facing).
-REQUIRED = ("hips", "thigh.L", "shin.L", "foot.L", "toe.L",
-            "thigh.R", "shin.R", "foot.R", "toe.R")
+REQUIRED = ("hips", "thigh.L", "shin.L", "foot.L", "toe.L", "thigh.R", "shin.R", "foot.R", "toe.R")
 
 
 def _sided(table):
@@ -71,52 +70,101 @@ def _sided(table):
             out[role] = names
             continue
         for side, s, x in (("Left", "l", "L"), ("Right", "r", "R")):
-            out[role.format(x=x)] = tuple(n.format(S=side, s=s, x=x, X=s.upper())
-                                          for n in names)
+            out[role.format(x=x)] = tuple(n.format(S=side, s=s, x=x, X=s.upper()) for n in names)
     return out
 
 
 CONVENTIONS = {
     # CMU BVH, MotionBuilder-friendly joint names (shared/mocap/cmu).
-    "CMU": _sided({
-        "hips": ("Hips",), "lowerback": ("LowerBack",), "spine": ("Spine",),
-        "chest": ("Spine1",), "neck": ("Neck",), "neck1": ("Neck1",), "head": ("Head",),
-        "hipjoint.{x}": ("{X}HipJoint",), "thigh.{x}": ("{S}UpLeg",), "shin.{x}": ("{S}Leg",),
-        "foot.{x}": ("{S}Foot",), "toe.{x}": ("{S}ToeBase",),
-        "collar.{x}": ("{S}Shoulder",), "upper_arm.{x}": ("{S}Arm",),
-        "forearm.{x}": ("{S}ForeArm",), "hand.{x}": ("{S}Hand",),
-        "fingers.{x}": ("{S}FingerBase",), "index.{x}": ("{S}HandIndex1",),
-        "thumb.{x}": ("{X}Thumb",),
-    }),
+    "CMU": _sided(
+        {
+            "hips": ("Hips",),
+            "lowerback": ("LowerBack",),
+            "spine": ("Spine",),
+            "chest": ("Spine1",),
+            "neck": ("Neck",),
+            "neck1": ("Neck1",),
+            "head": ("Head",),
+            "hipjoint.{x}": ("{X}HipJoint",),
+            "thigh.{x}": ("{S}UpLeg",),
+            "shin.{x}": ("{S}Leg",),
+            "foot.{x}": ("{S}Foot",),
+            "toe.{x}": ("{S}ToeBase",),
+            "collar.{x}": ("{S}Shoulder",),
+            "upper_arm.{x}": ("{S}Arm",),
+            "forearm.{x}": ("{S}ForeArm",),
+            "hand.{x}": ("{S}Hand",),
+            "fingers.{x}": ("{S}FingerBase",),
+            "index.{x}": ("{S}HandIndex1",),
+            "thumb.{x}": ("{X}Thumb",),
+        }
+    ),
     # CMU's "3dsMax-friendly" BVH conversion, Biped-like names (shared/mocap/cmu16max).
-    "3ds Max": _sided({
-        "hips": ("Hips",), "lowerback": ("lowerback",), "spine": ("Chest",),
-        "chest": ("Chest2",), "neck": ("lowerneck",), "neck1": ("Neck",), "head": ("Head",),
-        "hipjoint.{x}": ("{X}HipJoint",), "thigh.{x}": ("{S}Hip",), "shin.{x}": ("{S}Knee",),
-        "foot.{x}": ("{S}Ankle",), "toe.{x}": ("{S}Toe",),
-        "collar.{x}": ("{S}Collar",), "upper_arm.{x}": ("{S}Shoulder",),
-        "forearm.{x}": ("{S}Elbow",), "hand.{x}": ("{S}Wrist",),
-        "fingers.{x}": ("{s}hand",), "index.{x}": ("{X}Fingers",), "thumb.{x}": ("{X}Thumb",),
-    }),
+    "3ds Max": _sided(
+        {
+            "hips": ("Hips",),
+            "lowerback": ("lowerback",),
+            "spine": ("Chest",),
+            "chest": ("Chest2",),
+            "neck": ("lowerneck",),
+            "neck1": ("Neck",),
+            "head": ("Head",),
+            "hipjoint.{x}": ("{X}HipJoint",),
+            "thigh.{x}": ("{S}Hip",),
+            "shin.{x}": ("{S}Knee",),
+            "foot.{x}": ("{S}Ankle",),
+            "toe.{x}": ("{S}Toe",),
+            "collar.{x}": ("{S}Collar",),
+            "upper_arm.{x}": ("{S}Shoulder",),
+            "forearm.{x}": ("{S}Elbow",),
+            "hand.{x}": ("{S}Wrist",),
+            "fingers.{x}": ("{s}hand",),
+            "index.{x}": ("{X}Fingers",),
+            "thumb.{x}": ("{X}Thumb",),
+        }
+    ),
     # Mixamo (the "mixamorig:" namespace is ignored when matching).
-    "Mixamo": _sided({
-        "hips": ("Hips",), "lowerback": ("Spine",), "spine": ("Spine1",),
-        "chest": ("Spine2",), "neck": ("Neck",), "head": ("Head",),
-        "thigh.{x}": ("{S}UpLeg",), "shin.{x}": ("{S}Leg",), "foot.{x}": ("{S}Foot",),
-        "toe.{x}": ("{S}ToeBase",), "collar.{x}": ("{S}Shoulder",),
-        "upper_arm.{x}": ("{S}Arm",), "forearm.{x}": ("{S}ForeArm",), "hand.{x}": ("{S}Hand",),
-        "index.{x}": ("{S}HandIndex1",), "thumb.{x}": ("{S}HandThumb1",),
-    }),
+    "Mixamo": _sided(
+        {
+            "hips": ("Hips",),
+            "lowerback": ("Spine",),
+            "spine": ("Spine1",),
+            "chest": ("Spine2",),
+            "neck": ("Neck",),
+            "head": ("Head",),
+            "thigh.{x}": ("{S}UpLeg",),
+            "shin.{x}": ("{S}Leg",),
+            "foot.{x}": ("{S}Foot",),
+            "toe.{x}": ("{S}ToeBase",),
+            "collar.{x}": ("{S}Shoulder",),
+            "upper_arm.{x}": ("{S}Arm",),
+            "forearm.{x}": ("{S}ForeArm",),
+            "hand.{x}": ("{S}Hand",),
+            "index.{x}": ("{S}HandIndex1",),
+            "thumb.{x}": ("{S}HandThumb1",),
+        }
+    ),
     # Rigify deform bones. DEF-spine runs from the hips up (there is no separate hips bone).
-    "Rigify": _sided({
-        "hips": ("DEF-spine",), "spine": ("DEF-spine.001",), "chest": ("DEF-spine.003",),
-        "neck": ("DEF-spine.004",), "neck1": ("DEF-spine.005",), "head": ("DEF-spine.006",),
-        "thigh.{x}": ("DEF-thigh.{x}",), "shin.{x}": ("DEF-shin.{x}",),
-        "foot.{x}": ("DEF-foot.{x}",), "toe.{x}": ("DEF-toe.{x}",),
-        "collar.{x}": ("DEF-shoulder.{x}",), "upper_arm.{x}": ("DEF-upper_arm.{x}",),
-        "forearm.{x}": ("DEF-forearm.{x}",), "hand.{x}": ("DEF-hand.{x}",),
-        "thumb.{x}": ("DEF-thumb.01.{x}",), "index.{x}": ("DEF-f_index.01.{x}",),
-    }),
+    "Rigify": _sided(
+        {
+            "hips": ("DEF-spine",),
+            "spine": ("DEF-spine.001",),
+            "chest": ("DEF-spine.003",),
+            "neck": ("DEF-spine.004",),
+            "neck1": ("DEF-spine.005",),
+            "head": ("DEF-spine.006",),
+            "thigh.{x}": ("DEF-thigh.{x}",),
+            "shin.{x}": ("DEF-shin.{x}",),
+            "foot.{x}": ("DEF-foot.{x}",),
+            "toe.{x}": ("DEF-toe.{x}",),
+            "collar.{x}": ("DEF-shoulder.{x}",),
+            "upper_arm.{x}": ("DEF-upper_arm.{x}",),
+            "forearm.{x}": ("DEF-forearm.{x}",),
+            "hand.{x}": ("DEF-hand.{x}",),
+            "thumb.{x}": ("DEF-thumb.01.{x}",),
+            "index.{x}": ("DEF-f_index.01.{x}",),
+        }
+    ),
 }
 
 
@@ -128,8 +176,9 @@ def base_name(name):
 def _exclusive():
     """Per convention, the (lower-case) names no other convention uses."""
     used = {c: {n.lower() for names in t.values() for n in names} for c, t in CONVENTIONS.items()}
-    return {c: names - set().union(*(u for d, u in used.items() if d != c))
-            for c, names in used.items()}
+    return {
+        c: names - set().union(*(u for d, u in used.items() if d != c)) for c, names in used.items()
+    }
 
 
 def roles(skel):
@@ -194,22 +243,22 @@ def subtree(skel, root):
     keep = [root] + sorted(_descendants(skel)[root])
     keep.sort()
     index = {j: i for i, j in enumerate(keep)}
-    parents = np.array([index.get(int(skel.parents[j]), -1) if j != root else -1
-                        for j in keep])
+    parents = np.array([index.get(int(skel.parents[j]), -1) if j != root else -1 for j in keep])
     return Skeleton([skel.names[j] for j in keep], parents, skel.rest[keep].copy())
 
 
 @dataclass
 class RigMap:
     """How motion on ``source`` is put on ``target`` (see the module docstring)."""
+
     source: Skeleton
     target: Skeleton
-    pairs: np.ndarray          # (K, 2) source index, target index
-    scale: float               # root motion scale: target hip height / source hip height
-    floor: float               # height about which root heights are scaled
-    yaw: np.ndarray            # (3, 3) turn of the target's rest facing onto the source's
-    align: np.ndarray          # (K, 3, 3) shortest turn of each target bone's rest direction
-    convention: tuple = ("", "")        # (source, target) naming conventions recognised
+    pairs: np.ndarray  # (K, 2) source index, target index
+    scale: float  # root motion scale: target hip height / source hip height
+    floor: float  # height about which root heights are scaled
+    yaw: np.ndarray  # (3, 3) turn of the target's rest facing onto the source's
+    align: np.ndarray  # (K, 3, 3) shortest turn of each target bone's rest direction
+    convention: tuple = ("", "")  # (source, target) naming conventions recognised
     unmapped: list = field(default_factory=list)  # source bones no target bone plays
 
     @property
@@ -231,8 +280,10 @@ class RigMap:
     def note(self):
         """One line for reports: conventions, scale and what is left out."""
         src, tgt = self.convention
-        text = (f"retargeted from {src or 'the patch'} naming onto {tgt or 'the rig'} naming, "
-                f"{len(self.pairs)} bones, root motion x{self.scale:.3f}")
+        text = (
+            f"retargeted from {src or 'the patch'} naming onto {tgt or 'the rig'} naming, "
+            f"{len(self.pairs)} bones, root motion x{self.scale:.3f}"
+        )
         if self.unmapped:
             text += f"; patch bones not played: {', '.join(self.unmapped[:8])}"
             if len(self.unmapped) > 8:
@@ -276,8 +327,14 @@ class RigMap:
         """The clip on the target skeleton."""
         tags = dict(clip.tags)
         tags["retargeted_from"] = clip.name
-        return Clip(name or clip.name, self.target, clip.fps, self.position(clip.root_pos),
-                    self.rotations(clip.rotations), tags)
+        return Clip(
+            name or clip.name,
+            self.target,
+            clip.fps,
+            self.position(clip.root_pos),
+            self.rotations(clip.rotations),
+            tags,
+        )
 
     def motion(self, m):
         """A planned (in-place) motion on the target: ground positions and the root's
@@ -292,8 +349,9 @@ def _lateral(skel, left, right):
     a[2] = 0.0
     n = np.linalg.norm(a)
     if n < 1e-9:
-        raise RetargetError("the rig's thighs sit on top of each other: cannot tell which way "
-                            "it faces")
+        raise RetargetError(
+            "the rig's thighs sit on top of each other: cannot tell which way it faces"
+        )
     return a / n
 
 
@@ -306,15 +364,24 @@ def _aims(source, target, pairs, lat_s, eps=1e-4):
     hs, ht = source.rest[:, :3, 3], target.rest[:, :3, 3]
     out = []
     for si, ti in pairs:
-        cands = [(a, b) for a, b in pairs if a in desc_s[si] and b in desc_t[ti]
-                 and np.linalg.norm(hs[a] - hs[si]) > eps
-                 and np.linalg.norm(ht[b] - ht[ti]) > eps]
+        cands = [
+            (a, b)
+            for a, b in pairs
+            if a in desc_s[si]
+            and b in desc_t[ti]
+            and np.linalg.norm(hs[a] - hs[si]) > eps
+            and np.linalg.norm(ht[b] - ht[ti]) > eps
+        ]
         cands = [c for c in cands if not any(c[0] in desc_s[d[0]] for d in cands if d != c)]
         if not cands:
             out.append(None)
             continue
-        cands.sort(key=lambda c: (round(abs(float(np.dot(hs[c[0]] - hs[si], lat_s))), 2),
-                                  -float(np.linalg.norm(hs[c[0]] - hs[si]))))
+        cands.sort(
+            key=lambda c: (
+                round(abs(float(np.dot(hs[c[0]] - hs[si], lat_s))), 2),
+                -float(np.linalg.norm(hs[c[0]] - hs[si])),
+            )
+        )
         out.append(cands[0])
     return out
 
@@ -328,11 +395,11 @@ def rig_map(source, target, overrides=None, floor=0.0, label="patch"):
     overrides = dict(overrides or {})
     for s, t in overrides.items():
         if s not in source.names:
-            raise RetargetError(f"the bone map names '{s}', which is not a bone of the "
-                                f"{label} skeleton")
+            raise RetargetError(
+                f"the bone map names '{s}', which is not a bone of the {label} skeleton"
+            )
         if t and t not in target.names:
-            raise RetargetError(f"the bone map maps '{s}' to '{t}', which is not a bone of "
-                                f"the rig")
+            raise RetargetError(f"the bone map maps '{s}' to '{t}', which is not a bone of the rig")
     s_conv, s_roles = roles(source)
     t_conv, t_roles = roles(target)
     pairs = {}
@@ -362,30 +429,37 @@ def rig_map(source, target, overrides=None, floor=0.0, label="patch"):
     for role in REQUIRED:
         si = s_roles.get(role)
         if si is None:
-            raise RetargetError(f"the {label} skeleton has no bone for the {role} (none of "
-                                f"the naming conventions {', '.join(CONVENTIONS)} names it)")
+            raise RetargetError(
+                f"the {label} skeleton has no bone for the {role} (none of "
+                f"the naming conventions {', '.join(CONVENTIONS)} names it)"
+            )
         required.append(si)
     missing = [source.names[si] for si in required if si not in pairs]
     if missing:
         raise RetargetError(
             f"no bone of the rig plays the {label} bones {', '.join(missing)}: name the rig's "
             f"bones in a supported convention ({', '.join(CONVENTIONS)}) or map them in its "
-            f"bone map")
+            f"bone map"
+        )
     root_s = source.root
     if root_s not in pairs:
-        raise RetargetError(f"no bone of the rig plays the {label}'s root bone "
-                            f"'{source.names[root_s]}'")
+        raise RetargetError(
+            f"no bone of the rig plays the {label}'s root bone '{source.names[root_s]}'"
+        )
     # The target: the rig below the bone playing the source root.
     full = target
     tree = subtree(full, pairs[root_s])
     new_index = {n: i for i, n in enumerate(tree.names)}
     outside = [source.names[si] for si, ti in pairs.items() if full.names[ti] not in new_index]
     if outside:
-        raise RetargetError(f"the rig's bones playing {', '.join(outside[:6])} are not below "
-                            f"'{full.names[pairs[root_s]]}', the bone playing the {label}'s "
-                            f"root '{source.names[root_s]}'")
-    pair_arr = np.array(sorted((si, new_index[full.names[ti]]) for si, ti in pairs.items()),
-                        int).reshape(-1, 2)
+        raise RetargetError(
+            f"the rig's bones playing {', '.join(outside[:6])} are not below "
+            f"'{full.names[pairs[root_s]]}', the bone playing the {label}'s "
+            f"root '{source.names[root_s]}'"
+        )
+    pair_arr = np.array(
+        sorted((si, new_index[full.names[ti]]) for si, ti in pairs.items()), int
+    ).reshape(-1, 2)
     tgt = tree
     # The rig answers to the names of the patch bones it plays (feet, thighs: found by the
     # core's name lookups, Skeleton.find, whatever the rig calls them).
@@ -402,8 +476,10 @@ def rig_map(source, target, overrides=None, floor=0.0, label="patch"):
     h_s = hip_height(source, source.root, [rs[r] for r in feet])
     h_t = hip_height(tgt, tgt.root, [rt[r] for r in feet])
     if h_s <= 1e-6 or h_t <= 1e-6:
-        raise RetargetError(f"the hips are not above the feet in the rest pose of the {label} "
-                            f"skeleton or of the rig: cannot scale the root motion")
+        raise RetargetError(
+            f"the hips are not above the feet in the rest pose of the {label} "
+            f"skeleton or of the rig: cannot scale the root motion"
+        )
     # Rest alignment of each paired bone: its direction to the next paired bone down.
     hs, ht = source.rest[:, :3, 3], tgt.rest[:, :3, 3]
     align = np.tile(np.eye(3), (len(pair_arr), 1, 1))
@@ -415,14 +491,18 @@ def rig_map(source, target, overrides=None, floor=0.0, label="patch"):
         v = hs[aim[0]] - hs[si]
         align[k] = _rotation_between(u / np.linalg.norm(u), v / np.linalg.norm(v))
     unmapped = [source.names[i] for i in range(len(source.names)) if i not in t_by_s]
-    return RigMap(source, tgt, pair_arr, h_t / h_s, float(floor), yaw, align,
-                  (s_conv, t_conv), unmapped)
+    return RigMap(
+        source, tgt, pair_arr, h_t / h_s, float(floor), yaw, align, (s_conv, t_conv), unmapped
+    )
 
 
 def same_skeleton(a, b, tol=1e-4):
     """Whether two skeletons are the same (names, parents, rest matrices)."""
-    return (a.names == b.names and np.array_equal(a.parents, b.parents)
-            and np.allclose(a.rest, b.rest, atol=tol))
+    return (
+        a.names == b.names
+        and np.array_equal(a.parents, b.parents)
+        and np.allclose(a.rest, b.rest, atol=tol)
+    )
 
 
 _SEGMENT = re.compile(r"^(.*)\.\d{3}$")
@@ -434,8 +514,9 @@ def segment_parent(skel, j):
     p = int(skel.parents[j])
     while p >= 0:
         m = _SEGMENT.match(skel.names[p])
-        if not (m and m.group(1) in skel.names and
-                skel.names.index(m.group(1)) == int(skel.parents[p])):
+        if not (
+            m and m.group(1) in skel.names and skel.names.index(m.group(1)) == int(skel.parents[p])
+        ):
             return p
         p = int(skel.parents[p])
     return p

@@ -78,7 +78,7 @@ def eased(motion, ease_in=False, ease_out=False, ramp=None):
 def _ramp_area(a):
     """Phase covered over the first ``a`` (0..1) of a unit ramp whose rate falls from 1 to 0
     along a smoothstep: the integral of 1 - (3 x^2 - 2 x^3)."""
-    return a - a ** 3 + 0.5 * a ** 4
+    return a - a**3 + 0.5 * a**4
 
 
 def hold_phases(frames, at, hold, ramp):
@@ -92,11 +92,13 @@ def hold_phases(frames, at, hold, ramp):
     if hold <= 0:
         return np.arange(frames, dtype=float)
     if ramp % 2 or at - ramp / 2 < 0 or at + ramp / 2 > frames - 1:
-        raise ValueError(f"a hold at frame {at:g} needs an even ramp ({ramp}) with half of it "
-                         f"inside the motion's {frames} frames on both sides")
+        raise ValueError(
+            f"a hold at frame {at:g} needs an even ramp ({ramp}) with half of it "
+            f"inside the motion's {frames} frames on both sides"
+        )
     t = np.arange(frames + hold + ramp, dtype=float)
-    a0 = at - ramp / 2                      # the slow-down starts here (rate 1 before)
-    a1, a2 = a0 + ramp, a0 + ramp + hold    # stopped from a1 to a2, then speeding up
+    a0 = at - ramp / 2  # the slow-down starts here (rate 1 before)
+    a1, a2 = a0 + ramp, a0 + ramp + hold  # stopped from a1 to a2, then speeding up
     u = t.copy()
     if ramp:
         down = (t > a0) & (t < a1)

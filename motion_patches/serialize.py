@@ -16,16 +16,35 @@ import numpy as np
 from .gait import Gait
 from .locomotion_patch import DIRECTIONS, EDGES, LocomotionPatch
 
+_KIND_NAMES = dict(f="float", i="integer", u="uint64", b="bool", U="text")  # dtype kinds
+
 FORMAT = "motion_patches.locomotion_patch"
 VERSION = 1
-_ARRAYS = ("seg_entry", "seg_exit", "seg_scale", "seg_cycles", "seg_mask", "seg_length",
-           "seg_turn", "seg_effort", "seg_pose", "pose_centres")
+_ARRAYS = (
+    "seg_entry",
+    "seg_exit",
+    "seg_scale",
+    "seg_cycles",
+    "seg_mask",
+    "seg_length",
+    "seg_turn",
+    "seg_effort",
+    "seg_pose",
+    "pose_centres",
+)
 
 
 def patch_to_bytes(patch):
-    header = {"format": FORMAT, "version": VERSION, "layer": patch.layer, "side": patch.side,
-              "cells": patch.cells, "nodes": patch.nodes, "effort_rate": patch.effort_rate,
-              "stats": patch.stats}
+    header = {
+        "format": FORMAT,
+        "version": VERSION,
+        "layer": patch.layer,
+        "side": patch.side,
+        "cells": patch.cells,
+        "nodes": patch.nodes,
+        "effort_rate": patch.effort_rate,
+        "stats": patch.stats,
+    }
     arrays = {k: getattr(patch, k) for k in _ARRAYS}
     arrays.update(patch.gait.to_dict())
     arrays["header"] = np.array(json.dumps(header))
@@ -46,13 +65,21 @@ def patch_from_bytes(data):
     header = validate(d)
     gait = Gait.from_dict(d)
     return LocomotionPatch(
-        header["layer"], gait, float(header["side"]), int(header["cells"]), int(header["nodes"]),
-        float(header["effort_rate"]), *(d[k] for k in _ARRAYS[:8]),
-        d["seg_pose"], d["pose_centres"], header["stats"])
+        header["layer"],
+        gait,
+        float(header["side"]),
+        int(header["cells"]),
+        int(header["nodes"]),
+        float(header["effort_rate"]),
+        *(d[k] for k in _ARRAYS[:8]),
+        d["seg_pose"],
+        d["pose_centres"],
+        header["stats"],
+    )
 
 
-MAX_CELLS = 8     # a segment's cell mask is one 64-bit word: cells x cells <= 64
-MAX_NODES = 8     # local node ids: EDGES x nodes x DIRECTIONS <= 256 (node_keys.LOCAL)
+MAX_CELLS = 8  # a segment's cell mask is one 64-bit word: cells x cells <= 64
+MAX_NODES = 8  # local node ids: EDGES x nodes x DIRECTIONS <= 256 (node_keys.LOCAL)
 MAX_LOOPS = 64
 
 
@@ -67,10 +94,15 @@ def _array(d, key, kind, shape, finite=False, lo=None, hi=None, hi_open=None):
     if key not in d:
         _fail(f"array '{key}' is missing")
     a = d[key]
-    ok = {"f": a.dtype.kind == "f", "i": a.dtype.kind in "iu", "u": a.dtype == np.uint64,
-          "b": a.dtype.kind == "b", "U": a.dtype.kind == "U"}[kind]
+    ok = {
+        "f": a.dtype.kind == "f",
+        "i": a.dtype.kind in "iu",
+        "u": a.dtype == np.uint64,
+        "b": a.dtype.kind == "b",
+        "U": a.dtype.kind == "U",
+    }[kind]
     if not ok:
-        _fail(f"array '{key}' has dtype {a.dtype}, not {dict(f='float', i='integer', u='uint64', b='bool', U='text')[kind]}")
+        _fail(f"array '{key}' has dtype {a.dtype}, not {_KIND_NAMES[kind]}")
     if a.ndim != len(shape) or any(n is not None and m != n for m, n in zip(a.shape, shape)):
         want = "(" + ", ".join("N" if n is None else str(n) for n in shape) + ")"
         _fail(f"array '{key}' has shape {a.shape}, not {want}")
@@ -89,9 +121,15 @@ def _number(header, key, integer=False, lo=None, hi=None, above=None):
     v = header.get(key)
     if isinstance(v, bool) or not isinstance(v, int if integer else (int, float)):
         _fail(f"header field '{key}' is {v!r}, not {'a whole number' if integer else 'a number'}")
-    if not np.isfinite(v) or (lo is not None and v < lo) or (hi is not None and v > hi) \
-            or (above is not None and v <= above):
-        rng = (f"> {above}" if above is not None else f">= {lo}") + (f" and <= {hi}" if hi is not None else "")
+    if (
+        not np.isfinite(v)
+        or (lo is not None and v < lo)
+        or (hi is not None and v > hi)
+        or (above is not None and v <= above)
+    ):
+        rng = (f"> {above}" if above is not None else f">= {lo}") + (
+            f" and <= {hi}" if hi is not None else ""
+        )
         _fail(f"header field '{key}' is {v!r}, not {rng}")
     return v
 
@@ -112,8 +150,10 @@ def validate(d):
         raise ValueError("not a stored locomotion patch (wrong format tag)")
     version = header.get("version")
     if isinstance(version, int) and not isinstance(version, bool) and version > VERSION:
-        raise ValueError(f"locomotion patch format {version} is newer than this add-on "
-                         f"reads ({VERSION}); update the add-on")
+        raise ValueError(
+            f"locomotion patch format {version} is newer than this add-on "
+            f"reads ({VERSION}); update the add-on"
+        )
     _number(header, "version", integer=True, lo=1)
     if not isinstance(header.get("layer"), str) or not header["layer"].strip():
         _fail(f"header field 'layer' is {header.get('layer')!r}, not a name")

@@ -25,6 +25,7 @@ def shorten(planner, pieces, start, goal):
     """``pieces`` with runs of locomotion pieces replaced by cheaper single curves (plan
     frame coordinates; the planner's environment is that of the plan frame)."""
     from .planner import Piece
+
     out = list(pieces)
     i = 0
     while i < len(out) - 1:
@@ -35,19 +36,20 @@ def shorten(planner, pieces, start, goal):
         while end + 1 < len(out) and _locomotion(out[end + 1]):
             end += 1
         for j in range(end, i, -1):  # the longest run first
-            run = out[i:j + 1]
+            run = out[i : j + 1]
             a = entry_state(planner, run[0])
             b = exit_state(planner, run[-1])
             to_goal = run[-1].kind == "goal"
             old_cost = sum(p.cost for p in run)
             free_length = to_goal or run[0].kind == "start"
-            found = (_dubins(planner, a, b, old_cost) if free_length
-                     else _fit(planner, a, b, old_cost))
+            found = (
+                _dubins(planner, a, b, old_cost) if free_length else _fit(planner, a, b, old_cost)
+            )
             if found is not None:
                 curve, cycles, cost = found
                 kind = "goal" if to_goal else ("start" if run[0].kind == "start" else "shortcut")
                 piece = Piece(kind, curve=curve, cycles=cycles, cost=cost)
-                out[i:j + 1] = [piece]
+                out[i : j + 1] = [piece]
                 break
         i += 1
     return out
@@ -65,7 +67,9 @@ def entry_state(planner, piece):
     if piece.curve is not None:
         return piece.curve.pos[0], float(piece.curve.heading[0])
     p0, d0, _, _ = planner.patch.endpoints(np.array([piece.segment]))
-    return p0[0] + np.array(piece.tile, float) * planner.patch.side, float(np.arctan2(d0[0, 1], d0[0, 0]))
+    return p0[0] + np.array(piece.tile, float) * planner.patch.side, float(
+        np.arctan2(d0[0, 1], d0[0, 0])
+    )
 
 
 def exit_state(planner, piece):
@@ -73,7 +77,9 @@ def exit_state(planner, piece):
     if piece.curve is not None:
         return piece.curve.pos[-1], float(piece.curve.heading[-1])
     _, _, p1, d1 = planner.patch.endpoints(np.array([piece.segment]))
-    return p1[0] + np.array(piece.tile, float) * planner.patch.side, float(np.arctan2(d1[0, 1], d1[0, 0]))
+    return p1[0] + np.array(piece.tile, float) * planner.patch.side, float(
+        np.arctan2(d1[0, 1], d1[0, 0])
+    )
 
 
 def _chord_clear(planner, a, b):
@@ -115,14 +121,17 @@ def _fit(planner, a, b, old_cost):
     p0, d0 = pa[None], curves.unit(ha)[None]
     p1, d1 = pb[None], curves.unit(hb)[None]
     from .planner import CONNECTOR_SCALES
+
     table = curves.tabulate(p0, d0, p1, d1, planner._measure, CONNECTOR_SCALES, samples=48)
     least = int(np.argmin(table[1][0]))
     centre = table[0][0, least]
     best = None
-    for n in sorted({int(np.floor(centre)), int(np.ceil(centre))} - {0},
-                    key=lambda n: abs(n - centre)):
-        sc = curves.fit_scale(p0, d0, p1, d1, float(n), planner._measure, CONNECTOR_SCALES,
-                              samples=48, table=table)[0]
+    for n in sorted(
+        {int(np.floor(centre)), int(np.ceil(centre))} - {0}, key=lambda n: abs(n - centre)
+    ):
+        sc = curves.fit_scale(
+            p0, d0, p1, d1, float(n), planner._measure, CONNECTOR_SCALES, samples=48, table=table
+        )[0]
         if np.isnan(sc):
             continue
         c = curves.hermite_curve(pa, curves.unit(ha), pb, curves.unit(hb), sc)
@@ -134,9 +143,9 @@ def _fit(planner, a, b, old_cost):
     return best
 
 
-PULL_SPACING = 0.2     # metres between the path points string pulling looks at
+PULL_SPACING = 0.2  # metres between the path points string pulling looks at
 PULL_CLEARANCE = 0.05  # metres kept beyond the radius by pulled chords (room for the turns)
-PULL_ENDS = 3          # where pulling may end: the goal, or the start of one of the last pieces
+PULL_ENDS = 3  # where pulling may end: the goal, or the start of one of the last pieces
 
 
 def pull_tail(planner, pieces, goal):
@@ -160,13 +169,14 @@ def pull_tail(planner, pieces, goal):
         # (those are kept: a start that must turn round keeps its turn).
         found = _pull(planner, run[begin:], goal)
         if found is not None:
-            return pieces[:first + begin] + [found]
+            return pieces[: first + begin] + [found]
     return pieces
 
 
 def _pull(planner, run, goal):
     """One goal piece re-laying ``run`` (see :func:`pull_tail`), or None."""
     from .planner import Piece
+
     old_cost = sum(p.cost for p in run)
     for q in range(len(run), max(len(run) - PULL_ENDS, 1) - 1, -1):
         # Pull to the goal itself, else to where one of the last pieces begins (that piece
@@ -218,13 +228,18 @@ def _chain(planner, corners, first, goal_heading, budget=60):
     def solve(j, pa, ha):
         if j == len(corners):
             return []
-        heads = options(j)[:max(budget - tries[0], 0)]
+        heads = options(j)[: max(budget - tries[0], 0)]
         if not heads:
             return None
         # The options of a corner are sampled and tested together, tried in order.
         n, pb = len(heads), corners[j]
-        table = planner._dubins_table(np.tile(pa, (n, 1)), np.full(n, ha), np.tile(pb, (n, 1)),
-                                      np.array(heads), max_length=np.inf)
+        table = planner._dubins_table(
+            np.tile(pa, (n, 1)),
+            np.full(n, ha),
+            np.tile(pb, (n, 1)),
+            np.array(heads),
+            max_length=np.inf,
+        )
         found = planner._first_valids(np.tile(pa, (n, 1)), np.full(n, ha), table, np.arange(n))
         for hb, got in zip(heads, found):
             tries[0] += 1
@@ -243,7 +258,10 @@ def _chain(planner, corners, first, goal_heading, budget=60):
 def _ground_points(planner, piece):
     if piece.curve is not None:
         return piece.curve.pos
-    return planner.patch.path_points()[piece.segment] + np.array(piece.tile, float) * planner.patch.side
+    return (
+        planner.patch.path_points()[piece.segment]
+        + np.array(piece.tile, float) * planner.patch.side
+    )
 
 
 def _string_pull(env, pts, clearance, chunk=16):
@@ -259,7 +277,9 @@ def _string_pull(env, pts, clearance, chunk=16):
             samples = max(int(np.ceil(length.max() / 0.05)) + 1, 2)
             t = np.linspace(0.0, 1.0, samples)[None, :, None]
             chords = pts[k][None, None] + t * (pts[m] - pts[k])[:, None]
-            hit = env.blocked(chords.reshape(-1, 2), radius=clearance).reshape(m.size, -1).any(axis=1)
+            hit = (
+                env.blocked(chords.reshape(-1, 2), radius=clearance).reshape(m.size, -1).any(axis=1)
+            )
             clear = np.flatnonzero(~hit)
             if clear.size:
                 nxt = int(m[clear.max()])

@@ -17,9 +17,9 @@ from . import quat
 
 @dataclass
 class Skeleton:
-    names: list          # bone names, parents before children
+    names: list  # bone names, parents before children
     parents: np.ndarray  # (J,) int, -1 for the root
-    rest: np.ndarray     # (J, 4, 4) armature-space rest matrices
+    rest: np.ndarray  # (J, 4, 4) armature-space rest matrices
     # Other names of bones: a rig a patch is retargeted onto answers to the names of the
     # patch bones it plays ({patch bone name: index}, motion_patches.retarget).
     aliases: dict = field(default_factory=dict, repr=False, compare=False)
@@ -58,6 +58,7 @@ class Skeleton:
 
     def mirror_map(self):
         """Index of each bone's left/right counterpart (itself when it has none)."""
+
         def swap(name):
             for a, b in (("Left", "Right"), ("left", "right"), ("LEFT", "RIGHT")):
                 if a in name:
@@ -72,6 +73,7 @@ class Skeleton:
                 other = {"L": "R", "R": "L", "l": "r", "r": "l"}[m.group(2)]
                 return m.group(1) + other
             return name
+
         idx = {n: i for i, n in enumerate(self.names)}
         return np.array([idx.get(swap(n), i) for i, n in enumerate(self.names)])
 
@@ -80,8 +82,11 @@ class Skeleton:
 
     @classmethod
     def from_dict(cls, d):
-        return cls([str(n) for n in d["names"]], np.asarray(d["parents"], int),
-                   np.asarray(d["rest"], float))
+        return cls(
+            [str(n) for n in d["names"]],
+            np.asarray(d["parents"], int),
+            np.asarray(d["rest"], float),
+        )
 
 
 def compose(rot, pos):

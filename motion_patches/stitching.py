@@ -20,22 +20,23 @@ import numpy as np
 from . import poses
 from .node_keys import next_entry, pack
 
-POSITION_TOLERANCE = 0.2            # metres between the segment frame and the keyframe
+POSITION_TOLERANCE = 0.2  # metres between the segment frame and the keyframe
 HEADING_TOLERANCE = np.radians(20)  # radians
-POSE_TOLERANCE = 1.5                # times the best phase's pose distance (relative)
-BLEND_FRAMES = 8                    # frames eased across each stitch
-CLIP_CLEARANCE = 0.15               # metres kept from other props along the clip's own path
-MAX_PER_END = 12                    # cheapest connections kept at each keyframe
+POSE_TOLERANCE = 1.5  # times the best phase's pose distance (relative)
+BLEND_FRAMES = 8  # frames eased across each stitch
+CLIP_CLEARANCE = 0.15  # metres kept from other props along the clip's own path
+MAX_PER_END = 12  # cheapest connections kept at each keyframe
 
 
 @dataclass
 class Connection:
     """A segment cut at a frame: the walk into a clip's entry or out of its exit."""
+
     tile: tuple
     segment: int
     frame: int
     error: float
-    cost: float          # Eq. 5 cost of the used part
+    cost: float  # Eq. 5 cost of the used part
 
 
 @dataclass
@@ -44,7 +45,7 @@ class Stitch:
     clip_index: int
     entry: Connection
     exit: Connection
-    cost: float          # whole edge: entry part + clip + exit part
+    cost: float  # whole edge: entry part + clip + exit part
     from_key: int
     to_key: int
 
@@ -87,8 +88,9 @@ def _cell_frames(patch):
         order = np.lexsort((rows, cells))
         cells, rows = cells[order], rows[order]
         start = np.searchsorted(cells, np.arange(n * n + 1))
-        got = patch.__dict__["_stitch_cells"] = [(rows[a:b], owner[rows[a:b]])
-                                                 for a, b in zip(start[:-1], start[1:])]
+        got = patch.__dict__["_stitch_cells"] = [
+            (rows[a:b], owner[rows[a:b]]) for a, b in zip(start[:-1], start[1:])
+        ]
     return got
 
 
@@ -100,8 +102,10 @@ def _candidates(patch, env, state, phase_ok, exclude, at_entry, alpha, beta, gam
     origin = np.array(tile, float) * patch.side
     local = state[:2] - origin
     c = patch.cell_size
-    cell = int(np.clip(local[1] // c, 0, patch.cells - 1) * patch.cells
-               + np.clip(local[0] // c, 0, patch.cells - 1))
+    cell = int(
+        np.clip(local[1] // c, 0, patch.cells - 1) * patch.cells
+        + np.clip(local[0] // c, 0, patch.cells - 1)
+    )
     bit = np.uint64(1) << np.uint64(cell)
     ground, arc, first = patch.all_ground()
     # Only the frames near the cell can lie within the tolerance of the keyframe, so the
@@ -122,22 +126,29 @@ def _candidates(patch, env, state, phase_ok, exclude, at_entry, alpha, beta, gam
     mine, at = np.unique(run, return_index=True)
     firsts = np.full(segs.size, -1)
     firsts[mine] = idx[at]
-    f = rows[firsts] - first[segs]         # frame within the segment
+    f = rows[firsts] - first[segs]  # frame within the segment
     gr = ground[rows[firsts]]
     dh = np.abs((gr[:, 2] - state[2] + np.pi) % (2 * np.pi) - np.pi)
     n = patch.gait.frames
-    ok = ((f >= 2) & (f <= lens - 3) & (best <= POSITION_TOLERANCE) & (dh <= HEADING_TOLERANCE)
-          & phase_ok[f % n])
+    ok = (
+        (f >= 2)
+        & (f <= lens - 3)
+        & (best <= POSITION_TOLERANCE)
+        & (dh <= HEADING_TOLERANCE)
+        & phase_ok[f % n]
+    )
     ks = np.flatnonzero(ok)
     if ks.size == 0:
         return []
     seg, fk, start = segs[ks], f[ks], first[segs[ks]]
-    end = first[seg + 1] - 1                  # last row of each segment
-    lo, hi = (start, start + fk) if at_entry else (start + fk, end)   # the used rows
+    end = first[seg + 1] - 1  # last row of each segment
+    lo, hi = (start, start + fk) if at_entry else (start + fk, end)  # the used rows
     # The used parts (every other frame) keep the radius from the other props: one test.
     counts = (hi - lo) // 2 + 1
     owner = np.repeat(np.arange(ks.size), counts)
-    tested = lo[owner] + 2 * (np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts))
+    tested = lo[owner] + 2 * (
+        np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+    )
     hit = env.blocked(ground[tested, :2] + origin, exclude=(exclude,))
     clear = ~np.logical_or.reduceat(hit, np.cumsum(counts) - counts)
     length = arc[hi] - arc[lo]
@@ -176,18 +187,37 @@ def stitch(patch, env, prop, clip_index, alpha, beta, gamma):
     gait = patch.gait
     d_in = phase_pose_distance(gait, clip.motion.root_local[0], clip.motion.rotations[0])
     d_out = phase_pose_distance(gait, clip.motion.root_local[-1], clip.motion.rotations[-1])
-    ins = _candidates(patch, env, world.ground[0], d_in <= POSE_TOLERANCE * d_in.min(),
-                      prop.name, True, alpha, beta, gamma)
+    ins = _candidates(
+        patch,
+        env,
+        world.ground[0],
+        d_in <= POSE_TOLERANCE * d_in.min(),
+        prop.name,
+        True,
+        alpha,
+        beta,
+        gamma,
+    )
     if not ins:
         return []
-    outs = _candidates(patch, env, world.ground[-1], d_out <= POSE_TOLERANCE * d_out.min(),
-                       prop.name, False, alpha, beta, gamma)
+    outs = _candidates(
+        patch,
+        env,
+        world.ground[-1],
+        d_out <= POSE_TOLERANCE * d_out.min(),
+        prop.name,
+        False,
+        alpha,
+        beta,
+        gamma,
+    )
     clip_cost = alpha * clip.length() + beta * clip.turn() + gamma * clip.effort
     to_keys = [int(pack(*next_entry(patch, b.tile, b.segment))) for b in outs]
     result = []
     for a in ins:
         from_key = int(pack(a.tile[0], a.tile[1], patch.seg_entry[a.segment]))
         for b, to_key in zip(outs, to_keys):
-            result.append(Stitch(prop.name, clip_index, a, b, a.cost + clip_cost + b.cost,
-                                 from_key, to_key))
+            result.append(
+                Stitch(prop.name, clip_index, a, b, a.cost + clip_cost + b.cost, from_key, to_key)
+            )
     return result

@@ -14,7 +14,6 @@ from .motion import Motion
 RAMP = 0.25  # of a straight cycle's distance: blend easing length at segment ends
 
 
-
 def cycles_along(gait, pos, vel, acc, eased=(True, True), kappa=None):
     """Gait cycles needed to follow sampled curves (..., M, 2) -> (...).
 
@@ -46,6 +45,7 @@ def cycles_along_many(gait, pos, first, eased=(True, True)):
         g[start] = a[start + 1] - a[start]
         g[end] = a[end] - a[end - 1]
         return g
+
     vel = gradient(pos)
     acc = gradient(vel)
     d = np.diff(pos, axis=0)

@@ -31,8 +31,13 @@ def signature(prop):
     return h.hexdigest()
 
 
-def accessibility(patch, prop, radius, spots=(0.35, 0.65),
-                  weights=tuple(DEFAULTS[k] for k in ("alpha", "beta", "gamma"))):
+def accessibility(
+    patch,
+    prop,
+    radius,
+    spots=(0.35, 0.65),
+    weights=tuple(DEFAULTS[k] for k in ("alpha", "beta", "gamma")),
+):
     """psi of a kind of prop (cached): mean over sampled placements of T / O, at most 1."""
     key = (signature(prop), round(radius, 4), patch.side)
     if key in _PSI:
@@ -41,13 +46,17 @@ def accessibility(patch, prop, radius, spots=(0.35, 0.65),
     for fx in spots:
         for fy in spots:
             env = Environment(patch.side, patch.cells, radius)
-            placed = ObjectPatch(prop.name, prop.footprint, prop.clips,
-                                 pose=(fx * patch.side, fy * patch.side, 0.0))
+            placed = ObjectPatch(
+                prop.name, prop.footprint, prop.clips, pose=(fx * patch.side, fy * patch.side, 0.0)
+            )
             env.place(Obstacle(placed.name, placed.world_footprint()))
             free = env.free_cells((0, 0))
             occluded = int(np.sum((patch.seg_mask & free) != patch.seg_mask))
-            created = sum(len(stitch(patch, env, placed, i, *weights))
-                          for i, c in enumerate(placed.clips) if c.kind == "traversal")
+            created = sum(
+                len(stitch(patch, env, placed, i, *weights))
+                for i, c in enumerate(placed.clips)
+                if c.kind == "traversal"
+            )
             ratios.append(created / max(occluded, 1))
     psi = float(min(1.0, np.mean(ratios)))
     _PSI[key] = psi
@@ -59,8 +68,9 @@ def density(prop, obstacles, tile_origin, side):
     bins weighted by closeness to entry edge j and exit edge k of the tile."""
     rects, _ = prop.density_bins()
     occluded = prop.occluded_bins(obstacles).astype(float)
-    centres = prop.to_world(np.column_stack(((rects[:, 0] + rects[:, 2]) / 2,
-                                             (rects[:, 1] + rects[:, 3]) / 2)))
+    centres = prop.to_world(
+        np.column_stack(((rects[:, 0] + rects[:, 2]) / 2, (rects[:, 1] + rects[:, 3]) / 2))
+    )
     edges = np.asarray(tile_origin, float) + EDGE_POINTS * side
     d = np.linalg.norm(centres[:, None] - edges[None], axis=-1)  # (bins, 4)
     w = np.exp(-d / side)

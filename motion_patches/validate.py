@@ -29,9 +29,9 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-MARGIN = 1.5               # over the gait's own per-frame maxima
+MARGIN = 1.5  # over the gait's own per-frame maxima
 BACKWARD_TOLERANCE = 1e-3  # m per frame against the heading before a step counts as backwards
-JOIN_POSITION = 5e-3       # m: pieces' shared frame may differ by this much (numerical noise)
+JOIN_POSITION = 5e-3  # m: pieces' shared frame may differ by this much (numerical noise)
 JOIN_HEADING = np.radians(0.5)
 CLIPS = ("traversal", "interaction")  # recorded clips; every other piece kind is locomotion
 
@@ -39,12 +39,13 @@ CLIPS = ("traversal", "interaction")  # recorded clips; every other piece kind i
 @dataclass(frozen=True)
 class Limits:
     """Per-frame maxima a locomotion ground track of one gait stays within."""
-    heading: float        # rad per frame: largest |curvature| x largest step x margin
-    step: float           # m per frame: largest loop step x margin
-    accel: float          # m per frame^2: largest change of the step vector at a join
-    backward: float       # m per frame a step may go against the heading
+
+    heading: float  # rad per frame: largest |curvature| x largest step x margin
+    step: float  # m per frame: largest loop step x margin
+    accel: float  # m per frame^2: largest change of the step vector at a join
+    backward: float  # m per frame a step may go against the heading
     join_position: float  # m between pieces' shared frames
-    join_heading: float   # rad between pieces' shared frames
+    join_heading: float  # rad between pieces' shared frames
     margin: float
 
     def to_dict(self):
@@ -55,8 +56,13 @@ def _wrap(a):
     return (np.asarray(a, float) + np.pi) % (2.0 * np.pi) - np.pi
 
 
-def limits(gait, margin=MARGIN, backward=BACKWARD_TOLERANCE, join_position=JOIN_POSITION,
-           join_heading=JOIN_HEADING):
+def limits(
+    gait,
+    margin=MARGIN,
+    backward=BACKWARD_TOLERANCE,
+    join_position=JOIN_POSITION,
+    join_heading=JOIN_HEADING,
+):
     """The gait's own per-frame maxima, times ``margin``.
 
     ``gait`` is a :class:`~motion_patches.gait.Gait`, or a locomotion patch (then the
@@ -87,15 +93,26 @@ def limits(gait, margin=MARGIN, backward=BACKWARD_TOLERANCE, join_position=JOIN_
     # Change of step length from frame to frame within each loop, across its seam too.
     dstep = float(max(np.abs(np.diff(np.r_[s, s[:1]])).max() for s in steps))
     heading = kappa * step
-    return Limits(heading=heading * margin, step=step * margin,
-                  accel=(dstep + step * heading) * margin, backward=float(backward),
-                  join_position=float(join_position), join_heading=float(join_heading),
-                  margin=float(margin))
+    return Limits(
+        heading=heading * margin,
+        step=step * margin,
+        accel=(dstep + step * heading) * margin,
+        backward=float(backward),
+        join_position=float(join_position),
+        join_heading=float(join_heading),
+        margin=float(margin),
+    )
 
 
 def _record(frame, kind, value, limit, unit, where):
-    return {"frame": int(frame), "kind": kind, "value": float(value), "limit": float(limit),
-            "unit": unit, "where": where}
+    return {
+        "frame": int(frame),
+        "kind": kind,
+        "value": float(value),
+        "limit": float(limit),
+        "unit": unit,
+        "where": where,
+    }
 
 
 def _step_flags(ground, lim):
@@ -131,11 +148,22 @@ def ground_glitches(ground, lim, joins=()):
     inner = joins[(joins >= 0) & (joins < step.size)]
     join_step[inner] = True  # the step leaving a join frame
     for i in np.flatnonzero(np.abs(dh) > lim.heading):
-        out.append(_record(i + 1, "jump" if join_step[i] else "spin", abs(dh[i]), lim.heading,
-                           "rad/frame", "heading change"))
+        out.append(
+            _record(
+                i + 1,
+                "jump" if join_step[i] else "spin",
+                abs(dh[i]),
+                lim.heading,
+                "rad/frame",
+                "heading change",
+            )
+        )
     for i in np.flatnonzero(along < -lim.backward):
-        out.append(_record(i + 1, "backwards", -along[i], lim.backward, "m/frame",
-                           "travel against the heading"))
+        out.append(
+            _record(
+                i + 1, "backwards", -along[i], lim.backward, "m/frame", "travel against the heading"
+            )
+        )
     for i in np.flatnonzero(step > lim.step):
         out.append(_record(i + 1, "jump", step[i], lim.step, "m/frame", "step length"))
     inner = joins[(joins >= 1) & (joins <= g.shape[0] - 2)]
@@ -146,8 +174,11 @@ def ground_glitches(ground, lim, joins=()):
         for j, a in zip(inner[acc > lim.accel], acc[acc > lim.accel]):
             out.append(_record(j, "jump", a, lim.accel, "m/frame^2", "velocity change at a join"))
         for j, a in zip(inner[ddh > 2 * lim.heading], ddh[ddh > 2 * lim.heading]):
-            out.append(_record(j, "jump", a, 2 * lim.heading, "rad/frame^2",
-                               "turning rate change at a join"))
+            out.append(
+                _record(
+                    j, "jump", a, 2 * lim.heading, "rad/frame^2", "turning rate change at a join"
+                )
+            )
     out.sort(key=lambda r: (r["frame"], r["kind"]))
     return out
 
@@ -224,15 +255,20 @@ def segment_glitches(patch, lim=None, details=False):
     if hasattr(patch, "endpoints"):
         p0, d0, p1, d1 = patch.endpoints(np.arange(n))
         frames = np.diff(first)
-        for rows, at, pos, d, where in ((first[:-1], np.zeros(n, int), p0, d0, "entry node"),
-                                        (first[1:] - 1, frames - 1, p1, d1, "exit node")):
+        for rows, at, pos, d, where in (
+            (first[:-1], np.zeros(n, int), p0, d0, "entry node"),
+            (first[1:] - 1, frames - 1, p1, d1, "exit node"),
+        ):
             dp = np.linalg.norm(g[rows, :2] - pos, axis=1)
             da = np.abs(_wrap(g[rows, 2] - np.arctan2(d[:, 1], d[:, 0])))
-            for values, limit, unit, what in ((dp, lim.join_position, "m", " position"),
-                                              (da, lim.join_heading, "rad", " heading")):
+            for values, limit, unit, what in (
+                (dp, lim.join_position, "m", " position"),
+                (da, lim.join_heading, "rad", " heading"),
+            ):
                 for s in np.flatnonzero(values > limit):
                     found.setdefault(int(s), []).append(
-                        _record(at[s], "jump", values[s], limit, unit, where + what))
+                        _record(at[s], "jump", values[s], limit, unit, where + what)
+                    )
     for recs in found.values():
         recs.sort(key=lambda r: (r["frame"], r["kind"]))
     if details:
@@ -275,11 +311,33 @@ def motion_glitches(motions, kinds, lim):
             dp = float(np.linalg.norm(g[0, :2] - a[-1, :2]))
             da = float(abs(_wrap(g[0, 2] - a[-1, 2])))
             if dp > lim.join_position:
-                out.append(dict(_record(offset, "jump", dp, lim.join_position, "m",
-                                        f"{prev}-{kind} join position"), piece=i))
+                out.append(
+                    dict(
+                        _record(
+                            offset,
+                            "jump",
+                            dp,
+                            lim.join_position,
+                            "m",
+                            f"{prev}-{kind} join position",
+                        ),
+                        piece=i,
+                    )
+                )
             if da > lim.join_heading:
-                out.append(dict(_record(offset, "jump", da, lim.join_heading, "rad",
-                                        f"{prev}-{kind} join heading"), piece=i))
+                out.append(
+                    dict(
+                        _record(
+                            offset,
+                            "jump",
+                            da,
+                            lim.join_heading,
+                            "rad",
+                            f"{prev}-{kind} join heading",
+                        ),
+                        piece=i,
+                    )
+                )
             if prev not in CLIPS and kind not in CLIPS and a.shape[0] >= 2 and g.shape[0] >= 2:
                 three = np.stack((a[-2], a[-1], g[1]))
                 for r in ground_glitches(three, lim, joins=(1,)):
@@ -297,6 +355,7 @@ def plan_glitches(patch, plan, motions=None, lim=None):
     """:func:`motion_glitches` of a plan (motions from ``planner.plan_motions`` if not given)."""
     if motions is None:
         from .planner import plan_motions
+
         motions = plan_motions(patch, plan)
     return motion_glitches(motions, plan.pieces, limits(patch) if lim is None else lim)
 

@@ -6,7 +6,15 @@ import bpy
 from . import analyse, bake, crowd, mocap, object_patch, patch_files, plan
 from .common import guarded
 
-classes = tuple(guarded(c) for c in mocap.classes + bake.classes + patch_files.classes
-                + object_patch.classes + plan.classes + analyse.classes + crowd.classes)
+classes = tuple(
+    guarded(c)
+    for c in mocap.classes
+    + bake.classes
+    + patch_files.classes
+    + object_patch.classes
+    + plan.classes
+    + analyse.classes
+    + crowd.classes
+)
 
 register, unregister = bpy.utils.register_classes_factory(classes)

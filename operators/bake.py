@@ -10,18 +10,21 @@ from .common import list_operators, progress
 
 class MOTION_PATCHES_OT_bake_locomotion_patch(bpy.types.Operator):
     """Bake a tilable locomotion patch from a straight clip and turn clips"""
+
     bl_idname = "motion_patches.bake_locomotion_patch"
     bl_label = "Bake Locomotion Patch"
-    bl_options = {'REGISTER', 'UNDO'}
+    bl_options = {"REGISTER", "UNDO"}
 
     layer: StringProperty(name="Layer", default="walk", description="Gait name of the patch")
-    straight: StringProperty(name="Straight Action",
-                             description="Straight clip (default: the scene's bake setting)")
-    turns: StringProperty(name="Turn Actions",
-                          description="Comma-separated turn clips (default: the scene's list)")
+    straight: StringProperty(
+        name="Straight Action", description="Straight clip (default: the scene's bake setting)"
+    )
+    turns: StringProperty(
+        name="Turn Actions", description="Comma-separated turn clips (default: the scene's list)"
+    )
     # Not remembered between calls: unless given, they start from the add-on preferences.
-    cells: props.BAKE["cells"](options={'SKIP_SAVE'})
-    nodes: props.BAKE["nodes"](options={'SKIP_SAVE'})
+    cells: props.BAKE["cells"](options={"SKIP_SAVE"})
+    nodes: props.BAKE["nodes"](options={"SKIP_SAVE"})
 
     def _size_from_preferences(self, context):
         """Cells and nodes the caller did not give come from the preferences. Done in
@@ -37,25 +40,42 @@ class MOTION_PATCHES_OT_bake_locomotion_patch(bpy.types.Operator):
         settings = context.scene.motion_patches
         # Action names or the scene's bake settings; the API checks them and remembers them.
         straight = self.straight or settings.straight_action
-        turns = ([n.strip() for n in self.turns.split(",") if n.strip()] if self.turns
-                 else [r.action for r in settings.turn_actions if r.action])
+        turns = (
+            [n.strip() for n in self.turns.split(",") if n.strip()]
+            if self.turns
+            else [r.action for r in settings.turn_actions if r.action]
+        )
         try:
             with progress(context) as update:
                 res = api.bake_locomotion_patch(
-                    context.scene, settings.source_armature or context.active_object, straight,
-                    turns, layer=self.layer, cells=self.cells, nodes=self.nodes,
-                    progress=update)
+                    context.scene,
+                    settings.source_armature or context.active_object,
+                    straight,
+                    turns,
+                    layer=self.layer,
+                    cells=self.cells,
+                    nodes=self.nodes,
+                    progress=update,
+                )
         except api.MotionPatchesError as exc:
-            self.report({'ERROR'}, str(exc))
-            return {'CANCELLED'}
+            self.report({"ERROR"}, str(exc))
+            return {"CANCELLED"}
         st = res.stats
-        self.report({'INFO'}, f"Baked '{res.name}': {st['kept']} segments kept, {st['culled']} "
-                              f"culled ({res.seconds:.1f} s)")
-        return {'FINISHED'}
+        self.report(
+            {"INFO"},
+            f"Baked '{res.name}': {st['kept']} segments kept, {st['culled']} "
+            f"culled ({res.seconds:.1f} s)",
+        )
+        return {"FINISHED"}
 
 
-turn_list = list_operators("turn", "Turn Clip", "the clips the patch is baked from",
-                           lambda context: context.scene.motion_patches, "turn_actions",
-                           "active_turn_index")
+turn_list = list_operators(
+    "turn",
+    "Turn Clip",
+    "the clips the patch is baked from",
+    lambda context: context.scene.motion_patches,
+    "turn_actions",
+    "active_turn_index",
+)
 
 classes = (MOTION_PATCHES_OT_bake_locomotion_patch,) + turn_list

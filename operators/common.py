@@ -34,7 +34,7 @@ def list_operators(name, noun, where, owner, items, index):
         data = owner(context)
         getattr(data, items).add()
         setattr(data, index, len(getattr(data, items)) - 1)
-        return {'FINISHED'}
+        return {"FINISHED"}
 
     def has_active(context):
         data = owner(context)
@@ -45,19 +45,32 @@ def list_operators(name, noun, where, owner, items, index):
         i = getattr(data, index)
         getattr(data, items).remove(i)
         setattr(data, index, max(0, min(i, len(getattr(data, items)) - 1)))
-        return {'FINISHED'}
+        return {"FINISHED"}
 
     def operator(verb, description, poll, execute):
-        return type(f"MOTION_PATCHES_OT_{name}_{verb.lower()}", (bpy.types.Operator,), {
-            "bl_idname": f"motion_patches.{name}_{verb.lower()}",
-            "bl_label": f"{verb} {noun}", "bl_description": description,
-            # INTERNAL: a list's + / - button, not a command to find in F3 search.
-            "bl_options": {'REGISTER', 'UNDO', 'INTERNAL'},
-            "poll": classmethod(lambda cls, context: poll(context)), "execute": execute})
+        return type(
+            f"MOTION_PATCHES_OT_{name}_{verb.lower()}",
+            (bpy.types.Operator,),
+            {
+                "bl_idname": f"motion_patches.{name}_{verb.lower()}",
+                "bl_label": f"{verb} {noun}",
+                "bl_description": description,
+                # INTERNAL: a list's + / - button, not a command to find in F3 search.
+                "bl_options": {"REGISTER", "UNDO", "INTERNAL"},
+                "poll": classmethod(lambda cls, context: poll(context)),
+                "execute": execute,
+            },
+        )
 
-    return (operator("Add", f"Add a {noun.lower()} to {where}", has_list, add),
-            operator("Remove", f"Remove the selected {noun.lower()} from {where} (the action "
-                               f"itself is kept)", has_active, remove))
+    return (
+        operator("Add", f"Add a {noun.lower()} to {where}", has_list, add),
+        operator(
+            "Remove",
+            f"Remove the selected {noun.lower()} from {where} (the action itself is kept)",
+            has_active,
+            remove,
+        ),
+    )
 
 
 def guarded(cls):
@@ -75,10 +88,14 @@ def guarded(cls):
             return execute(self, context)
         except Exception as exc:
             traceback.print_exc()
-            self.report({'ERROR'}, f"Internal error ({type(exc).__name__}: {exc}); the scene "
-                                   f"was left as it was. Please report this bug with the "
-                                   f"console output")
-            return {'CANCELLED'}
+            self.report(
+                {"ERROR"},
+                f"Internal error ({type(exc).__name__}: {exc}); the scene "
+                f"was left as it was. Please report this bug with the "
+                f"console output",
+            )
+            return {"CANCELLED"}
+
     run._guarded = True
     cls.execute = run
     return cls

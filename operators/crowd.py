@@ -11,25 +11,30 @@ from .common import progress
 class MOTION_PATCHES_OT_duplicate_crowd(bpy.types.Operator):
     """Copy the active armature (sharing its armature data) into a crowd scattered over a
     region, send each copy to a goal scattered over another region, and plan the crowd"""
+
     bl_idname = "motion_patches.duplicate_crowd"
     bl_label = "Duplicate Crowd"
-    bl_options = {'REGISTER', 'UNDO'}
+    bl_options = {"REGISTER", "UNDO"}
 
     count: IntProperty(name="Characters", default=10, min=1, soft_max=200)
-    region_min: FloatVectorProperty(name="Region From", size=2, default=(-5.0, -5.0),
-                                    subtype='XYZ', unit='LENGTH')
-    region_max: FloatVectorProperty(name="Region To", size=2, default=(-1.0, 5.0),
-                                    subtype='XYZ', unit='LENGTH')
-    goal_min: FloatVectorProperty(name="Goals From", size=2, default=(1.0, -5.0),
-                                  subtype='XYZ', unit='LENGTH')
-    goal_max: FloatVectorProperty(name="Goals To", size=2, default=(5.0, 5.0),
-                                  subtype='XYZ', unit='LENGTH')
+    region_min: FloatVectorProperty(
+        name="Region From", size=2, default=(-5.0, -5.0), subtype="XYZ", unit="LENGTH"
+    )
+    region_max: FloatVectorProperty(
+        name="Region To", size=2, default=(-1.0, 5.0), subtype="XYZ", unit="LENGTH"
+    )
+    goal_min: FloatVectorProperty(
+        name="Goals From", size=2, default=(1.0, -5.0), subtype="XYZ", unit="LENGTH"
+    )
+    goal_max: FloatVectorProperty(
+        name="Goals To", size=2, default=(5.0, 5.0), subtype="XYZ", unit="LENGTH"
+    )
     seed: IntProperty(name="Seed", default=0, min=0)
     patch: StringProperty(name="Patch", description="Locomotion patch (default: the active one)")
 
     @classmethod
     def poll(cls, context):
-        return context.active_object is not None and context.active_object.type == 'ARMATURE'
+        return context.active_object is not None and context.active_object.type == "ARMATURE"
 
     def invoke(self, context, event):
         return context.window_manager.invoke_props_dialog(self)
@@ -39,29 +44,46 @@ class MOTION_PATCHES_OT_duplicate_crowd(bpy.types.Operator):
         try:
             w = api.planning_settings(context.scene)
             pairs = api.duplicate_crowd(
-                context.scene, context.active_object, self.count,
-                (self.region_min, self.region_max), (self.goal_min, self.goal_max),
-                seed=self.seed, radius=w["radius"], patch_name=self.patch or None,
-                context=context)
+                context.scene,
+                context.active_object,
+                self.count,
+                (self.region_min, self.region_max),
+                (self.goal_min, self.goal_max),
+                seed=self.seed,
+                radius=w["radius"],
+                patch_name=self.patch or None,
+                context=context,
+            )
             with progress(context) as update:
-                res = api.plan_crowd(context.scene, pairs, patch_name=self.patch or None,
-                                     context=context, progress=update)
+                res = api.plan_crowd(
+                    context.scene,
+                    pairs,
+                    patch_name=self.patch or None,
+                    context=context,
+                    progress=update,
+                )
         except api.MotionPatchesError as exc:
             api.remove_crowd(pairs)  # nothing made is left behind
-            self.report({'ERROR'}, str(exc))
-            return {'CANCELLED'}
+            self.report({"ERROR"}, str(exc))
+            return {"CANCELLED"}
         for name, why in res.failed:
-            self.report({'WARNING'}, f"unreachable: {why}")
+            self.report({"WARNING"}, f"unreachable: {why}")
         for c in res.conflicts:
-            self.report({'WARNING'}, f"'{c['a']}' and '{c['b']}' come within "
-                                     f"{c['distance_m']:.2f} m at frame {c['frame']}")
+            self.report(
+                {"WARNING"},
+                f"'{c['a']}' and '{c['b']}' come within "
+                f"{c['distance_m']:.2f} m at frame {c['frame']}",
+            )
         holds = sum(len(h) for h in getattr(res, "holds", {}).values())
         waits = sum(1 for d in res.delays.values() if d)
-        self.report({'INFO'}, f"Crowd of {len(pairs)}: {len(res.plans)} planned, "
-                              f"{len(res.failed)} unreachable, {len(res.conflicts)} conflicts, "
-                              f"{holds} idle holds, {waits} waits, {len(res.rerouted)} re-routed, "
-                              f"in {res.seconds:.1f} s")
-        return {'FINISHED'}
+        self.report(
+            {"INFO"},
+            f"Crowd of {len(pairs)}: {len(res.plans)} planned, "
+            f"{len(res.failed)} unreachable, {len(res.conflicts)} conflicts, "
+            f"{holds} idle holds, {waits} waits, {len(res.rerouted)} re-routed, "
+            f"in {res.seconds:.1f} s",
+        )
+        return {"FINISHED"}
 
 
 classes = (MOTION_PATCHES_OT_duplicate_crowd,)

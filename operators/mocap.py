@@ -8,27 +8,34 @@ from .. import api
 
 class MOTION_PATCHES_OT_import_mocap(bpy.types.Operator, ImportHelper):
     """Import BVH motion capture files as actions on one armature"""
+
     bl_idname = "motion_patches.import_mocap"
     bl_label = "Import Mocap Clips"
-    bl_options = {'REGISTER', 'UNDO'}
+    bl_options = {"REGISTER", "UNDO"}
 
-    filter_glob: StringProperty(default="*.bvh", options={'HIDDEN'})
-    files: CollectionProperty(type=bpy.types.OperatorFileListElement, options={'HIDDEN', 'SKIP_SAVE'})
-    directory: StringProperty(subtype='DIR_PATH', options={'HIDDEN', 'SKIP_SAVE'})
-    scale: FloatProperty(name="Scale", default=0.056444, min=1e-6,
-                         description="File units to metres (CMU: 0.056444)")
+    filter_glob: StringProperty(default="*.bvh", options={"HIDDEN"})
+    files: CollectionProperty(
+        type=bpy.types.OperatorFileListElement, options={"HIDDEN", "SKIP_SAVE"}
+    )
+    directory: StringProperty(subtype="DIR_PATH", options={"HIDDEN", "SKIP_SAVE"})
+    scale: FloatProperty(
+        name="Scale", default=0.056444, min=1e-6, description="File units to metres (CMU: 0.056444)"
+    )
 
     def execute(self, context):
         import os
-        paths = [os.path.join(self.directory, f.name) for f in self.files if f.name] or [self.filepath]
+
+        paths = [os.path.join(self.directory, f.name) for f in self.files if f.name] or [
+            self.filepath
+        ]
         try:
             arm, acts = api.import_mocap(paths, self.scale)
         except api.MotionPatchesError as exc:
-            self.report({'ERROR'}, str(exc))
-            return {'CANCELLED'}
+            self.report({"ERROR"}, str(exc))
+            return {"CANCELLED"}
         context.scene.motion_patches.source_armature = arm
-        self.report({'INFO'}, f"Imported {len(acts)} clip(s) on '{arm.name}'")
-        return {'FINISHED'}
+        self.report({"INFO"}, f"Imported {len(acts)} clip(s) on '{arm.name}'")
+        return {"FINISHED"}
 
 
 classes = (MOTION_PATCHES_OT_import_mocap,)

@@ -12,12 +12,13 @@ EXT = ".mpatch"
 
 class MOTION_PATCHES_OT_export_patch(bpy.types.Operator, ExportHelper):
     """Write the active locomotion patch to a file other .blend files can import"""
+
     bl_idname = "motion_patches.export_patch"
     bl_label = "Export Patch"
-    bl_options = {'REGISTER', 'UNDO'}
+    bl_options = {"REGISTER", "UNDO"}
 
     filename_ext = EXT
-    filter_glob: StringProperty(default="*" + EXT, options={'HIDDEN'})
+    filter_glob: StringProperty(default="*" + EXT, options={"HIDDEN"})
 
     @classmethod
     def poll(cls, context):
@@ -27,29 +28,30 @@ class MOTION_PATCHES_OT_export_patch(bpy.types.Operator, ExportHelper):
         try:
             name = api.export_patch(context.scene, self.filepath)
         except api.MotionPatchesError as exc:
-            self.report({'ERROR'}, str(exc))
-            return {'CANCELLED'}
-        self.report({'INFO'}, f"Exported '{name}' to {self.filepath}")
-        return {'FINISHED'}
+            self.report({"ERROR"}, str(exc))
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"Exported '{name}' to {self.filepath}")
+        return {"FINISHED"}
 
 
 class MOTION_PATCHES_OT_import_patch(bpy.types.Operator, ImportHelper):
     """Store a locomotion patch file in this .blend (replacing a patch of the same name)"""
+
     bl_idname = "motion_patches.import_patch"
     bl_label = "Import Patch"
-    bl_options = {'REGISTER', 'UNDO'}
+    bl_options = {"REGISTER", "UNDO"}
 
     filename_ext = EXT
-    filter_glob: StringProperty(default="*" + EXT, options={'HIDDEN'})
+    filter_glob: StringProperty(default="*" + EXT, options={"HIDDEN"})
 
     def execute(self, context):
         try:
             name = api.import_patch(context.scene, self.filepath)
         except api.MotionPatchesError as exc:
-            self.report({'ERROR'}, str(exc))
-            return {'CANCELLED'}
-        self.report({'INFO'}, f"Imported '{name}'")
-        return {'FINISHED'}
+            self.report({"ERROR"}, str(exc))
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"Imported '{name}'")
+        return {"FINISHED"}
 
 
 classes = (MOTION_PATCHES_OT_export_patch, MOTION_PATCHES_OT_import_patch)

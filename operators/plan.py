@@ -11,98 +11,123 @@ from .common import progress
 
 class MOTION_PATCHES_OT_plan_path(bpy.types.Operator):
     """Plan the active armature's walk to the goal and write it as NLA strips"""
+
     bl_idname = "motion_patches.plan_path"
     bl_label = "Plan Path"
-    bl_options = {'REGISTER', 'UNDO'}
+    bl_options = {"REGISTER", "UNDO"}
 
     patch: StringProperty(name="Patch", description="Locomotion patch (default: the active one)")
 
     @classmethod
     def poll(cls, context):
-        return context.active_object is not None and context.active_object.type == 'ARMATURE'
+        return context.active_object is not None and context.active_object.type == "ARMATURE"
 
     def execute(self, context):
         try:  # the planning settings are the scene's (api.planning_settings)
-            res = api.plan_path(context.scene, context.active_object,
-                                context.scene.motion_patches.goal,
-                                patch_name=self.patch or None, context=context)
+            res = api.plan_path(
+                context.scene,
+                context.active_object,
+                context.scene.motion_patches.goal,
+                patch_name=self.patch or None,
+                context=context,
+            )
         except api.MotionPatchesError as exc:
-            self.report({'ERROR'}, str(exc))
-            return {'CANCELLED'}
-        self.report({'INFO'}, f"Planned {len(res.pieces)} pieces, frames {res.frame_start}-"
-                              f"{res.frame_end}, cost {res.cost:.2f} in {res.seconds * 1000:.0f} ms")
+            self.report({"ERROR"}, str(exc))
+            return {"CANCELLED"}
+        self.report(
+            {"INFO"},
+            f"Planned {len(res.pieces)} pieces, frames {res.frame_start}-"
+            f"{res.frame_end}, cost {res.cost:.2f} in {res.seconds * 1000:.0f} ms",
+        )
         if res.stashed_action_track:
-            self.report({'WARNING'}, f"The active action was moved to the muted track "
-                                     f"'{res.stashed_action_track}' so the plan can play")
-        return {'FINISHED'}
+            self.report(
+                {"WARNING"},
+                f"The active action was moved to the muted track "
+                f"'{res.stashed_action_track}' so the plan can play",
+            )
+        return {"FINISHED"}
 
 
 class MOTION_PATCHES_OT_plan_crowd(bpy.types.Operator):
     """Plan every selected armature to its own goal (or the scene's), starting them apart"""
+
     bl_idname = "motion_patches.plan_crowd"
     bl_label = "Plan Crowd"
-    bl_options = {'REGISTER', 'UNDO'}
+    bl_options = {"REGISTER", "UNDO"}
 
     patch: StringProperty(name="Patch", description="Locomotion patch (default: the active one)")
 
     @classmethod
     def poll(cls, context):
-        return any(ob.type == 'ARMATURE' for ob in context.selected_objects)
+        return any(ob.type == "ARMATURE" for ob in context.selected_objects)
 
     def execute(self, context):
         try:
             pairs = api.crowd_members(context.scene, context.selected_objects)
             with progress(context) as update:
-                res = api.plan_crowd(context.scene, pairs, patch_name=self.patch or None,
-                                     context=context, progress=update)
+                res = api.plan_crowd(
+                    context.scene,
+                    pairs,
+                    patch_name=self.patch or None,
+                    context=context,
+                    progress=update,
+                )
         except api.MotionPatchesError as exc:
-            self.report({'ERROR'}, str(exc))
-            return {'CANCELLED'}
+            self.report({"ERROR"}, str(exc))
+            return {"CANCELLED"}
         for name, why in res.failed:
-            self.report({'WARNING'}, why if name in why else f"{name}: {why}")
+            self.report({"WARNING"}, why if name in why else f"{name}: {why}")
         if not res.plans:
-            self.report({'ERROR'}, "No character found a path; nothing was written")
-            return {'CANCELLED'}
+            self.report({"ERROR"}, "No character found a path; nothing was written")
+            return {"CANCELLED"}
         for c in res.conflicts:
-            self.report({'WARNING'}, f"'{c['a']}' and '{c['b']}' come within "
-                                     f"{c['distance_m']:.2f} m at frame {c['frame']}")
+            self.report(
+                {"WARNING"},
+                f"'{c['a']}' and '{c['b']}' come within "
+                f"{c['distance_m']:.2f} m at frame {c['frame']}",
+            )
         waits = [f"{n} {d} frames" for n, d in res.delays.items() if d]
-        self.report({'INFO'}, f"Planned {len(res.plans)} of {len(pairs)} characters in "
-                              f"{res.seconds:.1f} s" + (f"; waiting: {', '.join(waits)}"
-                                                        if waits else ""))
-        return {'FINISHED'}
+        self.report(
+            {"INFO"},
+            f"Planned {len(res.plans)} of {len(pairs)} characters in "
+            f"{res.seconds:.1f} s" + (f"; waiting: {', '.join(waits)}" if waits else ""),
+        )
+        return {"FINISHED"}
 
 
 class MOTION_PATCHES_OT_reset_planning(bpy.types.Operator):
     """Set this scene's planning settings (α, β, γ, radius, stitching, foot lock, goal
     facing) to the defaults in the preferences"""
+
     bl_idname = "motion_patches.reset_planning"
     bl_label = "Reset to Preferences"
-    bl_options = {'REGISTER', 'UNDO'}
+    bl_options = {"REGISTER", "UNDO"}
 
     def execute(self, context):
         prefs = props.preferences(context)
         if prefs is None:
-            self.report({'ERROR'}, "The add-on preferences are not available (is the add-on "
-                                   "enabled?)")
-            return {'CANCELLED'}
+            self.report(
+                {"ERROR"}, "The add-on preferences are not available (is the add-on enabled?)"
+            )
+            return {"CANCELLED"}
         s = context.scene.motion_patches
         for name in props.PLANNING:
             setattr(s, name, getattr(prefs, name))
-        return {'FINISHED'}
+        return {"FINISHED"}
 
 
 def _armature(context):
     ob = context.active_object
-    return ob if ob is not None and ob.type == 'ARMATURE' else None
+    return ob if ob is not None and ob.type == "ARMATURE" else None
 
 
 class MOTION_PATCHES_OT_bone_map_fill(bpy.types.Operator):
     """List every bone of the patch skeleton in the active armature's bone map with the
     armature bone its name pairs it with, ready to be corrected"""
+
     bl_idname = "motion_patches.bone_map_fill"
     bl_label = "Fill From Names"
-    bl_options = {'REGISTER', 'UNDO'}
+    bl_options = {"REGISTER", "UNDO"}
 
     @classmethod
     def poll(cls, context):
@@ -112,19 +137,23 @@ class MOTION_PATCHES_OT_bone_map_fill(bpy.types.Operator):
         try:
             mapping = api.fill_bone_map(context.scene, _armature(context))
         except api.MotionPatchesError as exc:
-            self.report({'ERROR'}, str(exc))
-            return {'CANCELLED'}
+            self.report({"ERROR"}, str(exc))
+            return {"CANCELLED"}
         left = [p for p, r in mapping.items() if not r]
-        self.report({'INFO'}, f"{len(mapping) - len(left)} of {len(mapping)} patch bones "
-                              f"paired" + (f"; none for {', '.join(left[:6])}" if left else ""))
-        return {'FINISHED'}
+        self.report(
+            {"INFO"},
+            f"{len(mapping) - len(left)} of {len(mapping)} patch bones "
+            f"paired" + (f"; none for {', '.join(left[:6])}" if left else ""),
+        )
+        return {"FINISHED"}
 
 
 class MOTION_PATCHES_OT_bone_map_clear(bpy.types.Operator):
     """Clear the active armature's bone map: bones are paired by their names again"""
+
     bl_idname = "motion_patches.bone_map_clear"
     bl_label = "Clear Bone Map"
-    bl_options = {'REGISTER', 'UNDO'}
+    bl_options = {"REGISTER", "UNDO"}
 
     @classmethod
     def poll(cls, context):
@@ -133,9 +162,13 @@ class MOTION_PATCHES_OT_bone_map_clear(bpy.types.Operator):
 
     def execute(self, context):
         api.set_bone_map(_armature(context), {})
-        return {'FINISHED'}
+        return {"FINISHED"}
 
 
-classes = (MOTION_PATCHES_OT_plan_path, MOTION_PATCHES_OT_plan_crowd,
-           MOTION_PATCHES_OT_reset_planning, MOTION_PATCHES_OT_bone_map_fill,
-           MOTION_PATCHES_OT_bone_map_clear)
+classes = (
+    MOTION_PATCHES_OT_plan_path,
+    MOTION_PATCHES_OT_plan_crowd,
+    MOTION_PATCHES_OT_reset_planning,
+    MOTION_PATCHES_OT_bone_map_fill,
+    MOTION_PATCHES_OT_bone_map_clear,
+)

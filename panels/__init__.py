@@ -7,8 +7,13 @@ import bpy
 
 from . import analysis, file_import, locomotion, object_patch, overlay, planning
 
-classes = (locomotion.classes + object_patch.classes + planning.classes + analysis.classes
-           + overlay.classes)
+classes = (
+    locomotion.classes
+    + object_patch.classes
+    + planning.classes
+    + analysis.classes
+    + overlay.classes
+)
 
 _register, _unregister = bpy.utils.register_classes_factory(classes)
 

@@ -4,8 +4,10 @@
 
 import bpy
 
-ENTRIES = (("motion_patches.import_mocap", "Motion Patches Mocap (.bvh)"),
-           ("motion_patches.import_patch", "Motion Patches Patch (.mpatch)"))
+ENTRIES = (
+    ("motion_patches.import_mocap", "Motion Patches Mocap (.bvh)"),
+    ("motion_patches.import_patch", "Motion Patches Patch (.mpatch)"),
+)
 
 
 def draw_entries(self, context):

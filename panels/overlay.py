@@ -20,19 +20,25 @@ from ..adapter import storage
 from ..motion_patches.plan_frame import lattice_frame, local_environment, to_local, to_world
 from .sidebar import SidebarPanel, wrapped_label
 
-COLOURS = {"segment": ((0.16, 0.45, 0.85, 1.0), (0.95, 0.6, 0.1, 1.0)),
-           "part": ((0.16, 0.45, 0.85, 1.0), (0.95, 0.6, 0.1, 1.0)),
-           "traversal": ((0.85, 0.15, 0.15, 1.0),), "interaction": ((0.1, 0.7, 0.3, 1.0),),
-           "start": ((0.6, 0.6, 0.6, 1.0),), "goal": ((0.6, 0.6, 0.6, 1.0),)}
+COLOURS = {
+    "segment": ((0.16, 0.45, 0.85, 1.0), (0.95, 0.6, 0.1, 1.0)),
+    "part": ((0.16, 0.45, 0.85, 1.0), (0.95, 0.6, 0.1, 1.0)),
+    "traversal": ((0.85, 0.15, 0.15, 1.0),),
+    "interaction": ((0.1, 0.7, 0.3, 1.0),),
+    "start": ((0.6, 0.6, 0.6, 1.0),),
+    "goal": ((0.6, 0.6, 0.6, 1.0),),
+}
 GRID = (0.5, 0.5, 0.5, 0.35)
-BLOCKED = (0.9, 0.35, 0.3, 0.35)    # fill: a prop's footprint grown by the radius
-OCCLUDED = (0.9, 0.35, 0.3, 0.6)    # outline: a cell the planner's bitmask (B_t) occludes
-ARC_STEP = np.radians(15.0)         # the grown footprint's rounded corners, in steps
-LEGEND = ("Path: segments blue / orange, traversals red, interactions green",
-          "Red fill: where the root cannot go (each prop grown by the radius); red squares: "
-          "cells the planner marks occluded",
-          "White points: stitches between pieces",
-          "Props: green = a clip starts, red = it ends (tick: heading)")
+BLOCKED = (0.9, 0.35, 0.3, 0.35)  # fill: a prop's footprint grown by the radius
+OCCLUDED = (0.9, 0.35, 0.3, 0.6)  # outline: a cell the planner's bitmask (B_t) occludes
+ARC_STEP = np.radians(15.0)  # the grown footprint's rounded corners, in steps
+LEGEND = (
+    "Path: segments blue / orange, traversals red, interactions green",
+    "Red fill: where the root cannot go (each prop grown by the radius); red squares: "
+    "cells the planner marks occluded",
+    "White points: stitches between pieces",
+    "Props: green = a clip starts, red = it ends (tick: heading)",
+)
 STITCH = (1.0, 1.0, 1.0, 1.0)
 ENTRY = (0.2, 0.9, 0.3, 1.0)
 EXIT = (0.95, 0.2, 0.2, 1.0)
@@ -144,10 +150,10 @@ def plan_buffers(scene):
         strip_starts = [meta["frame_start"]] + list(meta["boundaries"])
         parity = np.zeros(g.shape[0] - 1, int)
         for n, s in enumerate(strip_starts):
-            parity[s - meta["frame_start"]:] = n % 2
+            parity[s - meta["frame_start"] :] = n % 2
         for key in ("traversals", "interactions"):
             for a, b in meta.get(key, []):
-                kinds[a - meta["frame_start"]:b - meta["frame_start"]] = key[:-1]
+                kinds[a - meta["frame_start"] : b - meta["frame_start"]] = key[:-1]
         for i in range(g.shape[0] - 1):
             lines += [(g[i, 0], g[i, 1], Z), (g[i + 1, 0], g[i + 1, 1], Z)]
             options = COLOURS.get(kinds[i], COLOURS["segment"])
@@ -173,6 +179,7 @@ def plan_buffers(scene):
         def world(*pts):
             w = to_world(frame, np.array(pts, float))
             return [(float(x), float(y), Z) for x, y in w]
+
         for i in range(lo[0], hi[0] + 2):
             x = i * patch.side
             lines += world((x, lo[1] * patch.side), (x, (hi[1] + 1) * patch.side))
@@ -201,8 +208,11 @@ def plan_buffers(scene):
                 lines += [(a[0], a[1], Z), (b[0], b[1], Z)]
                 lcol += [OCCLUDED, OCCLUDED]
 
-    return {"lines": (_arr(lines, 3), _arr(lcol, 4)), "points": (_arr(points, 3), _arr(pcol, 4)),
-            "tris": (_arr(tris, 3), _arr(tcol, 4))}
+    return {
+        "lines": (_arr(lines, 3), _arr(lcol, 4)),
+        "points": (_arr(points, 3), _arr(pcol, 4)),
+        "tris": (_arr(tris, 3), _arr(tcol, 4)),
+    }
 
 
 def _patch_key(scene):
@@ -212,16 +222,29 @@ def _patch_key(scene):
 
 
 def _plans_key(scene):
-    return json.dumps([storage.plan_fingerprint(ob) for ob in scene.objects
-                       if ob.type == "ARMATURE"] + _patch_key(scene))
+    return json.dumps(
+        [storage.plan_fingerprint(ob) for ob in scene.objects if ob.type == "ARMATURE"]
+        + _patch_key(scene)
+    )
 
 
 def _markers_key(scene):
     """Changes when a tagged prop moves, is (un)tagged or its clips change."""
-    return json.dumps([[ob.name, [list(r) for r in ob.matrix_world], ob.visible_get(),
-                        [[c.action.name if c.action else "", c.kind, c.effort, c.copy_step]
-                         for c in ob.motion_patch.clips]] for ob in _tagged(scene)]
-                      + _patch_key(scene))
+    return json.dumps(
+        [
+            [
+                ob.name,
+                [list(r) for r in ob.matrix_world],
+                ob.visible_get(),
+                [
+                    [c.action.name if c.action else "", c.kind, c.effort, c.copy_step]
+                    for c in ob.motion_patch.clips
+                ],
+            ]
+            for ob in _tagged(scene)
+        ]
+        + _patch_key(scene)
+    )
 
 
 def _cached(name, key, make):
@@ -233,6 +256,7 @@ def _cached(name, key, make):
 def draw():
     import gpu
     from gpu_extras.batch import batch_for_shader
+
     scene = bpy.context.scene
     if not scene.motion_patches.show_overlay:
         return
@@ -246,8 +270,13 @@ def draw():
     # without writing depth (the fills are see-through; the lines sit on the same plane).
     gpu.state.depth_test_set("LESS_EQUAL")
     gpu.state.depth_mask_set(False)
-    for prim, name, size in (("TRIS", "tris", 0), ("LINES", "lines", 0), ("LINES", "ticks", 0),
-                             ("POINTS", "points", 6.0), ("POINTS", "markers", 9.0)):
+    for prim, name, size in (
+        ("TRIS", "tris", 0),
+        ("LINES", "lines", 0),
+        ("LINES", "ticks", 0),
+        ("POINTS", "points", 6.0),
+        ("POINTS", "markers", 9.0),
+    ):
         pos, col = buf[name]
         if not len(pos):
             continue

@@ -17,7 +17,7 @@ class MOTION_PATCHES_PT_planning(SidebarPanel, bpy.types.Panel):
         layout = self.layout
         layout.prop(s, "goal")
         ob = context.active_object
-        if ob is not None and ob.type == 'ARMATURE':
+        if ob is not None and ob.type == "ARMATURE":
             # The character's name over the field: beside it, "Walker's Goal" is cut.
             col = layout.column(align=True)
             wrapped_label(col, context, f"{ob.name}'s Own Goal (crowds)")
@@ -32,22 +32,21 @@ class MOTION_PATCHES_PT_planning(SidebarPanel, bpy.types.Panel):
         layout.prop(s, "foot_lock")
         layout.prop(s, "fit_frame_range")
         layout.prop(s, "goal_facing", text="Facing")  # "Goal Facing" does not fit beside
-        layout.operator("motion_patches.reset_planning", icon='LOOP_BACK')
+        layout.operator("motion_patches.reset_planning", icon="LOOP_BACK")
         row = layout.row(align=True)
-        row.operator("motion_patches.plan_path", icon='PLAY')
-        row.operator("motion_patches.plan_crowd", icon='COMMUNITY')
-        layout.operator("motion_patches.duplicate_crowd", icon='DUPLICATE')
+        row.operator("motion_patches.plan_path", icon="PLAY")
+        row.operator("motion_patches.plan_crowd", icon="COMMUNITY")
+        layout.operator("motion_patches.duplicate_crowd", icon="DUPLICATE")
 
 
 class MOTION_PATCHES_UL_bone_map(bpy.types.UIList):
     """Bone map rows: the patch bone, and the armature bone that plays it (editable)."""
 
-    def draw_item(self, context, layout, data, item, icon, active_data, active_propname,
-                  index=0):
+    def draw_item(self, context, layout, data, item, icon, active_data, active_propname, index=0):
         row = layout.row(align=True)
-        row.label(text=item.patch_bone, icon='BONE_DATA')
+        row.label(text=item.patch_bone, icon="BONE_DATA")
         arm = context.active_object
-        if arm is not None and arm.type == 'ARMATURE':
+        if arm is not None and arm.type == "ARMATURE":
             row.prop_search(item, "rig_bone", arm.data, "bones", text="")
         else:
             row.prop(item, "rig_bone", text="")
@@ -59,23 +58,36 @@ def draw_bone_map(layout, context, ob):
     editable rows (patch bone -> armature bone) with Fill From Names / Clear."""
     from .. import api
     from ..adapter import nla, storage
+
     rig_props = ob.data.motion_patches_rig
     try:
         patch = storage.load_patch(context.scene)
         rig = nla.check_rig(ob, patch.gait.skeleton, patch.gait.floor())
-        text, icon = (("Bone map: the patch's own skeleton", 'CHECKMARK') if rig is None else
-                      (f"Bone map: retargeted, {len(rig.pairs)} bones, root x{rig.scale:.3f}",
-                       'ARMATURE_DATA'))
+        text, icon = (
+            ("Bone map: the patch's own skeleton", "CHECKMARK")
+            if rig is None
+            else (
+                f"Bone map: retargeted, {len(rig.pairs)} bones, root x{rig.scale:.3f}",
+                "ARMATURE_DATA",
+            )
+        )
     except (ValueError, api.MotionPatchesError) as exc:
-        rig, text, icon = False, str(exc), 'ERROR'
+        rig, text, icon = False, str(exc), "ERROR"
     wrapped_label(layout, context, text, icon=icon)
     if rig is None and not len(rig_props.bone_map):
         return
-    layout.template_list("MOTION_PATCHES_UL_bone_map", "", rig_props, "bone_map",
-                         rig_props, "active_bone_index", rows=3)
+    layout.template_list(
+        "MOTION_PATCHES_UL_bone_map",
+        "",
+        rig_props,
+        "bone_map",
+        rig_props,
+        "active_bone_index",
+        rows=3,
+    )
     row = layout.row(align=True)
-    row.operator("motion_patches.bone_map_fill", icon='FILE_REFRESH')
-    row.operator("motion_patches.bone_map_clear", icon='X', text="Clear")
+    row.operator("motion_patches.bone_map_fill", icon="FILE_REFRESH")
+    row.operator("motion_patches.bone_map_clear", icon="X", text="Clear")
 
 
 classes = (MOTION_PATCHES_PT_planning, MOTION_PATCHES_UL_bone_map)

@@ -3,8 +3,8 @@
 
 
 class SidebarPanel:
-    bl_space_type = 'VIEW_3D'
-    bl_region_type = 'UI'
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
     bl_category = "Motion Patches"
 
 
@@ -13,8 +13,8 @@ def list_with_buttons(layout, listtype, owner, items, index, add, remove, rows=3
     row = layout.row()
     row.template_list(listtype, "", owner, items, owner, index, rows=rows)
     col = row.column(align=True)
-    col.operator(add, icon='ADD', text="")
-    col.operator(remove, icon='REMOVE', text="")
+    col.operator(add, icon="ADD", text="")
+    col.operator(remove, icon="REMOVE", text="")
 
 
 # Where a label's text starts and ends inside the sidebar region, in unscaled pixels: the
@@ -31,6 +31,7 @@ def text_width(text, context):
     scale = prefs.system.ui_scale if prefs is not None else 1.0
     try:
         import blf
+
         points = prefs.ui_styles[0].widget.points if prefs is not None else 11
         blf.size(0, points * scale)
         return blf.dimensions(0, text)[0]
@@ -59,10 +60,10 @@ def wrap_text(text, context, icon=False):
     return lines + [line]
 
 
-def wrapped_label(layout, context, text, icon='NONE'):
+def wrapped_label(layout, context, text, icon="NONE"):
     """A label whose text wraps onto as many lines as the sidebar's width needs; the lines
     after the first are indented under the text when there is an icon."""
     col = layout.column(align=True)
-    for i, line in enumerate(wrap_text(text, context, icon != 'NONE')):
-        col.label(text=line, icon=icon if i == 0 else ('BLANK1' if icon != 'NONE' else 'NONE'))
+    for i, line in enumerate(wrap_text(text, context, icon != "NONE")):
+        col.label(text=line, icon=icon if i == 0 else ("BLANK1" if icon != "NONE" else "NONE"))
     return col

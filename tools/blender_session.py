@@ -24,22 +24,31 @@ def start():
     home = Path(tempfile.mkdtemp(prefix="motion_patches-session-"))
     atexit.register(shutil.rmtree, home, ignore_errors=True)
     os.environ["BLENDER_USER_RESOURCES"] = str(home)
-    for var, sub in (("BLENDER_USER_CONFIG", "config"), ("BLENDER_USER_SCRIPTS", "scripts"),
-                     ("BLENDER_USER_DATAFILES", "datafiles"), ("BLENDER_USER_EXTENSIONS", "extensions")):
+    for var, sub in (
+        ("BLENDER_USER_CONFIG", "config"),
+        ("BLENDER_USER_SCRIPTS", "scripts"),
+        ("BLENDER_USER_DATAFILES", "datafiles"),
+        ("BLENDER_USER_EXTENSIONS", "extensions"),
+    ):
         os.environ[var] = str(home / sub)
     # isort: off
     import bpy
     import addon_utils  # ships with bpy: importable only once bpy is
+
     # isort: on
     repo_dir = home / "repo"
     repo_dir.mkdir()
     (repo_dir / "motion_patches").symlink_to(REPO_ROOT, target_is_directory=True)
     bpy.context.preferences.extensions.repos.new(
-        name="Motion Patches (working tree)", module=REPO_MODULE,
-        custom_directory=str(repo_dir), source='USER')
+        name="Motion Patches (working tree)",
+        module=REPO_MODULE,
+        custom_directory=str(repo_dir),
+        source="USER",
+    )
     name = f"bl_ext.{REPO_MODULE}.motion_patches"
 
     def fail(exc):
         raise exc
+
     addon_utils.enable(name, default_set=True, handle_error=fail)
     return bpy, sys.modules[name]

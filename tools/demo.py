@@ -23,9 +23,11 @@ REPO = blender_session.REPO_ROOT
 
 def parse_args(argv):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--mocap", default=os.environ.get("MOTION_PATCHES_MOCAP",
-                                                     str(REPO.parent / "shared" / "mocap")),
-                   help="folder holding cmu/16_15.bvh and cmu/16_18.bvh")
+    p.add_argument(
+        "--mocap",
+        default=os.environ.get("MOTION_PATCHES_MOCAP", str(REPO.parent / "shared" / "mocap")),
+        help="folder holding cmu/16_15.bvh and cmu/16_18.bvh",
+    )
     p.add_argument("--output", default=str(REPO / "sample_blends" / "demo_walk.blend"))
     p.add_argument("--json", help="also write the summary as JSON to this file")
     p.add_argument("--seed", type=int, default=7, help="pillar layout seed")
@@ -47,6 +49,7 @@ def chair_lines(bpy, api, source, jump, seed):
     """Two lines of eleven chairs tagged with the real CMU jump (16_06); a hurried and a
     calm walker cross them. Each is planned with dynamic and with static stitching."""
     import numpy as np
+
     scene = bpy.context.scene
     out = {}
     for name, y0, weights in (("Hurried", 15.0, (4.0, 0.5, 0.1)), ("Calm", 25.0, (0.3, 0.1, 3.0))):
@@ -64,19 +67,30 @@ def chair_lines(bpy, api, source, jump, seed):
         walker.location = (1.0, y0 + 0.3, 0.0)
         walker.rotation_euler = (0, 0, np.pi / 2)
         goal = bpy.data.objects.new(f"{name} goal", None)
-        goal.empty_display_type = 'SINGLE_ARROW'
+        goal.empty_display_type = "SINGLE_ARROW"
         scene.collection.objects.link(goal)
         goal.location = (9.0, y0 + 0.3, 0.0)
         goal.rotation_euler = (0, 0, np.pi / 2)
         rows = {}
         for mode in ("static", "dynamic"):  # dynamic last: its NLA stays in the file
-            res = api.plan_path(scene, walker, goal, alpha=weights[0], beta=weights[1],
-                                gamma=weights[2], frame_start=1, stitching=mode)
-            rows[mode] = {"seconds": res.seconds, "cost": res.cost,
-                          "copies_stitched": res.stats["copies_stitched"],
-                          "stitch_edges": res.stats["stitch_edges"],
-                          "traversals": res.stats["traversals_used"],
-                          "pieces": res.pieces}
+            res = api.plan_path(
+                scene,
+                walker,
+                goal,
+                alpha=weights[0],
+                beta=weights[1],
+                gamma=weights[2],
+                frame_start=1,
+                stitching=mode,
+            )
+            rows[mode] = {
+                "seconds": res.seconds,
+                "cost": res.cost,
+                "copies_stitched": res.stats["copies_stitched"],
+                "stitch_edges": res.stats["stitch_edges"],
+                "traversals": res.stats["traversals_used"],
+                "pieces": res.pieces,
+            }
         rows["evaluated"] = api.analyse(bpy.context, walker)
         out[name] = rows
     return out
@@ -87,6 +101,7 @@ def crowd_crossing(bpy, api, evaluate, source):
     a shuffled order, so their ways cross; planned as a crowd (later ones wait at their
     start until they keep a metre from the earlier ones) and evaluated together."""
     import numpy as np
+
     scene = bpy.context.scene
     pairs = []
     ys = [-2.0, -0.2, 1.6, 3.4, 5.2, 7.0]
@@ -99,7 +114,7 @@ def crowd_crossing(bpy, api, evaluate, source):
         walker.location = (-2.5, y0, 0.0)
         walker.rotation_euler = (0, 0, np.pi / 2)  # faces +X
         goal = bpy.data.objects.new(f"Crowd.{n} goal", None)
-        goal.empty_display_type = 'SINGLE_ARROW'
+        goal.empty_display_type = "SINGLE_ARROW"
         scene.collection.objects.link(goal)
         goal.location = (14.0, y1, 0.0)
         goal.rotation_euler = (0, 0, np.pi / 2)
@@ -114,14 +129,28 @@ def crowd_crossing(bpy, api, evaluate, source):
         pos, _, _, _ = evaluate.sample_armature(bpy.context, ob, frames, [ob.pose.bones[0].name])
         roots.append(pos[:, 0, :2])
     roots = np.array(roots)
-    gap = min((np.linalg.norm(roots[i] - roots[j], axis=1).min()
-               for i in range(len(names)) for j in range(i)), default=np.inf)
-    inside = sum(api.analyse(bpy.context, bpy.data.objects[n])["frames_root_inside_obstacle"]
-                 for n in names)
-    return {"characters": len(pairs), "planned": len(res.plans), "failed": res.failed,
-            "seconds": res.seconds, "delays_frames": res.delays, "conflicts": res.conflicts,
-            "evaluated_closest_m": float(gap), "frames_root_inside_obstacle": int(inside),
-            "frames": int(end)}
+    gap = min(
+        (
+            np.linalg.norm(roots[i] - roots[j], axis=1).min()
+            for i in range(len(names))
+            for j in range(i)
+        ),
+        default=np.inf,
+    )
+    inside = sum(
+        api.analyse(bpy.context, bpy.data.objects[n])["frames_root_inside_obstacle"] for n in names
+    )
+    return {
+        "characters": len(pairs),
+        "planned": len(res.plans),
+        "failed": res.failed,
+        "seconds": res.seconds,
+        "delays_frames": res.delays,
+        "conflicts": res.conflicts,
+        "evaluated_closest_m": float(gap),
+        "frames_root_inside_obstacle": int(inside),
+        "frames": int(end),
+    }
 
 
 def main(argv):
@@ -130,11 +159,14 @@ def main(argv):
     clips = [mocap / "cmu" / "16_15.bvh", mocap / "cmu" / "16_18.bvh", mocap / "cmu" / "16_06.bvh"]
     for c in clips:
         if not c.is_file():
-            print(f"demo: mocap clip not found: {c} (use --mocap or MOTION_PATCHES_MOCAP)",
-                  file=sys.stderr)
+            print(
+                f"demo: mocap clip not found: {c} (use --mocap or MOTION_PATCHES_MOCAP)",
+                file=sys.stderr,
+            )
             return 2
     bpy, addon = blender_session.start()
     import numpy as np
+
     api = addon.api
     from_core = addon.motion_patches
 
@@ -164,18 +196,35 @@ def main(argv):
     walker.location = (start[0], start[1], 0)
     walker.rotation_euler = (0, 0, np.pi / 2 + start[2])  # rest faces -Y; face start[2]
     goal_ob = bpy.data.objects.new("Goal", None)
-    goal_ob.empty_display_type = 'SINGLE_ARROW'
+    goal_ob.empty_display_type = "SINGLE_ARROW"
     scene.collection.objects.link(goal_ob)
     goal_ob.location = (goal[0], goal[1], 0)
     goal_ob.rotation_euler = (0, 0, np.pi / 2 + goal[2])  # its -Y axis (the facing) at goal[2]
     s.goal = goal_ob
 
     # The same plan without foot locking first: the skate the synthesis alone leaves.
-    api.plan_path(scene, walker, goal_ob, alpha=s.alpha, beta=s.beta, gamma=s.gamma,
-                  radius=s.radius, frame_start=1, foot_lock=False)
+    api.plan_path(
+        scene,
+        walker,
+        goal_ob,
+        alpha=s.alpha,
+        beta=s.beta,
+        gamma=s.gamma,
+        radius=s.radius,
+        frame_start=1,
+        foot_lock=False,
+    )
     unlocked = api.analyse(bpy.context, walker)["foot_skate"]
-    plan = api.plan_path(scene, walker, goal_ob, alpha=s.alpha, beta=s.beta, gamma=s.gamma,
-                         radius=s.radius, frame_start=1)
+    plan = api.plan_path(
+        scene,
+        walker,
+        goal_ob,
+        alpha=s.alpha,
+        beta=s.beta,
+        gamma=s.gamma,
+        radius=s.radius,
+        frame_start=1,
+    )
     scene.frame_start, scene.frame_end = plan.frame_start, plan.frame_end
     figures = api.analyse(bpy.context, walker)
     chairs = chair_lines(bpy, api, arm, acts[2], args.seed)
@@ -196,12 +245,20 @@ def main(argv):
         "blender": bpy.app.version_string,
         "clips": [c.name for c in clips],
         "gait_notes": bake.notes,
-        "bake": {"seconds": round(bake_s, 2), "kept": bake.stats["kept"],
-                 "culled": bake.stats["culled"], "culled_by": bake.stats["culled_by"]},
+        "bake": {
+            "seconds": round(bake_s, 2),
+            "kept": bake.stats["kept"],
+            "culled": bake.stats["culled"],
+            "culled_by": bake.stats["culled_by"],
+        },
         "scene": {"pillars": len(pillars), "start": start, "goal": goal},
-        "plan": {"seconds": round(plan.seconds, 3), "pieces": len(plan.pieces),
-                 "expansions": plan.expansions, "frames": plan.frame_end - plan.frame_start + 1,
-                 "cost": round(plan.cost, 3)},
+        "plan": {
+            "seconds": round(plan.seconds, 3),
+            "pieces": len(plan.pieces),
+            "expansions": plan.expansions,
+            "frames": plan.frame_end - plan.frame_start + 1,
+            "cost": round(plan.cost, 3),
+        },
         "evaluated": figures,
         "source_clip_skate": floor,
         "skate_without_foot_lock": unlocked,
@@ -212,58 +269,122 @@ def main(argv):
     sk, f = figures["foot_skate"], figures
     print()
     print("Dynamic Motion Patches demo  (Blender %s)" % bpy.app.version_string)
-    print("  clips:       %s (real CMU mocap, subject 16; 16_06 is a standing forward jump,"
-          " the closest recorded hurdle)" % ", ".join(c.name for c in clips))
+    print(
+        "  clips:       %s (real CMU mocap, subject 16; 16_06 is a standing forward jump,"
+        " the closest recorded hurdle)" % ", ".join(c.name for c in clips)
+    )
     for n in bake.notes:
         print("               " + n)
-    print("  bake:        %.1f s, %d segments kept, %d culled (%s)" % (
-        bake_s, bake.stats["kept"], bake.stats["culled"],
-        ", ".join(f"{k} {v}" for k, v in bake.stats["culled_by"].items())))
-    print("  plan:        %.0f ms, %d pieces, %d nodes expanded, %d frames (%.1f s of motion)" % (
-        plan.seconds * 1000, len(plan.pieces), plan.expansions,
-        plan.frame_end - plan.frame_start + 1, f["seconds"]))
+    print(
+        "  bake:        %.1f s, %d segments kept, %d culled (%s)"
+        % (
+            bake_s,
+            bake.stats["kept"],
+            bake.stats["culled"],
+            ", ".join(f"{k} {v}" for k, v in bake.stats["culled_by"].items()),
+        )
+    )
+    print(
+        "  plan:        %.0f ms, %d pieces, %d nodes expanded, %d frames (%.1f s of motion)"
+        % (
+            plan.seconds * 1000,
+            len(plan.pieces),
+            plan.expansions,
+            plan.frame_end - plan.frame_start + 1,
+            f["seconds"],
+        )
+    )
     print("  evaluated through the depsgraph, frame by frame:")
-    print("    foot skate while planted: %.2f cm/frame mean, %.2f p95  (%.1f cm/s; source clip %.1f cm/s;"
-          " without foot locking %.1f cm/s)" % (
-              sk["mean_cm_per_frame"], sk["p95_cm_per_frame"], sk["mean_cm_per_s"],
-              floor["mean_cm_per_s"], unlocked["mean_cm_per_s"]))
-    print("    goal error: root motion %.1f cm, %.1f deg; hips %.1f cm from the goal point" % (
-        f["goal_position_error_cm"], f["goal_heading_error_deg"], f["goal_root_position_error_cm"]))
-    print("    hips within %.2f cm of the planned root trajectory (max over all frames)" % (
-        f["root_from_plan_cm"]["max"]))
-    print("    frames with the root inside a pillar (+%.2f m radius): %d" % (
-        s.radius, f["frames_root_inside_obstacle"]))
-    print("    largest joint jump at a strip boundary: %.1f deg (p99 elsewhere %.1f deg)" % (
-        f["boundary_pop"]["max_boundary_jump_deg"], f["boundary_pop"]["p99_step_deg"]))
+    print(
+        "    foot skate while planted: %.2f cm/frame mean, %.2f p95  "
+        "(%.1f cm/s; source clip %.1f cm/s;"
+        " without foot locking %.1f cm/s)"
+        % (
+            sk["mean_cm_per_frame"],
+            sk["p95_cm_per_frame"],
+            sk["mean_cm_per_s"],
+            floor["mean_cm_per_s"],
+            unlocked["mean_cm_per_s"],
+        )
+    )
+    print(
+        "    goal error: root motion %.1f cm, %.1f deg; hips %.1f cm from the goal point"
+        % (
+            f["goal_position_error_cm"],
+            f["goal_heading_error_deg"],
+            f["goal_root_position_error_cm"],
+        )
+    )
+    print(
+        "    hips within %.2f cm of the planned root trajectory (max over all frames)"
+        % (f["root_from_plan_cm"]["max"])
+    )
+    print(
+        "    frames with the root inside a pillar (+%.2f m radius): %d"
+        % (s.radius, f["frames_root_inside_obstacle"])
+    )
+    print(
+        "    largest joint jump at a strip boundary: %.1f deg (p99 elsewhere %.1f deg)"
+        % (f["boundary_pop"]["max_boundary_jump_deg"], f["boundary_pop"]["p99_step_deg"])
+    )
     for name, rows in chairs.items():
         d, st, ev = rows["dynamic"], rows["static"], rows["evaluated"]
-        print("  %-8s chair line (alpha, beta, gamma = %s): %s" % (
-            name, "4, 0.5, 0.1" if name == "Hurried" else "0.3, 0.1, 3",
-            "hurdles a chair (16_06 jump)" if d["traversals"] else "walks around"))
-        print("    dynamic stitching: %4.0f ms, %3d clip copies stitched, %5d edges, cost %.2f" % (
-            d["seconds"] * 1000, d["copies_stitched"], d["stitch_edges"], d["cost"]))
-        print("    static  stitching: %4.0f ms, %3d clip copies stitched, %5d edges, cost %.2f" % (
-            st["seconds"] * 1000, st["copies_stitched"], st["stitch_edges"], st["cost"]))
-        print("    evaluated: skate %.2f cm/frame, root inside a chair outside the jump: %d frames, "
-              "goal %.1f cm / %.1f deg" % (
-                  ev["foot_skate"]["mean_cm_per_frame"], ev["frames_root_inside_obstacle"],
-                  ev["goal_root_position_error_cm"], ev["goal_heading_error_deg"]))
+        print(
+            "  %-8s chair line (alpha, beta, gamma = %s): %s"
+            % (
+                name,
+                "4, 0.5, 0.1" if name == "Hurried" else "0.3, 0.1, 3",
+                "hurdles a chair (16_06 jump)" if d["traversals"] else "walks around",
+            )
+        )
+        print(
+            "    dynamic stitching: %4.0f ms, %3d clip copies stitched, %5d edges, cost %.2f"
+            % (d["seconds"] * 1000, d["copies_stitched"], d["stitch_edges"], d["cost"])
+        )
+        print(
+            "    static  stitching: %4.0f ms, %3d clip copies stitched, %5d edges, cost %.2f"
+            % (st["seconds"] * 1000, st["copies_stitched"], st["stitch_edges"], st["cost"])
+        )
+        print(
+            "    evaluated: skate %.2f cm/frame, root inside a chair outside the jump: %d frames, "
+            "goal %.1f cm / %.1f deg"
+            % (
+                ev["foot_skate"]["mean_cm_per_frame"],
+                ev["frames_root_inside_obstacle"],
+                ev["goal_root_position_error_cm"],
+                ev["goal_heading_error_deg"],
+            )
+        )
     waits = [d for d in crowd["delays_frames"].values() if d]
-    print("  crowd:       %d of %d walkers planned across the pillars in %.1f s; %d wait at "
-          "their start (%s frames), %d conflict(s) left" % (
-              crowd["planned"], crowd["characters"], crowd["seconds"], len(waits),
-              ", ".join(map(str, waits)) or "none", len(crowd["conflicts"])))
-    print("    evaluated: closest two walkers come %.2f m apart (spacing 1.0 m); frames with a "
-          "root inside a pillar: %d" % (crowd["evaluated_closest_m"],
-                                        crowd["frames_root_inside_obstacle"]))
+    print(
+        "  crowd:       %d of %d walkers planned across the pillars in %.1f s; %d wait at "
+        "their start (%s frames), %d conflict(s) left"
+        % (
+            crowd["planned"],
+            crowd["characters"],
+            crowd["seconds"],
+            len(waits),
+            ", ".join(map(str, waits)) or "none",
+            len(crowd["conflicts"]),
+        )
+    )
+    print(
+        "    evaluated: closest two walkers come %.2f m apart (spacing 1.0 m); frames with a "
+        "root inside a pillar: %d"
+        % (crowd["evaluated_closest_m"], crowd["frames_root_inside_obstacle"])
+    )
     print("  saved:       %s" % out)
     if args.json:
         Path(args.json).write_text(json.dumps(summary, indent=2))
-    ok = (f["goal_root_position_error_cm"] < 10 and f["goal_heading_error_deg"] < 10
-          and f["frames_root_inside_obstacle"] == 0
-          and all(r["evaluated"]["frames_root_inside_obstacle"] == 0 for r in chairs.values())
-          and crowd["frames_root_inside_obstacle"] == 0 and not crowd["failed"]
-          and (crowd["conflicts"] or crowd["evaluated_closest_m"] >= 0.95))
+    ok = (
+        f["goal_root_position_error_cm"] < 10
+        and f["goal_heading_error_deg"] < 10
+        and f["frames_root_inside_obstacle"] == 0
+        and all(r["evaluated"]["frames_root_inside_obstacle"] == 0 for r in chairs.values())
+        and crowd["frames_root_inside_obstacle"] == 0
+        and not crowd["failed"]
+        and (crowd["conflicts"] or crowd["evaluated_closest_m"] >= 0.95)
+    )
     return 0 if ok else 1
 
 

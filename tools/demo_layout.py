@@ -4,7 +4,7 @@
 
 import numpy as np
 
-START = (0.0, 0.0, 0.0)          # x, y, heading (radians)
+START = (0.0, 0.0, 0.0)  # x, y, heading (radians)
 GOAL = (11.0, 5.0, 0.5)
 
 

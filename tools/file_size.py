@@ -21,8 +21,9 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import blender_session  # noqa: E402
 
-MOCAP = Path(os.environ.get("MOTION_PATCHES_MOCAP",
-                            Path(__file__).resolve().parents[2] / "shared" / "mocap"))
+MOCAP = Path(
+    os.environ.get("MOTION_PATCHES_MOCAP", Path(__file__).resolve().parents[2] / "shared" / "mocap")
+)
 
 
 def main(argv=None):
@@ -36,8 +37,9 @@ def main(argv=None):
     bpy.ops.wm.read_homefile(use_empty=True)
     scene = bpy.context.scene
     scene.render.fps = args.bake_fps
-    arm, acts = api.import_mocap([MOCAP / "cmu" / "16_15.bvh", MOCAP / "cmu" / "16_18.bvh"],
-                                 name="Source")
+    arm, acts = api.import_mocap(
+        [MOCAP / "cmu" / "16_15.bvh", MOCAP / "cmu" / "16_18.bvh"], name="Source"
+    )
     api.bake_locomotion_patch(scene, arm, acts[0], [acts[1]], layer="walk")
     patch = addon.adapter.storage.load_patch(scene)
     speed = patch.gait.cycle_distance * patch.gait.fps / patch.gait.frames
@@ -59,17 +61,23 @@ def main(argv=None):
     bpy.ops.wm.save_as_mainfile(filepath=str(after), compress=False)
     grown = (after.stat().st_size - before.stat().st_size) / 1e6
     seconds = (res.frame_end - res.frame_start) / args.scene_fps
-    print(f"Blender {bpy.app.version_string}: patch baked at {args.bake_fps} fps, scene at "
-          f"{args.scene_fps} fps")
+    print(
+        f"Blender {bpy.app.version_string}: patch baked at {args.bake_fps} fps, scene at "
+        f"{args.scene_fps} fps"
+    )
     print(f"plan: {seconds:.1f} s of walking, {len(res.pieces)} pieces ({', '.join(res.pieces)})")
     for a in sorted(set(bpy.data.actions) - actions_before, key=lambda a: a.name):
         fcs = compat.fcurves(a)
         nkeys = sum(len(fc.keyframe_points) for fc in fcs)
         nsamp = sum(len(fc.sampled_points) for fc in fcs)
-        print(f"  {a.name:32s} {len(fcs):4d} curves {nkeys:7d} keys {nsamp:8d} samples"
-              f"  ~{(72 * nkeys + 16 * nsamp) / 1e6:5.2f} MB")
-    print(f"the .blend grows {grown:.2f} MB ({grown / seconds * 30:.2f} MB per 30 s), "
-          f"uncompressed; {before.stat().st_size / 1e6:.2f} MB before")
+        print(
+            f"  {a.name:32s} {len(fcs):4d} curves {nkeys:7d} keys {nsamp:8d} samples"
+            f"  ~{(72 * nkeys + 16 * nsamp) / 1e6:5.2f} MB"
+        )
+    print(
+        f"the .blend grows {grown:.2f} MB ({grown / seconds * 30:.2f} MB per 30 s), "
+        f"uncompressed; {before.stat().st_size / 1e6:.2f} MB before"
+    )
     for p in (before, after):
         p.unlink()
     tmp.rmdir()

@@ -23,9 +23,10 @@ if str(REPO) not in sys.path:
 
 # -- colours (RGB 0..1) -----------------------------------------------------------------------
 
+
 def _rgb(hex_code):
     h = hex_code.lstrip("#")
-    return np.array([int(h[i:i + 2], 16) / 255.0 for i in (0, 2, 4)])
+    return np.array([int(h[i : i + 2], 16) / 255.0 for i in (0, 2, 4)])
 
 
 BACKGROUND = _rgb("#ffffff")
@@ -46,6 +47,7 @@ PANEL = _rgb("#f6f7f9")
 
 # -- PNG --------------------------------------------------------------------------------------
 
+
 def write_png(path, rgb):
     """Write an (H, W, 3) array (floats 0..1 or uint8) as an 8-bit RGB PNG."""
     a = np.asarray(rgb)
@@ -55,11 +57,19 @@ def write_png(path, rgb):
     raw = np.concatenate((np.zeros((h, 1), np.uint8), a.reshape(h, w * 3)), axis=1).tobytes()
 
     def chunk(tag, data):
-        return (struct.pack(">I", len(data)) + tag + data
-                + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF))
-    png = (b"\x89PNG\r\n\x1a\n"
-           + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
-           + chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b""))
+        return (
+            struct.pack(">I", len(data))
+            + tag
+            + data
+            + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
+        )
+
+    png = (
+        b"\x89PNG\r\n\x1a\n"
+        + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
+        + chunk(b"IDAT", zlib.compress(raw, 9))
+        + chunk(b"IEND", b"")
+    )
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     with open(path, "wb") as fh:
         fh.write(png)
@@ -117,8 +127,9 @@ _FONT_ROWS = {
     "%": "11000 11001 00010 00100 01000 10011 00011",
     "?": "01110 10001 00001 00010 00100 00000 00100",
 }
-FONT = {k: np.array([[c == "1" for c in row] for row in v.split()], bool)
-        for k, v in _FONT_ROWS.items()}
+FONT = {
+    k: np.array([[c == "1" for c in row] for row in v.split()], bool) for k, v in _FONT_ROWS.items()
+}
 
 
 def text_width(text, scale=2):
@@ -134,11 +145,12 @@ def draw_text(img, x, y, text, colour=TEXT, scale=2):
         r0, c0 = y, x
         r1, c1 = min(h, r0 + big.shape[0]), min(w, c0 + big.shape[1])
         if r0 >= 0 and c0 >= 0 and r1 > r0 and c1 > c0:
-            img[r0:r1, c0:c1][big[:r1 - r0, :c1 - c0]] = colour
+            img[r0:r1, c0:c1][big[: r1 - r0, : c1 - c0]] = colour
         x += 6 * scale
 
 
 # -- canvas: world metres <-> pixels, antialiased shapes from signed distances ----------------
+
 
 class Canvas:
     """An RGB float image of a world rectangle; y up in the world, down in the image."""
@@ -152,8 +164,9 @@ class Canvas:
 
     def to_px(self, xy):
         xy = np.asarray(xy, float)
-        return np.stack(((xy[..., 0] - self.x0) * self.scale,
-                         (self.y1 - xy[..., 1]) * self.scale), -1)
+        return np.stack(
+            ((xy[..., 0] - self.x0) * self.scale, (self.y1 - xy[..., 1]) * self.scale), -1
+        )
 
     def _window(self, lo, hi):
         """Pixel rows/cols covering the pixel-space box lo..hi, with pixel-centre coords."""
@@ -203,7 +216,7 @@ class Canvas:
             p = np.repeat(p, 2, axis=0)
         half = width_px / 2.0
         for i in range(0, p.shape[0] - 1, chunk):
-            part = p[i:i + chunk + 1]
+            part = p[i : i + chunk + 1]
             found = self._window(part.min(0) - half - 2, part.max(0) + half + 2)
             if found is None:
                 continue
@@ -255,12 +268,14 @@ def _polygon_sdf(q, poly):
     y = pts[:, 1:2]
     cond = (a[None, :, 1] > y) != (b[None, :, 1] > y)
     xint = a[None, :, 0] + (y - a[None, :, 1]) * (b[None, :, 0] - a[None, :, 0]) / np.where(
-        b[None, :, 1] == a[None, :, 1], 1e-12, b[None, :, 1] - a[None, :, 1])
+        b[None, :, 1] == a[None, :, 1], 1e-12, b[None, :, 1] - a[None, :, 1]
+    )
     inside = (np.sum(cond & (pts[:, 0:1] < xint), axis=1) % 2 == 1).reshape(q.shape[:-1])
     return np.where(inside, -d, d)
 
 
 # -- the plot -------------------------------------------------------------------------------
+
 
 def _piece_colours(pieces):
     out, n = [], 0
@@ -289,8 +304,19 @@ def _arrow(canvas, state, colour, length_m, width_px):
     canvas.fill_polygon(tri, colour)
 
 
-def plot_layout(path_png, env, patch, plan, motions, size_px=900, margin_m=1.0,
-                start=None, goal=None, title=None, searched=None):
+def plot_layout(
+    path_png,
+    env,
+    patch,
+    plan,
+    motions,
+    size_px=900,
+    margin_m=1.0,
+    start=None,
+    goal=None,
+    title=None,
+    searched=None,
+):
     """Write a top-down PNG of ``env`` and a plan on it; returns the image (H, W, 3) floats.
 
     ``plan`` is a :class:`~motion_patches.planner.Plan` (or None to draw only the scene and
@@ -321,6 +347,7 @@ def plot_layout(path_png, env, patch, plan, motions, size_px=900, margin_m=1.0,
     """
     if plan is not None and motions is None:
         from motion_patches.planner import plan_motions
+
         motions = plan_motions(patch, plan)
     motions = motions or []
     if plan is not None:
@@ -331,15 +358,21 @@ def plot_layout(path_png, env, patch, plan, motions, size_px=900, margin_m=1.0,
         # Drawn in the plan frame, where the planner laid its tile lattice (anchored at
         # the start, +x towards the goal): the grid is then the one it searched.
         from motion_patches import plan_frame
+
         c, s_ = np.cos(frame[2]), np.sin(frame[2])
         shift = -np.array([c * frame[0] + s_ * frame[1], -s_ * frame[0] + c * frame[1]])
         motions = [m.transformed(shift[0], shift[1], -frame[2]) for m in motions]
         searched = [m.transformed(shift[0], shift[1], -frame[2]) for m in searched or []]
-        start = None if start is None else plan_frame.state_to_local(frame, np.asarray(start, float))
+        start = (
+            None if start is None else plan_frame.state_to_local(frame, np.asarray(start, float))
+        )
         goal = None if goal is None else plan_frame.state_to_local(frame, np.asarray(goal, float))
-        every = np.concatenate([m.ground[:, :2] for m in motions] + [start[None, :2], goal[None, :2]])
-        env = plan_frame.local_environment(env, frame, every.min(0) - margin_m - env.side,
-                                           every.max(0) + margin_m + env.side)
+        every = np.concatenate(
+            [m.ground[:, :2] for m in motions] + [start[None, :2], goal[None, :2]]
+        )
+        env = plan_frame.local_environment(
+            env, frame, every.min(0) - margin_m - env.side, every.max(0) + margin_m + env.side
+        )
     pts = [m.ground[:, :2] for m in motions]
     pts += [np.asarray(s, float)[None, :2] for s in (start, goal) if s is not None]
     if not pts:
@@ -418,10 +451,15 @@ def _legend(cv, plan, motions, patch, title):
     """The legend strip below the map: swatches, a scale bar and a one-line summary."""
     s = 2 if cv.w >= 600 else 1
     row_h = 12 * s
-    entries = [("line", START, "start"), ("line2", (SEGMENT_A, SEGMENT_B), "segments"),
-               ("line", GOAL, "goal"), ("dot", None, "stitch"),
-               ("box", OBSTACLE, "obstacle"), ("box", OCCLUDED, "occluded cell"),
-               ("grid", TILE_GRID, "tile grid")]
+    entries = [
+        ("line", START, "start"),
+        ("line2", (SEGMENT_A, SEGMENT_B), "segments"),
+        ("line", GOAL, "goal"),
+        ("dot", None, "stitch"),
+        ("box", OBSTACLE, "obstacle"),
+        ("box", OCCLUDED, "occluded cell"),
+        ("grid", TILE_GRID, "tile grid"),
+    ]
     # Flow the entries left to right, wrapping onto new rows.
     widths = [34 * s + text_width(t, s) + 18 * s for _, _, t in entries]
     placed, x, r = [], 8 * s, 0
@@ -435,10 +473,13 @@ def _legend(cv, plan, motions, patch, title):
     if plan is not None:
         frames = sum(m.frames for m in motions) - (len(motions) - 1)
         fps = patch.gait.fps if patch is not None else 30.0
-        metres = sum(float(np.linalg.norm(np.diff(m.ground[:, :2], axis=0), axis=1).sum())
-                     for m in motions)
-        lines.append(f"{len(plan.pieces)} pieces, {(frames - 1) / fps:.1f} s of motion, "
-                     f"{metres:.1f} m, {plan.expansions} nodes expanded")
+        metres = sum(
+            float(np.linalg.norm(np.diff(m.ground[:, :2], axis=0), axis=1).sum()) for m in motions
+        )
+        lines.append(
+            f"{len(plan.pieces)} pieces, {(frames - 1) / fps:.1f} s of motion, "
+            f"{metres:.1f} m, {plan.expansions} nodes expanded"
+        )
     if title:
         lines.insert(0, title)
     # Scale bar: a round number of metres about a sixth of the width, right-aligned on
@@ -460,30 +501,30 @@ def _legend(cv, plan, motions, patch, title):
         mid = y + 3 * s
         sw = slice(x, x + 26 * s)
         if kind == "line":
-            strip[mid - 2 * s:mid + 2 * s, sw] = colour
+            strip[mid - 2 * s : mid + 2 * s, sw] = colour
         elif kind == "line2":
-            strip[mid - 2 * s:mid + 2 * s, x:x + 13 * s] = colour[0]
-            strip[mid - 2 * s:mid + 2 * s, x + 13 * s:x + 26 * s] = colour[1]
+            strip[mid - 2 * s : mid + 2 * s, x : x + 13 * s] = colour[0]
+            strip[mid - 2 * s : mid + 2 * s, x + 13 * s : x + 26 * s] = colour[1]
         elif kind == "box":
-            strip[y - 1 * s:y + 8 * s, sw] = colour
+            strip[y - 1 * s : y + 8 * s, sw] = colour
         elif kind == "grid":
-            strip[y - 1 * s:y + 8 * s, sw] = BACKGROUND
-            strip[y - 1 * s:y + 8 * s, x + 4 * s] = CELL_GRID * 0.97
-            strip[y - 1 * s:y + 8 * s, x + 13 * s] = colour
+            strip[y - 1 * s : y + 8 * s, sw] = BACKGROUND
+            strip[y - 1 * s : y + 8 * s, x + 4 * s] = CELL_GRID * 0.97
+            strip[y - 1 * s : y + 8 * s, x + 13 * s] = colour
             strip[mid, sw] = colour
         elif kind == "dot":
-            rr, cc = np.mgrid[-5 * s:5 * s + 1, -5 * s:5 * s + 1]
+            rr, cc = np.mgrid[-5 * s : 5 * s + 1, -5 * s : 5 * s + 1]
             d = np.hypot(rr, cc)
-            spot = strip[mid - 5 * s:mid + 5 * s + 1, x + 8 * s:x + 18 * s + 1]
+            spot = strip[mid - 5 * s : mid + 5 * s + 1, x + 8 * s : x + 18 * s + 1]
             spot[d <= 4 * s] = STITCH_EDGE
             spot[d <= 4 * s - 1.5] = STITCH_FILL
         draw_text(strip, x + 32 * s, y, label, TEXT, s)
     y = y0 + nrow * row_h
     x = cv.w - bar_w - 8 * s
     yb = y + 2 * s + (len(lines) - 1) * row_h
-    strip[yb + 3 * s:yb + 4 * s, x:x + bar] = TEXT
-    strip[yb:yb + 7 * s, x:x + s] = TEXT
-    strip[yb:yb + 7 * s, x + bar - s:x + bar] = TEXT
+    strip[yb + 3 * s : yb + 4 * s, x : x + bar] = TEXT
+    strip[yb : yb + 7 * s, x : x + s] = TEXT
+    strip[yb : yb + 7 * s, x + bar - s : x + bar] = TEXT
     draw_text(strip, x + bar + 8 * s, yb, bar_label, TEXT, s)
     for k, line in enumerate(lines):
         draw_text(strip, 8 * s, y + 2 * s + k * row_h, line, TEXT, s)
@@ -492,21 +533,27 @@ def _legend(cv, plan, motions, patch, title):
 
 # -- demo -----------------------------------------------------------------------------------
 
+
 def demo_pillars(seed=7, sides=32):
     """The pillars of tools/demo.py as footprints (Blender's default cylinder has 32 sides)."""
     import demo_layout
 
     from motion_patches.environment import Obstacle
+
     a = np.linspace(0.0, 2.0 * np.pi, sides + 1)[:-1]
-    return [Obstacle(f"Pillar.{n:02d}", np.column_stack((x + r * np.cos(a), y + r * np.sin(a))))
-            for n, (x, y, r) in enumerate(demo_layout.pillar_positions(seed))]
+    return [
+        Obstacle(f"Pillar.{n:02d}", np.column_stack((x + r * np.cos(a), y + r * np.sin(a))))
+        for n, (x, y, r) in enumerate(demo_layout.pillar_positions(seed))
+    ]
 
 
 def main(argv=None):
     p = argparse.ArgumentParser(description="Plan through the demo's pillar field and draw it.")
     p.add_argument("--output", default=str(REPO / "docs" / "plan.png"))
-    p.add_argument("--mocap", default=os.environ.get("MOTION_PATCHES_MOCAP",
-                                                     str(REPO.parent / "shared" / "mocap")))
+    p.add_argument(
+        "--mocap",
+        default=os.environ.get("MOTION_PATCHES_MOCAP", str(REPO.parent / "shared" / "mocap")),
+    )
     p.add_argument("--seed", type=int, default=7, help="pillar layout seed (as tools/demo.py)")
     p.add_argument("--size", type=int, default=900, help="map width in pixels")
     p.add_argument("--radius", type=float, default=0.25, help="character radius in metres")
@@ -520,6 +567,7 @@ def main(argv=None):
     g = gait.build_gait("walk", bvh.read(mocap / "16_15.bvh"), (bvh.read(mocap / "16_18.bvh"),))
     patch = locomotion_patch.bake(g)
     import demo_layout
+
     start, goal = demo_layout.START, demo_layout.GOAL
     env = Environment(patch.side, patch.cells, args.radius)
     for ob in demo_pillars(args.seed):
@@ -527,10 +575,20 @@ def main(argv=None):
     plan = SegmentPlanner(patch, env).plan(start, goal)
     motions = plan_motions(patch, plan)
     found = SegmentPlanner(patch, env).plan(start, goal, shorten=False)
-    plot_layout(args.output, env, patch, plan, motions, size_px=args.size, margin_m=args.margin,
-                searched=plan_motions(patch, found))
-    print(f"wrote {args.output}: {len(plan.pieces)} pieces, {plan.expansions} nodes, "
-          f"{len(env.obstacles)} pillars")
+    plot_layout(
+        args.output,
+        env,
+        patch,
+        plan,
+        motions,
+        size_px=args.size,
+        margin_m=args.margin,
+        searched=plan_motions(patch, found),
+    )
+    print(
+        f"wrote {args.output}: {len(plan.pieces)} pieces, {plan.expansions} nodes, "
+        f"{len(env.obstacles)} pillars"
+    )
     return 0
 
 

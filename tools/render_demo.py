@@ -40,8 +40,12 @@ COLOURS = {
     "Walker": (0.02, 0.16, 0.75),
     "Hurried": (0.85, 0.18, 0.02),
     "Calm": (0.02, 0.42, 0.20),
-    "Crowd.0": (0.75, 0.10, 0.10), "Crowd.1": (0.85, 0.45, 0.02), "Crowd.2": (0.55, 0.55, 0.02),
-    "Crowd.3": (0.05, 0.50, 0.15), "Crowd.4": (0.02, 0.25, 0.80), "Crowd.5": (0.45, 0.08, 0.65),
+    "Crowd.0": (0.75, 0.10, 0.10),
+    "Crowd.1": (0.85, 0.45, 0.02),
+    "Crowd.2": (0.55, 0.55, 0.02),
+    "Crowd.3": (0.05, 0.50, 0.15),
+    "Crowd.4": (0.02, 0.25, 0.80),
+    "Crowd.5": (0.45, 0.08, 0.65),
 }
 FINGER_BONES = ("FingerBase", "HandIndex", "Thumb")
 
@@ -51,43 +55,86 @@ FINGER_BONES = ("FingerBase", "HandIndex", "Thumb")
 # degrees (0 = looking along +Y, positive turns towards +X), pitch below the horizon in
 # degrees, focal length in mm; the default image size and output.
 VIEWS = {
-    "pillars": dict(characters=("Walker",), labels=False, props=None, near=0.0,
-                    azimuth=-20.0, pitch=60.0, lens=40.0,
-                    size=(960, 540), out="docs/demo_render.png"),
-    "chairs": dict(characters=("Hurried", "Calm"), labels=True, props="chair", near=6.0,
-                   azimuth=-8.0, pitch=36.0, lens=60.0,
-                   size=(960, 720), out="docs/demo_render_chairs.png"),
-    "crowd": dict(characters=tuple(f"Crowd.{n}" for n in range(6)), labels=False, props=None,
-                  near=0.0, azimuth=-90.0, pitch=62.0, lens=35.0, copies=4,
-                  size=(960, 600), out="docs/demo_render_crowd.png"),
+    "pillars": dict(
+        characters=("Walker",),
+        labels=False,
+        props=None,
+        near=0.0,
+        azimuth=-20.0,
+        pitch=60.0,
+        lens=40.0,
+        size=(960, 540),
+        out="docs/demo_render.png",
+    ),
+    "chairs": dict(
+        characters=("Hurried", "Calm"),
+        labels=True,
+        props="chair",
+        near=6.0,
+        azimuth=-8.0,
+        pitch=36.0,
+        lens=60.0,
+        size=(960, 720),
+        out="docs/demo_render_chairs.png",
+    ),
+    "crowd": dict(
+        characters=tuple(f"Crowd.{n}" for n in range(6)),
+        labels=False,
+        props=None,
+        near=0.0,
+        azimuth=-90.0,
+        pitch=62.0,
+        lens=35.0,
+        copies=4,
+        size=(960, 600),
+        out="docs/demo_render_crowd.png",
+    ),
 }
 
 
 def parse_args(argv):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--blend", default=str(REPO / "sample_blends" / "demo_walk.blend"),
-                   help="the demo scene written by ./dev demo (default: %(default)s)")
-    p.add_argument("--view", choices=sorted(VIEWS), default="pillars",
-                   help="pillars: the Walker through the pillar field; chairs: the hurried "
-                        "and the calm walker at the two chair lines (default: %(default)s)")
-    p.add_argument("--out", help="PNG to write (default: docs/demo_render.png for the pillars "
-                                 "view, docs/demo_render_chairs.png for the chairs view)")
+    p.add_argument(
+        "--blend",
+        default=str(REPO / "sample_blends" / "demo_walk.blend"),
+        help="the demo scene written by ./dev demo (default: %(default)s)",
+    )
+    p.add_argument(
+        "--view",
+        choices=sorted(VIEWS),
+        default="pillars",
+        help="pillars: the Walker through the pillar field; chairs: the hurried "
+        "and the calm walker at the two chair lines (default: %(default)s)",
+    )
+    p.add_argument(
+        "--out",
+        help="PNG to write (default: docs/demo_render.png for the pillars "
+        "view, docs/demo_render_chairs.png for the chairs view)",
+    )
     p.add_argument("--samples", type=int, default=32, help="Cycles samples (default: %(default)s)")
-    p.add_argument("--size", type=int, nargs=2, metavar=("W", "H"),
-                   help="image size (default: 960 540 for pillars, 960 720 for chairs, 960 600 "
-                        "for crowd)")
-    p.add_argument("--copies", type=int,
-                   help="poses drawn per character, evenly spaced in time (default: 8, 4 for "
-                        "the crowd; a traversal adds its take-off, top and landing)")
+    p.add_argument(
+        "--size",
+        type=int,
+        nargs=2,
+        metavar=("W", "H"),
+        help="image size (default: 960 540 for pillars, 960 720 for chairs, 960 600 for crowd)",
+    )
+    p.add_argument(
+        "--copies",
+        type=int,
+        help="poses drawn per character, evenly spaced in time (default: 8, 4 for "
+        "the crowd; a traversal adds its take-off, top and landing)",
+    )
     p.add_argument("--verbose", action="store_true", help="show Blender's render progress")
     return p.parse_args(argv)
 
 
 # --- drawing helpers -------------------------------------------------------------------------
 
+
 def material(bpy, name, colour, roughness=0.6, emission=0.0):
     mat = bpy.data.materials.new(name)
-    if mat.node_tree is None:         # Blender 4.x; 5.x materials always have nodes
+    if mat.node_tree is None:  # Blender 4.x; 5.x materials always have nodes
         mat.use_nodes = True
     bsdf = mat.node_tree.nodes.get("Principled BSDF")
     bsdf.inputs["Base Color"].default_value = (*colour, 1.0)
@@ -102,7 +149,7 @@ def material(bpy, name, colour, roughness=0.6, emission=0.0):
 def checker_material(bpy, name, a, b):
     """A 1 m checker in world X/Y (so the ground and its extension line up)."""
     mat = bpy.data.materials.new(name)
-    if mat.node_tree is None:         # Blender 4.x; 5.x materials always have nodes
+    if mat.node_tree is None:  # Blender 4.x; 5.x materials always have nodes
         mat.use_nodes = True
     nt = mat.node_tree
     bsdf = nt.nodes.get("Principled BSDF")
@@ -110,7 +157,7 @@ def checker_material(bpy, name, a, b):
     geo = nt.nodes.new("ShaderNodeNewGeometry")
     sep = nt.nodes.new("ShaderNodeSeparateXYZ")
     comb = nt.nodes.new("ShaderNodeCombineXYZ")
-    comb.inputs["Z"].default_value = 0.5      # off the cell boundary: no flicker at z = 0
+    comb.inputs["Z"].default_value = 0.5  # off the cell boundary: no flicker at z = 0
     chk = nt.nodes.new("ShaderNodeTexChecker")
     chk.inputs["Scale"].default_value = 1.0
     chk.inputs["Color1"].default_value = (*a, 1.0)
@@ -143,26 +190,38 @@ def stick_figure(bpy, bmesh, Matrix, ob_eval, name, mat, collection):
         axis = tail - head
         length = axis.length
         if length > 1e-3:
-            rot = axis.to_track_quat('Z', 'Y').to_matrix().to_4x4()
-            bmesh.ops.create_cone(bm, cap_ends=True, segments=10, radius1=r, radius2=r * 0.8,
-                                  depth=length, matrix=Matrix.Translation((head + tail) / 2) @ rot)
-        bmesh.ops.create_uvsphere(bm, u_segments=10, v_segments=6, radius=r * 1.25,
-                                  matrix=Matrix.Translation(head))
+            rot = axis.to_track_quat("Z", "Y").to_matrix().to_4x4()
+            bmesh.ops.create_cone(
+                bm,
+                cap_ends=True,
+                segments=10,
+                radius1=r,
+                radius2=r * 0.8,
+                depth=length,
+                matrix=Matrix.Translation((head + tail) / 2) @ rot,
+            )
+        bmesh.ops.create_uvsphere(
+            bm, u_segments=10, v_segments=6, radius=r * 1.25, matrix=Matrix.Translation(head)
+        )
         if pb.name == "Head":
-            bmesh.ops.create_uvsphere(bm, u_segments=16, v_segments=10,
-                                      radius=max(0.09, length * 0.6),
-                                      matrix=Matrix.Translation(head + axis * 0.55))
+            bmesh.ops.create_uvsphere(
+                bm,
+                u_segments=16,
+                v_segments=10,
+                radius=max(0.09, length * 0.6),
+                matrix=Matrix.Translation(head + axis * 0.55),
+            )
     for f in bm.faces:
         f.smooth = True
     return mesh_object(bpy, bm, name, mat, collection)
 
 
 def path_tube(bpy, name, xy, z, radius, mat, collection):
-    cu = bpy.data.curves.new(name, 'CURVE')
-    cu.dimensions = '3D'
+    cu = bpy.data.curves.new(name, "CURVE")
+    cu.dimensions = "3D"
     cu.bevel_depth = radius
     cu.bevel_resolution = 2
-    sp = cu.splines.new('POLY')
+    sp = cu.splines.new("POLY")
     sp.points.add(len(xy) - 1)
     for p, (x, y) in zip(sp.points, xy):
         p.co = (float(x), float(y), z, 1.0)
@@ -175,16 +234,30 @@ def path_tube(bpy, name, xy, z, radius, mat, collection):
 def disc(bpy, bmesh, Matrix, name, xy, radius, height, mat, collection):
     bm = bmesh.new()
     for x, y in xy:
-        bmesh.ops.create_cone(bm, cap_ends=True, segments=16, radius1=radius, radius2=radius,
-                              depth=height, matrix=Matrix.Translation((x, y, height / 2)))
+        bmesh.ops.create_cone(
+            bm,
+            cap_ends=True,
+            segments=16,
+            radius1=radius,
+            radius2=radius,
+            depth=height,
+            matrix=Matrix.Translation((x, y, height / 2)),
+        )
     return mesh_object(bpy, bm, name, mat, collection)
 
 
 def arrow(bpy, bmesh, Matrix, name, x, y, heading, mat, collection):
     """A flat arrow on the floor at (x, y) pointing along ``heading`` (0 = +X, CCW)."""
     bm = bmesh.new()
-    shaft = [(-0.45, -0.06), (0.1, -0.06), (0.1, -0.16), (0.45, 0.0), (0.1, 0.16), (0.1, 0.06),
-             (-0.45, 0.06)]
+    shaft = [
+        (-0.45, -0.06),
+        (0.1, -0.06),
+        (0.1, -0.16),
+        (0.45, 0.0),
+        (0.1, 0.16),
+        (0.1, 0.06),
+        (-0.45, 0.06),
+    ]
     c, s = math.cos(heading), math.sin(heading)
     verts = [bm.verts.new((x + c * u - s * v, y + s * u + c * v, 0.012)) for u, v in shaft]
     bm.faces.new(verts)
@@ -193,10 +266,10 @@ def arrow(bpy, bmesh, Matrix, name, x, y, heading, mat, collection):
 
 def label(bpy, text, x, y, z, mat, collection):
     """The character's object name over its start (turned to face the camera later)."""
-    cu = bpy.data.curves.new(f"rd label {text}", 'FONT')
+    cu = bpy.data.curves.new(f"rd label {text}", "FONT")
     cu.body = text
     cu.size = 0.45
-    cu.align_x = 'CENTER'
+    cu.align_x = "CENTER"
     cu.extrude = 0.01
     cu.materials.append(mat)
     ob = bpy.data.objects.new(f"rd label {text}", cu)
@@ -213,15 +286,17 @@ def tint(colour, t):
 
 # --- scene -----------------------------------------------------------------------------------
 
+
 def pick_frames(meta, arrays, copies):
     """Evenly spaced frames over the plan, plus take-off / top / landing of each traversal."""
     import numpy as np
+
     f0, f1 = int(meta["frame_start"]), int(meta["frame_end"])
     frames = set(int(round(f)) for f in np.linspace(f0, f1, copies))
     keys = set()
     root = arrays["root"]
     for a, b in meta.get("traversals", []):
-        seg = root[a - f0:b - f0 + 1, 2]
+        seg = root[a - f0 : b - f0 + 1, 2]
         top = a + int(np.argmax(seg))
         keys.update(k for k in (top - 12, top, top + 12) if f0 <= k <= f1)
     if keys:
@@ -233,6 +308,7 @@ def build(bpy, api, view, copies):
     import bmesh
     import numpy as np
     from mathutils import Matrix, Vector
+
     scene = bpy.context.scene
     coll = bpy.data.collections.new("render_demo (not saved)")
     scene.collection.children.link(coll)
@@ -242,14 +318,15 @@ def build(bpy, api, view, copies):
     stone = material(bpy, "rd pillar", (0.62, 0.55, 0.45), 0.7)
     wood = material(bpy, "rd chair", (0.33, 0.15, 0.05), 0.55)
     for ob in scene.objects:
-        if ob.type != 'MESH':
+        if ob.type != "MESH":
             continue
         m = floor if ob.name == "Ground" else stone if ob.name.startswith("Pillar") else wood
         ob.data.materials.clear()
         ob.data.materials.append(m)
     bm = bmesh.new()
-    bmesh.ops.create_grid(bm, x_segments=1, y_segments=1, size=60.0,
-                          matrix=Matrix.Translation((5.0, 10.0, -0.002)))
+    bmesh.ops.create_grid(
+        bm, x_segments=1, y_segments=1, size=60.0, matrix=Matrix.Translation((5.0, 10.0, -0.002))
+    )
     mesh_object(bpy, bm, "rd floor extension", floor, coll)
 
     fit_points = []
@@ -268,20 +345,47 @@ def build(bpy, api, view, copies):
         colour = COLOURS[name]
         f0 = int(meta["frame_start"])
         ground = arrays["ground"]
-        path_tube(bpy, f"rd {name} path", ground[:, :2], 0.015, 0.03,
-                  material(bpy, f"rd {name} path", colour, 0.5), coll)
-        joins = [ground[b - f0, :2] for b in meta.get("boundaries", [])
-                 if 0 <= b - f0 < len(ground)]
+        path_tube(
+            bpy,
+            f"rd {name} path",
+            ground[:, :2],
+            0.015,
+            0.03,
+            material(bpy, f"rd {name} path", colour, 0.5),
+            coll,
+        )
+        joins = [
+            ground[b - f0, :2] for b in meta.get("boundaries", []) if 0 <= b - f0 < len(ground)
+        ]
         disc(bpy, bmesh, Matrix, f"rd {name} joins", joins, 0.07, 0.03, white, coll)
         gx, gy, gh = meta["goal"]
-        arrow(bpy, bmesh, Matrix, f"rd {name} goal", gx, gy, gh,
-              material(bpy, f"rd {name} goal", colour, 0.5), coll)
+        arrow(
+            bpy,
+            bmesh,
+            Matrix,
+            f"rd {name} goal",
+            gx,
+            gy,
+            gh,
+            material(bpy, f"rd {name} goal", colour, 0.5),
+            coll,
+        )
         if VIEWS[view]["labels"]:
-            labels.append(label(bpy, name, ground[0, 0], ground[0, 1], 2.1,
-                                material(bpy, f"rd {name} label", (0.95, 0.95, 0.95), 0.5, 0.6),
-                                coll))
-            fit_points.extend(Vector((ground[0, 0] + dx, ground[0, 1] + dy, 2.6))
-                              for dx, dy in ((-1, -1), (1, 1), (-1, 1), (1, -1)))
+            labels.append(
+                label(
+                    bpy,
+                    name,
+                    ground[0, 0],
+                    ground[0, 1],
+                    2.1,
+                    material(bpy, f"rd {name} label", (0.95, 0.95, 0.95), 0.5, 0.6),
+                    coll,
+                )
+            )
+            fit_points.extend(
+                Vector((ground[0, 0] + dx, ground[0, 1] + dy, 2.6))
+                for dx, dy in ((-1, -1), (1, 1), (-1, 1), (1, -1))
+            )
         frames = pick_frames(meta, arrays, copies)
         worst = 0.0
         for i, f in enumerate(frames):
@@ -289,8 +393,15 @@ def build(bpy, api, view, copies):
             dg = bpy.context.evaluated_depsgraph_get()
             ev = ob.evaluated_get(dg)
             t = i / max(1, len(frames) - 1)
-            fig = stick_figure(bpy, bmesh, Matrix, ev, f"rd {name} f{f}",
-                               material(bpy, f"rd {name} f{f}", tint(colour, t), 0.45), coll)
+            fig = stick_figure(
+                bpy,
+                bmesh,
+                Matrix,
+                ev,
+                f"rd {name} f{f}",
+                material(bpy, f"rd {name} f{f}", tint(colour, t), 0.45),
+                coll,
+            )
             fit_points.extend(fig.matrix_world @ Vector(c) for c in fig.bound_box)
             hips = ev.matrix_world @ ev.pose.bones[meta["root_name"]].head
             worst = max(worst, (hips - Vector(arrays["root"][f - f0])).length)
@@ -300,7 +411,7 @@ def build(bpy, api, view, copies):
     # Keep in frame, whole, the props the paths pass near.
     path_xy = np.concatenate(paths)
     for ob in scene.objects:
-        if ob.type == 'MESH' and VIEWS[view]["props"] and VIEWS[view]["props"] in ob.name:
+        if ob.type == "MESH" and VIEWS[view]["props"] and VIEWS[view]["props"] in ob.name:
             x, y = ob.matrix_world.translation.xy
             if np.hypot(path_xy[:, 0] - x, path_xy[:, 1] - y).min() < VIEWS[view]["near"]:
                 fit_points.extend(ob.matrix_world @ Vector(c) for c in ob.bound_box)
@@ -311,12 +422,13 @@ def frame_points(bpy, scene, cam, points, margin):
     """Move ``cam`` (rotation fixed) so ``points`` fill the frame, centred, with a margin."""
     from bpy_extras.object_utils import world_to_camera_view
     from mathutils import Vector
+
     rot = cam.rotation_euler.to_matrix()
     right, up, fwd = rot @ Vector((1, 0, 0)), rot @ Vector((0, 1, 0)), rot @ Vector((0, 0, -1))
     centre = sum(points, Vector()) / len(points)
     cam.location = centre - fwd * 30.0
     w, h = scene.render.resolution_x, scene.render.resolution_y
-    half_w = cam.data.sensor_width / (2 * cam.data.lens)      # tan(horizontal fov / 2)
+    half_w = cam.data.sensor_width / (2 * cam.data.lens)  # tan(horizontal fov / 2)
     for _ in range(30):
         bpy.context.view_layer.update()
         proj = [world_to_camera_view(scene, cam, p) for p in points]
@@ -333,24 +445,25 @@ def frame_points(bpy, scene, cam, points, margin):
 
 def camera_and_light(bpy, view, fit_points, size):
     from mathutils import Euler
+
     scene = bpy.context.scene
     spec = VIEWS[view]
     cam = bpy.data.objects.new("rd camera", bpy.data.cameras.new("rd camera"))
     scene.collection.objects.link(cam)
     cam.data.lens = spec["lens"]
-    cam.data.sensor_fit = 'HORIZONTAL'
+    cam.data.sensor_fit = "HORIZONTAL"
     az, pitch = math.radians(spec["azimuth"]), math.radians(spec["pitch"])
     # Blender camera looks down -Z; X rotation 90 - pitch tilts it up from straight down.
-    cam.rotation_euler = Euler((math.pi / 2 - pitch, 0.0, -az), 'XYZ')
+    cam.rotation_euler = Euler((math.pi / 2 - pitch, 0.0, -az), "XYZ")
     scene.camera = cam
     scene.render.resolution_x, scene.render.resolution_y = size
     frame_points(bpy, scene, cam, fit_points, margin=0.04)
 
-    sun = bpy.data.objects.new("rd sun", bpy.data.lights.new("rd sun", 'SUN'))
+    sun = bpy.data.objects.new("rd sun", bpy.data.lights.new("rd sun", "SUN"))
     scene.collection.objects.link(sun)
     sun.data.energy = 3.5
     sun.data.angle = math.radians(4.0)
-    sun.rotation_euler = Euler((math.radians(40), 0.0, -az + math.radians(35)), 'XYZ')
+    sun.rotation_euler = Euler((math.radians(40), 0.0, -az + math.radians(35)), "XYZ")
 
     world = bpy.data.worlds.new("rd sky")
     if world.node_tree is None:
@@ -364,28 +477,29 @@ def camera_and_light(bpy, view, fit_points, size):
 
 def render_settings(scene, samples, out):
     import _cycles
-    scene.render.engine = 'CYCLES'
-    scene.cycles.device = 'CPU'
+
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
     scene.cycles.samples = samples
     scene.cycles.use_adaptive_sampling = True
     scene.cycles.max_bounces = 4
     denoiser = None
     if getattr(_cycles, "with_openimagedenoise", False):
         scene.cycles.use_denoising = True
-        scene.cycles.denoiser = 'OPENIMAGEDENOISE'
+        scene.cycles.denoiser = "OPENIMAGEDENOISE"
         denoiser = "OpenImageDenoise"
     else:
         scene.cycles.use_denoising = False
     scene.render.resolution_percentage = 100
     scene.render.film_transparent = False
-    scene.render.image_settings.file_format = 'PNG'
-    scene.render.image_settings.color_mode = 'RGB'
-    scene.render.image_settings.color_depth = '8'
+    scene.render.image_settings.file_format = "PNG"
+    scene.render.image_settings.color_mode = "RGB"
+    scene.render.image_settings.color_depth = "8"
     scene.render.image_settings.compression = 100
     scene.render.filepath = str(out)
-    scene.view_settings.view_transform = 'AgX'
+    scene.view_settings.view_transform = "AgX"
     try:
-        scene.view_settings.look = 'AgX - Medium High Contrast'
+        scene.view_settings.look = "AgX - Medium High Contrast"
     except TypeError:
         pass
     return denoiser
@@ -413,9 +527,11 @@ def main(argv):
     args = parse_args(argv)
     blend = Path(args.blend).resolve()
     if not blend.is_file():
-        print(f"render_demo: sample scene not found: {blend}\n"
-              f"  generate it with ./dev demo (tools/demo.py), or pass --blend FILE",
-              file=sys.stderr)
+        print(
+            f"render_demo: sample scene not found: {blend}\n"
+            f"  generate it with ./dev demo (tools/demo.py), or pass --blend FILE",
+            file=sys.stderr,
+        )
         return 2
     out = Path(args.out or REPO / VIEWS[args.view]["out"]).resolve()
     t_start = time.perf_counter()
@@ -444,14 +560,19 @@ def main(argv):
     # Nothing is saved: the loaded copy is dropped when the process ends.
 
     print()
-    print("render_demo: %s view of %s (Blender %s)" % (
-        args.view, blend.name, bpy.app.version_string))
+    print(
+        "render_demo: %s view of %s (Blender %s)" % (args.view, blend.name, bpy.app.version_string)
+    )
     for name, frames, worst in report:
-        print("  %-8s armature bones at frames %s "
-              "(evaluated hips within %.2f cm of the plan's root)"
-              % (name, ", ".join(map(str, frames)), worst * 100))
-    print("  Cycles CPU, %d samples, %dx%d, denoiser: %s" % (
-        args.samples, size[0], size[1], denoiser or "none (not in this build)"))
+        print(
+            "  %-8s armature bones at frames %s "
+            "(evaluated hips within %.2f cm of the plan's root)"
+            % (name, ", ".join(map(str, frames)), worst * 100)
+        )
+    print(
+        "  Cycles CPU, %d samples, %dx%d, denoiser: %s"
+        % (args.samples, size[0], size[1], denoiser or "none (not in this build)")
+    )
     print("  render %.1f s, total %.1f s" % (render_s, time.perf_counter() - t_start))
     print("  wrote %s" % out)
     return 0

@@ -11,7 +11,8 @@ from an extension repository. So this conftest
   to this working tree, and enables the add-on from there with errors raised, not swallowed.
 
 Fixtures: ``addon_module_name`` / ``addon_module`` (session), ``clean_scene`` (function),
-``mocap_dir`` (session), ``walk_blend`` (session: a .blend with the walk patch baked once). ``MOCAP_DIR`` and ``REPO_ROOT`` can also be imported from here.
+``mocap_dir`` (session), ``walk_blend`` (session: a .blend with the walk patch baked once).
+``MOCAP_DIR`` and ``REPO_ROOT`` can also be imported from here.
 
 Run these tests with ``./dev test``: one process per Blender version (bpy can be imported
 only once per process). Keep ``tests/`` and ``tests/blender/`` without ``__init__.py``: pytest
@@ -90,7 +91,7 @@ def add_local_extension_repo(name, module, directory):
     ``bl_ext.<module>`` so add-ons in ``directory`` can be enabled at once.
     """
     repos = bpy.context.preferences.extensions.repos
-    repo = repos.new(name=name, module=module, custom_directory=str(directory), source='USER')
+    repo = repos.new(name=name, module=module, custom_directory=str(directory), source="USER")
     assert repo.module == module, f"extension repository module is {repo.module!r}, not {module!r}"
     return repo
 
@@ -100,7 +101,8 @@ def enable_addon(module_name):
     mod = addon_utils.enable(module_name, default_set=True, handle_error=raise_error)
     if mod is None or addon_utils.check(module_name) != (True, True):
         raise RuntimeError(
-            f"add-on {module_name} did not enable: addon_utils.check -> {addon_utils.check(module_name)}"
+            f"add-on {module_name} did not enable: "
+            f"addon_utils.check -> {addon_utils.check(module_name)}"
         )
     return mod
 
@@ -114,16 +116,19 @@ def disable_addon(module_name):
 
 @pytest.fixture(scope="session")
 def addon_module_name(tmp_path_factory):
-    """``bl_ext.motion_patches_tests.motion_patches``: this working tree, enabled as an extension."""
+    """``bl_ext.motion_patches_tests.motion_patches``: this working tree, enabled as an
+    extension."""
     repo_dir = tmp_path_factory.mktemp("extension_repo")
     link = repo_dir / EXTENSION_ID
     try:
         link.symlink_to(REPO_ROOT, target_is_directory=True)
     except OSError:  # no symlinks (e.g. some Windows set-ups): copy the package instead
         shutil.copytree(
-            REPO_ROOT, link, ignore=shutil.ignore_patterns(
+            REPO_ROOT,
+            link,
+            ignore=shutil.ignore_patterns(
                 ".*", "tests", "bench", "sample_blends", "tools", "dist", "__pycache__"
-            )
+            ),
         )
     repo = add_local_extension_repo("Motion Patches tests", TEST_REPO_MODULE, repo_dir)
     module_name = f"bl_ext.{repo.module}.{EXTENSION_ID}"
@@ -142,7 +147,8 @@ def addon_module(addon_module_name):
 
 @pytest.fixture
 def clean_scene(addon_module_name):
-    """An empty scene, freshly reset, with the add-on still enabled; yields ``bpy.context.scene``."""
+    """An empty scene, freshly reset, with the add-on still enabled; yields
+    ``bpy.context.scene``."""
     bpy.ops.wm.read_homefile(use_empty=True)
     # read_homefile(use_empty=True) keeps the preferences, hence the add-on, in bpy 4.5 and 5.0;
     # re-enable anyway should a future version reload them.
@@ -171,8 +177,9 @@ def walk_blend(addon_module, mocap_dir, tmp_path_factory):
     bpy.ops.wm.read_homefile(use_empty=True)
     scene = bpy.context.scene
     scene.render.fps = 30
-    arm, acts = api.import_mocap([mocap_dir / "cmu" / "16_15.bvh", mocap_dir / "cmu" / "16_18.bvh"],
-                                 name="Source")
+    arm, acts = api.import_mocap(
+        [mocap_dir / "cmu" / "16_15.bvh", mocap_dir / "cmu" / "16_18.bvh"], name="Source"
+    )
     api.bake_locomotion_patch(scene, arm, acts[0], [acts[1]], layer="walk")
     scene.motion_patches.source_armature = arm
     path = tmp_path_factory.mktemp("walk") / "baked.blend"

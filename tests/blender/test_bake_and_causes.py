@@ -31,7 +31,8 @@ def walker(addon_module, straight_blend, location=(0.0, 0.0, 0.0)):
     char = walker_from(scene.motion_patches.source_armature, location=location)
     bpy.context.view_layer.update()
     start = addon_module.adapter.scene.character_state(
-        char, addon_module.adapter.storage.load_patch(scene, "walk").gait.skeleton)
+        char, addon_module.adapter.storage.load_patch(scene, "walk").gait.skeleton
+    )
     return char, start
 
 
@@ -44,7 +45,9 @@ def evaluated_hips(addon_module, char):
     """World (x, y) of the hips at every planned frame, through the depsgraph."""
     meta, _ = addon_module.api.load_plan_record(char)
     frames = np.arange(meta["frame_start"], meta["frame_end"] + 1)
-    pos, _, _, _ = addon_module.adapter.evaluate.sample_armature(bpy.context, char, frames, ["Hips"])
+    pos, _, _, _ = addon_module.adapter.evaluate.sample_armature(
+        bpy.context, char, frames, ["Hips"]
+    )
     return pos[:, 0, :2]
 
 
@@ -112,10 +115,12 @@ def test_a_crowd_member_walled_off_is_reported_with_the_wall(straight_blend, add
     ahead = np.array(goal.location) - loc
     ahead /= np.linalg.norm(ahead)
     beside = np.array([-ahead[1], ahead[0], 0.0]) * 3.0
-    other = walker_from(bpy.context.scene.motion_patches.source_armature, name="Other",
-                        location=tuple(loc + beside))
-    other_goal = empty("Other goal", *(loc + beside + 2.0 * ahead)[:2],
-                       float(np.arctan2(ahead[1], ahead[0])))
+    other = walker_from(
+        bpy.context.scene.motion_patches.source_armature, name="Other", location=tuple(loc + beside)
+    )
+    other_goal = empty(
+        "Other goal", *(loc + beside + 2.0 * ahead)[:2], float(np.arctan2(ahead[1], ahead[0]))
+    )
     bpy.context.view_layer.update()
     res = addon_module.api.plan_crowd(bpy.context.scene, [(char, goal), (other, other_goal)])
     assert [c for c, _ in res.failed] == [char.name]
@@ -128,8 +133,9 @@ def test_the_cli_plan_exits_1_naming_the_wall(straight_blend, addon_module, tmp_
     path = tmp_path / "walled.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(path))
     capsys.readouterr()
-    code = addon_module.cli.main(["plan", "--blend", str(path), "--character", "Walker",
-                                  "--goal", "Goal"])
+    code = addon_module.cli.main(
+        ["plan", "--blend", str(path), "--character", "Walker", "--goal", "Goal"]
+    )
     err = capsys.readouterr().err
     assert code == 1
     assert "no path for 'Walker'" in err and "Cause: 'Garden wall'" in err
@@ -143,9 +149,11 @@ def test_a_bake_too_sparse_to_connect_is_refused_with_what_to_add(straight_blend
     scene = bpy.context.scene
     arm = scene.motion_patches.source_armature
     action = next(a for a in bpy.data.actions if a.name.startswith("16_15"))
-    with pytest.raises(api.MotionPatchesError,
-                       match=r"too sparse to plan with: only \d+% of entry states have a way on"
-                             r".*Add a turn clip") as err:
+    with pytest.raises(
+        api.MotionPatchesError,
+        match=r"too sparse to plan with: only \d+% of entry states have a way on"
+        r".*Add a turn clip",
+    ) as err:
         api.bake_locomotion_patch(scene, arm, action, [], layer="sparse", nodes=2)
     assert "more nodes per edge" in str(err.value)
     assert [p.name for p in scene.motion_patches.patches] == ["walk"]

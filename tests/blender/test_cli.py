@@ -50,9 +50,12 @@ def one_line(err):
 def scene_state(name="Walker"):
     ob = bpy.data.objects.get(name)
     ad = ob.animation_data if ob else None
-    return (sorted(o.name for o in bpy.data.objects), sorted(a.name for a in bpy.data.actions),
-            [t.name for t in ad.nla_tracks] if ad else None,
-            ad.action.name if ad and ad.action else None)
+    return (
+        sorted(o.name for o in bpy.data.objects),
+        sorted(a.name for a in bpy.data.actions),
+        [t.name for t in ad.nla_tracks] if ad else None,
+        ad.action.name if ad and ad.action else None,
+    )
 
 
 CAGE = (3.0, -6.0)
@@ -66,10 +69,26 @@ def baked(addon_module_name, mocap_dir, tmp_path_factory):
     path = tmp_path_factory.mktemp("cli") / "baked.blend"
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
-        code = cli.main(["bake", "--import-bvh", str(mocap_dir / "cmu" / "16_15.bvh"),
-                         "--import-bvh", str(mocap_dir / "cmu" / "16_18.bvh"),
-                         "--armature", "Source", "--straight", "16_15", "--turn", "16_18",
-                         "--fps", "30", "--save", str(path), "--json"])
+        code = cli.main(
+            [
+                "bake",
+                "--import-bvh",
+                str(mocap_dir / "cmu" / "16_15.bvh"),
+                "--import-bvh",
+                str(mocap_dir / "cmu" / "16_18.bvh"),
+                "--armature",
+                "Source",
+                "--straight",
+                "16_15",
+                "--turn",
+                "16_18",
+                "--fps",
+                "30",
+                "--save",
+                str(path),
+                "--json",
+            ]
+        )
     return path, code, json.loads(out.getvalue())
 
 
@@ -114,8 +133,9 @@ def test_command_is_registered_and_released_with_the_addon(addon_module_name, ca
     assert sys.modules[addon_module_name].cli._handle is not None
 
 
-@pytest.mark.parametrize("command", [None, "bake", "plan", "crowd", "analyse", "check",
-                                     "export", "import"])
+@pytest.mark.parametrize(
+    "command", [None, "bake", "plan", "crowd", "analyse", "check", "export", "import"]
+)
 def test_help_exits_0(cli, capsys, command):
     code, out, err = call(cli, capsys, *([command] if command else []), "--help")
     assert code == 0
@@ -123,14 +143,19 @@ def test_help_exits_0(cli, capsys, command):
     assert "exit codes" in out
 
 
-@pytest.mark.parametrize("argv, needle", [
-    ([], "required"),
-    (["frobnicate"], "invalid choice"),
-    (["plan", "--goal", "Goal"], "--character"),
-    (["plan", "--character", "W", "--alpha", "fast"], "invalid float"),
-    (["bake", "--armature", "A", "--straight", "s", "--cells", "12"],
-     "cells must be a whole number from 2 to 8, not 12"),
-])
+@pytest.mark.parametrize(
+    "argv, needle",
+    [
+        ([], "required"),
+        (["frobnicate"], "invalid choice"),
+        (["plan", "--goal", "Goal"], "--character"),
+        (["plan", "--character", "W", "--alpha", "fast"], "invalid float"),
+        (
+            ["bake", "--armature", "A", "--straight", "s", "--cells", "12"],
+            "cells must be a whole number from 2 to 8, not 12",
+        ),
+    ],
+)
 def test_usage_errors_exit_2_with_one_line(cli, capsys, argv, needle):
     code, out, err = call(cli, capsys, *argv)
     assert code == 2 and out == ""
@@ -164,15 +189,32 @@ def test_bake_bad_input_exits_2_and_writes_nothing(cli, capsys, clean_scene, moc
     out = tmp_path / "out.blend"
     walk = mocap_dir / "cmu" / "16_15.bvh"
     cases = [
-        (["--import-bvh", tmp_path / "missing.bvh", "--armature", "A", "--straight", "missing"],
-         "BVH file not found"),
+        (
+            ["--import-bvh", tmp_path / "missing.bvh", "--armature", "A", "--straight", "missing"],
+            "BVH file not found",
+        ),
         (["--armature", "Nobody", "--straight", "16_15"], "no armature object named 'Nobody'"),
-        (["--import-bvh", walk, "--armature", "A", "--straight", "16_99"],
-         "no action named '16_99'"),
-        (["--import-bvh", walk, "--armature", "A", "--straight", "16_15", "--turn", "nope"],
-         "no action named 'nope'"),
-        (["--import-bvh", walk, "--armature", "A", "--straight", "16_15",
-          "--save", tmp_path / "no" / "such" / "dir.blend"], "does not exist"),
+        (
+            ["--import-bvh", walk, "--armature", "A", "--straight", "16_99"],
+            "no action named '16_99'",
+        ),
+        (
+            ["--import-bvh", walk, "--armature", "A", "--straight", "16_15", "--turn", "nope"],
+            "no action named 'nope'",
+        ),
+        (
+            [
+                "--import-bvh",
+                walk,
+                "--armature",
+                "A",
+                "--straight",
+                "16_15",
+                "--save",
+                tmp_path / "no" / "such" / "dir.blend",
+            ],
+            "does not exist",
+        ),
     ]
     for argv, needle in cases:
         if "--save" not in argv:
@@ -185,16 +227,30 @@ def test_bake_bad_input_exits_2_and_writes_nothing(cli, capsys, clean_scene, moc
         assert len(clean_scene.motion_patches.patches) == 0
 
 
-def test_failed_bake_rolls_back_the_import(cli, capsys, clean_scene, mocap_dir, tmp_path,
-                                           monkeypatch):
+def test_failed_bake_rolls_back_the_import(
+    cli, capsys, clean_scene, mocap_dir, tmp_path, monkeypatch
+):
     def refuse(*a, **k):  # the core bake, after the import: the API puts the import back
         raise ValueError("every candidate segment was culled")
+
     monkeypatch.setattr(cli.api, "bake", refuse)
     fps = clean_scene.render.fps
     out = tmp_path / "out.blend"
-    code, doc, err = call_json(cli, capsys, "bake", "--import-bvh", mocap_dir / "cmu" / "16_15.bvh",
-                               "--armature", "A", "--straight", "16_15", "--fps", "30",
-                               "--save", out)
+    code, doc, err = call_json(
+        cli,
+        capsys,
+        "bake",
+        "--import-bvh",
+        mocap_dir / "cmu" / "16_15.bvh",
+        "--armature",
+        "A",
+        "--straight",
+        "16_15",
+        "--fps",
+        "30",
+        "--save",
+        out,
+    )
     assert code == 2 and doc["ok"] is False and "culled" in one_line(err)
     assert not out.exists()
     assert len(bpy.data.objects) == 0 and len(bpy.data.actions) == 0
@@ -226,12 +282,26 @@ def test_progress_bar_on_a_terminal_and_plain_lines_otherwise(cli):
 
 def test_plan_saves_nla_and_analyse_reports_figures(cli, capsys, layout, tmp_path):
     out = tmp_path / "planned.blend"
-    code, doc, err = call_json(cli, capsys, "plan", "--blend", layout, "--character", "Walker",
-                               "--goal", "Goal", "--frame-start", "1", "--save", out)
+    code, doc, err = call_json(
+        cli,
+        capsys,
+        "plan",
+        "--blend",
+        layout,
+        "--character",
+        "Walker",
+        "--goal",
+        "Goal",
+        "--frame-start",
+        "1",
+        "--save",
+        out,
+    )
     assert code == 0 and doc["ok"], err
     assert doc["character"] == "Walker" and doc["goal"]["object"] == "Goal"
     assert doc["goal"]["x"] == pytest.approx(7.5) and doc["goal"]["heading_deg"] == pytest.approx(
-        np.degrees(0.6))
+        np.degrees(0.6)
+    )
     assert doc["frame_start"] == 1 and doc["frames"] == doc["frame_end"]
     # The found path may be shortened down to one goal piece (one followed curve).
     assert doc["pieces"][-1] == "goal" and doc["pieces"][0] in ("start", "goal")
@@ -249,25 +319,50 @@ def test_plan_saves_nla_and_analyse_reports_figures(cli, capsys, layout, tmp_pat
 
 
 def test_plan_to_coordinates_prints_a_summary(cli, capsys, layout):
-    code, out, err = call(cli, capsys, "plan", "--blend", layout, "--character", "Walker",
-                          "--goal-xyh", "4", "-1", "0", "--alpha", "1", "--gamma", "0.1")
+    code, out, err = call(
+        cli,
+        capsys,
+        "plan",
+        "--blend",
+        layout,
+        "--character",
+        "Walker",
+        "--goal-xyh",
+        "4",
+        "-1",
+        "0",
+        "--alpha",
+        "1",
+        "--gamma",
+        "0.1",
+    )
     assert code == 0, err
     assert out.startswith("planned 'Walker':") and "cost" in out
     assert bpy.data.filepath == str(layout)  # nothing saved: the file is as it was
     assert "Traceback" not in err
 
 
-@pytest.mark.parametrize("argv, needle", [
-    (["--character", "Nobody", "--goal", "Goal"], "no armature object named 'Nobody'"),
-    (["--character", "Pillar0", "--goal", "Goal"], "'Pillar0' is a mesh"),
-    (["--character", "Walker", "--goal", "Nowhere"], "no object named 'Nowhere'"),
-    (["--character", "Walker", "--goal", "Goal", "--patch", "run"], "no locomotion patch named"),
-    (["--character", "Walker", "--goal", "Goal", "--radius", "-1"],
-     "radius must be a number of metres above 0"),
-    (["--character", "Walker", "--goal-xyh", "3", "1", "0"],
-     "the goal of 'Walker' is inside or within 0.25 m of 'Pillar0'"),
-    (["--character", "Walker", "--goal", "Walker"], "the goal cannot be the character itself"),
-])
+@pytest.mark.parametrize(
+    "argv, needle",
+    [
+        (["--character", "Nobody", "--goal", "Goal"], "no armature object named 'Nobody'"),
+        (["--character", "Pillar0", "--goal", "Goal"], "'Pillar0' is a mesh"),
+        (["--character", "Walker", "--goal", "Nowhere"], "no object named 'Nowhere'"),
+        (
+            ["--character", "Walker", "--goal", "Goal", "--patch", "run"],
+            "no locomotion patch named",
+        ),
+        (
+            ["--character", "Walker", "--goal", "Goal", "--radius", "-1"],
+            "radius must be a number of metres above 0",
+        ),
+        (
+            ["--character", "Walker", "--goal-xyh", "3", "1", "0"],
+            "the goal of 'Walker' is inside or within 0.25 m of 'Pillar0'",
+        ),
+        (["--character", "Walker", "--goal", "Walker"], "the goal cannot be the character itself"),
+    ],
+)
 def test_plan_bad_input_exits_2_and_changes_nothing(cli, capsys, layout, tmp_path, argv, needle):
     out = tmp_path / "out.blend"
     open_blend(layout)
@@ -283,8 +378,9 @@ def test_plan_without_a_baked_patch_exits_2(cli, capsys, clean_scene, tmp_path):
     clean_scene.collection.objects.link(arm)
     empty("Goal", 3, 0, 0)
     out = tmp_path / "out.blend"
-    code, doc, err = call_json(cli, capsys, "plan", "--character", "Rig", "--goal", "Goal",
-                               "--save", out)
+    code, doc, err = call_json(
+        cli, capsys, "plan", "--character", "Rig", "--goal", "Goal", "--save", out
+    )
     assert code == 2 and "no locomotion patch is baked" in one_line(err)
     assert doc["ok"] is False and not out.exists()
 
@@ -298,8 +394,9 @@ def test_unreachable_plan_exits_1_and_changes_nothing(cli, capsys, layout, tmp_p
     open_blend(layout)
     before = scene_state()
     out = tmp_path / "out.blend"
-    code, doc, err = call_json(cli, capsys, "plan", "--character", "Walker", "--goal",
-                               "CageGoal", "--save", out)
+    code, doc, err = call_json(
+        cli, capsys, "plan", "--character", "Walker", "--goal", "CageGoal", "--save", out
+    )
     assert code == 1 and doc["ok"] is False
     assert "no path for 'Walker'" in one_line(err)
     assert not out.exists() and scene_state() == before
@@ -308,8 +405,20 @@ def test_unreachable_plan_exits_1_and_changes_nothing(cli, capsys, layout, tmp_p
 def test_json_stdout_is_only_the_document_at_the_fd_level(cli, capfd, layout, tmp_path):
     """Blender prints reports (file saved, ...) to stdout itself; they must not mix in."""
     out = tmp_path / "planned.blend"
-    code = cli.main(["plan", "--blend", str(layout), "--character", "Walker", "--goal", "Goal",
-                     "--save", str(out), "--json"])
+    code = cli.main(
+        [
+            "plan",
+            "--blend",
+            str(layout),
+            "--character",
+            "Walker",
+            "--goal",
+            "Goal",
+            "--save",
+            str(out),
+            "--json",
+        ]
+    )
     stdout, _ = capfd.readouterr()
     assert code == 0 and json.loads(stdout)["saved"] == str(out)
 
@@ -319,11 +428,18 @@ def test_json_stdout_is_only_the_document_at_the_fd_level(cli, capfd, layout, tm
 
 def test_check_spec_reports_every_pair_and_writes_nothing(cli, capsys, layout, tmp_path):
     spec = tmp_path / "layout.json"
-    spec.write_text(json.dumps({
-        "radius": 0.25,
-        "limits": {"max_seconds": 60},
-        "pairs": [{"name": "walker to goal", "character": "Walker", "goal": "Goal"},
-                  {"start": [0, 0, 90], "goal": "Near", "max_length": 50}]}))
+    spec.write_text(
+        json.dumps(
+            {
+                "radius": 0.25,
+                "limits": {"max_seconds": 60},
+                "pairs": [
+                    {"name": "walker to goal", "character": "Walker", "goal": "Goal"},
+                    {"start": [0, 0, 90], "goal": "Near", "max_length": 50},
+                ],
+            }
+        )
+    )
     open_blend(layout)
     before = scene_state()
     code, doc, err = call_json(cli, capsys, "check", "--spec", spec)
@@ -345,7 +461,8 @@ def test_failing_check_exits_1_and_names_the_blocking_props(cli, capsys, layout,
         '[[pairs]]\nname = "into the cage"\ncharacter = "Walker"\ngoal = "CageGoal"\n\n'
         '[[pairs]]\nname = "too slow"\ncharacter = "Walker"\ngoal = "Goal"\nmax_seconds = 2\n\n'
         '[[pairs]]\nname = "optional"\nstart = [0.0, -3.0, 0.0]\ngoal = "CageGoal"\n'
-        'must_reach = false\n')
+        "must_reach = false\n"
+    )
     code, doc, err = call_json(cli, capsys, "check", "--blend", layout, "--spec", spec)
     assert code == 1 and doc["ok"] is False and doc["failed"] == 2
     cage, slow, optional = doc["pairs"]
@@ -388,21 +505,32 @@ def test_check_without_spec_rechecks_planned_characters(cli, capsys, layout, tmp
     assert code == 0 and doc["pairs"][0]["goal"]["object"] == "Near", err
     # a spec can say which props are not obstacles (the crate will be moved)
     spec = tmp_path / "spec.json"
-    spec.write_text(json.dumps({"exclude": ["Crate"], "pairs": [
-        {"start": [0.4, 0.3, -90], "goal": "Goal", "exclude": ["WalkerBody"]}]}))
+    spec.write_text(
+        json.dumps(
+            {
+                "exclude": ["Crate"],
+                "pairs": [{"start": [0.4, 0.3, -90], "goal": "Goal", "exclude": ["WalkerBody"]}],
+            }
+        )
+    )
     code, doc, err = call_json(cli, capsys, "check", "--spec", spec)
     assert code == 0 and doc["pairs"][0]["reachable"], err
 
 
-@pytest.mark.parametrize("content, needle", [
-    (None, "layout spec not found"),
-    ("{not json", "cannot read layout spec"),
-    ('{"pairs": [{"character": "Walker", "goal": "Nowhere"}]}', "no object named 'Nowhere'"),
-    ('{"pairs": [{"character": "Walker", "goal": "Goal", "max_secs": 3}]}',
-     "unknown key(s) max_secs"),
-    ('{"pairs": [{"start": [0, 0], "goal": "Goal"}]}', "[x, y, heading_deg]"),
-    ('{"pairs": []}', "non-empty list"),
-])
+@pytest.mark.parametrize(
+    "content, needle",
+    [
+        (None, "layout spec not found"),
+        ("{not json", "cannot read layout spec"),
+        ('{"pairs": [{"character": "Walker", "goal": "Nowhere"}]}', "no object named 'Nowhere'"),
+        (
+            '{"pairs": [{"character": "Walker", "goal": "Goal", "max_secs": 3}]}',
+            "unknown key(s) max_secs",
+        ),
+        ('{"pairs": [{"start": [0, 0], "goal": "Goal"}]}', "[x, y, heading_deg]"),
+        ('{"pairs": []}', "non-empty list"),
+    ],
+)
 def test_check_bad_spec_exits_2(cli, capsys, layout, tmp_path, content, needle):
     spec = tmp_path / "spec.json"
     if content is not None:
@@ -428,8 +556,12 @@ def test_missing_blend_exits_2(cli, capsys, tmp_path):
 def evaluated_roots(cli, names, frames):
     """(characters, frames, 2) ground positions of each armature's evaluated root bone."""
     sample = cli.api.evaluate.sample_armature
-    return np.array([sample(bpy.context, ob, frames, [ob.pose.bones[0].name])[0][:, 0, :2]
-                     for ob in (bpy.data.objects[n] for n in names)])
+    return np.array(
+        [
+            sample(bpy.context, ob, frames, [ob.pose.bones[0].name])[0][:, 0, :2]
+            for ob in (bpy.data.objects[n] for n in names)
+        ]
+    )
 
 
 def facing(cli, walker, heading):
@@ -463,9 +595,22 @@ def test_crowd_plans_everyone_and_keeps_them_apart(cli, capsys, crossing, tmp_pa
     # Walking at once they would come within a metre of each other; with no wait allowed
     # the second is re-routed round where the first walks at that time.
     rerouted = tmp_path / "rerouted.blend"
-    code, doc, err = call_json(cli, capsys, "crowd", "--blend", crossing, *pairs,
-                               "--spacing", "1", "--max-wait", "0", "--frame-start", "1",
-                               "--save", rerouted)
+    code, doc, err = call_json(
+        cli,
+        capsys,
+        "crowd",
+        "--blend",
+        crossing,
+        *pairs,
+        "--spacing",
+        "1",
+        "--max-wait",
+        "0",
+        "--frame-start",
+        "1",
+        "--save",
+        rerouted,
+    )
     assert code == 0 and doc["conflicts"] == [] and doc["rerouted"] == ["North"], err
     assert doc["delays_frames"] == {"East": 0, "North": 0}
     open_blend(rerouted)
@@ -475,8 +620,20 @@ def test_crowd_plans_everyone_and_keeps_them_apart(cli, capsys, crossing, tmp_pa
     assert gap.min() >= 1.0 - 0.05, f"closest approach {gap.min():.2f} m"
     assert np.linalg.norm(roots[1, -1] - (4.0, 4.0)) < 0.3
     out = tmp_path / "crowd.blend"
-    code, doc, err = call_json(cli, capsys, "crowd", "--blend", crossing, *pairs,
-                               "--spacing", "1", "--frame-start", "1", "--save", out)
+    code, doc, err = call_json(
+        cli,
+        capsys,
+        "crowd",
+        "--blend",
+        crossing,
+        *pairs,
+        "--spacing",
+        "1",
+        "--frame-start",
+        "1",
+        "--save",
+        out,
+    )
     assert code == 0 and doc["ok"] and doc["conflicts"] == [] and doc["failed"] == [], err
     assert [p["character"] for p in doc["planned"]] == ["East", "North"]
     # North gives way by an idle hold mid-walk (preferred to a wait at its start)
@@ -492,7 +649,7 @@ def test_crowd_plans_everyone_and_keeps_them_apart(cli, capsys, crossing, tmp_pa
     assert np.linalg.norm(roots[0, -1] - (8.0, 0.0)) < 0.3
     assert np.linalg.norm(roots[1, -1] - (4.0, 4.0)) < 0.3
     # it stands still for a while between leaving its start and reaching its goal
-    walk = roots[1, :second["frame_end"]]
+    walk = roots[1, : second["frame_end"]]
     still = np.linalg.norm(np.diff(walk, axis=0), axis=1) < 1e-3
     moved = np.linalg.norm(walk - walk[0], axis=1) > 0.5
     far = np.linalg.norm(walk - (4.0, 4.0), axis=1) > 0.5
@@ -503,25 +660,38 @@ def test_crowd_with_an_unreachable_goal_exits_1_and_saves_nothing(cli, capsys, l
     scene = open_blend(layout)
     walker_from(scene.motion_patches.source_armature, "North", (1.0, -2.0, 0.0))
     out = tmp_path / "crowd.blend"
-    code, doc, err = call_json(cli, capsys, "crowd", "--pair", "Walker", "Goal", "--pair",
-                               "North", "CageGoal", "--save", out)
+    code, doc, err = call_json(
+        cli,
+        capsys,
+        "crowd",
+        "--pair",
+        "Walker",
+        "Goal",
+        "--pair",
+        "North",
+        "CageGoal",
+        "--save",
+        out,
+    )
     assert code == 1 and not out.exists()
     assert [p["character"] for p in doc["planned"]] == ["Walker"]
     assert doc["failed"][0]["character"] == "North"
     assert "no path for 'North'" in doc["failed"][0]["error"]
 
 
-@pytest.mark.parametrize("argv, needle", [
-    ([], "no crowd: no armature in the scene has its own goal"),
-    (["--pair", "East", "Goal", "--pair", "East", "NorthGoal"], "'East' appears twice"),
-    (["--pair", "East", "Nowhere"], "no object named 'Nowhere'"),
-    (["--pair", "East", "East"], "the character itself"),
-    (["--pair", "Goal", "East"], "no armature object named 'Goal'"),
-    (["--pair", "East", "Goal", "--max-wait", "-2"], "the longest wait must be numbers >= 0"),
-    (["--pair", "East", "Goal", "--character", "North"], "either --pair or --character"),
-])
-def test_crowd_bad_input_exits_2_and_changes_nothing(cli, capsys, crossing, tmp_path, argv,
-                                                     needle):
+@pytest.mark.parametrize(
+    "argv, needle",
+    [
+        ([], "no crowd: no armature in the scene has its own goal"),
+        (["--pair", "East", "Goal", "--pair", "East", "NorthGoal"], "'East' appears twice"),
+        (["--pair", "East", "Nowhere"], "no object named 'Nowhere'"),
+        (["--pair", "East", "East"], "the character itself"),
+        (["--pair", "Goal", "East"], "no armature object named 'Goal'"),
+        (["--pair", "East", "Goal", "--max-wait", "-2"], "the longest wait must be numbers >= 0"),
+        (["--pair", "East", "Goal", "--character", "North"], "either --pair or --character"),
+    ],
+)
+def test_crowd_bad_input_exits_2_and_changes_nothing(cli, capsys, crossing, tmp_path, argv, needle):
     out = tmp_path / "out.blend"
     open_blend(crossing)
     before = scene_state("East"), scene_state("North")
@@ -574,8 +744,9 @@ def test_a_crowd_goal_object_blocks_everyone_but_its_own_character(cli, capsys, 
     """North walks to a pillar (its goal): for North it is no obstacle, for Walker it is."""
     scene = open_blend(layout)
     walker_from(scene.motion_patches.source_armature, "North", (1.0, -2.0, 0.0))
-    code, doc, err = call_json(cli, capsys, "crowd", "--pair", "Walker", "Goal", "--pair",
-                               "North", "Pillar0")
+    code, doc, err = call_json(
+        cli, capsys, "crowd", "--pair", "Walker", "Goal", "--pair", "North", "Pillar0"
+    )
     assert not doc["failed"], err
     walker_obstacles = cli.api.load_plan_record(bpy.data.objects["Walker"])[0]["obstacles"]
     north_obstacles = cli.api.load_plan_record(bpy.data.objects["North"])[0]["obstacles"]
@@ -588,14 +759,18 @@ def test_a_goal_facing_out_of_a_dead_end_is_reached_with_any_facing(cli, capsys,
     """A goal deep in a dead end facing its mouth cannot be reached (no room to turn);
     --any-facing arrives facing the end wall instead, evaluated on the goal point."""
     open_blend(layout)
-    for name, (x, y, sx, sy) in {"WallN": (9.8, 10.75, 3.6, 0.3), "WallS": (9.8, 9.25, 3.6, 0.3),
-                                 "WallEnd": (11.45, 10.0, 0.3, 1.8)}.items():
+    for name, (x, y, sx, sy) in {
+        "WallN": (9.8, 10.75, 3.6, 0.3),
+        "WallS": (9.8, 9.25, 3.6, 0.3),
+        "WallEnd": (11.45, 10.0, 0.3, 1.8),
+    }.items():
         prop_box(name, x, y, (sx, sy, 2.0))
     empty("DeadEnd", 10.4, 10.0, np.pi)
     code, doc, err = call_json(cli, capsys, "plan", "--character", "Walker", "--goal", "DeadEnd")
     assert code == 1 and "no path for 'Walker'" in one_line(err)
-    code, doc, err = call_json(cli, capsys, "plan", "--character", "Walker", "--goal", "DeadEnd",
-                               "--any-facing")
+    code, doc, err = call_json(
+        cli, capsys, "plan", "--character", "Walker", "--goal", "DeadEnd", "--any-facing"
+    )
     assert code == 0, err
     assert abs(doc["goal"]["heading_deg"]) < 30  # facing the end wall, not the way out
     code, doc, err = call_json(cli, capsys, "analyse", "--character", "Walker")
@@ -603,8 +778,12 @@ def test_a_goal_facing_out_of_a_dead_end_is_reached_with_any_facing(cli, capsys,
     assert f["goal_root_position_error_cm"] < 10 and f["frames_root_inside_obstacle"] == 0
     assert f["goal_heading_error_deg"] < 5  # against the facing it chose
     # The same pair as a layout check: exact facing fails, any facing passes.
-    spec = {"pairs": [{"character": "Walker", "goal": "DeadEnd"},
-                      {"character": "Walker", "goal": "DeadEnd", "goal_facing": "any"}]}
+    spec = {
+        "pairs": [
+            {"character": "Walker", "goal": "DeadEnd"},
+            {"character": "Walker", "goal": "DeadEnd", "goal_facing": "any"},
+        ]
+    }
     exact, anyway = cli.api.check_layout(bpy.context.scene, spec)
     assert not exact["reachable"] and anyway["reachable"] and anyway["goal_facing"] == "any"
     assert abs(anyway["goal"]["heading_deg"]) < 30

@@ -16,8 +16,11 @@ def open_walk(walk_blend):
 
 
 def snapshot():
-    return (sorted(o.name for o in bpy.data.objects), sorted(c.name for c in bpy.data.collections),
-            sorted(a.name for a in bpy.data.actions))
+    return (
+        sorted(o.name for o in bpy.data.objects),
+        sorted(c.name for c in bpy.data.collections),
+        sorted(a.name for a in bpy.data.actions),
+    )
 
 
 def test_duplicate_crowd_makes_a_linked_crowd_and_plans_it(walk_blend, addon_module):
@@ -27,10 +30,18 @@ def test_duplicate_crowd_makes_a_linked_crowd_and_plans_it(walk_blend, addon_mod
     bpy.context.view_layer.objects.active = src
     before_src = src.animation_data.action if src.animation_data else None
     assert bpy.ops.motion_patches.duplicate_crowd(
-        count=6, region_min=(-7.0, -3.0), region_max=(-4.0, 3.0), goal_min=(4.0, -3.0),
-        goal_max=(7.0, 3.0), seed=3) == {'FINISHED'}
-    crowd = [o for o in bpy.data.objects if o.name.startswith(f"{src.name}.crowd")
-             and o.type == 'ARMATURE']
+        count=6,
+        region_min=(-7.0, -3.0),
+        region_max=(-4.0, 3.0),
+        goal_min=(4.0, -3.0),
+        goal_max=(7.0, 3.0),
+        seed=3,
+    ) == {"FINISHED"}
+    crowd = [
+        o
+        for o in bpy.data.objects
+        if o.name.startswith(f"{src.name}.crowd") and o.type == "ARMATURE"
+    ]
     assert len(crowd) == 6
     assert all(o.data == src.data for o in crowd)  # linked armature data
     assert (src.animation_data.action if src.animation_data else None) == before_src
@@ -41,24 +52,33 @@ def test_duplicate_crowd_makes_a_linked_crowd_and_plans_it(walk_blend, addon_mod
         for o in crowd:
             goal = o.motion_patches_character.goal
             assert goal is not None and 4.0 <= goal.location.x <= 7.0
-            roots.append((np.array(o.matrix_world.translation[:2]),
-                          np.array(goal.matrix_world.translation[:2])))
+            roots.append(
+                (
+                    np.array(o.matrix_world.translation[:2]),
+                    np.array(goal.matrix_world.translation[:2]),
+                )
+            )
     for at, goal in roots:
         assert np.linalg.norm(at - goal) < 0.3
 
 
-@pytest.mark.parametrize("kw, match", [
-    (dict(count=40, region_min=(-5.0, -1.0), region_max=(-4.0, 0.0)), "holds only"),
-    (dict(count=3, region_min=(-5.0, -1.0), region_max=(-6.0, 0.0)), "second corner"),
-])
-def test_duplicate_crowd_refuses_what_it_cannot_do_and_leaves_the_scene(walk_blend, kw, match,
-                                                                        addon_module):
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        (dict(count=40, region_min=(-5.0, -1.0), region_max=(-4.0, 0.0)), "holds only"),
+        (dict(count=3, region_min=(-5.0, -1.0), region_max=(-6.0, 0.0)), "second corner"),
+    ],
+)
+def test_duplicate_crowd_refuses_what_it_cannot_do_and_leaves_the_scene(
+    walk_blend, kw, match, addon_module
+):
     api = addon_module.api
     scene, src = open_walk(walk_blend)
     before = snapshot()
     with pytest.raises(api.MotionPatchesError, match=match):
-        api.duplicate_crowd(scene, src, kw["count"], (kw["region_min"], kw["region_max"]),
-                            ((4.0, -3.0), (7.0, 3.0)))
+        api.duplicate_crowd(
+            scene, src, kw["count"], (kw["region_min"], kw["region_max"]), ((4.0, -3.0), (7.0, 3.0))
+        )
     bpy.context.view_layer.objects.active = src
     with pytest.raises(RuntimeError, match=match):
         bpy.ops.motion_patches.duplicate_crowd(goal_min=(4.0, -3.0), goal_max=(7.0, 3.0), **kw)
@@ -73,15 +93,16 @@ def test_a_character_the_patch_cannot_play_is_refused(walk_blend, addon_module):
     stick = bpy.data.objects.new("Stick", arm)
     scene.collection.objects.link(stick)
     bpy.context.view_layer.objects.active = stick
-    bpy.ops.object.mode_set(mode='EDIT')
+    bpy.ops.object.mode_set(mode="EDIT")
     b = arm.edit_bones.new("Bone")
     b.head, b.tail = (0, 0, 0), (0, 0, 1)
-    bpy.ops.object.mode_set(mode='OBJECT')
+    bpy.ops.object.mode_set(mode="OBJECT")
     walker = walker_from(src, "Walker", (-5.0, 0.0, 0.0))
     before = snapshot()
     with pytest.raises(api.MotionPatchesError, match="Stick"):
-        api.plan_crowd(scene, [(walker, empty("G1", 5.0, 0.0, 0.0)),
-                               (stick, empty("G2", 5.0, 2.0, 0.0))])
+        api.plan_crowd(
+            scene, [(walker, empty("G1", 5.0, 0.0, 0.0)), (stick, empty("G2", 5.0, 2.0, 0.0))]
+        )
     with pytest.raises(RuntimeError, match="Stick"):
         bpy.ops.motion_patches.duplicate_crowd(count=2)
     assert snapshot()[1:] == before[1:]  # no collection, no action made

@@ -42,7 +42,6 @@ def test_clean_scene_is_empty_and_keeps_the_addon(clean_scene, addon_module_name
     assert addon_module_name in bpy.context.preferences.addons
 
 
-
 def test_blender_user_directories_are_the_session_temp_dir():
     for resource in ("CONFIG", "SCRIPTS", "DATAFILES", "EXTENSIONS"):
         path = Path(bpy.utils.user_resource(resource)).resolve()

@@ -25,9 +25,18 @@ from conftest import EXTENSION_ID, REPO_ROOT, blender_user_env
 
 # Top-level entries of the working tree that must never ship in the zip.
 DEV_ONLY_DIRS = (
-    "tests/", "bench/", "sample_blends/", "tools/", "requirements/", "dist/", "examples/",
+    "tests/",
+    "bench/",
+    "sample_blends/",
+    "tools/",
+    "requirements/",
+    "dist/",
+    "examples/",
     "docs/",
-    ".ci/", ".venv/", ".git/", ".pytest_cache/",
+    ".ci/",
+    ".venv/",
+    ".git/",
+    ".pytest_cache/",
 )
 DEV_ONLY_FILES = ("dev", ".gitignore", "THIRD_PARTY_NOTICES.md")
 CLI_TIMEOUT_S = 300
@@ -39,7 +48,7 @@ def bpy_package_dir():
     Not ``bpy.__file__``: once imported, ``bpy`` is Blender's Python package inside
     ``bpy/<version>/scripts/modules``; the scripts directory is two levels below the wheel's.
     """
-    return Path(bpy.utils.system_resource('SCRIPTS')).resolve().parents[1]
+    return Path(bpy.utils.system_resource("SCRIPTS")).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")
@@ -103,9 +112,12 @@ def test_built_zip_has_manifest_and_package_at_its_root(built_zip):
 def test_built_zip_ships_no_development_files(built_zip):
     names = zipfile.ZipFile(built_zip).namelist()
     leaked = [
-        n for n in names
-        if n.startswith(DEV_ONLY_DIRS) or n in DEV_ONLY_FILES
-        or "__pycache__/" in n or n.endswith((".md", ".pyc"))
+        n
+        for n in names
+        if n.startswith(DEV_ONLY_DIRS)
+        or n in DEV_ONLY_FILES
+        or "__pycache__/" in n
+        or n.endswith((".md", ".pyc"))
     ]
     assert not leaked, f"development files in {built_zip.name}: {leaked}"
 
@@ -176,14 +188,19 @@ def install_report(built_zip, tmp_path_factory):
     env = {**os.environ, **blender_user_env(user_dir)}
     cmd = [sys.executable, "-c", INSTALL_SCRIPT, str(built_zip), str(repo_dir)]
     proc = subprocess.run(
-        cmd, capture_output=True, text=True, env=env, timeout=CLI_TIMEOUT_S,
-        stdin=subprocess.DEVNULL, cwd=base,
+        cmd,
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=CLI_TIMEOUT_S,
+        stdin=subprocess.DEVNULL,
+        cwd=base,
     )
     output = f"--- stdout ---\n{proc.stdout}\n--- stderr ---\n{proc.stderr}"
     lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT-JSON ")]
     if proc.returncode != 0 or not lines:
         pytest.fail(f"install subprocess exited {proc.returncode} without a result\n{output}")
-    report = json.loads(lines[-1][len("RESULT-JSON "):])
+    report = json.loads(lines[-1][len("RESULT-JSON ") :])
     if report["errors"]:
         pytest.fail("installing or enabling the zip raised:\n" + "".join(report["errors"]) + output)
     report["output"] = output
@@ -200,7 +217,9 @@ def test_zip_installs_without_errors(install_report):
 
 def test_installed_package_has_manifest_and_init(install_report):
     files = install_report["installed_files"]
-    assert files is not None, f"nothing installed in {install_report['repo_dir']}\n{install_report['output']}"
+    assert files is not None, (
+        f"nothing installed in {install_report['repo_dir']}\n{install_report['output']}"
+    )
     assert "blender_manifest.toml" in files
     assert "__init__.py" in files
     assert "tests" not in files
@@ -220,7 +239,9 @@ def test_installed_addon_registers_its_operators(install_report):
     if r["operator_idnames"]:
         assert r["ops_namespace"], "operators declared but bpy.ops.motion_patches is missing"
     assert r["has_bake_locomotion_patch"], r["output"]
-    assert {"motion_patches.plan_path", "motion_patches.bake_locomotion_patch"} <= set(r["operator_idnames"])
+    assert {"motion_patches.plan_path", "motion_patches.bake_locomotion_patch"} <= set(
+        r["operator_idnames"]
+    )
 
 
 def test_installed_addon_can_be_disabled_and_enabled_again(install_report):

@@ -26,10 +26,12 @@ def fake_context(width):
 def test_long_labels_wrap_to_the_sidebar_width(addon_module, width):
     sidebar = addon_module.panels.sidebar
     ctx = fake_context(width)
-    for text in ("Select a planned character and analyse it",
-                 "Red fill: where the root cannot go (each prop grown by the radius); red "
-                 "squares: cells the planner marks occluded",
-                 "no locomotion patch is baked in this scene; bake one first"):
+    for text in (
+        "Select a planned character and analyse it",
+        "Red fill: where the root cannot go (each prop grown by the radius); red "
+        "squares: cells the planner marks occluded",
+        "no locomotion patch is baked in this scene; bake one first",
+    ):
         for icon in (False, True):
             lines = sidebar.wrap_text(text, ctx, icon)
             assert " ".join(lines) == text
@@ -37,8 +39,9 @@ def test_long_labels_wrap_to_the_sidebar_width(addon_module, width):
             words = [ln for ln in lines if " " in ln]  # a single word longer than room stays
             assert all(sidebar.text_width(ln, ctx) <= room for ln in words), (lines, room)
     # Drawn with no region (off screen): one line, as before.
-    assert sidebar.wrap_text("a b c", SimpleNamespace(region=None,
-                                                      preferences=bpy.context.preferences)) == ["a b c"]
+    assert sidebar.wrap_text(
+        "a b c", SimpleNamespace(region=None, preferences=bpy.context.preferences)
+    ) == ["a b c"]
 
 
 # --- preferences ---------------------------------------------------------------------------
@@ -79,12 +82,18 @@ def test_preferences_are_drawn_in_headed_sections(addon_module_name, addon_modul
     bake = list(addon_module.props.BAKE)
     assert props == planning + bake
     i = log.index(("label", "Bake Defaults"))
-    assert all(("prop", n) in log[:i] for n in planning) and all(("prop", n) in log[i:] for n in bake)
+    assert all(("prop", n) in log[:i] for n in planning) and all(
+        ("prop", n) in log[i:] for n in bake
+    )
 
 
 def test_copy_step_says_its_unit(addon_module):
-    name = bpy.types.Object.bl_rna.properties["motion_patch"].fixed_type.properties["clips"] \
-        .fixed_type.properties["copy_step"].name
+    name = (
+        bpy.types.Object.bl_rna.properties["motion_patch"]
+        .fixed_type.properties["clips"]
+        .fixed_type.properties["copy_step"]
+        .name
+    )
     assert "°" in name
 
 
@@ -108,7 +117,7 @@ def test_blocked_area_is_the_footprint_grown_by_the_radius(addon_module):
         a, b, c = tris[0::3, :2], tris[1::3, :2], tris[2::3, :2]
         u, v = b - a, c - a
         area = 0.5 * np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]).sum()
-        exact = 0.4 * 0.44 + 2 * 0.25 * (0.4 + 0.44) + np.pi * 0.25 ** 2
+        exact = 0.4 * 0.44 + 2 * 0.25 * (0.4 + 0.44) + np.pi * 0.25**2
         assert exact * 0.98 < area <= exact + 1e-9
 
 
@@ -117,11 +126,11 @@ def test_blocked_area_is_the_footprint_grown_by_the_radius(addon_module):
 
 def test_fitted_frame_range_rule(addon_module):
     fit = addon_module.api.fitted_frame_range
-    assert fit((1, 250), [(1, 239)]) == (1, 239)           # Blender's default follows
+    assert fit((1, 250), [(1, 239)]) == (1, 239)  # Blender's default follows
     assert fit((1, 250), [(1, 380)]) == (1, 380)
     assert fit((1, 239), [(1, 120)], ours=(1, 239)) == (1, 120)  # ours follows a re-plan
-    assert fit((1, 1000), [(1, 239)]) == (1, 1000)         # the user's longer range stays
-    assert fit((20, 100), [(1, 239)]) == (1, 239)          # ... and is extended when short
+    assert fit((1, 1000), [(1, 239)]) == (1, 1000)  # the user's longer range stays
+    assert fit((20, 100), [(1, 239)]) == (1, 239)  # ... and is extended when short
     assert fit((1, 250), [(1, 120), (30, 400)]) == (1, 400)  # every planned character
 
 
@@ -141,10 +150,10 @@ def test_planning_sets_the_scene_frame_range(addon_module):
     scene.pop(api.FRAME_RANGE_KEY, None)
     api.plan_path(scene, walker, goal, frame_start=1)
     assert (scene.frame_start, scene.frame_end) == span()
-    scene.frame_start, scene.frame_end = 1, 5000       # the user's own, longer
+    scene.frame_start, scene.frame_end = 1, 5000  # the user's own, longer
     api.plan_path(scene, walker, goal, frame_start=1)
     assert (scene.frame_start, scene.frame_end) == (1, 5000)
-    scene.motion_patches.fit_frame_range = False       # off: untouched
+    scene.motion_patches.fit_frame_range = False  # off: untouched
     scene.frame_start, scene.frame_end = 1, 10
     api.plan_path(scene, walker, goal, frame_start=1)
     assert (scene.frame_start, scene.frame_end) == (1, 10)

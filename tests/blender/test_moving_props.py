@@ -20,7 +20,7 @@ def cart(name, keys, size=(1.2, 0.8, 1.0)):
     ob.scale = size
     edit = bpy.context.preferences.edit
     kept = edit.keyframe_new_interpolation_type
-    edit.keyframe_new_interpolation_type = 'LINEAR'  # the same on every version's actions
+    edit.keyframe_new_interpolation_type = "LINEAR"  # the same on every version's actions
     try:
         for f, x, y in keys:
             ob.location = (x, y, size[2] / 2)
@@ -47,7 +47,8 @@ def setup(addon_module, walk_blend):
     char = walker_from(scene.motion_patches.source_armature, location=(0.0, 0.0, 0.0))
     bpy.context.view_layer.update()
     start = addon_module.adapter.scene.character_state(
-        char, addon_module.adapter.storage.load_patch(scene, "walk").gait.skeleton)
+        char, addon_module.adapter.storage.load_patch(scene, "walk").gait.skeleton
+    )
     d = np.array([np.cos(start[2]), np.sin(start[2])])
     goal = empty("Goal", *(start[:2] + 14.0 * d), start[2])
     return scene, char, goal, start, d
@@ -56,7 +57,9 @@ def setup(addon_module, walk_blend):
 def hips_track(addon_module, char):
     meta, _ = addon_module.api.load_plan_record(char)
     frames = np.arange(meta["frame_start"], meta["frame_end"] + 1)
-    pos, _, _, _ = addon_module.adapter.evaluate.sample_armature(bpy.context, char, frames, ["Hips"])
+    pos, _, _, _ = addon_module.adapter.evaluate.sample_armature(
+        bpy.context, char, frames, ["Hips"]
+    )
     return frames, pos[:, 0, :2]
 
 
@@ -98,16 +101,16 @@ def test_a_cart_crossing_at_walking_pace_is_waited_for(walk_blend, addon_module)
     fps = scene.render.fps / scene.render.fps_base
     f, p = crossing_frame(addon_module, char, goal, start, d, 7.0)
     side = np.array([-d[1], d[0]])
-    a, b = p - 4.0 * side, p + 4.0 * side   # across the way at 1 m/s, there when the walker is
+    a, b = p - 4.0 * side, p + 4.0 * side  # across the way at 1 m/s, there when the walker is
     ob = cart("Cart", [(1, *a), (int(f - 4 * fps), *a), (int(f + 4 * fps), *b)])
     result = plan(addon_module, char, goal)
     info = result.stats["moving_props"]
     assert info["props"] == ["Cart"] and info["wait_s"] > 0, info
     assert result.frame_start == 1 + round(info["wait_s"] * fps)
     frames, hips, closest = clearances(addon_module, char, ob)
-    assert closest.min() > RADIUS - 0.06, closest.min()   # the hips sway ~5 cm off the ground path
+    assert closest.min() > RADIUS - 0.06, closest.min()  # the hips sway ~5 cm off the ground path
     check_walk(scene, goal, hips)
-    assert result.length_m < 14.0 * 1.01                   # the same straight walk, later
+    assert result.length_m < 14.0 * 1.01  # the same straight walk, later
     # Before its first frame the character stands where it starts.
     scene.frame_set(1)
     pos, _, _, _ = addon_module.adapter.evaluate.sample_armature(bpy.context, char, [1], ["Hips"])
@@ -115,7 +118,8 @@ def test_a_cart_crossing_at_walking_pace_is_waited_for(walk_blend, addon_module)
 
 
 def test_a_slow_cart_crossing_the_path_is_walked_round_keeping_the_other_pieces(
-        walk_blend, addon_module):
+    walk_blend, addon_module
+):
     """A long cart (2.4 m) crossing at a crawl (0.2 m/s) would keep the walker waiting longer
     than the longest wait offered: the pieces it meets are re-planned round it, the rest
     of the plan kept."""
@@ -123,15 +127,18 @@ def test_a_slow_cart_crossing_the_path_is_walked_round_keeping_the_other_pieces(
     fps = scene.render.fps / scene.render.fps_base
     f, p = crossing_frame(addon_module, char, goal, start, d, 11.0)
     side = np.array([-d[1], d[0]])
-    a, b = p - 2.0 * side, p + 2.0 * side   # 4 m at 0.2 m/s, in the middle when the walker is
+    a, b = p - 2.0 * side, p + 2.0 * side  # 4 m at 0.2 m/s, in the middle when the walker is
     half = 2.0 / 0.2
     assert f - half * fps > 1
-    ob = cart("Cart", [(1, *a), (int(f - half * fps), *a), (int(f + half * fps), *b)],
-              size=(2.4, 2.4, 1.0))
+    ob = cart(
+        "Cart",
+        [(1, *a), (int(f - half * fps), *a), (int(f + half * fps), *b)],
+        size=(2.4, 2.4, 1.0),
+    )
     result = plan(addon_module, char, goal)
     info = result.stats["moving_props"]
     assert info["wait_s"] == 0 and info["repairs"], info
-    assert all(r["kept"] >= 1 for r in info["repairs"])    # not the whole plan searched again
+    assert all(r["kept"] >= 1 for r in info["repairs"])  # not the whole plan searched again
     frames, hips, closest = clearances(addon_module, char, ob)
     assert closest.min() > RADIUS - 0.06, closest.min()
     assert np.all(closest > 0.0)
@@ -151,7 +158,7 @@ def test_a_cart_parked_across_the_path_is_walked_round(walk_blend, addon_module)
     assert info["repairs"] and info["wait_s"] == 0, info
     frames, hips, closest = clearances(addon_module, char, ob)
     assert closest.min() > RADIUS - 0.06, closest.min()
-    assert np.all(closest > 0.0)                           # never inside the cart
+    assert np.all(closest > 0.0)  # never inside the cart
     check_walk(scene, goal, hips)
 
 
@@ -174,7 +181,9 @@ def test_a_cart_parking_on_the_goal_is_reported_and_nothing_is_written(walk_blen
     side = np.array([-d[1], d[0]])
     cart("Cart", [(1, *(g + 5.0 * side)), (60, *(g + 5.0 * side)), (120, *g)])
     before = char.animation_data.nla_tracks.keys() if char.animation_data else []
-    with pytest.raises(addon_module.api.PathNotFound, match=r"'Cart' meets the walk at frame \d+") as e:
+    with pytest.raises(
+        addon_module.api.PathNotFound, match=r"'Cart' meets the walk at frame \d+"
+    ) as e:
         plan(addon_module, char, goal)
     assert e.value.cause == "moving" and e.value.props == ["Cart"]
     after = char.animation_data.nla_tracks.keys() if char.animation_data else []

@@ -51,7 +51,7 @@ def test_a_truncated_bvh_is_one_line(walk, mocap_dir, tmp_path):
     _, _, api = walk
     text = (mocap_dir / "cmu" / "16_15.bvh").read_text()
     bad = tmp_path / "cut.bvh"
-    bad.write_text(text[:len(text) // 50])  # cut inside the hierarchy
+    bad.write_text(text[: len(text) // 50])  # cut inside the hierarchy
     objects = set(bpy.data.objects)
     with pytest.raises(api.MotionPatchesError) as info:
         api.import_mocap([bad])
@@ -88,13 +88,16 @@ def test_a_goal_where_the_character_stands_is_refused(walk):
     assert r["error"] is None or "nothing to plan" not in r["error"]
 
 
-@pytest.mark.parametrize("weights, cause", [
-    (dict(alpha=1e308), "alpha must be a number from 0"),
-    (dict(beta=-1.0), "beta must be a number"),
-    (dict(gamma=float("nan")), "gamma must be a number"),
-    (dict(radius=0.0), "radius must be a number of metres above 0"),
-    (dict(radius=float("inf")), "radius must be"),
-])
+@pytest.mark.parametrize(
+    "weights, cause",
+    [
+        (dict(alpha=1e308), "alpha must be a number from 0"),
+        (dict(beta=-1.0), "beta must be a number"),
+        (dict(gamma=float("nan")), "gamma must be a number"),
+        (dict(radius=0.0), "radius must be a number of metres above 0"),
+        (dict(radius=float("inf")), "radius must be"),
+    ],
+)
 def test_absurd_weights_are_refused_up_front(walk, weights, cause):
     scene, char, api = walk
     goal = empty("Goal", 0.0, -5.0, -np.pi / 2)
@@ -107,10 +110,13 @@ def test_absurd_weights_are_refused_up_front(walk, weights, cause):
         api.check_layout(scene, spec)
 
 
-@pytest.mark.parametrize("goal, cause", [
-    ((1e12, 0.0, 0.0), "from the origin"),
-    ((0.0, -3000.0, -math.pi / 2), "plan the walk in legs"),
-])
+@pytest.mark.parametrize(
+    "goal, cause",
+    [
+        ((1e12, 0.0, 0.0), "from the origin"),
+        ((0.0, -3000.0, -math.pi / 2), "plan the walk in legs"),
+    ],
+)
 def test_absurd_coordinates_are_refused_up_front(walk, goal, cause):
     scene, char, api = walk
     with pytest.raises(api.MotionPatchesError, match=cause):
@@ -132,10 +138,15 @@ def test_a_400_m_diagonal_plans_or_reports_the_search_limit(walk):
     else:
         print(f"400 m diagonal: planned, {res.length_m:.1f} m, {res.expansions} nodes")
         assert res.length_m > 399.0
-    [r] = api.check_layout(scene, {"pairs": [{"character": char.name, "goal": [283.0, -283.0, -45.0]}]})
+    [r] = api.check_layout(
+        scene, {"pairs": [{"character": char.name, "goal": [283.0, -283.0, -45.0]}]}
+    )
     print("check:", r["reachable"], r["error"])
-    assert r["reachable"] or (r["blocked_reason"] == "search limit" and r["blocked_by"] == []
-                              and "search limit reached after" in r["error"])
+    assert r["reachable"] or (
+        r["blocked_reason"] == "search limit"
+        and r["blocked_by"] == []
+        and "search limit reached after" in r["error"]
+    )
 
 
 def test_a_search_limit_hit_is_reported_as_such_not_as_props(walk, addon_module, monkeypatch):
@@ -150,13 +161,16 @@ def test_a_search_limit_hit_is_reported_as_such_not_as_props(walk, addon_module,
     def limited(self, start, goal, *args, **kw):
         kw["max_expansions"] = min(kw.get("max_expansions", limit), limit)
         return plan(self, start, goal, *args, **kw)
+
     monkeypatch.setattr(planner_cls, "plan", limited)
     monkeypatch.setattr(causes, "SEARCH_LIMIT", limit)
     monkeypatch.setattr(causes.plan_explained, "__defaults__", (causes.MARGIN_TILES, limit))
     for k in range(6):
         pillar(f"Pillar{k}", 3.0 * (k % 3) - 3.0, -10.0 - 8.0 * (k // 3), r=0.4)
     goal = empty("Far", 0.0, -60.0, -np.pi / 2)
-    with pytest.raises(api.PathNotFound, match=f"search limit reached after {limit:,} nodes") as info:
+    with pytest.raises(
+        api.PathNotFound, match=f"search limit reached after {limit:,} nodes"
+    ) as info:
         api.plan_path(scene, char, goal)
     assert info.value.cause == "search limit" and info.value.props == []
     assert "Pillar" not in str(info.value)

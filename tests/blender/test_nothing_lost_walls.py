@@ -22,8 +22,11 @@ def plane_wall(name, x, y, length, height=2.0, exact=True):
     if exact:
         h = length / 2
         me = bpy.data.meshes.new(name)
-        me.from_pydata([(x - h, y, 0), (x + h, y, 0), (x + h, y, height), (x - h, y, height)],
-                       [], [(0, 1, 2, 3)])
+        me.from_pydata(
+            [(x - h, y, 0), (x + h, y, 0), (x + h, y, height), (x - h, y, height)],
+            [],
+            [(0, 1, 2, 3)],
+        )
         ob = bpy.data.objects.new(name, me)
         bpy.context.scene.collection.objects.link(ob)
         return ob
@@ -81,7 +84,7 @@ def test_a_plane_wall_two_metres_high_blocks(baked_blend, addon_module, exact):
     # Neither the planned ground path nor the evaluated hips cross the wall: it goes round.
     assert crossings(ground, 4.0, -3.0, 3.0).size == 0
     assert crossings(hips, 4.0, -3.0, 3.0).size == 0
-    assert np.abs(ground[:, 0]).max() > 3.0   # round one of its ends
+    assert np.abs(ground[:, 0]).max() > 3.0  # round one of its ends
     assert np.linalg.norm(hips[-1] - (0.0, 8.0)) < 0.3  # and on to the goal
     assert addon_module.api.analyse(bpy.context, char)["frames_root_inside_obstacle"] == 0
 
@@ -97,7 +100,7 @@ def test_a_start_inside_an_open_room_plans_out_through_its_door(baked_blend, add
     hips, ground = hips_and_record(addon_module, char)
     for xy in (ground, hips):
         out = crossings(xy, -1.0, -4.5, 4.5)
-        assert out.size == 1   # leaves the room once, through the front wall's line ...
+        assert out.size == 1  # leaves the room once, through the front wall's line ...
         x = (xy[out[0], 0] + xy[out[0] + 1, 0]) / 2
         assert 0.5 < x < 2.0, x  # ... in the door
     assert np.linalg.norm(hips[-1] - (1.0, -6.0)) < 0.3

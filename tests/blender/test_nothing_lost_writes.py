@@ -22,20 +22,52 @@ def scene_state():
         ad = ob.animation_data
         anim = None
         if ad is not None:
-            anim = {"action": ad.action and ad.action.name, "tweak": ad.use_tweak_mode,
-                    "tracks": [(t.name, t.mute, t.is_solo,
-                                [(s.name, s.action and s.action.name, s.frame_start, s.frame_end,
-                                  s.blend_type, s.extrapolation, round(s.scale, 6), s.mute)
-                                 for s in t.strips]) for t in ad.nla_tracks]}
-        objects[ob.name] = {"anim": anim, "props": {k: str(ob[k]) for k in ob.keys()},
-                            "location": tuple(ob.location)}
-    actions = {a.name: (a.users, a.use_fake_user, sorted(a.keys()),
-                        sum(len(fc.keyframe_points) for fc in _fcurves(a)))
-               for a in bpy.data.actions}
+            anim = {
+                "action": ad.action and ad.action.name,
+                "tweak": ad.use_tweak_mode,
+                "tracks": [
+                    (
+                        t.name,
+                        t.mute,
+                        t.is_solo,
+                        [
+                            (
+                                s.name,
+                                s.action and s.action.name,
+                                s.frame_start,
+                                s.frame_end,
+                                s.blend_type,
+                                s.extrapolation,
+                                round(s.scale, 6),
+                                s.mute,
+                            )
+                            for s in t.strips
+                        ],
+                    )
+                    for t in ad.nla_tracks
+                ],
+            }
+        objects[ob.name] = {
+            "anim": anim,
+            "props": {k: str(ob[k]) for k in ob.keys()},
+            "location": tuple(ob.location),
+        }
+    actions = {
+        a.name: (
+            a.users,
+            a.use_fake_user,
+            sorted(a.keys()),
+            sum(len(fc.keyframe_points) for fc in _fcurves(a)),
+        )
+        for a in bpy.data.actions
+    }
     sc = bpy.context.scene
-    return {"objects": objects, "actions": actions,
-            "frames": (sc.frame_start, sc.frame_end, sc.frame_current),
-            "scene_props": {k: str(sc[k]) for k in sc.keys() if k.startswith("motion_patches_")}}
+    return {
+        "objects": objects,
+        "actions": actions,
+        "frames": (sc.frame_start, sc.frame_end, sc.frame_current),
+        "scene_props": {k: str(sc[k]) for k in sc.keys() if k.startswith("motion_patches_")},
+    }
 
 
 def _fcurves(action):
@@ -76,7 +108,7 @@ def planned(baked_blend, addon_module):
 def test_an_absurd_frame_start_is_refused_before_anything_changes(planned, addon_module):
     scene, char, goal = planned
     before = scene_state()
-    for frame in (-10 ** 9, 10 ** 9, float("nan")):
+    for frame in (-(10**9), 10**9, float("nan")):
         with pytest.raises(addon_module.api.MotionPatchesError, match="frame"):
             addon_module.api.plan_path(scene, char, goal, frame_start=frame)
         assert_same(before, scene_state())
@@ -154,8 +186,9 @@ def test_a_write_that_fails_half_way_is_undone(planned, addon_module, monkeypatc
     assert_same(before, scene_state())
 
 
-def test_the_operator_reports_an_unexpected_failure_and_keeps_the_scene(planned, addon_module,
-                                                                         monkeypatch):
+def test_the_operator_reports_an_unexpected_failure_and_keeps_the_scene(
+    planned, addon_module, monkeypatch
+):
     scene, char, goal = planned
     scene.motion_patches.goal = goal
     for ob in bpy.context.view_layer.objects:

@@ -15,14 +15,23 @@ def chairs_blend(addon_module, mocap_dir, tmp_path_factory):
     scene = bpy.context.scene
     scene.render.fps = 30
     cmu = mocap_dir / "cmu"
-    arm, acts = api.import_mocap([cmu / "16_15.bvh", cmu / "16_18.bvh", cmu / "16_06.bvh",
-                                  cmu / "13_05.bvh", cmu / "13_05_standup.bvh"], name="Source")
+    arm, acts = api.import_mocap(
+        [
+            cmu / "16_15.bvh",
+            cmu / "16_18.bvh",
+            cmu / "16_06.bvh",
+            cmu / "13_05.bvh",
+            cmu / "13_05_standup.bvh",
+        ],
+        name="Source",
+    )
     api.bake_locomotion_patch(scene, arm, acts[0], [acts[1]], layer="walk")
     for k, y in enumerate(np.linspace(-2.5, 2.5, 11)):
         ob = prop_box(f"Chair.{k:02d}", 5.0, y)
         bpy.context.view_layer.objects.active = ob
-        assert bpy.ops.motion_patches.tag_object_patch(action="16_06", kind='TRAVERSAL',
-                                                       effort=8.0) == {'FINISHED'}
+        assert bpy.ops.motion_patches.tag_object_patch(
+            action="16_06", kind="TRAVERSAL", effort=8.0
+        ) == {"FINISHED"}
     walker = walker_from(arm, location=(1.0, 0.3, 0))
     walker.rotation_euler = (0, 0, np.pi / 2)  # the rig's rest faces -Y: face +X
     scene.motion_patches.goal = empty("Goal", 9.0, 0.3, 0.0)
@@ -31,13 +40,13 @@ def chairs_blend(addon_module, mocap_dir, tmp_path_factory):
     return path
 
 
-def plan(alpha, beta, gamma, stitching='DYNAMIC'):
+def plan(alpha, beta, gamma, stitching="DYNAMIC"):
     scene = bpy.context.scene
     s = scene.motion_patches
     s.alpha, s.beta, s.gamma, s.stitching = alpha, beta, gamma, stitching
     walker = bpy.data.objects["Walker"]
     bpy.context.view_layer.objects.active = walker
-    assert bpy.ops.motion_patches.plan_path() == {'FINISHED'}
+    assert bpy.ops.motion_patches.plan_path() == {"FINISHED"}
     return walker
 
 
@@ -67,8 +76,8 @@ def test_unhurried_character_walks_around(chairs_blend, addon_module):
 
 def test_static_stitching_finds_the_same_plan(chairs_blend, addon_module):
     bpy.ops.wm.open_mainfile(filepath=str(chairs_blend))
-    dynamic = strip_names(plan(4.0, 0.5, 0.1, 'DYNAMIC'))
-    static = strip_names(plan(4.0, 0.5, 0.1, 'STATIC'))
+    dynamic = strip_names(plan(4.0, 0.5, 0.1, "DYNAMIC"))
+    static = strip_names(plan(4.0, 0.5, 0.1, "STATIC"))
     assert dynamic == static
 
 
@@ -92,12 +101,16 @@ def user_notes_track(walker):
 
 def user_animation(walker):
     """Everything of the user's own tracks and actions an edit could change."""
-    tracks = [(t.name, t.mute, [(s.name, s.frame_start, s.frame_end, s.action.name)
-                                for s in t.strips])
-              for t in walker.animation_data.nla_tracks if not t.name.startswith("MP ")]
+    tracks = [
+        (t.name, t.mute, [(s.name, s.frame_start, s.frame_end, s.action.name) for s in t.strips])
+        for t in walker.animation_data.nla_tracks
+        if not t.name.startswith("MP ")
+    ]
     action = bpy.data.actions["My notes"]
-    keys = [(fc.data_path, [tuple(k.co) for k in fc.keyframe_points])
-            for fc in action.layers[0].strips[0].channelbags[0].fcurves]
+    keys = [
+        (fc.data_path, [tuple(k.co) for k in fc.keyframe_points])
+        for fc in action.layers[0].strips[0].channelbags[0].fcurves
+    ]
     return tracks, keys
 
 
@@ -105,6 +118,7 @@ def evaluated_root(api, walker):
     """(F, 3) world position of the hips over the last plan's frames, as Blender plays
     them (depsgraph-evaluated NLA)."""
     from importlib import import_module
+
     evaluate = import_module(api.__name__.rpartition(".")[0] + ".adapter.evaluate")
     meta, _ = api.load_plan_record(walker)
     frames = np.arange(meta["frame_start"], meta["frame_end"] + 1)
@@ -131,16 +145,18 @@ def test_moving_chairs_and_re_planning_changes_the_path(chairs_blend, addon_modu
     plan(4.0, 0.5, 0.1)
     jump = [n for n in strip_names(walker) if "16_06" in n]
     assert len(jump) == 1, strip_names(walker)
-    hurdled = next(ob for ob in bpy.data.objects
-                   if ob.name.startswith("Chair.") and ob.name in jump[0])
+    hurdled = next(
+        ob for ob in bpy.data.objects if ob.name.startswith("Chair.") and ob.name in jump[0]
+    )
     before = evaluated_root(api, walker)
     f = api.analyse(bpy.context, walker)
     assert f["traversals"] == 1 and f["frames_root_inside_obstacle"] == 0
 
     # Clear a passage around the walker's line: the chairs between y = 0 and 1.5 (the
     # hurdled one among them) go to the north end of the row.
-    moved = [ob for ob in bpy.data.objects if ob.name.startswith("Chair.")
-             and -0.1 < ob.location.y < 1.6]
+    moved = [
+        ob for ob in bpy.data.objects if ob.name.startswith("Chair.") and -0.1 < ob.location.y < 1.6
+    ]
     assert hurdled in moved and len(moved) == 4
     for k, ob in enumerate(moved):
         ob.location = (5.0, 3.0 + 0.5 * k, ob.location.z)
@@ -175,21 +191,21 @@ def test_tagging_bad_input_reports_and_changes_nothing(chairs_blend, addon_modul
     api = addon_module.api
     # A clip whose root never moves (only a rotation key) cannot be a traversal.
     still = bpy.data.actions.new("still")
-    slot = still.slots.new(id_type='OBJECT', name="still")
-    bag = still.layers.new("L").strips.new(type='KEYFRAME').channelbag(slot, ensure=True)
+    slot = still.slots.new(id_type="OBJECT", name="still")
+    bag = still.layers.new("L").strips.new(type="KEYFRAME").channelbag(slot, ensure=True)
     fc = bag.fcurves.new('pose.bones["Hips"].location', index=0)
     fc.keyframe_points.insert(1, 0.0)
     fc.keyframe_points.insert(30, 0.0)
     target = prop_box("Extra", 12.0, 0.0)
     with pytest.raises(api.MotionPatchesError, match="root"):
-        api.tag_object_patch(target, [(still, 'TRAVERSAL', 8.0, 10.0)])
+        api.tag_object_patch(target, [(still, "TRAVERSAL", 8.0, 10.0)])
     assert not target.motion_patch.enabled and len(target.motion_patch.clips) == 0
     # A mesh without geometry has no footprint.
     me = bpy.data.meshes.new("nothing")
     hollow = bpy.data.objects.new("Hollow", me)
     bpy.context.scene.collection.objects.link(hollow)
     with pytest.raises(api.MotionPatchesError, match="footprint"):
-        api.tag_object_patch(hollow, [(bpy.data.actions["16_06"], 'TRAVERSAL', 8.0, 10.0)])
+        api.tag_object_patch(hollow, [(bpy.data.actions["16_06"], "TRAVERSAL", 8.0, 10.0)])
     assert not hollow.motion_patch.enabled
 
 
@@ -205,8 +221,8 @@ def test_stand_up_walk_and_sit_down(chairs_blend, addon_module):
     api = addon_module.api
     a, b = prop_box("Chair A", 1.0, -4.5), prop_box("Chair B", 9.0, -4.0)
     b.rotation_euler = (0, 0, 2.0)
-    api.tag_object_patch(a, [(bpy.data.actions["13_05_standup"], 'INTERACTION', 2.0, 0.0)])
-    api.tag_object_patch(b, [(bpy.data.actions["13_05"], 'INTERACTION', 2.0, 0.0)])
+    api.tag_object_patch(a, [(bpy.data.actions["13_05_standup"], "INTERACTION", 2.0, 0.0)])
+    api.tag_object_patch(b, [(bpy.data.actions["13_05"], "INTERACTION", 2.0, 0.0)])
     walker = bpy.data.objects["Walker"]
     res = api.plan_path(bpy.context.scene, walker, b, start_prop=a, frame_start=1)
     names = [s.name for s in walker.animation_data.nla_tracks["MP motion"].strips]
@@ -232,9 +248,9 @@ def test_a_goal_prop_without_a_sit_clip_is_refused(chairs_blend, addon_module):
     # A goal position inside the chair (not the chair itself): refused the same way, as
     # bad input, not as "no path".
     x, y = bpy.data.objects["Chair.03"].matrix_world.translation[:2]
-    with pytest.raises(api.MotionPatchesError,
-                       match="inside the object patch 'Chair.03', which has no interaction"
-                       ) as err:
+    with pytest.raises(
+        api.MotionPatchesError, match="inside the object patch 'Chair.03', which has no interaction"
+    ) as err:
         api.plan_path(bpy.context.scene, walker, (x, y, 0.0))
     assert not isinstance(err.value, api.PathNotFound)
     now = [t.name for t in walker.animation_data.nla_tracks] if walker.animation_data else []
@@ -244,9 +260,15 @@ def test_a_goal_prop_without_a_sit_clip_is_refused(chairs_blend, addon_module):
 def test_layout_check_sees_traversals_and_can_forbid_them(chairs_blend, addon_module):
     bpy.ops.wm.open_mainfile(filepath=str(chairs_blend))
     check = addon_module.api.check_layout
-    spec = {"alpha": 4.0, "beta": 0.5, "gamma": 0.1,
-            "pairs": [{"character": "Walker", "goal": "Goal"},
-                      {"character": "Walker", "goal": "Goal", "allow_traversal": False}]}
+    spec = {
+        "alpha": 4.0,
+        "beta": 0.5,
+        "gamma": 0.1,
+        "pairs": [
+            {"character": "Walker", "goal": "Goal"},
+            {"character": "Walker", "goal": "Goal", "allow_traversal": False},
+        ],
+    }
     hurdle, around = check(bpy.context.scene, spec)
     assert hurdle["reachable"] and hurdle["traversals"] == 1 and hurdle["passed"]
     assert around["reachable"] and around["traversals"] == 0 and around["passed"]

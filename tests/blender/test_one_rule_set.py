@@ -78,6 +78,7 @@ def recorded(mp, monkeypatch):
     def record(scene, pairs, **kw):
         calls.append([(c.name, g.name) for c, g in pairs])
         raise api.MotionPatchesError("recorded")
+
     monkeypatch.setattr(api, "plan_crowd", record)
     return calls
 
@@ -103,8 +104,7 @@ def through_cli(cli, capsys, names):
 EXPECTED = [("A", "Goal A"), ("B", "Goal")]  # A's own goal; B has none: the scene's
 
 
-def test_the_button_the_cli_and_the_api_make_the_same_crowd(scene, mp, cli, capsys,
-                                                            recorded):
+def test_the_button_the_cli_and_the_api_make_the_same_crowd(scene, mp, cli, capsys, recorded):
     api = mp.api
     objects = [bpy.data.objects[n] for n in ("B", "Body", "A")]
     by_api = [(c.name, g.name) for c, g in api.crowd_members(scene, objects)]
@@ -126,13 +126,16 @@ def test_the_button_the_cli_and_the_api_make_the_same_crowd(scene, mp, cli, caps
     assert recorded[-1] == [("A", "Goal A")]
 
 
-@pytest.mark.parametrize("case, needle", [
-    ("no goal", "'B' has no goal: give it its own goal or set the scene's goal"),
-    ("own goal is itself", "the goal of 'B' is the character itself"),
-])
-def test_the_three_doors_refuse_the_same_crowd_with_the_same_words(scene, mp, cli,
-                                                                    capsys, recorded, case,
-                                                                    needle):
+@pytest.mark.parametrize(
+    "case, needle",
+    [
+        ("no goal", "'B' has no goal: give it its own goal or set the scene's goal"),
+        ("own goal is itself", "the goal of 'B' is the character itself"),
+    ],
+)
+def test_the_three_doors_refuse_the_same_crowd_with_the_same_words(
+    scene, mp, cli, capsys, recorded, case, needle
+):
     api = mp.api
     b = bpy.data.objects["B"]
     if case == "no goal":
@@ -150,15 +153,16 @@ def test_the_three_doors_refuse_the_same_crowd_with_the_same_words(scene, mp, cl
     assert all(bpy.data.objects[n].animation_data is None for n in ("A", "B"))
 
 
-def test_bad_settings_are_refused_alike_by_the_api_and_the_cli(scene, mp, cli,
-                                                               capsys):
+def test_bad_settings_are_refused_alike_by_the_api_and_the_cli(scene, mp, cli, capsys):
     """The operator reads the scene's settings, which Blender keeps in range (radius >= 0.05);
     a script and the CLI can ask for anything, and get the same refusal."""
     api = mp.api
     pairs = api.crowd_members(scene, [bpy.data.objects["A"]])
-    for flag, value, needle in (("radius", -1.0, "radius must be a number of metres above 0"),
-                                ("alpha", -0.5, "alpha must be a number from 0 to"),
-                                ("gamma", float("nan"), "gamma must be a number from 0 to")):
+    for flag, value, needle in (
+        ("radius", -1.0, "radius must be a number of metres above 0"),
+        ("alpha", -0.5, "alpha must be a number from 0 to"),
+        ("gamma", float("nan"), "gamma must be a number from 0 to"),
+    ):
         with pytest.raises(api.MotionPatchesError) as by_api:
             api.plan_crowd(scene, pairs, **{flag: value})
         with pytest.raises(api.MotionPatchesError) as by_api_plan:
@@ -171,24 +175,48 @@ def test_bad_settings_are_refused_alike_by_the_api_and_the_cli(scene, mp, cli,
     assert bpy.data.objects["A"].animation_data is None
 
 
-def test_the_cli_plans_with_the_scene_settings_and_its_flags_override_them(scene, mp,
-                                                                           cli, capsys, tmp_path):
+def test_the_cli_plans_with_the_scene_settings_and_its_flags_override_them(
+    scene, mp, cli, capsys, tmp_path
+):
     record = mp.api.load_plan_record
     s = scene.motion_patches
-    s.stitching, s.foot_lock, s.goal_facing, s.radius = 'STATIC', False, 'ANY', 0.3
+    s.stitching, s.foot_lock, s.goal_facing, s.radius = "STATIC", False, "ANY", 0.3
     path = tmp_path / "settings.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(path))
     capsys.readouterr()
     assert cli.main(["plan", "--json", "--blend", str(path), "--character", "A"]) == 0
     doc = json.loads(capsys.readouterr().out)
-    assert doc["weights"] == {"alpha": 1.0, "beta": 0.5, "gamma": pytest.approx(0.2),
-                              "radius": pytest.approx(0.3), "stitching": "static",
-                              "foot_lock": False, "goal_facing": "any"}
+    assert doc["weights"] == {
+        "alpha": 1.0,
+        "beta": 0.5,
+        "gamma": pytest.approx(0.2),
+        "radius": pytest.approx(0.3),
+        "stitching": "static",
+        "foot_lock": False,
+        "goal_facing": "any",
+    }
     assert doc["goal"]["object"] == "Goal"  # no --goal: the scene's
     meta = record(bpy.data.objects["A"])[0]
     assert meta["foot_lock"] is False and meta["radius"] == pytest.approx(0.3)
-    assert cli.main(["plan", "--json", "--blend", str(path), "--character", "A", "--foot-lock",
-                     "--stitching", "dynamic", "--exact-facing", "--radius", "0.25"]) == 0
+    assert (
+        cli.main(
+            [
+                "plan",
+                "--json",
+                "--blend",
+                str(path),
+                "--character",
+                "A",
+                "--foot-lock",
+                "--stitching",
+                "dynamic",
+                "--exact-facing",
+                "--radius",
+                "0.25",
+            ]
+        )
+        == 0
+    )
     doc = json.loads(capsys.readouterr().out)
     assert doc["weights"]["stitching"] == "dynamic" and doc["weights"]["foot_lock"] is True
     assert doc["weights"]["goal_facing"] == "exact"
@@ -196,52 +224,66 @@ def test_the_cli_plans_with_the_scene_settings_and_its_flags_override_them(scene
     assert meta["foot_lock"] is True and meta["radius"] == pytest.approx(0.25)
 
 
-def test_an_imported_patch_is_the_active_one_through_every_door(scene, mp, cli,
-                                                                capsys, tmp_path):
+def test_an_imported_patch_is_the_active_one_through_every_door(scene, mp, cli, capsys, tmp_path):
     api = mp.api
     s = scene.motion_patches
     patch_file = tmp_path / "walk.mpatch"
     assert api.export_patch(scene, patch_file) == "walk"
     assert api.import_patch(scene, patch_file, "by api") == "by api"
     assert api.active_patch_name(scene) == "by api" == s.patches[s.active_patch_index].name
-    assert bpy.ops.motion_patches.import_patch(filepath=str(patch_file)) == {'FINISHED'}
+    assert bpy.ops.motion_patches.import_patch(filepath=str(patch_file)) == {"FINISHED"}
     assert api.active_patch_name(scene) == "walk"  # stored under its layer's name
     path = tmp_path / "with two.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(path))
     out = tmp_path / "imported.blend"
     capsys.readouterr()
-    assert cli.main(["import", "--blend", str(path), str(patch_file), "--name", "by cli",
-                     "--save", str(out)]) == 0
+    assert (
+        cli.main(
+            [
+                "import",
+                "--blend",
+                str(path),
+                str(patch_file),
+                "--name",
+                "by cli",
+                "--save",
+                str(out),
+            ]
+        )
+        == 0
+    )
     bpy.ops.wm.open_mainfile(filepath=str(out))
     assert mp.api.active_patch_name(bpy.context.scene) == "by cli"
 
 
-def test_file_import_offers_mocap_and_patch_files_and_both_import(scene, mp, mocap_dir,
-                                                                  tmp_path):
+def test_file_import_offers_mocap_and_patch_files_and_both_import(scene, mp, mocap_dir, tmp_path):
     """File > Import lists both entries (drawn into a recording layout), each an operator
     that exists; run in background mode they import a CMU BVH and a patch file."""
     menu = bpy.types.TOPBAR_MT_file_import
     assert mp.panels.file_import.draw_entries in menu._dyn_ui_initialize()
     drawn = []
-    layout = type("Layout", (), {"operator": lambda self, idname, text="": drawn.append(
-        (idname, text))})()
+    layout = type(
+        "Layout", (), {"operator": lambda self, idname, text="": drawn.append((idname, text))}
+    )()
     mp.panels.file_import.draw_entries(type("Menu", (), {"layout": layout})(), bpy.context)
-    assert [t for _, t in drawn] == ["Motion Patches Mocap (.bvh)",
-                                     "Motion Patches Patch (.mpatch)"]
+    assert [t for _, t in drawn] == [
+        "Motion Patches Mocap (.bvh)",
+        "Motion Patches Patch (.mpatch)",
+    ]
     for idname, _ in drawn:
         module, name = idname.split(".")
         getattr(getattr(bpy.ops, module), name).get_rna_type()  # raises when it does not exist
 
     before = set(bpy.data.objects)
     bvh = mocap_dir / "cmu" / "16_06.bvh"
-    assert bpy.ops.motion_patches.import_mocap(filepath=str(bvh)) == {'FINISHED'}
+    assert bpy.ops.motion_patches.import_mocap(filepath=str(bvh)) == {"FINISHED"}
     (arm,) = set(bpy.data.objects) - before
     assert arm.type == "ARMATURE" and scene.motion_patches.source_armature == arm
     assert arm.animation_data.action.name == "16_06"
 
     patch_file = tmp_path / "walk.mpatch"
     mp.api.export_patch(scene, patch_file)
-    assert bpy.ops.motion_patches.import_patch(filepath=str(patch_file)) == {'FINISHED'}
+    assert bpy.ops.motion_patches.import_patch(filepath=str(patch_file)) == {"FINISHED"}
     assert mp.api.active_patch_name(scene) == "walk"
     with pytest.raises(RuntimeError, match="patch file not found"):
         bpy.ops.motion_patches.import_patch(filepath=str(tmp_path / "missing.mpatch"))
@@ -249,7 +291,6 @@ def test_file_import_offers_mocap_and_patch_files_and_both_import(scene, mp, moc
 
 def test_list_buttons_stay_out_of_f3_search(mp):
     """The + / - buttons beside the add-on's lists are INTERNAL, as Blender's own are."""
-    buttons = [c for c in mp.operators.classes
-               if c.bl_idname.endswith(("_add", "_remove"))]
+    buttons = [c for c in mp.operators.classes if c.bl_idname.endswith(("_add", "_remove"))]
     assert len(buttons) == 4  # turn clips and a prop's clips, add and remove each
-    assert all('INTERNAL' in c.bl_options for c in buttons)
+    assert all("INTERNAL" in c.bl_options for c in buttons)

@@ -7,7 +7,8 @@ import bpy
 
 
 def test_the_overlay_is_drawn_again_after_opening_a_file_and_reloading_the_addon(
-        addon_module, tmp_path):
+    addon_module, tmp_path
+):
     overlay = addon_module.panels.overlay
     bpy.ops.wm.read_homefile(use_empty=True)
     bpy.context.scene.motion_patches.show_overlay = True
@@ -21,7 +22,7 @@ def test_the_overlay_is_drawn_again_after_opening_a_file_and_reloading_the_addon
 
     bpy.ops.wm.open_mainfile(filepath=str(on))
     assert bpy.context.scene.motion_patches.show_overlay
-    assert overlay.is_enabled()            # was: ticked, and nothing drawn
+    assert overlay.is_enabled()  # was: ticked, and nothing drawn
 
     bpy.ops.wm.open_mainfile(filepath=str(off))
     assert not overlay.is_enabled()
@@ -30,11 +31,11 @@ def test_the_overlay_is_drawn_again_after_opening_a_file_and_reloading_the_addon
     name = addon_module.__name__
     addon_utils.disable(name, default_set=True)
     try:
-        assert not overlay.is_enabled()    # no handler left behind
+        assert not overlay.is_enabled()  # no handler left behind
         assert overlay._on_load not in bpy.app.handlers.load_post
     finally:
         addon_utils.enable(name, default_set=True)
     overlay = __import__(name, fromlist=["panels"]).panels.overlay
-    assert overlay.is_enabled()            # enabled again with the file's overlay ticked
+    assert overlay.is_enabled()  # enabled again with the file's overlay ticked
     bpy.context.scene.motion_patches.show_overlay = False
     assert not overlay.is_enabled()

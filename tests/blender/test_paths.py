@@ -28,7 +28,9 @@ def evaluated_hips(addon_module, char):
     """World (x, y) of the hips at every planned frame, through the depsgraph, and fps."""
     meta, _ = addon_module.api.load_plan_record(char)
     frames = np.arange(meta["frame_start"], meta["frame_end"] + 1)
-    pos, _, _, _ = addon_module.adapter.evaluate.sample_armature(bpy.context, char, frames, ["Hips"])
+    pos, _, _, _ = addon_module.adapter.evaluate.sample_armature(
+        bpy.context, char, frames, ["Hips"]
+    )
     scene = bpy.context.scene
     return pos[:, 0, :2], scene.render.fps / scene.render.fps_base
 
@@ -44,7 +46,8 @@ def test_open_ground_walk_goes_straight_and_starts_and_stops_standing(baked_blen
     char = walker_from(scene.motion_patches.source_armature, location=(0.7, -0.4, 0.0))
     bpy.context.view_layer.update()
     start = addon_module.adapter.scene.character_state(
-        char, addon_module.adapter.storage.load_patch(scene, "walk").gait.skeleton)
+        char, addon_module.adapter.storage.load_patch(scene, "walk").gait.skeleton
+    )
     d = np.array([np.cos(start[2]), np.sin(start[2])])
     goal = empty("Goal", *(start[:2] + 16.0 * d), start[2])  # 16 m straight ahead, same facing
     result = plan(addon_module, char, goal)
@@ -52,7 +55,7 @@ def test_open_ground_walk_goes_straight_and_starts_and_stops_standing(baked_blen
     rel = hips - start[:2]
     lateral = rel @ np.array([-d[1], d[0]])
     along = rel @ d
-    assert np.abs(lateral).max() < 0.05, np.abs(lateral).max()   # within 5 cm of the line
+    assert np.abs(lateral).max() < 0.05, np.abs(lateral).max()  # within 5 cm of the line
     assert along[-1] == pytest.approx(16.0, abs=0.1)
     assert result.length_m < 16.0 * 1.01
     speed = np.linalg.norm(np.diff(hips, axis=0), axis=1) * fps
@@ -72,7 +75,8 @@ def test_a_gap_of_twice_the_radius_plus_0_3_m_is_used(baked_blend, addon_module)
     char.rotation_euler[2] = np.pi  # face +Y, towards the wall
     bpy.context.view_layer.update()
     start = addon_module.adapter.scene.character_state(
-        char, addon_module.adapter.storage.load_patch(scene, "walk").gait.skeleton)
+        char, addon_module.adapter.storage.load_patch(scene, "walk").gait.skeleton
+    )
     goal = empty("Goal", start[0], 10.0, np.pi / 2)
     result = plan(addon_module, char, goal)
     figures = addon_module.api.analyse(bpy.context, char)

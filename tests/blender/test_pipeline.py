@@ -17,13 +17,14 @@ def baked_blend(addon_module, mocap_dir, tmp_path_factory):
     bpy.ops.wm.read_homefile(use_empty=True)
     scene = bpy.context.scene
     scene.render.fps = 30
-    arm, acts = api.import_mocap([mocap_dir / "cmu" / "16_15.bvh", mocap_dir / "cmu" / "16_18.bvh"],
-                                 name="Source")
+    arm, acts = api.import_mocap(
+        [mocap_dir / "cmu" / "16_15.bvh", mocap_dir / "cmu" / "16_18.bvh"], name="Source"
+    )
     s = scene.motion_patches
     s.source_armature = arm
     s.straight_action = acts[0]
     s.turn_actions.add().action = acts[1]
-    assert bpy.ops.motion_patches.bake_locomotion_patch(layer="walk") == {'FINISHED'}
+    assert bpy.ops.motion_patches.bake_locomotion_patch(layer="walk") == {"FINISHED"}
     path = tmp_path_factory.mktemp("blend") / "baked.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(path))
     return path
@@ -32,7 +33,8 @@ def baked_blend(addon_module, mocap_dir, tmp_path_factory):
 def test_import_puts_every_clip_on_one_armature(addon_module, mocap_dir, clean_scene):
     clean_scene.render.fps = 30
     arm, acts = addon_module.api.import_mocap(
-        [mocap_dir / "cmu" / "16_15.bvh", mocap_dir / "cmu" / "16_18.bvh"])
+        [mocap_dir / "cmu" / "16_15.bvh", mocap_dir / "cmu" / "16_18.bvh"]
+    )
     assert [o.type for o in bpy.data.objects] == ["ARMATURE"]
     assert [a.name for a in acts] == ["16_15", "16_18"]
     clip = addon_module.adapter.actions.clip_from_action(acts[0], arm, 30.0)
@@ -57,7 +59,7 @@ def test_plan_writes_nla_and_evaluates_onto_the_goal(baked_blend, addon_module):
         pillar(f"Pillar{n}", x, y)
     scene.motion_patches.goal = empty("Goal", 7.5, 5.0, 0.6)
     bpy.context.view_layer.objects.active = char
-    assert bpy.ops.motion_patches.plan_path() == {'FINISHED'}
+    assert bpy.ops.motion_patches.plan_path() == {"FINISHED"}
     tracks = [t.name for t in char.animation_data.nla_tracks]
     assert tracks == ["MP motion", "MP root", "MP foot lock"]
     strips = char.animation_data.nla_tracks["MP motion"].strips
@@ -105,9 +107,12 @@ def test_foot_lock_pins_the_evaluated_feet(baked_blend, addon_module):
     assert sk1["p95_cm_per_s"] < sk0["p95_cm_per_s"]
     assert after["root_from_plan_cm"]["max"] < 0.5  # the hips are not touched
     assert after["goal_root_position_error_cm"] == pytest.approx(
-        before["goal_root_position_error_cm"], abs=0.1)
-    assert (after["boundary_pop"]["max_boundary_jump_deg"]
-            <= before["boundary_pop"]["max_boundary_jump_deg"] + 5.0)
+        before["goal_root_position_error_cm"], abs=0.1
+    )
+    assert (
+        after["boundary_pop"]["max_boundary_jump_deg"]
+        <= before["boundary_pop"]["max_boundary_jump_deg"] + 5.0
+    )
     # Re-planning without the lock removes its track (the add-on owns it), nothing else.
     api.plan_path(scene, char, goal, frame_start=1, foot_lock=False)
     assert [t.name for t in char.animation_data.nla_tracks] == ["MP motion", "MP root"]
@@ -122,9 +127,9 @@ def test_replanning_replaces_only_the_addon_tracks(baked_blend, addon_module):
     user_track.name = "My layout notes"
     scene.motion_patches.goal = empty("Goal", 5.0, 2.0, 0.0)
     bpy.context.view_layer.objects.active = char
-    assert bpy.ops.motion_patches.plan_path() == {'FINISHED'}
+    assert bpy.ops.motion_patches.plan_path() == {"FINISHED"}
     scene.motion_patches.goal.location = (4.0, -3.0, 0)
-    assert bpy.ops.motion_patches.plan_path() == {'FINISHED'}
+    assert bpy.ops.motion_patches.plan_path() == {"FINISHED"}
     names = [t.name for t in char.animation_data.nla_tracks]
     assert "My layout notes" in names
     assert names.count("MP motion") == 1 and names.count("MP root") == 1

@@ -41,8 +41,9 @@ def build_plaza(api, src):
     for side, x in (("W", -12.5), ("E", 12.5)):
         for k, y in enumerate(SEATS_Y):
             ob = seat(f"Seat{side}.{k}", x, y, 0.0 if side == "W" else np.pi)
-            api.tag_object_patch(ob, [(stand, 'INTERACTION', 2.0, 0.0),
-                                      (sit, 'INTERACTION', 2.0, 0.0)])
+            api.tag_object_patch(
+                ob, [(stand, "INTERACTION", 2.0, 0.0), (sit, "INTERACTION", 2.0, 0.0)]
+            )
             seats[side, k] = ob
     rng = np.random.default_rng(17)
     rows = np.linspace(-9.0, 9.0, 11)
@@ -61,8 +62,13 @@ def build_plaza(api, src):
             ob = walker_from(src, f"{group}Up{k}", (x0, 0.0, 0.0))
             face(ob, heading)
             gx, gy = -x0 - np.sign(x0) * 2.8, (-1.0 if k else 1.0) * 4.0
-            pairs.append((ob, empty(f"Goal{group}Up{k}", gx, gy, heading),
-                          {"start_prop": seats[group, k * 2]}))
+            pairs.append(
+                (
+                    ob,
+                    empty(f"Goal{group}Up{k}", gx, gy, heading),
+                    {"start_prop": seats[group, k * 2]},
+                )
+            )
         for k in range(2):  # walk across, sit down on the other side
             y = rows[1 + 8 * k]
             ob = walker_from(src, f"{group}Sit{k}", (x0 - np.sign(x0) * 2.8, y, 0.0))
@@ -78,8 +84,9 @@ def plaza(walk_blend, addon_module, mocap_dir):
     bpy.ops.wm.open_mainfile(filepath=str(walk_blend))
     scene = bpy.context.scene
     src = scene.motion_patches.source_armature
-    api.import_mocap([mocap_dir / "cmu" / "13_05.bvh", mocap_dir / "cmu" / "13_05_standup.bvh"],
-                     armature=src)
+    api.import_mocap(
+        [mocap_dir / "cmu" / "13_05.bvh", mocap_dir / "cmu" / "13_05_standup.bvh"], armature=src
+    )
     pairs = build_plaza(api, src)
     t0 = time.perf_counter()
     res = api.plan_crowd(scene, pairs, frame_start=1, radius=RADIUS, max_wait_seconds=8.0)
@@ -91,6 +98,7 @@ def evaluate_all(scene, objs, frames):
     """Per object: (frames, B, 3) world positions of the root and foot bones of its plan
     record, read through the depsgraph with one frame change per frame for everyone."""
     import json
+
     metas = [json.loads(ob["motion_patches_plan"])["meta"] for ob in objs]
     bones = [[m["root_name"]] + list(m["foot_names"]) for m in metas]
     out = np.empty((len(objs), len(frames), len(bones[0]), 3))
@@ -109,10 +117,12 @@ def test_a_plaza_of_fifty_crosses_without_meeting(plaza, addon_module):
     api = addon_module.api
     scene, pairs, res, seconds = plaza
     names = [c.name for c, _, _ in pairs]
-    print(f"plaza: {len(res.plans)} planned, {len(res.failed)} unreachable, "
-          f"{len(res.conflicts)} conflicts, {len(res.holds)} holds, "
-          f"{sum(1 for d in res.delays.values() if d)} waits, {len(res.rerouted)} re-routed, "
-          f"{seconds:.1f} s")
+    print(
+        f"plaza: {len(res.plans)} planned, {len(res.failed)} unreachable, "
+        f"{len(res.conflicts)} conflicts, {len(res.holds)} holds, "
+        f"{sum(1 for d in res.delays.values() if d)} waits, {len(res.rerouted)} re-routed, "
+        f"{seconds:.1f} s"
+    )
     # every character is planned, or reported unreachable with its reason
     assert len(res.plans) + len(res.failed) == 50
     for name, why in res.failed:
@@ -130,9 +140,13 @@ def test_a_plaza_of_fifty_crosses_without_meeting(plaza, addon_module):
     d = np.linalg.norm(roots[:, None] - roots[None], axis=-1)
     d[np.arange(len(planned)), np.arange(len(planned))] = np.inf
     print(f"closest roots {d.min():.3f} m")
+
     def pairs_closer(limit):
-        return {tuple(sorted((planned[a].name, planned[b].name)))
-                for a, b in zip(*np.nonzero((d < limit).any(axis=2)))}
+        return {
+            tuple(sorted((planned[a].name, planned[b].name)))
+            for a, b in zip(*np.nonzero((d < limit).any(axis=2)))
+        }
+
     reported = {tuple(sorted((c["a"], c["b"]))) for c in res.conflicts}
     # No two roots closer than two radii but those reported; what is reported is measured
     # on the planned motion (float64), the depsgraph evaluates in float32: 1 cm either way.
@@ -142,7 +156,10 @@ def test_a_plaza_of_fifty_crosses_without_meeting(plaza, addon_module):
         assert d[a, b, c["frame"] - 1] < 2 * RADIUS + 0.01
     from bl_ext.motion_patches_tests.motion_patches.motion_patches import metrics  # noqa
     from bl_ext.motion_patches_tests.motion_patches.motion_patches.environment import (
-        Environment, Obstacle)
+        Environment,
+        Obstacle,
+    )
+
     skates = []
     for c, (ob, p) in enumerate(zip(planned, res.plans)):
         meta, arrays = api.load_plan_record(ob)
@@ -158,8 +175,11 @@ def test_a_plaza_of_fifty_crosses_without_meeting(plaza, addon_module):
         goal = pairs[names.index(ob.name)][1]
         at = np.array(goal.matrix_world.translation[:2])
         assert np.linalg.norm(roots[c, -1] - at) < 0.35, (ob.name, roots[c, -1], at)
-        skates.append(metrics.foot_skate(pos[c][mine][:, 1:], api.scene_fps(scene),
-                                         arrays["contacts"])["mean_cm_per_s"])
+        skates.append(
+            metrics.foot_skate(pos[c][mine][:, 1:], api.scene_fps(scene), arrays["contacts"])[
+                "mean_cm_per_s"
+            ]
+        )
     # an idle hold stands still, feet planted: root and both feet still on its frames
     still = 0
     for name, hs in res.holds.items():
@@ -175,12 +195,16 @@ def test_a_plaza_of_fifty_crosses_without_meeting(plaza, addon_module):
     face(lone, 0.0)
     api.plan_path(scene, lone, empty("LoneGoal", 9.5, -0.7, 0.0), frame_start=1)
     skate_lone = api.analyse(bpy.context, lone)["foot_skate"]["mean_cm_per_s"]
-    print(f"foot skate mean cm/s: crowd {np.mean(skates):.2f} (worst character "
-          f"{np.max(skates):.2f}), lone {skate_lone:.2f}")
+    print(
+        f"foot skate mean cm/s: crowd {np.mean(skates):.2f} (worst character "
+        f"{np.max(skates):.2f}), lone {skate_lone:.2f}"
+    )
     assert np.mean(skates) <= 1.25 * skate_lone
     seated_start = [p for p in res.plans if "Up" in p.character]
     seated_end = [p for p in res.plans if "Sit" in p.character]
     assert len(seated_start) == 4 and len(seated_end) == 4
-    assert all("13_05_standup" in p.strips[0]["action"] or "interaction" in p.strips[0]["kind"]
-               for p in seated_start)
+    assert all(
+        "13_05_standup" in p.strips[0]["action"] or "interaction" in p.strips[0]["kind"]
+        for p in seated_start
+    )
     assert all(p.strips[-1]["kind"] == "interaction" for p in seated_end)

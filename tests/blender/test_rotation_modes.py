@@ -28,9 +28,12 @@ TOL = 1e-4  # metres / matrix entries
 def native_bvh(mocap_dir, name):
     """16_15 through Blender's BVH importer at its defaults (Euler bones), renamed ``name``."""
     before = set(bpy.data.objects)
-    result = bpy.ops.import_anim.bvh(filepath=str(mocap_dir / "cmu" / "16_15.bvh"),
-                                     global_scale=CMU_SCALE, update_scene_fps=False)
-    assert result == {'FINISHED'}
+    result = bpy.ops.import_anim.bvh(
+        filepath=str(mocap_dir / "cmu" / "16_15.bvh"),
+        global_scale=CMU_SCALE,
+        update_scene_fps=False,
+    )
+    assert result == {"FINISHED"}
     (ob,) = [o for o in bpy.data.objects if o not in before]
     ob.name = name
     return ob
@@ -86,8 +89,12 @@ def test_conversions_agree_with_mathutils(addon_module):
     act_io = addon_module.adapter.actions
     rng = np.random.default_rng(15)
     q = random_quats(rng, 300)
-    q[:4] = [[1, 0, 0, 0], [0, 1, 0, 0], [np.sqrt(0.5), 0, np.sqrt(0.5), 0],  # identity, 180
-             [np.sqrt(0.5), 0, 0, -np.sqrt(0.5)]]                          # degrees, gimbal
+    q[:4] = [
+        [1, 0, 0, 0],
+        [0, 1, 0, 0],
+        [np.sqrt(0.5), 0, np.sqrt(0.5), 0],  # identity, 180
+        [np.sqrt(0.5), 0, 0, -np.sqrt(0.5)],
+    ]  # degrees, gimbal
     rest = np.zeros((len(q), 3))
     for order in EULER_ORDERS:  # mathutils computes in float32
         e = act_io.closest_channels(q, order, rest)
@@ -102,8 +109,9 @@ def test_conversions_agree_with_mathutils(addon_module):
     back = np.array([tuple(Quaternion(v[1:], v[0])) for v in aa])
     assert same_rotation(back, q, 1e-6)
     assert same_rotation(act_io.axis_angle_to_quat(aa), back, 1e-6)
-    assert np.allclose(act_io.channels_to_quat(np.array([[0.0, 0.0, 0.0, 0.0]]), "AXIS_ANGLE"),
-                       [[1, 0, 0, 0]])  # zero axis: no rotation, as in Blender
+    assert np.allclose(
+        act_io.channels_to_quat(np.array([[0.0, 0.0, 0.0, 0.0]]), "AXIS_ANGLE"), [[1, 0, 0, 0]]
+    )  # zero axis: no rotation, as in Blender
 
 
 def test_channels_are_continuous_over_frames(addon_module):
@@ -143,15 +151,21 @@ def test_blender_add_rule(clean_scene):
     ob = bpy.data.objects.new("Probe", arm)
     clean_scene.collection.objects.link(ob)
     bpy.context.view_layer.objects.active = ob
-    bpy.ops.object.mode_set(mode='EDIT')
+    bpy.ops.object.mode_set(mode="EDIT")
     for m in MODES:
         b = arm.edit_bones.new(m)
         b.head, b.tail = (0, 0, 0), (0, 0, 1)
-    bpy.ops.object.mode_set(mode='OBJECT')
+    bpy.ops.object.mode_set(mode="OBJECT")
     for m in MODES:
         ob.pose.bones[m].rotation_mode = m
-    paths = {m: "rotation_quaternion" if m == "QUATERNION" else
-             "rotation_axis_angle" if m == "AXIS_ANGLE" else "rotation_euler" for m in MODES}
+    paths = {
+        m: "rotation_quaternion"
+        if m == "QUATERNION"
+        else "rotation_axis_angle"
+        if m == "AXIS_ANGLE"
+        else "rotation_euler"
+        for m in MODES
+    }
     lower = {m: (0.3, 0.5, 0.7) for m in EULER_ORDERS}
     upper = {m: (0.1, -0.2, 0.3) for m in EULER_ORDERS}
     lower["QUATERNION"] = tuple(0.97 * np.array(Quaternion((1, 2, 3, 4)).normalized()))
@@ -163,8 +177,8 @@ def test_blender_add_rule(clean_scene):
     ad = ob.animation_data_create()
     for name, vals, blend in (("lower", lower, "REPLACE"), ("upper", upper, "ADD")):
         act = bpy.data.actions.new(name)
-        slot = act.slots.new(id_type='OBJECT', name=name)
-        bag = act.layers.new("L").strips.new(type='KEYFRAME').channelbag(slot, ensure=True)
+        slot = act.slots.new(id_type="OBJECT", name=name)
+        bag = act.layers.new("L").strips.new(type="KEYFRAME").channelbag(slot, ensure=True)
         for m, v in vals.items():
             for i, x in enumerate(v):
                 fc = bag.fcurves.new(f'pose.bones["{m}"].{paths[m]}', index=i)
@@ -176,8 +190,10 @@ def test_blender_add_rule(clean_scene):
     ev = ob.evaluated_get(bpy.context.evaluated_depsgraph_get())
     got = {m: np.array(getattr(ev.pose.bones[m], paths[m])) for m in MODES}
     assert np.allclose(got["QUATERNION"], np.array(locked), atol=1e-7), got["QUATERNION"]
-    pose = (np.array(ob.data.bones["QUATERNION"].matrix_local.inverted())[:3, :3]
-            @ np.array(ev.pose.bones["QUATERNION"].matrix)[:3, :3])
+    pose = (
+        np.array(ob.data.bones["QUATERNION"].matrix_local.inverted())[:3, :3]
+        @ np.array(ev.pose.bones["QUATERNION"].matrix)[:3, :3]
+    )
     assert np.allclose(pose, np.array(locked.to_matrix()), atol=1e-6)
     for m in EULER_ORDERS + ("AXIS_ANGLE",):
         assert np.allclose(got[m], np.add(lower[m], upper[m]), atol=1e-6), (m, got[m])
@@ -206,8 +222,7 @@ def test_clips_read_the_same_in_every_rotation_mode(addon_module, mocap_dir, cle
     for mode in MODES:
         set_modes(rig_n, lambda _: mode)
         act, slot = addon_module.adapter.compat.new_action(f"keyed {mode}")
-        act_io.key_pose(act, slot, skel, frames, loc, ref.rotations,
-                        {n: mode for n in skel.names})
+        act_io.key_pose(act, slot, skel, frames, loc, ref.rotations, {n: mode for n in skel.names})
         paths = {p.rsplit(".", 1)[1] for p, _ in curves_of(addon_module, act)}
         assert paths == {"location", act_io.rotation_path(mode)}, mode
         back = act_io.clip_from_action(act, rig_n, 30.0)
@@ -227,8 +242,14 @@ def baked(walk_blend):
 
 
 # The foot lock's changed bones in the mixed rig: an axis-angle thigh and five Euler orders.
-MIXED_LEGS = {"LeftUpLeg": "AXIS_ANGLE", "LeftLeg": "XZY", "LeftFoot": "YXZ",
-              "RightUpLeg": "YZX", "RightLeg": "ZXY", "RightFoot": "XYZ"}
+MIXED_LEGS = {
+    "LeftUpLeg": "AXIS_ANGLE",
+    "LeftLeg": "XZY",
+    "LeftFoot": "YXZ",
+    "RightUpLeg": "YZX",
+    "RightLeg": "ZXY",
+    "RightFoot": "XYZ",
+}
 
 
 def _mixed(names):
@@ -252,9 +273,13 @@ def planned(request, baked, addon_module, mocap_dir):
     bpy.ops.wm.open_mainfile(filepath=str(baked))
     scene = bpy.context.scene
     source = bpy.data.objects["Source"]
-    rigs = [walker_from(source, "Quat"), native_bvh(mocap_dir, "Native"),
-            native_bvh(mocap_dir, "Native2"), walker_from(source, "Mixed"),
-            walker_from(source, "AxisAngle")]
+    rigs = [
+        walker_from(source, "Quat"),
+        native_bvh(mocap_dir, "Native"),
+        native_bvh(mocap_dir, "Native2"),
+        walker_from(source, "Mixed"),
+        walker_from(source, "AxisAngle"),
+    ]
     quat_rig, _, _, mixed, axis_angle = rigs
     set_modes(quat_rig, lambda _: "QUATERNION", "QUATERNION")
     set_modes(mixed, _mixed([pb.name for pb in mixed.pose.bones]), "AXIS_ANGLE")
@@ -269,23 +294,34 @@ def planned(request, baked, addon_module, mocap_dir):
 
     def spy(bpy_, obj, patch, key, plan, motions, world, frame_start, locked=None, *more):
         written[obj.name] = (patch.gait.skeleton, world, locked)
-        return write_plan(bpy_, obj, patch, key, plan, motions, world, frame_start, locked,
-                          *more)
+        return write_plan(bpy_, obj, patch, key, plan, motions, world, frame_start, locked, *more)
+
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(nla, "write_plan", spy)
-        results = {r.name: api.plan_path(scene, r, goal, frame_start=1,
-                                         foot_lock=request.param) for r in rigs}
+        results = {
+            r.name: api.plan_path(scene, r, goal, frame_start=1, foot_lock=request.param)
+            for r in rigs
+        }
     skel, world, locked = written["Quat"]
     motion = addon_module.motion_patches.motion.Motion
-    expected = motion(world.ground, world.root_local,
-                      world.rotations if locked is None else locked,
-                      world.contacts).world_matrices(skel)
+    expected = motion(
+        world.ground,
+        world.root_local,
+        world.rotations if locked is None else locked,
+        world.contacts,
+    ).world_matrices(skel)
     ref = results["Quat"]
     frames = np.arange(ref.frame_start, ref.frame_end + 1)
     mats = world_bone_matrices(rigs, frames, skel.names)
-    return {"rigs": {r.name: r for r in rigs}, "results": results, "frames": frames,
-            "names": skel.names, "matrices": mats, "expected": expected,
-            "foot_lock": request.param}
+    return {
+        "rigs": {r.name: r for r in rigs},
+        "results": results,
+        "frames": frames,
+        "names": skel.names,
+        "matrices": mats,
+        "expected": expected,
+        "foot_lock": request.param,
+    }
 
 
 def worst(planned, a, b):
@@ -304,8 +340,13 @@ def test_default_bvh_import_rig_follows_the_plan(planned):
     # not a statue: the shin swings back and forth relative to the hips
     hips, shin = names.index("Hips"), names.index("LeftLeg")
     rel = np.linalg.inv(m[:, hips, :3, :3]) @ m[:, shin, :3, :3]
-    swing = np.degrees(np.arccos(np.clip((np.trace(rel[1:] @ np.swapaxes(rel[:1], 1, 2),
-                                                  axis1=1, axis2=2) - 1) / 2, -1, 1)))
+    swing = np.degrees(
+        np.arccos(
+            np.clip(
+                (np.trace(rel[1:] @ np.swapaxes(rel[:1], 1, 2), axis1=1, axis2=2) - 1) / 2, -1, 1
+            )
+        )
+    )
     assert swing.max() > 20.0, swing.max()
     err, where = worst(planned, m, planned["expected"])
     assert err < TOL, where
@@ -336,8 +377,10 @@ def test_quaternion_rig_evaluates_the_plan(planned):
 
 def test_foot_skate_is_the_quaternion_rigs(planned, addon_module):
     api = addon_module.api
-    figures = {n: api.analyse(bpy.context, planned["rigs"][n])
-               for n in ("Quat", "Native", "Mixed", "AxisAngle")}
+    figures = {
+        n: api.analyse(bpy.context, planned["rigs"][n])
+        for n in ("Quat", "Native", "Mixed", "AxisAngle")
+    }
     ref = figures["Quat"]["foot_skate"]
     # cm/s and cm/frame, foot lock on or off: the rigs evaluate the same bones to 1e-4 m
     rel, tol = 1e-3, 1e-2
@@ -365,8 +408,11 @@ def test_segment_actions_are_shared_by_rigs_with_the_same_modes(planned, addon_m
     assert acts["Quat"][nla.SEGMENT_KEY] == f"{key}:0"
     assert acts["Native"][nla.SEGMENT_KEY] == f"{key}:0:ZYX"
     assert acts["Mixed"][nla.SEGMENT_KEY].startswith(f"{key}:0:mixed-")
-    for n, want in (("Quat", "rotation_quaternion"), ("Native", "rotation_euler"),
-                    ("AxisAngle", "rotation_axis_angle")):
+    for n, want in (
+        ("Quat", "rotation_quaternion"),
+        ("Native", "rotation_euler"),
+        ("AxisAngle", "rotation_axis_angle"),
+    ):
         paths = {p.rsplit(".", 1)[1] for p, _ in curves_of(addon_module, acts[n])}
         assert paths == {"location", want}, n
     mixed = {p for p, _ in curves_of(addon_module, acts["Mixed"])}
@@ -378,11 +424,13 @@ def test_segment_actions_are_shared_by_rigs_with_the_same_modes(planned, addon_m
     def segment_strip_actions(name):
         strips = rigs[name].animation_data.nla_tracks["MP motion"].strips
         return [s.action for s in strips if s.action.get(nla.SEGMENT_KEY)]
+
     assert segment_strip_actions("Native") == segment_strip_actions("Native2")
     quat_names = {a.name for a in segment_strip_actions("Quat")}
     assert not quat_names & {a.name for a in segment_strip_actions("Native")}
     assert len(segment_strip_actions("Native")) == sum(
-        p.startswith("seg") for p in planned["results"]["Native"].pieces)
+        p.startswith("seg") for p in planned["results"]["Native"].pieces
+    )
 
 
 def test_foot_lock_keys_the_bones_own_channels(planned, addon_module):
@@ -391,10 +439,16 @@ def test_foot_lock_keys_the_bones_own_channels(planned, addon_module):
         for r in rigs.values():
             assert "MP foot lock" not in [t.name for t in r.animation_data.nla_tracks]
         return
-    mixed_legs = {f'pose.bones["{n}"].{addon_module.adapter.actions.rotation_path(m)}'
-                  for n, m in MIXED_LEGS.items()}
-    for name, want in (("Quat", {"rotation_quaternion"}), ("Native", {"rotation_euler"}),
-                       ("AxisAngle", {"rotation_axis_angle"}), ("Mixed", None)):
+    mixed_legs = {
+        f'pose.bones["{n}"].{addon_module.adapter.actions.rotation_path(m)}'
+        for n, m in MIXED_LEGS.items()
+    }
+    for name, want in (
+        ("Quat", {"rotation_quaternion"}),
+        ("Native", {"rotation_euler"}),
+        ("AxisAngle", {"rotation_axis_angle"}),
+        ("Mixed", None),
+    ):
         strip = rigs[name].animation_data.nla_tracks["MP foot lock"].strips[0]
         assert strip.blend_type == "ADD"
         paths = {p for p, _ in curves_of(addon_module, strip.action)}

@@ -11,8 +11,10 @@ SAMPLE = REPO_ROOT / "sample_blends" / "demo_walk.blend"
 
 def test_sample_blend_saved_by_blender_4_5_opens_and_replans(addon_module):
     if not SAMPLE.is_file():
-        pytest.fail(f"{SAMPLE} is missing: ./dev test generates it with Blender 4.5 "
-                    f"(tools/demo.py) before the Blender suites")
+        pytest.fail(
+            f"{SAMPLE} is missing: ./dev test generates it with Blender 4.5 "
+            f"(tools/demo.py) before the Blender suites"
+        )
     bpy.ops.wm.open_mainfile(filepath=str(SAMPLE))
     assert tuple(bpy.data.version[:2]) == (4, 5)  # the version that saved the file
     api = addon_module.api
@@ -33,6 +35,7 @@ def test_sample_blend_saved_by_blender_4_5_opens_and_replans(addon_module):
 def test_the_documented_layout_spec_passes_on_the_sample(addon_module):
     """examples/demo_layout.toml (shown in the README) checks the sample scene."""
     import tomllib
+
     if not SAMPLE.is_file():
         pytest.fail(f"{SAMPLE} is missing: ./dev test generates it before the Blender suites")
     bpy.ops.wm.open_mainfile(filepath=str(SAMPLE))

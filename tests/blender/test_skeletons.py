@@ -26,27 +26,72 @@ FPS = 24
 
 # Subject 16 renamed as Mixamo and Rigify rigs name their bones; bones those conventions
 # have no counterpart of get names of no convention.
-MIXAMO = {"Hips": "mixamorig:Hips", "LowerBack": "mixamorig:Spine", "Spine": "mixamorig:Spine1",
-          "Spine1": "mixamorig:Spine2", "Neck": "mixamorig:Neck", "Neck1": "mixamorig:NeckTwist",
-          "Head": "mixamorig:Head", "LHipJoint": "mixamorig:LeftHipRoot",
-          "RHipJoint": "mixamorig:RightHipRoot", "LThumb": "mixamorig:LeftHandThumb1",
-          "RThumb": "mixamorig:RightHandThumb1", "LeftFingerBase": "mixamorig:LeftPalm",
-          "RightFingerBase": "mixamorig:RightPalm"}
-RIGIFY = {"Hips": "DEF-spine", "LowerBack": "DEF-spine.lower", "Spine": "DEF-spine.001",
-          "Spine1": "DEF-spine.003", "Neck": "DEF-spine.004", "Neck1": "DEF-spine.005",
-          "Head": "DEF-spine.006", "LHipJoint": "DEF-pelvis.L", "RHipJoint": "DEF-pelvis.R",
-          "LThumb": "DEF-thumb.01.L", "RThumb": "DEF-thumb.01.R",
-          "LeftFingerBase": "DEF-palm.01.L", "RightFingerBase": "DEF-palm.01.R"}
+MIXAMO = {
+    "Hips": "mixamorig:Hips",
+    "LowerBack": "mixamorig:Spine",
+    "Spine": "mixamorig:Spine1",
+    "Spine1": "mixamorig:Spine2",
+    "Neck": "mixamorig:Neck",
+    "Neck1": "mixamorig:NeckTwist",
+    "Head": "mixamorig:Head",
+    "LHipJoint": "mixamorig:LeftHipRoot",
+    "RHipJoint": "mixamorig:RightHipRoot",
+    "LThumb": "mixamorig:LeftHandThumb1",
+    "RThumb": "mixamorig:RightHandThumb1",
+    "LeftFingerBase": "mixamorig:LeftPalm",
+    "RightFingerBase": "mixamorig:RightPalm",
+}
+RIGIFY = {
+    "Hips": "DEF-spine",
+    "LowerBack": "DEF-spine.lower",
+    "Spine": "DEF-spine.001",
+    "Spine1": "DEF-spine.003",
+    "Neck": "DEF-spine.004",
+    "Neck1": "DEF-spine.005",
+    "Head": "DEF-spine.006",
+    "LHipJoint": "DEF-pelvis.L",
+    "RHipJoint": "DEF-pelvis.R",
+    "LThumb": "DEF-thumb.01.L",
+    "RThumb": "DEF-thumb.01.R",
+    "LeftFingerBase": "DEF-palm.01.L",
+    "RightFingerBase": "DEF-palm.01.R",
+}
 for _side, _x in (("Left", "L"), ("Right", "R")):
-    for _b in ("UpLeg", "Leg", "Foot", "ToeBase", "Shoulder", "Arm", "ForeArm", "Hand",
-               "HandIndex1"):
+    for _b in (
+        "UpLeg",
+        "Leg",
+        "Foot",
+        "ToeBase",
+        "Shoulder",
+        "Arm",
+        "ForeArm",
+        "Hand",
+        "HandIndex1",
+    ):
         MIXAMO[_side + _b] = f"mixamorig:{_side}{_b}"
-    for _b, _r in (("UpLeg", "thigh"), ("Leg", "shin"), ("Foot", "foot"), ("ToeBase", "toe"),
-                   ("Shoulder", "shoulder"), ("Arm", "upper_arm"), ("ForeArm", "forearm"),
-                   ("Hand", "hand"), ("HandIndex1", "f_index.01")):
+    for _b, _r in (
+        ("UpLeg", "thigh"),
+        ("Leg", "shin"),
+        ("Foot", "foot"),
+        ("ToeBase", "toe"),
+        ("Shoulder", "shoulder"),
+        ("Arm", "upper_arm"),
+        ("ForeArm", "forearm"),
+        ("Hand", "hand"),
+        ("HandIndex1", "f_index.01"),
+    ):
         RIGIFY[_side + _b] = f"DEF-{_r}.{_x}"
-LEGS = ["Hips", "LeftUpLeg", "LeftLeg", "LeftFoot", "LeftToeBase", "RightUpLeg", "RightLeg",
-        "RightFoot", "RightToeBase"]
+LEGS = [
+    "Hips",
+    "LeftUpLeg",
+    "LeftLeg",
+    "LeftFoot",
+    "LeftToeBase",
+    "RightUpLeg",
+    "RightLeg",
+    "RightFoot",
+    "RightToeBase",
+]
 
 
 @pytest.fixture(scope="module")
@@ -68,8 +113,9 @@ def native_rig(mocap_dir, rel, name, rename=None):
     """A rig from Blender's BVH importer at its defaults (Euler bones), animation cleared,
     its bones renamed by ``rename`` ({old: new})."""
     before = set(bpy.data.objects)
-    assert bpy.ops.import_anim.bvh(filepath=str(mocap_dir / rel), global_scale=CMU_SCALE,
-                                   update_scene_fps=False) == {'FINISHED'}
+    assert bpy.ops.import_anim.bvh(
+        filepath=str(mocap_dir / rel), global_scale=CMU_SCALE, update_scene_fps=False
+    ) == {"FINISHED"}
     (ob,) = [o for o in bpy.data.objects if o not in before]
     ob.name = name
     ob.animation_data_clear()
@@ -85,14 +131,14 @@ def odd_rig(name, bones=("Root", "Torso", "Wing.L", "Wing.R", "Tail")):
     ob = bpy.data.objects.new(name, arm)
     bpy.context.scene.collection.objects.link(ob)
     bpy.context.view_layer.objects.active = ob
-    bpy.ops.object.mode_set(mode='EDIT')
+    bpy.ops.object.mode_set(mode="EDIT")
     root = None
     for i, n in enumerate(bones):
         eb = arm.edit_bones.new(n)
         eb.head, eb.tail = (0.1 * i, 0.0, 1.0), (0.1 * i, 0.0, 1.2)
         eb.parent = root
         root = root or eb
-    bpy.ops.object.mode_set(mode='OBJECT')
+    bpy.ops.object.mode_set(mode="OBJECT")
     return ob
 
 
@@ -116,18 +162,27 @@ def planned(s2_blend, addon_module, mocap_dir):
     bpy.ops.wm.open_mainfile(filepath=str(s2_blend))
     scene = bpy.context.scene
     goal = scene_with_pillars()
-    rigs = {"Own": walker_from(scene.motion_patches.source_armature, "Own"),
-            "S16": native_rig(mocap_dir, "cmu/16_15.bvh", "S16"),
-            "Max": native_rig(mocap_dir, "cmu16max/16_35.bvh", "Max"),
-            "Mixamo": native_rig(mocap_dir, "cmu/16_15.bvh", "Mixamo", MIXAMO),
-            "Rigify": native_rig(mocap_dir, "cmu/16_15.bvh", "Rigify", RIGIFY)}
+    rigs = {
+        "Own": walker_from(scene.motion_patches.source_armature, "Own"),
+        "S16": native_rig(mocap_dir, "cmu/16_15.bvh", "S16"),
+        "Max": native_rig(mocap_dir, "cmu16max/16_35.bvh", "Max"),
+        "Mixamo": native_rig(mocap_dir, "cmu/16_15.bvh", "Mixamo", MIXAMO),
+        "Rigify": native_rig(mocap_dir, "cmu/16_15.bvh", "Rigify", RIGIFY),
+    }
     results, figures = {}, {}
     for name, rig in rigs.items():
         results[name] = api.plan_path(scene, rig, goal, frame_start=1)
         figures[name] = api.analyse(bpy.context, rig)
-    print("\nfoot skate (evaluated), cm/s mean / p95:",
-          {n: (round(f["foot_skate"]["mean_cm_per_s"], 2),
-               round(f["foot_skate"]["p95_cm_per_s"], 2)) for n, f in figures.items()})
+    print(
+        "\nfoot skate (evaluated), cm/s mean / p95:",
+        {
+            n: (
+                round(f["foot_skate"]["mean_cm_per_s"], 2),
+                round(f["foot_skate"]["p95_cm_per_s"], 2),
+            )
+            for n, f in figures.items()
+        },
+    )
     return {"rigs": rigs, "results": results, "figures": figures, "goal": goal}
 
 
@@ -147,29 +202,36 @@ def test_other_skeletons_follow_the_plan_without_more_skate(planned):
 
 
 def test_the_conventions_are_recognised(planned):
-    notes = {n: planned["results"][n].stats["retarget"] for n in ("S16", "Max", "Mixamo",
-                                                                   "Rigify")}
+    notes = {n: planned["results"][n].stats["retarget"] for n in ("S16", "Max", "Mixamo", "Rigify")}
     assert "onto CMU naming" in notes["S16"]
     assert "onto 3ds Max naming" in notes["Max"]
     assert "onto Mixamo naming" in notes["Mixamo"]
     assert "onto Rigify naming" in notes["Rigify"]
 
 
-def test_the_3ds_max_rig_plays_its_own_bones_and_holds_its_arms_as_the_cmu_rig(planned,
-                                                                               addon_module):
+def test_the_3ds_max_rig_plays_its_own_bones_and_holds_its_arms_as_the_cmu_rig(
+    planned, addon_module
+):
     """Subject 16 in both namings: the same legs, so the same plan and the same feet; the
     3ds Max conversion rests with its arms down, yet its arms point where the CMU rig's do
     (each bone's rest is aligned before its rotation is applied)."""
     rigs = planned["rigs"]
     assert planned["results"]["Max"].pieces == planned["results"]["S16"].pieces
-    cmu = world_positions(addon_module, rigs["S16"],
-                          ["LeftFoot", "RightToeBase", "LeftArm", "LeftForeArm", "RightHand"])
-    mx = world_positions(addon_module, rigs["Max"],
-                         ["LeftAnkle", "RightToe", "LeftShoulder", "LeftElbow", "RightWrist"])
+    cmu = world_positions(
+        addon_module,
+        rigs["S16"],
+        ["LeftFoot", "RightToeBase", "LeftArm", "LeftForeArm", "RightHand"],
+    )
+    mx = world_positions(
+        addon_module,
+        rigs["Max"],
+        ["LeftAnkle", "RightToe", "LeftShoulder", "LeftElbow", "RightWrist"],
+    )
     assert np.abs(cmu[:, :2] - mx[:, :2]).max() < 0.005
     upper = cmu[:, 3] - cmu[:, 2], mx[:, 3] - mx[:, 2]
-    cos = np.sum(upper[0] * upper[1], axis=1) / np.prod([np.linalg.norm(u, axis=1)
-                                                          for u in upper], axis=0)
+    cos = np.sum(upper[0] * upper[1], axis=1) / np.prod(
+        [np.linalg.norm(u, axis=1) for u in upper], axis=0
+    )
     assert cos.min() > 0.999
     paths = set()
     for strip in rigs["Max"].animation_data.nla_tracks["MP motion"].strips:
@@ -199,8 +261,10 @@ def test_rigs_of_one_skeleton_share_retargeted_segment_actions(planned, addon_mo
     def action(rig):
         rm = nla.check_rig(rig, patch.gait.skeleton, patch.gait.floor())
         skel = rm.target if rm else patch.gait.skeleton
-        return nla.segment_action(bpy, patch, key, 3, skel, nla.rig_rotation_modes(rig, skel),
-                                  rm)[0]
+        return nla.segment_action(bpy, patch, key, 3, skel, nla.rig_rotation_modes(rig, skel), rm)[
+            0
+        ]
+
     a16, a16b, amax, aown = (action(r) for r in (rigs["S16"], s16b, rigs["Max"], rigs["Own"]))
     assert a16 == a16b
     assert len({a16.name, amax.name, aown.name}) == 3
@@ -215,10 +279,15 @@ def test_a_crowd_of_different_skeletons(s2_blend, addon_module, mocap_dir):
     own = walker_from(scene.motion_patches.source_armature, "Own", location=(0.0, 0.0, 0.0))
     mx = native_rig(mocap_dir, "cmu16max/16_35.bvh", "Max")
     mx.location = (0.0, 2.0, 0.0)
-    res = api.plan_crowd(scene, [(own, empty("GoalA", 8.0, 0.5, 0.0)),
-                                 (mx, empty("GoalB", 8.0, 3.0, 0.0))], frame_start=1)
+    res = api.plan_crowd(
+        scene,
+        [(own, empty("GoalA", 8.0, 0.5, 0.0)), (mx, empty("GoalB", 8.0, 3.0, 0.0))],
+        frame_start=1,
+    )
     assert not res.failed and len(res.plans) == 2
-    assert res.plans[0].stats.get("retarget") is None and "3ds Max" in res.plans[1].stats["retarget"]
+    assert (
+        res.plans[0].stats.get("retarget") is None and "3ds Max" in res.plans[1].stats["retarget"]
+    )
     for rig in (own, mx):
         f = api.analyse(bpy.context, rig)
         assert f["goal_position_error_cm"] < 10 and f["foot_skate"]["mean_cm_per_frame"] < 1.0
@@ -238,14 +307,17 @@ def test_an_unmappable_rig_is_refused_naming_the_patch_bones(s2_blend, addon_mod
     assert "Odd" in str(e.value)
 
 
-def test_a_bone_map_on_the_armature_pairs_what_the_names_do_not(s2_blend, addon_module,
-                                                                   mocap_dir):
+def test_a_bone_map_on_the_armature_pairs_what_the_names_do_not(s2_blend, addon_module, mocap_dir):
     api = addon_module.api
     bpy.ops.wm.open_mainfile(filepath=str(s2_blend))
     scene = bpy.context.scene
     goal = scene_with_pillars()
-    rig = native_rig(mocap_dir, "cmu/16_15.bvh", "Custom",
-                     {"LeftUpLeg": "thigh_left", "RightUpLeg": "thigh_right"})
+    rig = native_rig(
+        mocap_dir,
+        "cmu/16_15.bvh",
+        "Custom",
+        {"LeftUpLeg": "thigh_left", "RightUpLeg": "thigh_right"},
+    )
     with pytest.raises(api.MotionPatchesError, match="LeftUpLeg, RightUpLeg"):
         api.plan_path(scene, rig, goal)
     filled = api.fill_bone_map(scene, rig)
@@ -257,10 +329,15 @@ def test_a_bone_map_on_the_armature_pairs_what_the_names_do_not(s2_blend, addon_
     res = api.plan_path(scene, rig, goal, frame_start=1)
     f = api.analyse(bpy.context, rig)
     assert f["goal_position_error_cm"] < 10 and f["foot_skate"]["mean_cm_per_frame"] < 1.0
-    assert "thigh_left" in {b for s in rig.animation_data.nla_tracks["MP motion"].strips
-                            for b in [fc.data_path.split('"')[1] for fc in
-                                      addon_module.adapter.compat.fcurves(s.action)
-                                      if fc.data_path.startswith("pose.bones")]}
+    assert "thigh_left" in {
+        b
+        for s in rig.animation_data.nla_tracks["MP motion"].strips
+        for b in [
+            fc.data_path.split('"')[1]
+            for fc in addon_module.adapter.compat.fcurves(s.action)
+            if fc.data_path.startswith("pose.bones")
+        ]
+    }
     assert res.pieces
     api.set_bone_map(rig, {})
     with pytest.raises(api.MotionPatchesError):
@@ -270,8 +347,9 @@ def test_a_bone_map_on_the_armature_pairs_what_the_names_do_not(s2_blend, addon_
 def test_a_3ds_max_clip_imports_onto_a_cmu_armature(addon_module, mocap_dir, clean_scene):
     clean_scene.render.fps = 30
     api = addon_module.api
-    arm, acts = api.import_mocap([mocap_dir / "cmu" / "16_15.bvh",
-                                  mocap_dir / "cmu16max" / "16_35.bvh"], name="CMU16")
+    arm, acts = api.import_mocap(
+        [mocap_dir / "cmu" / "16_15.bvh", mocap_dir / "cmu16max" / "16_35.bvh"], name="CMU16"
+    )
     run = acts[1]
     assert "3ds Max naming onto CMU naming" in run["motion_patches_retargeted"]
     clip = addon_module.adapter.actions.clip_from_action(run, arm, 30.0)
@@ -279,8 +357,9 @@ def test_a_3ds_max_clip_imports_onto_a_cmu_armature(addon_module, mocap_dir, cle
     src = bvh.read(mocap_dir / "cmu16max" / "16_35.bvh")
     # same subject: the retargeted run has the recorded run's stride, on CMU bone names
     travelled = np.linalg.norm(clip.root_pos[-1, :2] - clip.root_pos[0, :2])
-    assert travelled == pytest.approx(np.linalg.norm(src.root_pos[-1, :2] - src.root_pos[0, :2]),
-                                      rel=0.02)
+    assert travelled == pytest.approx(
+        np.linalg.norm(src.root_pos[-1, :2] - src.root_pos[0, :2]), rel=0.02
+    )
     with pytest.raises(api.MotionPatchesError, match="cannot go on armature"):
         odd = odd_rig("Odd")
         api.import_mocap([mocap_dir / "cmu" / "02_01.bvh"], armature=odd)
@@ -316,11 +395,16 @@ def test_a_24_fps_patch_plans_in_a_120_fps_scene(s2_blend, addon_module):
     assert f120["root_from_plan_cm"]["max"] < 1.0
     # per second the same feet: skate measured 5 times as often, not 5 times as large
     assert f120["foot_skate"]["mean_cm_per_s"] < 1.25 * f24["foot_skate"]["mean_cm_per_s"] + 1.0
-    print(f"\nskate at 24 fps {f24['foot_skate']['mean_cm_per_s']:.2f} cm/s, same plan at "
-          f"120 fps {f120['foot_skate']['mean_cm_per_s']:.2f} cm/s")
+    print(
+        f"\nskate at 24 fps {f24['foot_skate']['mean_cm_per_s']:.2f} cm/s, same plan at "
+        f"120 fps {f120['foot_skate']['mean_cm_per_s']:.2f} cm/s"
+    )
     root = rig.animation_data.nla_tracks["MP root"].strips[0].action
-    frames = {c[0] for fc in addon_module.adapter.compat.fcurves(root)
-              for c in addon_module.adapter.actions.curve_points(fc)}
+    frames = {
+        c[0]
+        for fc in addon_module.adapter.compat.fcurves(root)
+        for c in addon_module.adapter.actions.curve_points(fc)
+    }
     assert max(frames) == fast.frame_end - fast.frame_start  # keyed to the last scene frame
 
 
@@ -338,7 +422,9 @@ def test_a_30_second_walk_at_120_fps_adds_under_5_mb(s2_blend, addon_module, tmp
     after = tmp_path / "after.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(after), compress=False)
     grown = (os.path.getsize(after) - os.path.getsize(before)) / 1e6
-    print(f"\n{seconds:.1f} s walk at 120 fps ({len(res.pieces)} pieces): the .blend grows "
-          f"{grown:.2f} MB (uncompressed)")
+    print(
+        f"\n{seconds:.1f} s walk at 120 fps ({len(res.pieces)} pieces): the .blend grows "
+        f"{grown:.2f} MB (uncompressed)"
+    )
     assert seconds > 28
     assert grown < 5.0

@@ -32,15 +32,16 @@ def ui_blend(addon_module, mocap_dir, tmp_path_factory):
     scene = bpy.context.scene
     scene.render.fps = 30
     cmu = mocap_dir / "cmu"
-    arm, acts = api.import_mocap([cmu / "16_15.bvh", cmu / "16_18.bvh", cmu / "16_06.bvh"],
-                                 name="Source")
+    arm, acts = api.import_mocap(
+        [cmu / "16_15.bvh", cmu / "16_18.bvh", cmu / "16_06.bvh"], name="Source"
+    )
     s = scene.motion_patches
     s.source_armature, s.straight_action = arm, acts[0]
-    assert bpy.ops.motion_patches.turn_add() == {'FINISHED'}
+    assert bpy.ops.motion_patches.turn_add() == {"FINISHED"}
     s.turn_actions[s.active_turn_index].action = acts[1]
-    assert bpy.ops.motion_patches.bake_locomotion_patch(layer="walk") == {'FINISHED'}
+    assert bpy.ops.motion_patches.bake_locomotion_patch(layer="walk") == {"FINISHED"}
     bpy.context.view_layer.objects.active = prop_box("Chair", 4.0, 0.3)
-    assert bpy.ops.motion_patches.tag_object_patch(action="16_06", kind='TRAVERSAL') == {'FINISHED'}
+    assert bpy.ops.motion_patches.tag_object_patch(action="16_06", kind="TRAVERSAL") == {"FINISHED"}
     for name, y in (("Walker", 0.3), ("Walker.B", -2.5)):
         walker = walker_from(arm, name=name, location=(1.0, y, 0))
         walker.rotation_euler = (0, 0, np.pi / 2)  # the rig's rest faces -Y: face +X
@@ -101,8 +102,9 @@ class Layout:
         cls = getattr(bpy.types, listtype)  # AttributeError when the list is not registered
         assert items in data.bl_rna.properties and active_prop in active_data.bl_rna.properties
         for i, item in enumerate(getattr(data, items)):
-            cls.draw_item(None, bpy.context, Layout(self.log), data, item, 0, active_data,
-                          active_prop, i)
+            cls.draw_item(
+                None, bpy.context, Layout(self.log), data, item, 0, active_data, active_prop, i
+            )
         self.log.append(("list", listtype))
 
 
@@ -112,7 +114,7 @@ def draw_panels(addon_module):
     for cls in addon_module.panels.classes:
         if not issubclass(cls, bpy.types.Panel):
             continue
-        assert cls.bl_category == "Motion Patches" and cls.bl_space_type == 'VIEW_3D'
+        assert cls.bl_category == "Motion Patches" and cls.bl_space_type == "VIEW_3D"
         if hasattr(cls, "poll") and not cls.poll(bpy.context):
             continue
         log = []
@@ -159,12 +161,12 @@ def test_object_patch_panel_shows_clips_and_footprint(scene, addon_module):
 def test_turn_list_add_and_remove(scene):
     s = scene.motion_patches
     assert len(s.turn_actions) == 1
-    assert bpy.ops.motion_patches.turn_add() == {'FINISHED'}
+    assert bpy.ops.motion_patches.turn_add() == {"FINISHED"}
     assert len(s.turn_actions) == 2 and s.active_turn_index == 1
     s.active_turn_index = 0
-    assert bpy.ops.motion_patches.turn_remove() == {'FINISHED'}
+    assert bpy.ops.motion_patches.turn_remove() == {"FINISHED"}
     assert len(s.turn_actions) == 1 and s.turn_actions[0].action is None  # 16_18 row went
-    assert bpy.ops.motion_patches.turn_remove() == {'FINISHED'}
+    assert bpy.ops.motion_patches.turn_remove() == {"FINISHED"}
     assert not bpy.ops.motion_patches.turn_remove.poll()  # nothing left to remove
 
 
@@ -174,18 +176,18 @@ def test_clip_list_then_tag_checks_and_keeps_the_clips(scene):
     assert bpy.ops.motion_patches.tag_object_patch.poll()
     with pytest.raises(RuntimeError, match="no clip"):
         bpy.ops.motion_patches.tag_object_patch()
-    assert bpy.ops.motion_patches.clip_add() == {'FINISHED'}
-    assert bpy.ops.motion_patches.clip_add() == {'FINISHED'}
+    assert bpy.ops.motion_patches.clip_add() == {"FINISHED"}
+    assert bpy.ops.motion_patches.clip_add() == {"FINISHED"}
     mp = box.motion_patch
     assert len(mp.clips) == 2 and mp.active_clip_index == 1
-    assert bpy.ops.motion_patches.clip_remove() == {'FINISHED'}
+    assert bpy.ops.motion_patches.clip_remove() == {"FINISHED"}
     mp.clips[0].action, mp.clips[0].copy_step = bpy.data.actions["16_06"], 30.0
-    assert bpy.ops.motion_patches.tag_object_patch() == {'FINISHED'}  # the list as it is
+    assert bpy.ops.motion_patches.tag_object_patch() == {"FINISHED"}  # the list as it is
     assert mp.enabled and [(c.action.name, c.copy_step) for c in mp.clips] == [("16_06", 30.0)]
-    assert bpy.ops.motion_patches.clip_add() == {'FINISHED'}  # a row left without an action
-    assert bpy.ops.motion_patches.tag_object_patch() == {'FINISHED'}
+    assert bpy.ops.motion_patches.clip_add() == {"FINISHED"}  # a row left without an action
+    assert bpy.ops.motion_patches.tag_object_patch() == {"FINISHED"}
     assert [c.action.name for c in mp.clips] == ["16_06"]  # is dropped by tagging
-    assert bpy.ops.motion_patches.untag_object_patch() == {'FINISHED'} and not mp.enabled
+    assert bpy.ops.motion_patches.untag_object_patch() == {"FINISHED"} and not mp.enabled
     assert len(mp.clips) == 1  # untagging keeps the list
 
 
@@ -195,8 +197,10 @@ def test_clip_list_then_tag_checks_and_keeps_the_clips(scene):
 @pytest.fixture
 def prefs(addon_module_name):
     p = bpy.context.preferences.addons[addon_module_name].preferences
-    keep = {n: getattr(p, n) for n in ("alpha", "beta", "gamma", "radius", "stitching",
-                                       "cells", "nodes")}
+    keep = {
+        n: getattr(p, n)
+        for n in ("alpha", "beta", "gamma", "radius", "stitching", "cells", "nodes")
+    }
     yield p
     for n, v in keep.items():
         setattr(p, n, v)
@@ -204,18 +208,18 @@ def prefs(addon_module_name):
 
 def test_reset_to_preferences_copies_the_defaults(scene, prefs):
     prefs.alpha, prefs.beta, prefs.gamma, prefs.radius = 2.5, 0.05, 3.0, 0.4
-    prefs.stitching = 'STATIC'
+    prefs.stitching = "STATIC"
     s = scene.motion_patches
-    assert (s.alpha, s.stitching) == (1.0, 'DYNAMIC')
-    assert bpy.ops.motion_patches.reset_planning() == {'FINISHED'}
-    assert (s.alpha, s.beta, s.gamma, s.stitching) == pytest.approx((2.5, 0.05, 3.0, 'STATIC'))
+    assert (s.alpha, s.stitching) == (1.0, "DYNAMIC")
+    assert bpy.ops.motion_patches.reset_planning() == {"FINISHED"}
+    assert (s.alpha, s.beta, s.gamma, s.stitching) == pytest.approx((2.5, 0.05, 3.0, "STATIC"))
     assert s.radius == pytest.approx(0.4)
 
 
 def test_bake_starts_from_the_preferred_patch_size(scene, prefs, addon_module):
     storage = addon_module.adapter.storage
     prefs.cells, prefs.nodes = 4, 4
-    assert bpy.ops.motion_patches.bake_locomotion_patch(layer="small") == {'FINISHED'}
+    assert bpy.ops.motion_patches.bake_locomotion_patch(layer="small") == {"FINISHED"}
     patch = storage.load_patch(scene, "small")
     assert (patch.cells, patch.nodes) == (4, 4)
     # The new patch is the active row of the patch list, hence the one the planner uses;
@@ -225,7 +229,7 @@ def test_bake_starts_from_the_preferred_patch_size(scene, prefs, addon_module):
     s.active_patch_index = s.patches.find("walk")
     assert storage.load_patch(scene).cells == 8
     # A size given by the caller wins over the preferences.
-    assert bpy.ops.motion_patches.bake_locomotion_patch(layer="small", nodes=3) == {'FINISHED'}
+    assert bpy.ops.motion_patches.bake_locomotion_patch(layer="small", nodes=3) == {"FINISHED"}
     patch = addon_module.adapter.storage.load_patch(scene, "small")
     assert (patch.cells, patch.nodes) == (4, 3)
 
@@ -235,7 +239,7 @@ def test_bake_starts_from_the_preferred_patch_size(scene, prefs, addon_module):
 
 def test_every_operator_is_undoable_and_registered(addon_module):
     for cls in addon_module.operators.classes:
-        assert {'REGISTER', 'UNDO'} <= cls.bl_options, cls.bl_idname
+        assert {"REGISTER", "UNDO"} <= cls.bl_options, cls.bl_idname
         assert cls.bl_idname.startswith("motion_patches.")
 
 
@@ -245,12 +249,22 @@ def nla_state(ob):
     ad = ob.animation_data
     if ad is None:
         return None
-    return {"action": ad.action and ad.action.name,
-            "slot": ad.action_slot and ad.action_slot.identifier,
-            "tracks": [(t.name, t.mute, [(s.name, s.frame_start, s.frame_end,
-                                          s.action and s.action.name) for s in t.strips])
-                       for t in ad.nla_tracks],
-            "plan": ob.get("motion_patches_plan")}
+    return {
+        "action": ad.action and ad.action.name,
+        "slot": ad.action_slot and ad.action_slot.identifier,
+        "tracks": [
+            (
+                t.name,
+                t.mute,
+                [
+                    (s.name, s.frame_start, s.frame_end, s.action and s.action.name)
+                    for s in t.strips
+                ],
+            )
+            for t in ad.nla_tracks
+        ],
+        "plan": ob.get("motion_patches_plan"),
+    }
 
 
 def evaluated_pose(name, frame, bones=None):
@@ -275,17 +289,17 @@ def test_undo_after_plan_restores_the_previous_nla_state(scene):
     before, pose_before = nla_state(walker), evaluated_pose("Walker", 40)
     scene.frame_set(1)
     bpy.ops.ed.undo_push(message="Before planning")
-    assert bpy.ops.motion_patches.plan_path('EXEC_DEFAULT', True) == {'FINISHED'}
+    assert bpy.ops.motion_patches.plan_path("EXEC_DEFAULT", True) == {"FINISHED"}
     planned, pose_planned = nla_state(bpy.data.objects["Walker"]), evaluated_pose("Walker", 40)
     assert planned["action"] is None and planned["plan"]
     assert [t[0] for t in planned["tracks"]][-3:] == ["MP motion", "MP root", "MP foot lock"]
     assert np.abs(pose_planned - pose_before).max() > 0.1  # the plan moves the rig
 
-    assert bpy.ops.ed.undo() == {'FINISHED'}
+    assert bpy.ops.ed.undo() == {"FINISHED"}
     assert nla_state(bpy.data.objects["Walker"]) == before
     assert np.allclose(evaluated_pose("Walker", 40), pose_before, atol=1e-5)
 
-    assert bpy.ops.ed.redo() == {'FINISHED'}  # the plan was its own undo step
+    assert bpy.ops.ed.redo() == {"FINISHED"}  # the plan was its own undo step
     assert nla_state(bpy.data.objects["Walker"]) == planned
     assert np.allclose(evaluated_pose("Walker", 40), pose_planned, atol=1e-5)
 
@@ -295,8 +309,8 @@ def test_undo_after_plan_restores_the_previous_nla_state(scene):
 
 def test_analyse_keeps_the_figures_on_the_character(scene, addon_module):
     activate("Walker")
-    assert bpy.ops.motion_patches.plan_path() == {'FINISHED'}
-    assert bpy.ops.motion_patches.analyse_motion() == {'FINISHED'}
+    assert bpy.ops.motion_patches.plan_path() == {"FINISHED"}
+    assert bpy.ops.motion_patches.analyse_motion() == {"FINISHED"}
     walker = bpy.data.objects["Walker"]
     figures = json.loads(walker["motion_patches_analysis"])
     assert figures["frames_root_inside_obstacle"] == 0
@@ -304,8 +318,9 @@ def test_analyse_keeps_the_figures_on_the_character(scene, addon_module):
     assert figures["foot_skate"]["mean_cm_per_frame"] < 1.0
     lines = [t for k, t in draw_panels(addon_module)["Analysis"] if k == "label"]
     sk = figures["foot_skate"]
-    assert (f"Foot skate: {sk['mean_cm_per_frame']:.2f} cm/frame "
-            f"({sk['mean_cm_per_s']:.1f} cm/s)") in lines
+    assert (
+        f"Foot skate: {sk['mean_cm_per_frame']:.2f} cm/frame ({sk['mean_cm_per_s']:.1f} cm/s)"
+    ) in lines
     assert "Frames inside props: 0" in lines
     assert any(t.startswith("Boundary pop: ") for t in lines)
     activate("Walker.B")  # not analysed: the panel says what to do
@@ -326,9 +341,10 @@ def test_plan_crowd_sends_each_selected_character_to_its_goal(scene, addon_modul
         report = kw["progress"]
         kw["progress"] = lambda f: (calls[-1]["progress"].append(f), report(f))
         return plan_crowd(scene, pairs, **kw)
+
     monkeypatch.setattr(api, "plan_crowd", recording)
     activate("Walker.B", "Walker")
-    assert bpy.ops.motion_patches.plan_crowd() == {'FINISHED'}
+    assert bpy.ops.motion_patches.plan_crowd() == {"FINISHED"}
     assert calls[0]["pairs"] == [("Walker", "Goal"), ("Walker.B", "Goal B")]
     progress = calls[0]["progress"]
     assert progress[-1] == 1.0 and progress == sorted(progress)  # the progress bar moved on
@@ -357,10 +373,17 @@ def clip_ends(addon_module, scene):
     every tagged prop, entry then exit per clip, as the planner sees them."""
     api, storage = addon_module.api, addon_module.adapter.storage
     bpy.context.view_layer.update()
-    props = api.object_patches(scene, bpy.context.evaluated_depsgraph_get(),
-                               storage.load_patch(scene))
-    return np.array([g for p in props for c in p.clips
-                     for g in (p.world_clip(c).ground[0], p.world_clip(c).ground[-1])])
+    props = api.object_patches(
+        scene, bpy.context.evaluated_depsgraph_get(), storage.load_patch(scene)
+    )
+    return np.array(
+        [
+            g
+            for p in props
+            for c in p.clips
+            for g in (p.world_clip(c).ground[0], p.world_clip(c).ground[-1])
+        ]
+    )
 
 
 def markers(overlay, scene):
@@ -393,8 +416,11 @@ def test_overlay_marks_where_the_props_clips_start_and_end(scene, addon_module):
     assert np.allclose(ticks[0::2], pos, atol=1e-6)
     step = ticks[1::2, :2] - ticks[0::2, :2]
     assert np.allclose(np.linalg.norm(step, axis=1), overlay.TICK, atol=1e-4)
-    assert np.allclose(np.arctan2(step[:, 1], step[:, 0]),
-                       np.arctan2(np.sin(ends[:, 2]), np.cos(ends[:, 2])), atol=1e-3)
+    assert np.allclose(
+        np.arctan2(step[:, 1], step[:, 0]),
+        np.arctan2(np.sin(ends[:, 2]), np.cos(ends[:, 2])),
+        atol=1e-3,
+    )
 
     # Move and turn the chair: the markers go with it, rigidly.
     a = 0.7
@@ -421,16 +447,17 @@ def test_overlay_draw_cache_follows_a_moved_prop(scene, addon_module):
     assert overlay._markers_key(scene) != key
 
 
-def test_export_and_import_patch_operators_carry_a_patch_to_another_scene(scene, addon_module,
-                                                                           tmp_path):
+def test_export_and_import_patch_operators_carry_a_patch_to_another_scene(
+    scene, addon_module, tmp_path
+):
     api = addon_module.api
     path = tmp_path / "walk.mpatch"
-    assert bpy.ops.motion_patches.export_patch(filepath=str(path)) == {'FINISHED'}
+    assert bpy.ops.motion_patches.export_patch(filepath=str(path)) == {"FINISHED"}
     activate("Walker")
     before = api.plan_path(scene, bpy.data.objects["Walker"], scene.motion_patches.goal)
     scene.motion_patches.patches.clear()
     assert not bpy.ops.motion_patches.export_patch.poll()  # nothing to export any more
-    assert bpy.ops.motion_patches.import_patch(filepath=str(path)) == {'FINISHED'}
+    assert bpy.ops.motion_patches.import_patch(filepath=str(path)) == {"FINISHED"}
     assert [p.name for p in scene.motion_patches.patches] == ["walk"]
     after = api.plan_path(scene, bpy.data.objects["Walker"], scene.motion_patches.goal)
     assert after.cost == pytest.approx(before.cost) and after.pieces == before.pieces

@@ -30,6 +30,7 @@ def brute_force(starts, edges, goals, n):
         for b, c in edges.get(node, ()):
             if b not in seen:
                 walk(b, cost + c, seen | {b})
+
     for s, c in starts:
         walk(s, c, {s})
     return best
@@ -46,8 +47,11 @@ def test_astar_finds_the_brute_force_optimum(seed):
 
     def expand(k):
         out = edges.get(k, [])
-        return (np.array([b for b, _ in out], np.int64), np.array([c for _, c in out]),
-                np.array([b for b, _ in out], np.int64))
+        return (
+            np.array([b for b, _ in out], np.int64),
+            np.array([c for _, c in out]),
+            np.array([b for b, _ in out], np.int64),
+        )
 
     def heuristic(keys):
         # Admissible: every edge costs at least its straight-line length; node n-2's link
@@ -74,6 +78,7 @@ def test_astar_finds_the_brute_force_optimum(seed):
 def test_astar_reports_no_path_when_goal_is_disconnected():
     def expand(k):
         return np.array([], np.int64), np.array([]), np.array([], np.int64)
+
     res = astar.search([(0, 0.0, -1)], expand, lambda k: np.zeros(len(k)), lambda k: None)
     assert not res.found and res.expansions == 1
 
@@ -136,8 +141,11 @@ def lazy_problem(seed, n=12):
 
     def expand(k):
         out = visible.get(int(node_of(k)), [])
-        return (np.array([key_of(b) for b, _ in out], np.int64), np.array([c for _, c in out]),
-                np.array([b for b, _ in out], np.int64))
+        return (
+            np.array([key_of(b) for b, _ in out], np.int64),
+            np.array([c for _, c in out]),
+            np.array([b for b, _ in out], np.int64),
+        )
 
     def heuristic(keys):
         return h[node_of(keys)]
@@ -146,10 +154,19 @@ def lazy_problem(seed, n=12):
         node = int(node_of(k))
         return (goals[node], -1) if node in goals else None
 
-    problem = dict(starts=[(key_of(s), c, -1) for s, c in starts], expand=expand,
-                   heuristic=heuristic, goal_cost=goal_cost)
-    return problem, hidden, estimates, brute_force(starts, edges, goals, n), \
-        brute_force(starts, visible, goals, n)
+    problem = dict(
+        starts=[(key_of(s), c, -1) for s, c in starts],
+        expand=expand,
+        heuristic=heuristic,
+        goal_cost=goal_cost,
+    )
+    return (
+        problem,
+        hidden,
+        estimates,
+        brute_force(starts, edges, goals, n),
+        brute_force(starts, visible, goals, n),
+    )
 
 
 def hidden_edges(hidden, which):
@@ -157,8 +174,9 @@ def hidden_edges(hidden, which):
 
 
 def per_tile_observer(hidden, estimates):
-    copies = [(est, 0, e, key_of(a) // LOCAL)
-              for e, ((a, _, _), est) in enumerate(zip(hidden, estimates))]
+    copies = [
+        (est, 0, e, key_of(a) // LOCAL) for e, ((a, _, _), est) in enumerate(zip(hidden, estimates))
+    ]
     return TraversalObserver(copies, lambda _, e: hidden_edges(hidden, {e}), ACROSS)
 
 
@@ -172,6 +190,7 @@ def late_observer(hidden):
             done.append(True)
             return hidden_edges(hidden, range(len(hidden)))
         return ()
+
     return observer
 
 
@@ -217,11 +236,19 @@ def test_observer_sees_each_expanded_node_once_with_its_f_then_the_goal(seed):
 
     def expand(k):
         out = edges.get(k, [])
-        return (np.array([b for b, _ in out], np.int64), np.array([c for _, c in out]),
-                np.array([b for b, _ in out], np.int64))
+        return (
+            np.array([b for b, _ in out], np.int64),
+            np.array([c for _, c in out]),
+            np.array([b for b, _ in out], np.int64),
+        )
 
-    res = astar.search([(0, 0.0, -1)], expand, lambda k: h[k],
-                       lambda k: (0.0, -1) if k == n - 1 else None, observer=observer)
+    res = astar.search(
+        [(0, 0.0, -1)],
+        expand,
+        lambda k: h[k],
+        lambda k: (0.0, -1) if k == n - 1 else None,
+        observer=observer,
+    )
     g = dijkstra([(0, 0.0)], edges, n)
     nodes = [k for _, k in calls if k != astar.GOAL]
     assert len(nodes) == len(set(nodes)) == res.expansions  # no stale entries reported

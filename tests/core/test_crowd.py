@@ -52,8 +52,9 @@ def test_the_reservation_table_finds_exactly_the_frames_too_close():
         mine = crowd.timeline(track, delay, horizon)
         expect = {}
         for j, (d, t) in enumerate(placed):
-            close = np.nonzero(np.linalg.norm(mine - crowd.timeline(t, d, horizon), axis=1)
-                               < spacing)[0]
+            close = np.nonzero(
+                np.linalg.norm(mine - crowd.timeline(t, d, horizon), axis=1) < spacing
+            )[0]
             if close.size:
                 expect[j] = close
         assert sorted(found) == sorted(expect), i
@@ -70,28 +71,29 @@ def test_hold_phases_stop_on_the_frame_and_keep_the_pace_elsewhere():
     u = retime.hold_phases(60, 30, 12, 10)
     assert len(u) == 60 + 12 + 10 and u[0] == 0 and u[-1] == 59
     assert np.all(np.diff(u) >= -1e-12)
-    assert np.sum(np.isclose(u, 30.0)) >= 12            # stands on frame 30
-    assert np.allclose(u[:26], np.arange(26))           # full pace before the slow-down
-    assert np.allclose(u[-25:], np.arange(35, 60))      # and after the speed-up
-    assert np.diff(u).max() <= 1.0 + 1e-9               # never faster than recorded
+    assert np.sum(np.isclose(u, 30.0)) >= 12  # stands on frame 30
+    assert np.allclose(u[:26], np.arange(26))  # full pace before the slow-down
+    assert np.allclose(u[-25:], np.arange(35, 60))  # and after the speed-up
+    assert np.diff(u).max() <= 1.0 + 1e-9  # never faster than recorded
     with pytest.raises(ValueError, match="ramp"):
-        retime.hold_phases(60, 3, 12, 10)               # no room to slow down
+        retime.hold_phases(60, 3, 12, 10)  # no room to slow down
 
 
 def test_a_crossing_is_cleared_by_an_idle_hold_before_a_wait():
-    a = line((-5.0, 0.0), (5.0, 0.0), 101)   # 10 m in 100 frames
-    b = line((0.0, -5.0), (0.0, 5.0), 101)   # crosses a's path at the same moment
+    a = line((-5.0, 0.0), (5.0, 0.0), 101)  # 10 m in 100 frames
+    b = line((0.0, -5.0), (0.0, 5.0), 101)  # crosses a's path at the same moment
     holdable = [np.ones(101, bool), (np.arange(101) % 15) == 0]  # b: double support every 15
     assert min_gap(a, b) < 0.1
-    sched, conflicts = crowd.resolve([a, b], lambda i, d: None, 0.5, 0.25, 30.0, 60, 3,
-                                     ramp=10, holdable=holdable)
+    sched, conflicts = crowd.resolve(
+        [a, b], lambda i, d: None, 0.5, 0.25, 30.0, 60, 3, ramp=10, holdable=holdable
+    )
     assert conflicts == []
     assert sched[0].delay == 0 and sched[0].holds == ()
-    (k, h), = sched[1].holds
+    ((k, h),) = sched[1].holds
     assert sched[1].delay == 0 and holdable[1][k] and 0 < h <= 60
     la, lb = lines_of(sched)
     assert min_gap(la, lb) >= 0.5
-    assert np.allclose(lb[-1], b[-1])                   # still arrives
+    assert np.allclose(lb[-1], b[-1])  # still arrives
     # without double-support frames to stand on, it waits at its start instead
     sched, conflicts = crowd.resolve([a, b], lambda i, d: None, 0.5, 0.25, 30.0, 60, 3)
     assert conflicts == [] and sched[1].holds == () and sched[1].delay > 0
@@ -99,12 +101,12 @@ def test_a_crossing_is_cleared_by_an_idle_hold_before_a_wait():
     assert min_gap(*lines_of(sched)) >= 0.5
     shorter = crowd.Reservations(0.5)
     shorter.reserve(0, a)
-    assert shorter.check(b, d - 3)                      # and no shorter wait would do
+    assert shorter.check(b, d - 3)  # and no shorter wait would do
 
 
 def test_a_goal_on_someone_elses_path_is_reported_by_pair_and_frame():
     a = line((-5.0, 0.0), (5.0, 0.0), 101)
-    b = line((0.0, -2.0), (0.0, 0.0), 21)    # b ends standing on a's path
+    b = line((0.0, -2.0), (0.0, 0.0), 21)  # b ends standing on a's path
     sched, conflicts = crowd.resolve([a, b], lambda i, d: None, 0.5, 0.25, 30.0, 30, 3)
     assert len(conflicts) == 1
     c = conflicts[0]
@@ -116,8 +118,9 @@ def test_a_goal_on_someone_elses_path_is_reported_by_pair_and_frame():
 
 def test_far_apart_characters_neither_wait_nor_hold():
     tracks = [line((x, 0.0), (x, 8.0), 80) for x in (0.0, 3.0, 6.0)]
-    sched, conflicts = crowd.resolve(tracks, None, 0.5, 0.25, 30.0, 60, 6,
-                                     holdable=[np.ones(80, bool)] * 3)
+    sched, conflicts = crowd.resolve(
+        tracks, None, 0.5, 0.25, 30.0, 60, 6, holdable=[np.ones(80, bool)] * 3
+    )
     assert [(s.delay, s.holds) for s in sched] == [(0, ())] * 3 and conflicts == []
 
 
@@ -125,18 +128,19 @@ def test_reroute_when_neither_hold_nor_wait_clears():
     """Head-on in the open: b would meet a or stand where a ends; re-planned round a's
     reserved stretch (discs on a's line near the meeting), it passes clear."""
     t = np.linspace(0.0, 1.0, 121)[:, None]
-    a = np.array([0.0, 0.0]) + t * np.array([10.0, 0.0])       # west -> east
-    b = np.array([10.0, 0.3]) + t * np.array([-10.0, 0.0])     # east -> west, 0.3 m aside
+    a = np.array([0.0, 0.0]) + t * np.array([10.0, 0.0])  # west -> east
+    b = np.array([10.0, 0.3]) + t * np.array([-10.0, 0.0])  # east -> west, 0.3 m aside
     calls = []
 
     def replan(index, discs):
         calls.append(index)
         centres = np.array([d.mean(axis=0) for d in discs])
-        assert np.abs(centres[:, 1]).max() < 0.5   # the reserved stretch is on a's line
-        return b + np.array([0.0, 2.0]), None      # the re-plan goes 2 m round it
+        assert np.abs(centres[:, 1]).max() < 0.5  # the reserved stretch is on a's line
+        return b + np.array([0.0, 2.0]), None  # the re-plan goes 2 m round it
 
-    sched, conflicts = crowd.resolve([a, b], replan, 1.0, 0.25, 30.0, 12, 6,
-                                     holdable=[None, np.ones(121, bool)])
+    sched, conflicts = crowd.resolve(
+        [a, b], replan, 1.0, 0.25, 30.0, 12, 6, holdable=[None, np.ones(121, bool)]
+    )
     assert calls == [1] and conflicts == [] and sched[1].rerouted
     sched0, conflicts0 = crowd.resolve([a, b], lambda i, d: None, 1.0, 0.25, 30.0, 12, 6)
     assert conflicts0 and not sched0[1].rerouted  # without re-routing the conflict stays
@@ -164,19 +168,22 @@ def test_a_hold_on_real_walking_keeps_the_feet_planted(walk_patch):
     of its walk; on the held motion both feet stay planted and still while it stands."""
     env = Environment(walk_patch.side, walk_patch.cells, 0.25)
     planner = SegmentPlanner(walk_patch, env)
-    plans = [planner.plan((0.0, 0.0, 0.0), (8.0, 0.0, 0.0)),
-             planner.plan((4.0, -4.0, np.pi / 2), (4.0, 4.0, np.pi / 2))]
+    plans = [
+        planner.plan((0.0, 0.0, 0.0), (8.0, 0.0, 0.0)),
+        planner.plan((4.0, -4.0, np.pi / 2), (4.0, 4.0, np.pi / 2)),
+    ]
     motions = [plan_motions(walk_patch, p) for p in plans]
     whole = [concatenate(m) for m in motions]
     tracks = [w.ground[:, :2] for w in whole]
     double = [w.contacts[:, :2].any(1) & w.contacts[:, 2:].any(1) for w in whole]
     ramp = 16
-    sched, conflicts = crowd.resolve(tracks, None, 1.0, 0.5, walk_patch.gait.fps, 120, 6,
-                                     ramp=ramp, holdable=double)
+    sched, conflicts = crowd.resolve(
+        tracks, None, 1.0, 0.5, walk_patch.gait.fps, 120, 6, ramp=ramp, holdable=double
+    )
     assert conflicts == [] and len(sched[1].holds) == 1 and sched[1].delay == 0
-    (k, h), = sched[1].holds
+    ((k, h),) = sched[1].holds
     motion = retime.held(whole[1], k, h, ramp)
-    assert np.allclose(motion.ground[:, :2], sched[1].track)   # the track the crowd checked
+    assert np.allclose(motion.ground[:, :2], sched[1].track)  # the track the crowd checked
     skel = walk_patch.gait.skeleton
     feet = motion.world_matrices(skel)[:, contacts.foot_joints(skel)][..., :3, 3]
     still = slice(k + ramp // 2, k + ramp // 2 + h)
@@ -193,21 +200,20 @@ def test_what_resolve_reports_is_exactly_what_is_left():
     tracks, masks = [], []
     for i in range(25):
         p0 = rng.uniform(-4, 4, 2)
-        p1 = p0 + rng.uniform(4, 7) * np.array([np.cos(a := rng.uniform(0, 2 * np.pi)),
-                                                 np.sin(a)])
+        p1 = p0 + rng.uniform(4, 7) * np.array([np.cos(a := rng.uniform(0, 2 * np.pi)), np.sin(a)])
         n = int(np.linalg.norm(p1 - p0) / 1.3 * 30)
         tracks.append(line(p0, p1, n))
         masks.append((np.arange(n) % 16) == 3)
     before = len(crowd.conflicts_of(tracks, [0] * 25, 0.5))
-    sched, conflicts = crowd.resolve(tracks, None, 0.5, 0.25, 30.0, 120, 6, ramp=12,
-                                     holdable=masks)
+    sched, conflicts = crowd.resolve(tracks, None, 0.5, 0.25, 30.0, 120, 6, ramp=12, holdable=masks)
     brute = brute_conflicts(lines_of(sched), 0.5)
     # (two standing for good are counted to the end of the crowd as it was when placed)
     pair = lambda c: tuple(sorted((c["a"], c["b"])))  # noqa: E731 ("a" placed first)
     assert {pair(c): c["first_frame"] for c in conflicts} == {k: v[0] for k, v in brute.items()}
     horizon = max(len(s.track) + s.delay for s in sched)
-    assert all(c["frames"] == len(brute[pair(c)]) for c in conflicts
-               if brute[pair(c)][-1] < horizon - 1)
+    assert all(
+        c["frames"] == len(brute[pair(c)]) for c in conflicts if brute[pair(c)][-1] < horizon - 1
+    )
     assert all(sched[c["a"]].rank < sched[c["b"]].rank for c in conflicts)
     assert len(conflicts) < before, (len(conflicts), before)  # some are solved
     for s, track, mask in zip(sched, tracks, masks):

@@ -95,6 +95,7 @@ def test_a_thin_fence_across_a_cell_occludes_it_even_with_a_tiny_radius():
 
 def test_vectorised_cell_occlusion_matches_the_pairwise_polygon_test():
     from motion_patches.environment import cells_within, polygons_within
+
     rng = np.random.default_rng(5)
     c = 0.3
     ix, iy = np.meshgrid(np.arange(8), np.arange(8), indexing="xy")
@@ -107,5 +108,7 @@ def test_vectorised_cell_occlusion_matches_the_pairwise_polygon_test():
         r = float(rng.choice([0.0, 0.05, 0.25]))
         fast = cells_within(x0, y0, c, poly, r)
         for k in range(64):
-            cell = np.array([[x0[k], y0[k]], [x0[k] + c, y0[k]], [x0[k] + c, y0[k] + c], [x0[k], y0[k] + c]])
+            cell = np.array(
+                [[x0[k], y0[k]], [x0[k] + c, y0[k]], [x0[k] + c, y0[k] + c], [x0[k], y0[k] + c]]
+            )
             assert fast[k] == polygons_within(cell, poly, r), (k, r)

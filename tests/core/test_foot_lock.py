@@ -28,7 +28,7 @@ def test_locked_feet_skate_far_less_than_the_followed_curve(walk_patch, walk):
     skel = walk_patch.gait.skeleton
     locked = Motion(walk.ground, walk.root_local, foot_lock.lock_feet(skel, walk), walk.contacts)
     before, after = skate(skel, walk), skate(skel, locked)
-    assert before["mean_cm_per_s"] > 10          # the synthesis alone skates
+    assert before["mean_cm_per_s"] > 10  # the synthesis alone skates
     assert after["mean_cm_per_s"] < 0.4 * before["mean_cm_per_s"]
     assert after["p95_cm_per_s"] < before["p95_cm_per_s"]
 
@@ -45,8 +45,9 @@ def test_only_the_legs_change_and_the_feet_keep_their_orientation(walk_patch, wa
         assert np.allclose(a[:, ankle, :3, :3], b[:, ankle, :3, :3], atol=1e-6)
         assert np.allclose(a[:, hip, :3, 3], b[:, hip, :3, 3])  # the hips do not move
         # the foot is carried whole: the toe moves exactly as the ankle does
-        assert np.allclose(b[:, toe, :3, 3] - b[:, ankle, :3, 3],
-                           a[:, toe, :3, 3] - a[:, ankle, :3, 3], atol=1e-6)
+        assert np.allclose(
+            b[:, toe, :3, 3] - b[:, ankle, :3, 3], a[:, toe, :3, 3] - a[:, ankle, :3, 3], atol=1e-6
+        )
 
 
 def test_locking_adds_no_pop(walk_patch, walk):
@@ -68,9 +69,9 @@ def test_planted_offsets_ease_in_and_out():
     on[10:20] = True
     d = foot_lock.planted_offsets(ankle, ankle, on, np.zeros(n, bool), blend=4)
     pinned = ankle[10:20] + d[10:20]
-    assert np.allclose(pinned, pinned[0])                       # held still while planted
-    assert np.allclose(d[:5], 0) and np.allclose(d[25:], 0)     # untouched far from it
-    assert np.all(np.abs(np.diff(d[:, 0])) <= 0.045)            # no jump into or out of it
+    assert np.allclose(pinned, pinned[0])  # held still while planted
+    assert np.allclose(d[:5], 0) and np.allclose(d[25:], 0)  # untouched far from it
+    assert np.all(np.abs(np.diff(d[:, 0])) <= 0.045)  # no jump into or out of it
 
 
 def test_a_straight_leg_bends_its_knee_forward():
@@ -79,8 +80,9 @@ def test_a_straight_leg_bends_its_knee_forward():
     hip, knee, ankle = (np.array([[0.0, 0.0, z]]) for z in (1.0, 0.55, 0.1))
     target = np.array([[0.0, 0.0, 0.2]])
     for forward in (np.array([[1.0, 0.0, 0.0]]), np.array([[-1.0, 0.0, 0.0]])):
-        r_thigh, r_shin = foot_lock.two_bone_ik(hip, knee, ankle, target,
-                                                np.array([[0.0, 1.0, 0.0]]), forward)
+        r_thigh, r_shin = foot_lock.two_bone_ik(
+            hip, knee, ankle, target, np.array([[0.0, 1.0, 0.0]]), forward
+        )
         new_knee = hip[0] + r_thigh[0] @ (knee - hip)[0]
         new_ankle = new_knee + r_shin[0] @ (ankle - knee)[0]
         assert np.allclose(new_ankle, target[0], atol=1e-6)

@@ -26,7 +26,7 @@ def test_avoidance_probability_drops_in_a_blocked_tile(walk_patch):
     tp = TilePlanner(walk_patch, env)
     open_u, wall_u = tp.upsilon((3, 3)), tp.upsilon((1, 0))
     assert open_u[3, 1] == 1.0  # west -> east on open ground
-    assert wall_u[3, 1] < 0.2   # west -> east through the wall
+    assert wall_u[3, 1] < 0.2  # west -> east through the wall
     assert np.isinf(tp.edge_cost((1, 0), 3, 1)) or tp.edge_cost((1, 0), 3, 1) > 5 * s
 
 

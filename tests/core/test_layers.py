@@ -73,7 +73,9 @@ def test_run_tiles_follow_the_runs_pace(run_patch, run_gait, walk_patch, walk_ga
     ratio = run_gait.cycle_distance / walk_gait.cycle_distance
     assert ratio > 1.5
     assert run_patch.side / walk_patch.side == pytest.approx(ratio)
-    assert run_patch.side / run_patch.nodes == pytest.approx(ratio * walk_patch.side / walk_patch.nodes)
+    assert run_patch.side / run_patch.nodes == pytest.approx(
+        ratio * walk_patch.side / walk_patch.nodes
+    )
     assert run_patch.stats["entry_share"] >= locomotion_patch.MIN_ENTRY_SHARE
     assert run_patch.effort_rate > 2 * walk_patch.effort_rate
 
@@ -132,8 +134,10 @@ def test_planned_run_skates_like_its_source_clip(run_patch, run_gait, run_clips)
     planted, _, _ = contacts.foot_contacts(src)
     fj = contacts.foot_joints(src.skeleton)
     source = metrics.foot_skate(src.joint_positions()[:, fj], src.fps, planted)
-    print(f"run skate: planned {planned['mean_cm_per_s']:.1f} cm/s, 16_35 "
-          f"{source['mean_cm_per_s']:.1f} cm/s")
+    print(
+        f"run skate: planned {planned['mean_cm_per_s']:.1f} cm/s, 16_35 "
+        f"{source['mean_cm_per_s']:.1f} cm/s"
+    )
     assert planned["planted_steps"] > 20
     assert planned["mean_cm_per_s"] <= 1.25 * source["mean_cm_per_s"]
 
@@ -146,13 +150,19 @@ def test_traversal_clips_serve_the_layers_they_declare():
     assert layers.serves(clip("walk", "walk"), "walk")
     assert not layers.serves(clip("walk", "walk"), "run")
     assert layers.serves(clip("run", "run"), "run")
-    assert not layers.serves(clip("walk", "run"), "run")   # entered walking: not a run clip
+    assert not layers.serves(clip("walk", "run"), "run")  # entered walking: not a run clip
     assert layers.serves(clip("walk, run", "walk,run"), "run")
     assert layers.serves(clip("*", "*"), "run")
-    prop = ObjectPatch("chair", np.zeros((4, 2)),
-                       [clip("walk", "walk"), clip("run", "run"), clip("walk", "walk", "interaction")])
+    prop = ObjectPatch(
+        "chair",
+        np.zeros((4, 2)),
+        [clip("walk", "walk"), clip("run", "run"), clip("walk", "walk", "interaction")],
+    )
     kept = layers.for_layer(prop, "run")
-    assert [(c.layer_in, c.kind) for c in kept.clips] == [("run", "traversal"), ("walk", "interaction")]
+    assert [(c.layer_in, c.kind) for c in kept.clips] == [
+        ("run", "traversal"),
+        ("walk", "interaction"),
+    ]
     assert layers.for_layer(prop, "walk").clips == [prop.clips[0], prop.clips[2]]
     assert len(prop.clips) == 3  # the prop itself is left as it was
 
@@ -174,18 +184,26 @@ def test_blend_table_walk_to_run_ends_on_the_run_node_pose_without_a_pop(walk_pa
     walk and run cycles (99th percentile)."""
     from motion_patches import blend_table, poses, quat
     from motion_patches.stitching import POSITION_TOLERANCE
+
     entries = blend_table.table(walk_patch, run_patch)
     assert len(entries) == walk_patch.pose_centres.shape[0]
     assert all(t.end_pose == run_patch.seg_pose[0, 0] for t in entries)
-    assert all(0.5 * walk_patch.gait.frames <= t.frames <= 1.5 * walk_patch.gait.frames + 1
-               for t in entries)
-    m = blend_table.blend(walk_patch.gait, run_patch.gait, 0)   # from the walk's node pose
+    assert all(
+        0.5 * walk_patch.gait.frames <= t.frames <= 1.5 * walk_patch.gait.frames + 1
+        for t in entries
+    )
+    m = blend_table.blend(walk_patch.gait, run_patch.gait, 0)  # from the walk's node pose
     lw, lr = walk_patch.gait.straight, run_patch.gait.straight
     offset = m.ground[-1]
 
     def dist(root, rot, ref_root, ref_rot):
-        return float(np.abs(poses.pose_features(root[None], rot[None])
-                            - poses.pose_features(ref_root[None], ref_rot[None])).max())
+        return float(
+            np.abs(
+                poses.pose_features(root[None], rot[None])
+                - poses.pose_features(ref_root[None], ref_rot[None])
+            ).max()
+        )
+
     assert dist(m.root_local[0], m.rotations[0], lw.root_local[0], lw.rotations[0]) < 1e-6
     assert dist(m.root_local[-1], m.rotations[-1], lr.root_local[0], lr.rotations[0]) < 1e-6
     assert np.linalg.norm(m.root_local[-1] - lr.root_local[0]) < POSITION_TOLERANCE / 10
@@ -193,18 +211,28 @@ def test_blend_table_walk_to_run_ends_on_the_run_node_pose_without_a_pop(walk_pa
     assert walk_patch.gait.cycle_distance < offset[0] < run_patch.gait.cycle_distance
     assert offset[1] == 0 and offset[2] == 0
     step = np.diff(m.ground[:, 0])
-    assert step.min() > 0 and step.max() < 1.5 * run_patch.gait.cycle_distance / lr.rotations.shape[0]
+    assert (
+        step.min() > 0 and step.max() < 1.5 * run_patch.gait.cycle_distance / lr.rotations.shape[0]
+    )
 
     def joint_steps(rot):
         d = quat.mul(quat.conj(rot[:-1]), rot[1:])
         return 2 * np.arccos(np.clip(np.abs(d[..., 0]), 0, 1)).max(axis=1)
-    inside = np.concatenate([joint_steps(np.concatenate([lp.rotations, lp.rotations[:1]]))
-                             for lp in (lw, lr)])
-    joins = np.concatenate([joint_steps(np.concatenate([lw.rotations[-1:], m.rotations[:2]])),
-                            joint_steps(np.concatenate([m.rotations[-2:], lr.rotations[1:2]])),
-                            joint_steps(m.rotations)])
-    print(f"largest joint step: blend {np.degrees(joins.max()):.1f} deg, "
-          f"99th percentile in the cycles {np.degrees(np.percentile(inside, 99)):.1f} deg")
+
+    inside = np.concatenate(
+        [joint_steps(np.concatenate([lp.rotations, lp.rotations[:1]])) for lp in (lw, lr)]
+    )
+    joins = np.concatenate(
+        [
+            joint_steps(np.concatenate([lw.rotations[-1:], m.rotations[:2]])),
+            joint_steps(np.concatenate([m.rotations[-2:], lr.rotations[1:2]])),
+            joint_steps(m.rotations),
+        ]
+    )
+    print(
+        f"largest joint step: blend {np.degrees(joins.max()):.1f} deg, "
+        f"99th percentile in the cycles {np.degrees(np.percentile(inside, 99)):.1f} deg"
+    )
     assert joins.max() <= np.percentile(inside, 99)
     back = blend_table.table(run_patch, walk_patch)
     assert len(back) == run_patch.pose_centres.shape[0]

@@ -37,10 +37,12 @@ def test_segment_headings_are_45_degree_steps_and_nodes_differ_in_edge(walk_patc
     e0, _, h0 = split_node_id(walk_patch.seg_entry, walk_patch.nodes)
     e1, _, h1 = split_node_id(walk_patch.seg_exit, walk_patch.nodes)
     assert np.all(e0 != e1)
+
     # Every segment starts along its entry node's heading and ends along its exit node's
     # (direction d: d * 45 degrees), the headings the ids say, not just some multiple of 45.
     def off(angle, d):
         return np.abs((angle - d * 2 * np.pi / DIRECTIONS + np.pi) % (2 * np.pi) - np.pi)
+
     first = np.array([walk_patch.curve(k).heading[0] for k in range(len(h0))])
     last = np.array([walk_patch.curve(k).heading[-1] for k in range(len(h1))])
     assert off(first, h0).max() < 1e-6 and off(last, h1).max() < 1e-6
@@ -106,7 +108,13 @@ def test_garbage_bytes_are_rejected_with_a_message():
 
 def test_gait_rejects_a_clip_without_locomotion(walk16):
     from motion_patches.gait import build_gait
-    still = clipmod.Clip("still", walk16.skeleton, walk16.fps,
-                         np.repeat(walk16.root_pos[:1], 60, 0), np.repeat(walk16.rotations[:1], 60, 0))
+
+    still = clipmod.Clip(
+        "still",
+        walk16.skeleton,
+        walk16.fps,
+        np.repeat(walk16.root_pos[:1], 60, 0),
+        np.repeat(walk16.rotations[:1], 60, 0),
+    )
     with pytest.raises(ValueError, match="left-foot strike"):
         build_gait("walk", still)

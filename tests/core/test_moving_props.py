@@ -35,7 +35,9 @@ def clearance(patch, plan, track):
 
 
 def test_a_track_is_asleep_before_and_after_its_keys_and_awake_between():
-    tr = mp.PropTrack("Cart", CART, [0.0, 2.0, 5.0, 9.0], [[0, 0, 0], [0, 0, 0], [3, 0, 0], [3, 0, 0]])
+    tr = mp.PropTrack(
+        "Cart", CART, [0.0, 2.0, 5.0, 9.0], [[0, 0, 0], [0, 0, 0], [3, 0, 0], [3, 0, 0]]
+    )
     assert tr.awake_intervals() == [(2.0, 5.0)]
     assert not tr.awake_at(1.0) and tr.awake_at(3.0) and not tr.awake_at(6.0)
     assert np.allclose(tr.pose_at([-1.0, 3.5, 100.0])[:, 0], [0.0, 1.5, 3.0])
@@ -53,12 +55,17 @@ def test_a_cart_crossing_the_walk_has_only_the_pieces_it_meets_replanned(walk_pa
     assert len(plan.pieces) >= 5
     t, x, y = when_at_x(walk_patch, plan, 8.0)
     # Across the walk at 1 m/s, in the middle of the path just as the character gets there.
-    cart = mp.PropTrack("Cart", CART, [0.0, t - 4, t + 4, t + 20],
-                        [[x, y - 4, 0], [x, y - 4, 0], [x, y + 4, 0], [x, y + 4, 0]])
+    cart = mp.PropTrack(
+        "Cart",
+        CART,
+        [0.0, t - 4, t + 4, t + 20],
+        [[x, y - 4, 0], [x, y - 4, 0], [x, y + 4, 0], [x, y + 4, 0]],
+    )
     assert clearance(walk_patch, plan, cart).min() < 0.25
     assert mp.conflicts(plan_motions(walk_patch, plan), [cart], 0.25, walk_patch.gait.fps)
-    new, wait, repairs, left = mp.avoid(planner, walk_patch, plan, [cart], motions_of(walk_patch),
-                                        longest_wait=0)
+    new, wait, repairs, left = mp.avoid(
+        planner, walk_patch, plan, [cart], motions_of(walk_patch), longest_wait=0
+    )
     assert left == [] and repairs and wait == 0
     assert clearance(walk_patch, new, cart).min() >= 0.25
     first = min(r["pieces"][0] for r in repairs)
@@ -76,19 +83,29 @@ def test_a_cart_crossing_the_walk_has_only_the_pieces_it_meets_replanned(walk_pa
 
 
 def test_a_cart_crossing_at_walking_pace_is_waited_for_when_a_detour_takes_longer(
-        walk_patch, open_ground):
+    walk_patch, open_ground
+):
     planner = SegmentPlanner(walk_patch, open_ground)
     plan = planner.plan((0.0, 0.0, 0.0), (14.0, 0.0, 0.0))
     t, x, y = when_at_x(walk_patch, plan, 7.0)
-    cart = mp.PropTrack("Cart", CART, [0.0, t - 3, t + 3, t + 20],
-                        [[x, y - 3, 0], [x, y - 3, 0], [x, y + 3, 0], [x, y + 3, 0]])
+    cart = mp.PropTrack(
+        "Cart",
+        CART,
+        [0.0, t - 3, t + 3, t + 20],
+        [[x, y - 3, 0], [x, y - 3, 0], [x, y + 3, 0], [x, y + 3, 0]],
+    )
     new, wait, repairs, left = mp.avoid(planner, walk_patch, plan, [cart], motions_of(walk_patch))
     assert left == [] and 0 < wait <= mp.MAX_DELAY_S
     assert new is plan  # the same walk, later
-    assert mp.conflicts(plan_motions(walk_patch, plan), [cart], 0.25, walk_patch.gait.fps, wait) == []
-    assert mp.conflicts(plan_motions(walk_patch, plan), [cart], 0.25, walk_patch.gait.fps,
-                        wait - mp.DELAY_STEP_S)  # and no shorter wait would do
-    _, _, detours, _ = mp.avoid(planner, walk_patch, plan, [cart], motions_of(walk_patch), longest_wait=0)
+    assert (
+        mp.conflicts(plan_motions(walk_patch, plan), [cart], 0.25, walk_patch.gait.fps, wait) == []
+    )
+    assert mp.conflicts(
+        plan_motions(walk_patch, plan), [cart], 0.25, walk_patch.gait.fps, wait - mp.DELAY_STEP_S
+    )  # and no shorter wait would do
+    _, _, detours, _ = mp.avoid(
+        planner, walk_patch, plan, [cart], motions_of(walk_patch), longest_wait=0
+    )
     assert detours and detours[0]["seconds_longer"] >= wait
 
 
@@ -109,7 +126,9 @@ def test_a_cart_parked_across_the_way_is_walked_round(walk_patch, open_ground):
 def test_a_cart_that_parks_on_the_goal_is_reported_by_prop_and_frame(walk_patch, open_ground):
     planner = SegmentPlanner(walk_patch, open_ground)
     plan = planner.plan((0.0, 0.0, 0.0), (10.0, 0.0, 0.0))
-    cart = mp.PropTrack("Cart", CART, [0.0, 1.0, 4.0], [[10.0, -5.0, 0], [10.0, -5.0, 0], [10.0, 0.0, 0]])
+    cart = mp.PropTrack(
+        "Cart", CART, [0.0, 1.0, 4.0], [[10.0, -5.0, 0], [10.0, -5.0, 0], [10.0, 0.0, 0]]
+    )
     new, wait, repairs, left = mp.avoid(planner, walk_patch, plan, [cart], motions_of(walk_patch))
     assert left and left[0].prop == "Cart"
     assert "'Cart' meets the walk at frame" in left[0].describe(walk_patch.gait.fps, 1)

@@ -28,25 +28,29 @@ def env_with(patch, *obstacles):
 
 def no_path(patch, env, start, goal, **kw):
     with pytest.raises(causes.NoPath) as err:
-        causes.plan_explained(SegmentPlanner(patch, env), np.array(start, float),
-                              np.array(goal, float), **kw)
+        causes.plan_explained(
+            SegmentPlanner(patch, env), np.array(start, float), np.array(goal, float), **kw
+        )
     return err.value
 
 
 def test_a_wall_across_the_way_is_named(walk_patch):
-    err = no_path(walk_patch, env_with(walk_patch, box("Wall", 3.0, -30, 3.3, 30)),
-                  (0, 0, 0), (6, 0, 0))
+    err = no_path(
+        walk_patch, env_with(walk_patch, box("Wall", 3.0, -30, 3.3, 30)), (0, 0, 0), (6, 0, 0)
+    )
     assert (err.cause, err.props) == ("props", ["Wall"])
     assert "Cause: 'Wall' walls the goal off from the start" in str(err)
 
 
 def test_pillars_closing_a_pocket_round_the_start_are_named(walk_patch):
-    ring = [pillar(f"r{n}", 1.8 * np.cos(a), 1.8 * np.sin(a))
-            for n, a in enumerate(np.linspace(0, 2 * np.pi, 17)[:-1])]
+    ring = [
+        pillar(f"r{n}", 1.8 * np.cos(a), 1.8 * np.sin(a))
+        for n, a in enumerate(np.linspace(0, 2 * np.pi, 17)[:-1])
+    ]
     err = no_path(walk_patch, env_with(walk_patch, *ring), (0, 0, 0), (6, 0, 0))
     assert err.cause == "props" and err.props
     assert set(err.props) <= {ob.name for ob in ring}
-    assert all(repr(n) in str(err) for n in err.props[:causes.NAMED])
+    assert all(repr(n) in str(err) for n in err.props[: causes.NAMED])
 
 
 def test_a_patch_that_cannot_turn_is_blamed_not_the_props(walk_patch):
@@ -54,8 +58,9 @@ def test_a_patch_that_cannot_turn_is_blamed_not_the_props(walk_patch):
     makes a 90 degree turn even on open ground, so the patch is the cause."""
     straight = walk_patch.without(np.flatnonzero(walk_patch.seg_turn > 1e-3))
     straight.stats = dict(walk_patch.stats, curvature_limits=[-0.02, 0.02])
-    err = no_path(straight, env_with(straight, pillar("Near", 2.0, 3.5)),
-                  (0, 0, 0), (4, 4, np.pi / 2))
+    err = no_path(
+        straight, env_with(straight, pillar("Near", 2.0, 3.5)), (0, 0, 0), (4, 4, np.pi / 2)
+    )
     assert (err.cause, err.props) == ("patch", [])
     assert "Cause: the locomotion patch: even on open ground" in str(err)
     assert "50.00 m" in str(err) and "turn clip" in str(err)

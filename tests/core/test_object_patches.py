@@ -50,14 +50,22 @@ def test_jump_clip_is_anchored_at_its_apex_and_faces_along_x(hurdle_clip):
 
 def test_a_clip_without_root_motion_is_refused(walk16):
     from motion_patches.clip import Clip
-    still = Clip("still", walk16.skeleton, walk16.fps, np.repeat(walk16.root_pos[:1], 40, 0),
-                 np.repeat(walk16.rotations[:1], 40, 0))
+
+    still = Clip(
+        "still",
+        walk16.skeleton,
+        walk16.fps,
+        np.repeat(walk16.root_pos[:1], 40, 0),
+        np.repeat(walk16.rotations[:1], 40, 0),
+    )
     with pytest.raises(ValueError, match="no root motion"):
         op.patch_clip_from(still, op.TRAVERSAL, 30.0)
 
 
 def test_copies_every_ten_degrees_skip_those_landing_on_the_prop(hurdle_clip):
-    long_wall = op.ObjectPatch("wall", np.array([[-0.1, -1.0], [0.1, -1.0], [0.1, 1.0], [-0.1, 1.0]]))
+    long_wall = op.ObjectPatch(
+        "wall", np.array([[-0.1, -1.0], [0.1, -1.0], [0.1, 1.0], [-0.1, 1.0]])
+    )
     chair = op.ObjectPatch("chair", CHAIR)
     assert chair.add_traversal_copies(hurdle_clip) == 36
     kept = long_wall.add_traversal_copies(hurdle_clip)
@@ -108,8 +116,11 @@ def test_dynamic_and_static_stitching_find_paths_of_equal_cost(walk_patch, hurdl
         plans = []
         for mode in ("dynamic", "static"):
             env, props = scattered_chairs(walk_patch, hurdle_clip, seed, 8)
-            plans.append(SegmentPlanner(walk_patch, env, 3.0, 0.5, 0.1, props=props,
-                                        mode=mode).plan(start, goal))
+            plans.append(
+                SegmentPlanner(walk_patch, env, 3.0, 0.5, 0.1, props=props, mode=mode).plan(
+                    start, goal
+                )
+            )
         assert np.isclose(plans[0].cost, plans[1].cost), seed
         used = [sum(p.kind == "traversal" for p in plan.pieces) for plan in plans]
         assert used[0] == used[1], seed
@@ -134,23 +145,28 @@ def test_per_tile_observer_stitches_the_chair_line_lazily(walk_patch, hurdle_cli
         dyn, sta = plans["dynamic"].stats, plans["static"].stats
         assert np.isclose(plans["dynamic"].cost, plans["static"].cost)
         assert dyn["traversals_used"] == sta["traversals_used"] == traversals
-        assert dyn["copies_stitched"] == (dyn["copies_stitched_by_tile"]
-                                          + dyn["copies_stitched_at_goal"])
+        assert dyn["copies_stitched"] == (
+            dyn["copies_stitched_by_tile"] + dyn["copies_stitched_at_goal"]
+        )
         assert sta["copies_stitched_by_tile"] == sta["copies_stitched_at_goal"] == 0
         assert dyn["copies_stitched"] < sta["copies_stitched"] / 2, (dyn, sta)
         if traversals:
             assert dyn["copies_stitched_by_tile"] > 0
             with planner.framed(np.array(start), np.array(goal)) as (local_start, _, _):
-                below = sum(e <= plans["dynamic"].cost
-                            for e, *_ in planner._traversal_estimates(local_start))
+                below = sum(
+                    e <= plans["dynamic"].cost
+                    for e, *_ in planner._traversal_estimates(local_start)
+                )
             assert dyn["copies_stitched"] <= below
 
 
-def test_goal_backstop_is_what_keeps_dynamic_stitching_optimal(walk_patch, hurdle_clip,
-                                                               monkeypatch):
+def test_goal_backstop_is_what_keeps_dynamic_stitching_optimal(
+    walk_patch, hurdle_clip, monkeypatch
+):
     """On this layout the per-tile rule alone never fires for the jump of the cheapest
     path: without the backstop at the goal the walker takes a 6 % costlier way."""
     from motion_patches import planner as planner_mod
+
     args = ((0.5, 0.0, 0.0), (10.0, 0.5, 0.0))
     costs = {}
     for mode in ("dynamic", "static"):
@@ -169,7 +185,9 @@ def test_goal_backstop_is_what_keeps_dynamic_stitching_optimal(walk_patch, hurdl
 def test_moving_a_prop_changes_the_path(walk_patch, hurdle_clip):
     env = Environment(walk_patch.side, walk_patch.cells, 0.25)
     y = 0.5 * walk_patch.side  # the middle of a tile row
-    wall = Obstacle("wall", np.array([[4.8, y - 1.5], [5.2, y - 1.5], [5.2, y + 1.5], [4.8, y + 1.5]]))
+    wall = Obstacle(
+        "wall", np.array([[4.8, y - 1.5], [5.2, y - 1.5], [5.2, y + 1.5], [4.8, y + 1.5]])
+    )
     env.place(wall)
     a = SegmentPlanner(walk_patch, env).plan((1.0, y, 0.0), (9.0, y, 0.0))
     env.place(Obstacle("wall", wall.polygon + [0.0, 4.0]))  # moved out of the way, same name
@@ -181,6 +199,7 @@ def test_moving_a_prop_changes_the_path(walk_patch, hurdle_clip):
 def test_traversal_probability_keeps_a_chair_line_tile_passable(walk_patch, hurdle_clip):
     from motion_patches import traversal_probability as tp
     from motion_patches.high_level import TilePlanner
+
     env, props = chair_line(walk_patch, hurdle_clip)
     planner = SegmentPlanner(walk_patch, env, 4.0, 0.5, 0.1, props=props)
     tile = env.tile_of((5.0, 0.3))
@@ -188,8 +207,8 @@ def test_traversal_probability_keeps_a_chair_line_tile_passable(walk_patch, hurd
     assert 0.0 < psi <= 1.0
     upsilon = TilePlanner(walk_patch, env).upsilon(tile)
     tau = planner._tile_traversal(tile)
-    assert upsilon[3, 1] == 0.0          # no walk crosses the line west to east ...
-    assert tau[3, 1] > 0.2               # ... but the jump likely does (Eq. 3)
+    assert upsilon[3, 1] == 0.0  # no walk crosses the line west to east ...
+    assert tau[3, 1] > 0.2  # ... but the jump likely does (Eq. 3)
     with_tau = TilePlanner(walk_patch, env, traversal=planner._tile_traversal)
     assert np.isfinite(with_tau.edge_cost(tile, 3, 1))
     assert np.isinf(TilePlanner(walk_patch, env).edge_cost(tile, 3, 1))
@@ -197,10 +216,13 @@ def test_traversal_probability_keeps_a_chair_line_tile_passable(walk_patch, hurd
 
 def test_corridor_planning_with_traversals_matches_the_full_search(walk_patch, hurdle_clip):
     env, props = chair_line(walk_patch, hurdle_clip)
-    full = SegmentPlanner(walk_patch, env, 4.0, 0.5, 0.1, props=props).plan((1.0, 0.3, 0), (9.0, 0.3, 0))
+    full = SegmentPlanner(walk_patch, env, 4.0, 0.5, 0.1, props=props).plan(
+        (1.0, 0.3, 0), (9.0, 0.3, 0)
+    )
     env, props = chair_line(walk_patch, hurdle_clip)
     corr = SegmentPlanner(walk_patch, env, 4.0, 0.5, 0.1, props=props).plan(
-        (1.0, 0.3, 0), (9.0, 0.3, 0), use_corridor=True)
+        (1.0, 0.3, 0), (9.0, 0.3, 0), use_corridor=True
+    )
     assert corr.stats["high_level_tiles"] > 0 and corr.stats["traversals_used"] == 1
     assert corr.cost <= 1.1 * full.cost
 
@@ -209,11 +231,22 @@ def test_stand_up_walk_and_sit_down_on_retargeted_real_clips(walk_patch, walk_ga
     from motion_patches.clip import retarget
     from motion_patches.object_patch import floor_level
     from motion_patches.planner import interaction_states, with_interactions
+
     floor = floor_level(walk16)
-    sit = op.patch_clip_from(retarget(cmu("13_05"), walk16.skeleton), op.INTERACTION,
-                             walk_gait.fps, effort=2.0, floor=floor)
-    stand = op.patch_clip_from(retarget(cmu("13_05_standup"), walk16.skeleton), op.INTERACTION,
-                               walk_gait.fps, effort=2.0, floor=floor)
+    sit = op.patch_clip_from(
+        retarget(cmu("13_05"), walk16.skeleton),
+        op.INTERACTION,
+        walk_gait.fps,
+        effort=2.0,
+        floor=floor,
+    )
+    stand = op.patch_clip_from(
+        retarget(cmu("13_05_standup"), walk16.skeleton),
+        op.INTERACTION,
+        walk_gait.fps,
+        effort=2.0,
+        floor=floor,
+    )
     assert op.ends_lower(cmu("13_05")) and not op.ends_lower(cmu("13_05_standup"))
     env = Environment(walk_patch.side, walk_patch.cells, 0.25)
     a = op.ObjectPatch("chair A", CHAIR, [stand], pose=(1.0, 1.0, 0.0))

@@ -59,7 +59,7 @@ def test_the_good_file_reads_back(good, walk_patch):
 @pytest.mark.parametrize("fraction", [0.0, 0.1, 0.5, 0.9, 0.999])
 def test_truncated_files_are_refused(good, fraction):
     with pytest.raises(ValueError, match="not a stored locomotion patch"):
-        serialize.patch_from_bytes(good[:int(len(good) * fraction)])
+        serialize.patch_from_bytes(good[: int(len(good) * fraction)])
 
 
 def test_flipped_bytes_are_refused_or_change_nothing(good, walk_patch):
@@ -93,21 +93,37 @@ def _cases(d):
         "node id too large": (dict(seg_exit=np.full(s, 10_000)), "'seg_exit' holds 10000"),
         "pose cluster out of range": (dict(seg_pose=np.full((s, 2), 7)), "'seg_pose' holds 7"),
         "no segments": ({k: d[k][:0] for k in serialize._ARRAYS[:-1]}, "no segments"),
-        "inf rest pose": (dict(skel_rest=np.full_like(d["skel_rest"], np.inf)),
-                          "'skel_rest' holds NaN or infinite"),
+        "inf rest pose": (
+            dict(skel_rest=np.full_like(d["skel_rest"], np.inf)),
+            "'skel_rest' holds NaN or infinite",
+        ),
         "one loop missing": (dict(loop1_rotations=None), "'loop1_rotations' is missing"),
-        "short rotations": (dict(loop0_rotations=d["loop0_rotations"][:, :3]),
-                            "'loop0_rotations' has shape"),
+        "short rotations": (
+            dict(loop0_rotations=d["loop0_rotations"][:, :3]),
+            "'loop0_rotations' has shape",
+        ),
         "NaN fps": (dict(gait_fps=np.array(np.nan)), "'gait_fps' holds NaN"),
-        "bone its own parent": (dict(skel_parents=np.arange(d["skel_parents"].size)),
-                                "own parent"),
+        "bone its own parent": (dict(skel_parents=np.arange(d["skel_parents"].size)), "own parent"),
         "no header": (dict(header=None), "'header' is missing"),
     }
 
 
-CASES = ["NaN scales", "short lengths", "float mask", "no turn array", "zero cycles",
-         "node id too large", "pose cluster out of range", "no segments", "inf rest pose",
-         "one loop missing", "short rotations", "NaN fps", "bone its own parent", "no header"]
+CASES = [
+    "NaN scales",
+    "short lengths",
+    "float mask",
+    "no turn array",
+    "zero cycles",
+    "node id too large",
+    "pose cluster out of range",
+    "no segments",
+    "inf rest pose",
+    "one loop missing",
+    "short rotations",
+    "NaN fps",
+    "bone its own parent",
+    "no header",
+]
 
 
 @pytest.mark.parametrize("case", CASES)
@@ -117,27 +133,30 @@ def test_crafted_arrays_are_refused_naming_the_array(good, case):
         serialize.patch_from_bytes(crafted(good, **arrays))
 
 
-@pytest.mark.parametrize("header, cause", [
-    ([1, 2, 3], "header is a list"),
-    ("walk", "header is a str"),
-    ({"side": -2.6}, "'side' is -2.6"),
-    ({"side": "2.6"}, "'side' is '2.6', not a number"),
-    ({"cells": 0}, "'cells' is 0"),
-    ({"cells": 9}, "'cells' is 9"),
-    ({"cells": 8.0}, "'cells' is 8.0, not a whole number"),
-    ({"nodes": -1}, "'nodes' is -1"),
-    ({"effort_rate": -1.0}, "'effort_rate' is -1.0"),
-    ({"layer": ""}, "'layer' is ''"),
-    ({"layer": None}, "'layer' is None"),
-    ({"stats": None}, "'stats' is None"),
-    ({"side": None}, "'side' is None"),
-    ({"cells": None}, "'cells' is None"),
-    ({"version": None}, "'version' is None"),
-    ({"version": 0}, "'version' is 0"),
-    ({"version": "1"}, "'version' is '1'"),
-    ({"version": 99}, "format 99 is newer"),
-    ({"format": "something else"}, "wrong format tag"),
-])
+@pytest.mark.parametrize(
+    "header, cause",
+    [
+        ([1, 2, 3], "header is a list"),
+        ("walk", "header is a str"),
+        ({"side": -2.6}, "'side' is -2.6"),
+        ({"side": "2.6"}, "'side' is '2.6', not a number"),
+        ({"cells": 0}, "'cells' is 0"),
+        ({"cells": 9}, "'cells' is 9"),
+        ({"cells": 8.0}, "'cells' is 8.0, not a whole number"),
+        ({"nodes": -1}, "'nodes' is -1"),
+        ({"effort_rate": -1.0}, "'effort_rate' is -1.0"),
+        ({"layer": ""}, "'layer' is ''"),
+        ({"layer": None}, "'layer' is None"),
+        ({"stats": None}, "'stats' is None"),
+        ({"side": None}, "'side' is None"),
+        ({"cells": None}, "'cells' is None"),
+        ({"version": None}, "'version' is None"),
+        ({"version": 0}, "'version' is 0"),
+        ({"version": "1"}, "'version' is '1'"),
+        ({"version": 99}, "format 99 is newer"),
+        ({"format": "something else"}, "wrong format tag"),
+    ],
+)
 def test_crafted_headers_are_refused_naming_the_field(good, header, cause):
     with pytest.raises(ValueError, match=cause.replace("(", r"\(")):
         serialize.patch_from_bytes(crafted(good, header))

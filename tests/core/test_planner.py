@@ -34,8 +34,9 @@ def test_plan_on_open_ground_ends_exactly_on_the_goal(walk_patch, open_ground):
     # shortened (here: a start connector straight into a goal connector).
     assert plan.stats["pieces_searched"] >= len(plan.pieces)
     assert plan.stats["cost_shortened"] <= plan.cost + 1e-9
-    searched = SegmentPlanner(walk_patch, open_ground).plan((0.5, 0.5, 0.0), (9.0, 3.0, 0.8),
-                                                            shorten=False)
+    searched = SegmentPlanner(walk_patch, open_ground).plan(
+        (0.5, 0.5, 0.0), (9.0, 3.0, 0.8), shorten=False
+    )
     assert [p.kind for p in searched.pieces][0] == "start"
     assert any(p.kind == "segment" for p in searched.pieces)
     m = planned_motion(walk_patch, searched)
@@ -120,8 +121,11 @@ def test_a_goal_facing_out_of_a_dead_end_needs_any_facing(walk_patch):
         return Obstacle(name, np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]], float))
 
     env = Environment(walk_patch.side, walk_patch.cells, 0.25)
-    for ob in (box("N", 3.0, 0.6, 6.6, 0.9), box("S", 3.0, -0.9, 6.6, -0.6),
-               box("End", 6.3, -0.9, 6.6, 0.9)):
+    for ob in (
+        box("N", 3.0, 0.6, 6.6, 0.9),
+        box("S", 3.0, -0.9, 6.6, -0.6),
+        box("End", 6.3, -0.9, 6.6, 0.9),
+    ):
         env.place(ob)
     planner = SegmentPlanner(walk_patch, env)
     start = (-2.0, 0.0, 0.0)

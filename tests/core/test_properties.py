@@ -49,8 +49,15 @@ def layout(kind, rng, patch):
     elif kind == "fences":
         for k in range(int(rng.integers(1, 6))):
             p = rng.uniform((1, -4), (11, 4))
-            obs.append(board(f"f{k}", p, p + rng.uniform(1.0, 4.0) * np.array(
-                [np.cos(a := rng.uniform(0, np.pi)), np.sin(a)])))
+            obs.append(
+                board(
+                    f"f{k}",
+                    p,
+                    p
+                    + rng.uniform(1.0, 4.0)
+                    * np.array([np.cos(a := rng.uniform(0, np.pi)), np.sin(a)]),
+                )
+            )
     elif kind == "tiny":
         for k in range(int(rng.integers(10, 60))):
             obs.append(disc(f"t{k}", *rng.uniform((1, -4), (11, 4)), rng.uniform(0.01, 0.06), 6))
@@ -124,8 +131,10 @@ def test_every_layout_plans_cleanly_or_says_why(walk_patch):
         bad = violations(walk_patch, env, plan, goal)
         if bad:
             broken.append((n, kind, bad))
-    print(f"\nproperty suite: {tried:,} layouts tried ({', '.join(KINDS)}), {planned:,} planned, "
-          f"{refused:,} refused with a reason, violations: {len(broken)}")
+    print(
+        f"\nproperty suite: {tried:,} layouts tried ({', '.join(KINDS)}), {planned:,} planned, "
+        f"{refused:,} refused with a reason, violations: {len(broken)}"
+    )
     assert tried >= 0.95 * LAYOUTS
     assert planned > 0.6 * tried
     assert not broken, broken[:10]

@@ -32,27 +32,54 @@ def renamed(skel, names):
 
 # A CMU skeleton renamed as Mixamo and Rigify rigs name their bones (the bones those have no
 # counterpart of get names of no convention).
-MIXAMO = {"Hips": "mixamorig:Hips", "LowerBack": "mixamorig:Spine",
-          "Spine": "mixamorig:Spine1", "Spine1": "mixamorig:Spine2", "Neck": "mixamorig:Neck",
-          "Neck1": "mixamorig:NeckTwist", "Head": "mixamorig:Head",
-          "LHipJoint": "mixamorig:LeftHipRoot", "RHipJoint": "mixamorig:RightHipRoot",
-          "LThumb": "mixamorig:LeftHandThumb1", "RThumb": "mixamorig:RightHandThumb1",
-          "LeftFingerBase": "mixamorig:LeftPalm", "RightFingerBase": "mixamorig:RightPalm",
-          "LeftHandIndex1": "mixamorig:LeftHandIndex1",
-          "RightHandIndex1": "mixamorig:RightHandIndex1"}
+MIXAMO = {
+    "Hips": "mixamorig:Hips",
+    "LowerBack": "mixamorig:Spine",
+    "Spine": "mixamorig:Spine1",
+    "Spine1": "mixamorig:Spine2",
+    "Neck": "mixamorig:Neck",
+    "Neck1": "mixamorig:NeckTwist",
+    "Head": "mixamorig:Head",
+    "LHipJoint": "mixamorig:LeftHipRoot",
+    "RHipJoint": "mixamorig:RightHipRoot",
+    "LThumb": "mixamorig:LeftHandThumb1",
+    "RThumb": "mixamorig:RightHandThumb1",
+    "LeftFingerBase": "mixamorig:LeftPalm",
+    "RightFingerBase": "mixamorig:RightPalm",
+    "LeftHandIndex1": "mixamorig:LeftHandIndex1",
+    "RightHandIndex1": "mixamorig:RightHandIndex1",
+}
 for side in ("Left", "Right"):
     for b in ("UpLeg", "Leg", "Foot", "ToeBase", "Shoulder", "Arm", "ForeArm", "Hand"):
         MIXAMO[side + b] = f"mixamorig:{side}{b}"
-RIGIFY = {"Hips": "DEF-spine", "Spine": "DEF-spine.001", "Spine1": "DEF-spine.003",
-          "Neck": "DEF-spine.004", "Neck1": "DEF-spine.005", "Head": "DEF-spine.006",
-          "LowerBack": "DEF-spine.lower", "LHipJoint": "DEF-pelvis.L", "RHipJoint": "DEF-pelvis.R",
-          "LThumb": "DEF-thumb.01.L", "RThumb": "DEF-thumb.01.R",
-          "LeftFingerBase": "DEF-palm.01.L", "RightFingerBase": "DEF-palm.01.R",
-          "LeftHandIndex1": "DEF-f_index.01.L", "RightHandIndex1": "DEF-f_index.01.R"}
+RIGIFY = {
+    "Hips": "DEF-spine",
+    "Spine": "DEF-spine.001",
+    "Spine1": "DEF-spine.003",
+    "Neck": "DEF-spine.004",
+    "Neck1": "DEF-spine.005",
+    "Head": "DEF-spine.006",
+    "LowerBack": "DEF-spine.lower",
+    "LHipJoint": "DEF-pelvis.L",
+    "RHipJoint": "DEF-pelvis.R",
+    "LThumb": "DEF-thumb.01.L",
+    "RThumb": "DEF-thumb.01.R",
+    "LeftFingerBase": "DEF-palm.01.L",
+    "RightFingerBase": "DEF-palm.01.R",
+    "LeftHandIndex1": "DEF-f_index.01.L",
+    "RightHandIndex1": "DEF-f_index.01.R",
+}
 for side, x in (("Left", "L"), ("Right", "R")):
-    for b, r in (("UpLeg", "thigh"), ("Leg", "shin"), ("Foot", "foot"), ("ToeBase", "toe"),
-                 ("Shoulder", "shoulder"), ("Arm", "upper_arm"), ("ForeArm", "forearm"),
-                 ("Hand", "hand")):
+    for b, r in (
+        ("UpLeg", "thigh"),
+        ("Leg", "shin"),
+        ("Foot", "foot"),
+        ("ToeBase", "toe"),
+        ("Shoulder", "shoulder"),
+        ("Arm", "upper_arm"),
+        ("ForeArm", "forearm"),
+        ("Hand", "hand"),
+    ):
         RIGIFY[side + b] = f"DEF-{r}.{x}"
 
 
@@ -85,15 +112,22 @@ def test_mixamo_and_rigify_names_pair_and_follow(walk16, names):
     target = renamed(walk16.skeleton, names)
     rm = rig_map(walk16.skeleton, target)
     for src, tgt in names.items():
-        if src in ("LowerBack", "Neck1", "LHipJoint", "RHipJoint", "LeftFingerBase",
-                   "RightFingerBase"):
+        if src in (
+            "LowerBack",
+            "Neck1",
+            "LHipJoint",
+            "RHipJoint",
+            "LeftFingerBase",
+            "RightFingerBase",
+        ):
             continue  # no such bone in that convention (LowerBack is Mixamo's Spine)
         assert rm.mapping[src] == tgt, (src, rm.mapping.get(src))
     assert rm.scale == pytest.approx(1.0)
     moved = rm.clip(walk16)
     feet = ["LeftFoot", "LeftToeBase", "RightFoot", "RightToeBase"]
-    np.testing.assert_allclose(positions(moved, [names[n] for n in feet]),
-                               positions(walk16, feet), atol=1e-9)
+    np.testing.assert_allclose(
+        positions(moved, [names[n] for n in feet]), positions(walk16, feet), atol=1e-9
+    )
 
 
 def test_a_clip_on_its_own_skeleton_is_unchanged(walk16):
@@ -129,15 +163,20 @@ def test_arms_resting_down_follow_arms_resting_out(walk16, max16):
         cos = np.sum(ds * dt, axis=1) / np.linalg.norm(ds, axis=1) / np.linalg.norm(dt, axis=1)
         assert cos.min() > 0.9999
     # the legs of this same subject land exactly where the source's do
-    np.testing.assert_allclose(positions(out, ["LeftToe", "RightAnkle"]),
-                               positions(walk16, ["LeftToeBase", "RightFoot"]), atol=1e-5)
+    np.testing.assert_allclose(
+        positions(out, ["LeftToe", "RightAnkle"]),
+        positions(walk16, ["LeftToeBase", "RightFoot"]),
+        atol=1e-5,
+    )
 
 
 def test_an_unmappable_rig_is_refused_naming_the_patch_bones(walk16):
     rng = np.random.default_rng(1)
     n = len(walk16.skeleton.names)
-    odd = renamed(walk16.skeleton, {b: f"bone_{rng.integers(1e6)}_{i}"
-                                    for i, b in enumerate(walk16.skeleton.names)})
+    odd = renamed(
+        walk16.skeleton,
+        {b: f"bone_{rng.integers(1e6)}_{i}" for i, b in enumerate(walk16.skeleton.names)},
+    )
     with pytest.raises(RetargetError) as e:
         rig_map(walk16.skeleton, odd)
     for b in ("Hips", "LeftUpLeg", "LeftLeg", "LeftFoot", "LeftToeBase", "RightUpLeg"):
@@ -179,8 +218,14 @@ def test_segment_parent_skips_rigify_limb_segments(walk16):
 def test_linear_keys_keep_every_value_within_the_tolerance():
     rng = np.random.default_rng(0)
     t = np.arange(600)
-    v = np.column_stack((np.sin(t * 0.05), np.cumsum(rng.normal(size=600)) * 1e-3,
-                         np.where(t < 300, 0.0, (t - 300) * 0.01), np.zeros(600)))
+    v = np.column_stack(
+        (
+            np.sin(t * 0.05),
+            np.cumsum(rng.normal(size=600)) * 1e-3,
+            np.where(t < 300, 0.0, (t - 300) * 0.01),
+            np.zeros(600),
+        )
+    )
     tol = 1e-5
     keep = keys.linear_keys(v, tol)
     assert keep[0].all() and keep[-1].all()

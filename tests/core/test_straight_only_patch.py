@@ -47,8 +47,12 @@ def planted_drift_cm(gait, kappa, cycles=4):
     from where it stands on average during it, the straight loop followed along an arc."""
     s = np.linspace(0.0, cycles * gait.cycle_distance, 400)
     pos, heading = curves.arc_frame(np.zeros(2), 0.0, kappa, s)
-    motion = synthesis.follow(gait, curves.Curve(s, pos, heading, np.full(s.size, kappa)),
-                              cycles=cycles, eased=(False, False))
+    motion = synthesis.follow(
+        gait,
+        curves.Curve(s, pos, heading, np.full(s.size, kappa)),
+        cycles=cycles,
+        eased=(False, False),
+    )
     feet = contacts.foot_joints(gait.skeleton)
     fp = motion.world_matrices(gait.skeleton)[:, feet][..., :2, 3]
     drift = 0.0
@@ -64,7 +68,7 @@ def test_the_default_bend_keeps_planted_feet_within_10_cm_and_is_the_tightest_th
     gait = gait_mod.build_gait("walk", cmu(name), ())
     r = gait_mod.STRAIGHT_BEND_RADIUS
     assert gait.kappa_limits == pytest.approx((-1 / r, 1 / r))
-    assert planted_drift_cm(gait, 0.0) < 6.0     # the recording's own
+    assert planted_drift_cm(gait, 0.0) < 6.0  # the recording's own
     assert planted_drift_cm(gait, 1 / r) < 10.0  # bent left and right to the default radius
     assert planted_drift_cm(gait, -1 / r) < 10.0
     assert planted_drift_cm(gait, 1 / (r - 0.2)) > 10.0  # 20 cm tighter strays further
@@ -85,8 +89,9 @@ def test_a_straight_clip_alone_walks_16_m_straight_within_5_cm_of_the_line(strai
     assert np.linalg.norm(np.diff(ground[:, :2], axis=0), axis=1).sum() < 16.0 * 1.01
 
 
-@pytest.mark.parametrize("goal", [(6.0, 6.0, np.pi / 2), (5.0, -5.0, -np.pi / 2)],
-                         ids=["left", "right"])
+@pytest.mark.parametrize(
+    "goal", [(6.0, 6.0, np.pi / 2), (5.0, -5.0, -np.pi / 2)], ids=["left", "right"]
+)
 def test_a_straight_clip_alone_turns_90_degrees(straight_patch, goal):
     ground, _ = walked(straight_patch, open_ground(straight_patch), (0, 0, 0), goal)
     assert ground[-1, :2] == pytest.approx(goal[:2], abs=1e-6)
@@ -99,8 +104,9 @@ def test_a_straight_clip_alone_turns_90_degrees(straight_patch, goal):
 
 def test_a_straight_clip_alone_crosses_a_pillar_field(straight_patch):
     env = open_ground(straight_patch)
-    for n, (x, y) in enumerate([(3, 0.6), (4.5, 1.5), (3.5, 2.8), (6, 0.2), (6.5, 2.5),
-                                (8, -0.8), (9.5, 1.0), (11, -0.2)]):
+    for n, (x, y) in enumerate(
+        [(3, 0.6), (4.5, 1.5), (3.5, 2.8), (6, 0.2), (6.5, 2.5), (8, -0.8), (9.5, 1.0), (11, -0.2)]
+    ):
         env.place(pillar(f"p{n}", x, y))
     ground, _ = walked(straight_patch, env, (0.5, 1.3, 0.0), (13.0, 1.3, 0.0))
     assert not env.blocked(ground[:, :2]).any()

@@ -23,10 +23,12 @@ def track(steps, heading0=0.0, kappa=0.0, at=(0.0, 0.0)):
     s = np.concatenate(([0.0], np.cumsum(steps)))
     h = heading0 + kappa * s
     mid = heading0 + kappa * 0.5 * (s[1:] + s[:-1])  # chord direction of each step
-    chord = np.where(kappa == 0, steps,
-                     2 * np.sin(kappa * np.asarray(steps) / 2) / (kappa if kappa else 1.0))
-    xy = np.concatenate(([at], at + np.cumsum(chord[:, None] * np.stack(
-        (np.cos(mid), np.sin(mid)), 1), axis=0)))
+    chord = np.where(
+        kappa == 0, steps, 2 * np.sin(kappa * np.asarray(steps) / 2) / (kappa if kappa else 1.0)
+    )
+    xy = np.concatenate(
+        ([at], at + np.cumsum(chord[:, None] * np.stack((np.cos(mid), np.sin(mid)), 1), axis=0))
+    )
     return np.column_stack((xy, wrap(h)))
 
 
@@ -36,8 +38,9 @@ def loop_steps(loop, cycles):
 
 def motion(ground):
     f = ground.shape[0]
-    return Motion(ground, np.zeros((f, 3)), np.tile([1.0, 0, 0, 0], (f, 1, 1)),
-                  np.zeros((f, 4), bool))
+    return Motion(
+        ground, np.zeros((f, 3)), np.tile([1.0, 0, 0, 0], (f, 1, 1)), np.zeros((f, 4), bool)
+    )
 
 
 def test_limits_come_from_the_gait(walk_gait, lim):
@@ -59,8 +62,7 @@ def test_a_clean_sharp_turn_round_and_round_passes(walk_gait, lim):
     # The sharpest loop's own steps on its own curvature, three cycles (more than a full
     # turn: the heading wraps past +-pi several times, which is not a flip).
     sharp = max(walk_gait.loops, key=lambda lp: abs(lp.curvature))
-    g = track(loop_steps(sharp, 3), heading0=3.0 * np.sign(sharp.curvature),
-              kappa=sharp.curvature)
+    g = track(loop_steps(sharp, 3), heading0=3.0 * np.sign(sharp.curvature), kappa=sharp.curvature)
     assert np.abs(np.diff(g[:, 2])).max() > np.pi  # wrapped
     assert validate.ground_glitches(g, lim) == []
     # The worst the limits allow for: the curvature range at the straight loop's steps.
@@ -153,8 +155,11 @@ def test_segments_it_names_are_the_ones_that_flip(walk_patch):
         return g[0] if isinstance(g, tuple) else g
 
     named = validate.segment_glitches(walk_patch)
-    flips = [s for s in range(walk_patch.segment_count)
-             if np.abs(wrap(np.diff(ground(s)[:, 2]))).max() > np.pi / 2]
+    flips = [
+        s
+        for s in range(walk_patch.segment_count)
+        if np.abs(wrap(np.diff(ground(s)[:, 2]))).max() > np.pi / 2
+    ]
     assert named == flips
     # The synthesised motion has the flip too (the ground frames are the motion's).
     for s in named[:3]:

@@ -23,7 +23,7 @@ POLL_S = 0.01
 
 
 def _channel():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    argv = sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else []
     return argv[argv.index("--channel") + 1]
 
 
@@ -47,8 +47,12 @@ def region(kind="VIEW_3D", rtype="WINDOW"):
 def override(kind="VIEW_3D", rtype="WINDOW"):
     """A context override for operators that need an area (e.g. view3d.*, screen.*)."""
     a = area(kind)
-    return bpy.context.temp_override(window=window(), screen=window().screen, area=a,
-                                     region=next(r for r in a.regions if r.type == rtype))
+    return bpy.context.temp_override(
+        window=window(),
+        screen=window().screen,
+        area=a,
+        region=next(r for r in a.regions if r.type == rtype),
+    )
 
 
 def rect(r):
@@ -71,8 +75,15 @@ def redraw_all():
         a.tag_redraw()
 
 
-NS.update(window=window, area=area, region=region, override=override, rect=rect,
-          redraw_all=redraw_all, take_clipboard=take_clipboard)
+NS.update(
+    window=window,
+    area=area,
+    region=region,
+    override=override,
+    rect=rect,
+    redraw_all=redraw_all,
+    take_clipboard=take_clipboard,
+)
 
 
 def _write(n, payload):

@@ -48,8 +48,12 @@ class Session:
 
     def env(self):
         env = dict(os.environ)
-        env.update(DISPLAY=f":{self.display}", BLENDER_USER_RESOURCES=str(self.user_dir),
-                   HOME=str(self.workdir / "home"), TMPDIR=str(self.workdir / "tmp"))
+        env.update(
+            DISPLAY=f":{self.display}",
+            BLENDER_USER_RESOURCES=str(self.user_dir),
+            HOME=str(self.workdir / "home"),
+            TMPDIR=str(self.workdir / "tmp"),
+        )
         # Mesa's software rasteriser, whatever the machine has.
         env.update(LIBGL_ALWAYS_SOFTWARE="1", GALLIUM_DRIVER="llvmpipe")
         return env
@@ -60,15 +64,34 @@ class Session:
         (self.workdir / "tmp").mkdir(parents=True, exist_ok=True)
         w, h = self.size
         self.xvfb = subprocess.Popen(
-            ["Xvfb", f":{self.display}", "-screen", "0", f"{w}x{h}x24", "-nolisten", "tcp",
-             "-noreset", "+extension", "GLX"],
-            stdout=subprocess.DEVNULL, stderr=open(self.workdir / "xvfb.log", "w"))
+            [
+                "Xvfb",
+                f":{self.display}",
+                "-screen",
+                "0",
+                f"{w}x{h}x24",
+                "-nolisten",
+                "tcp",
+                "-noreset",
+                "+extension",
+                "GLX",
+            ],
+            stdout=subprocess.DEVNULL,
+            stderr=open(self.workdir / "xvfb.log", "w"),
+        )
         t0 = time.monotonic()
         while time.monotonic() - t0 < 20:
             if self.xvfb.poll() is not None:
                 raise GuiError(f"Xvfb exited ({self.xvfb.returncode}); see {self.workdir}/xvfb.log")
-            if subprocess.run(["xdpyinfo"], env=self.env(), stdout=subprocess.DEVNULL,
-                              stderr=subprocess.DEVNULL).returncode == 0:
+            if (
+                subprocess.run(
+                    ["xdpyinfo"],
+                    env=self.env(),
+                    stdout=subprocess.DEVNULL,
+                    stderr=subprocess.DEVNULL,
+                ).returncode
+                == 0
+            ):
                 return
             time.sleep(0.1)
         raise GuiError("Xvfb did not answer within 20 s")
@@ -79,18 +102,38 @@ class Session:
         self.channel.mkdir(parents=True)
         w, h = self.size
         # --log-level info: the log says which operators started, finished or were cancelled.
-        cmd = ["blender", "--window-geometry", "0", "0", str(w), str(h), "-noaudio",
-               "--log-level", "info",
-               *extra_args, "--python", str(HERE / "agent.py"), "--", "--channel",
-               str(self.channel)]
-        self.blender = subprocess.Popen(cmd, env=self.env(), stdin=subprocess.DEVNULL,
-                                        stdout=open(self.blender_log, "w"),
-                                        stderr=subprocess.STDOUT, start_new_session=True)
+        cmd = [
+            "blender",
+            "--window-geometry",
+            "0",
+            "0",
+            str(w),
+            str(h),
+            "-noaudio",
+            "--log-level",
+            "info",
+            *extra_args,
+            "--python",
+            str(HERE / "agent.py"),
+            "--",
+            "--channel",
+            str(self.channel),
+        ]
+        self.blender = subprocess.Popen(
+            cmd,
+            env=self.env(),
+            stdin=subprocess.DEVNULL,
+            stdout=open(self.blender_log, "w"),
+            stderr=subprocess.STDOUT,
+            start_new_session=True,
+        )
         t0 = time.monotonic()
         while not (self.channel / "ready").exists():
             if self.blender.poll() is not None:
-                raise GuiError(f"Blender exited ({self.blender.returncode}) before its window "
-                               f"was ready; see {self.blender_log}")
+                raise GuiError(
+                    f"Blender exited ({self.blender.returncode}) before its window "
+                    f"was ready; see {self.blender_log}"
+                )
             if time.monotonic() - t0 > 90:
                 raise GuiError("Blender's window was not ready within 90 s")
             time.sleep(0.1)
@@ -102,8 +145,11 @@ class Session:
     def stop(self):
         if self.blender is not None and self.blender.poll() is None:
             try:
-                self.py("bpy.app.timers.register(lambda: bpy.ops.wm.quit_blender() and None, "
-                        "first_interval=0.1)", timeout=10)
+                self.py(
+                    "bpy.app.timers.register(lambda: bpy.ops.wm.quit_blender() and None, "
+                    "first_interval=0.1)",
+                    timeout=10,
+                )
                 self.blender.wait(timeout=20)
             except Exception:
                 pass
@@ -136,16 +182,22 @@ class Session:
         t0 = time.monotonic()
         while not res.exists():
             if self.blender.poll() is not None:
-                raise GuiError(f"Blender exited ({self.blender.returncode}) while running: "
-                               f"{code.strip().splitlines()[0][:100]}")
+                raise GuiError(
+                    f"Blender exited ({self.blender.returncode}) while running: "
+                    f"{code.strip().splitlines()[0][:100]}"
+                )
             if time.monotonic() - t0 > timeout:
-                raise GuiError(f"Blender did not answer within {timeout} s (busy or hung) to: "
-                               f"{code.strip().splitlines()[0][:100]}")
+                raise GuiError(
+                    f"Blender did not answer within {timeout} s (busy or hung) to: "
+                    f"{code.strip().splitlines()[0][:100]}"
+                )
             time.sleep(0.005)
         out = json.loads(res.read_text())
         if time.monotonic() - t0 > 2 and self.log:
-            self.log(f"  (Blender answered after {time.monotonic() - t0:.1f} s: "
-                     f"{code.strip().splitlines()[0][:60]})")
+            self.log(
+                f"  (Blender answered after {time.monotonic() - t0:.1f} s: "
+                f"{code.strip().splitlines()[0][:60]})"
+            )
         if not out["ok"]:
             raise GuiError("Python in Blender failed:\n" + out["error"])
         return out["result"]
@@ -157,8 +209,9 @@ class Session:
     # --- input --------------------------------------------------------------------------
 
     def xdo(self, *args):
-        r = subprocess.run(["xdotool", *map(str, args)], env=self.env(), capture_output=True,
-                           text=True)
+        r = subprocess.run(
+            ["xdotool", *map(str, args)], env=self.env(), capture_output=True, text=True
+        )
         if r.returncode:
             raise GuiError(f"xdotool {' '.join(map(str, args))} failed: {r.stderr.strip()}")
         return r.stdout
@@ -186,8 +239,11 @@ class Session:
     def grab(self):
         """The screen as an (H, W, 3) uint8 array (ImageMagick's import: Blender's own
         screenshot operator gives a black image under llvmpipe)."""
-        r = subprocess.run(["import", "-window", "root", "-depth", "8", "ppm:-"],
-                           env=self.env(), capture_output=True)
+        r = subprocess.run(
+            ["import", "-window", "root", "-depth", "8", "ppm:-"],
+            env=self.env(),
+            capture_output=True,
+        )
         if r.returncode:
             raise GuiError(f"import -window root failed: {r.stderr.decode(errors='replace')}")
         return read_ppm(r.stdout)
@@ -197,13 +253,18 @@ class Session:
         with at most 256 colours (``palette``: a small file for the docs)."""
         if crop is not None:
             x, y, w, h = crop
-            img = img[y:y + h, x:x + w]
+            img = img[y : y + h, x : x + w]
         args = ["convert", "ppm:-"]
         if scale is not None and scale != 1:
             args += ["-filter", "Lanczos", "-resize", f"{scale * 100:g}%"]
         if palette:
             args += ["-dither", "None", "-colors", "256"]
-        args += ["-strip", "-define", "png:compression-level=9", f"png{'8' if palette else ''}:{path}"]
+        args += [
+            "-strip",
+            "-define",
+            "png:compression-level=9",
+            f"png{'8' if palette else ''}:{path}",
+        ]
         h, w = img.shape[:2]
         data = f"P6\n{w} {h}\n255\n".encode() + np.ascontiguousarray(img).tobytes()
         r = subprocess.run(args, input=data, capture_output=True)
@@ -216,13 +277,13 @@ def read_ppm(data):
     """A binary PPM (P6, maxval 255) as an (H, W, 3) uint8 array."""
     fields, pos = [], 0
     while len(fields) < 4:
-        while data[pos:pos + 1].isspace():
+        while data[pos : pos + 1].isspace():
             pos += 1
-        if data[pos:pos + 1] == b"#":
+        if data[pos : pos + 1] == b"#":
             pos = data.index(b"\n", pos) + 1
             continue
         end = pos
-        while not data[end:end + 1].isspace():
+        while not data[end : end + 1].isspace():
             end += 1
         fields.append(data[pos:end])
         pos = end

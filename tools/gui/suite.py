@@ -51,14 +51,20 @@ EXT_ID = "motion_patches"
 MODULE = f"bl_ext.user_default.{EXT_ID}"
 TAB = "Motion Patches"
 # The overlay's path colours (panels/overlay.py COLOURS), 0-255: segments, traversal, connector.
-PATH_COLOURS = np.array([(41, 115, 217), (242, 153, 25), (217, 38, 38), (153, 153, 153),
-                         (26, 178, 77)], float)
+PATH_COLOURS = np.array(
+    [(41, 115, 217), (242, 153, 25), (217, 38, 38), (153, 153, 153), (26, 178, 77)], float
+)
 COLOUR_TOLERANCE = 40  # per channel (anti-aliasing, blending with what is below)
 # Blender's log: lines that fail the run. Debian's build and Mesa print a few harmless lines.
-LOG_BAD = re.compile(r"Traceback|^Error\b|\| Error\b|\bERROR\b|Exception|Segmentation fault|"
-                     r"Cancelled: bpy\.ops\.motion_patches|[Uu]nable to load|[Ff]ailed to")
-LOG_ALLOWED = re.compile(r"Color management: .*|.*libdecor.*|.*pipewire.*|.*ALSA.*|"
-                         r".*Warning: .*|.*failed to open .*\.(ttf|otf).*", re.I)
+LOG_BAD = re.compile(
+    r"Traceback|^Error\b|\| Error\b|\bERROR\b|Exception|Segmentation fault|"
+    r"Cancelled: bpy\.ops\.motion_patches|[Uu]nable to load|[Ff]ailed to"
+)
+LOG_ALLOWED = re.compile(
+    r"Color management: .*|.*libdecor.*|.*pipewire.*|.*ALSA.*|"
+    r".*Warning: .*|.*failed to open .*\.(ttf|otf).*",
+    re.I,
+)
 
 
 class Step:
@@ -99,8 +105,10 @@ class Suite:
         except Exception:
             st.ok, st.detail = False, traceback.format_exc()
         st.seconds = time.monotonic() - t
-        self.log(f"{name}: {'ok' if st.ok else 'FAILED'} ({st.seconds:.1f} s)"
-                 + (f" {st.detail}" if st.detail else ""))
+        self.log(
+            f"{name}: {'ok' if st.ok else 'FAILED'} ({st.seconds:.1f} s)"
+            + (f" {st.detail}" if st.detail else "")
+        )
         return st.ok
 
     def check(self, cond, msg):
@@ -110,14 +118,25 @@ class Suite:
     # --- blender outside the window: build, install -------------------------------------
 
     def blender_cmd(self, *args, timeout=300):
-        env = dict(os.environ, BLENDER_USER_RESOURCES=str(self.user_dir),
-                   HOME=str(self.work / "home"))
-        r = subprocess.run(["blender", *args], env=env, capture_output=True, text=True,
-                           timeout=timeout, stdin=subprocess.DEVNULL)
+        env = dict(
+            os.environ, BLENDER_USER_RESOURCES=str(self.user_dir), HOME=str(self.work / "home")
+        )
+        r = subprocess.run(
+            ["blender", *args],
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+            stdin=subprocess.DEVNULL,
+        )
         text = r.stdout + r.stderr
-        (self.work / "blender-commands.log").open("a").write(f"$ blender {' '.join(args)}\n{text}\n")
+        (self.work / "blender-commands.log").open("a").write(
+            f"$ blender {' '.join(args)}\n{text}\n"
+        )
         if r.returncode or LOG_BAD.search(_without_allowed(text)):
-            raise GuiError(f"blender {' '.join(args)} failed (exit {r.returncode}):\n{text[-2000:]}")
+            raise GuiError(
+                f"blender {' '.join(args)} failed (exit {r.returncode}):\n{text[-2000:]}"
+            )
         return text
 
     def build_and_install(self):
@@ -127,24 +146,45 @@ class Suite:
         dist.mkdir()
         src = self.work / "src"
         # The extension's files as the builder sees them in a fresh clone (no caches, no venvs).
-        shutil.copytree(REPO, src, ignore=shutil.ignore_patterns(
-            ".git", ".venv", "__pycache__", ".pytest_cache", "dist", "sample_blends",
-            "bench", "tests", "tools", "docs", "examples"))
-        self.blender_cmd("--command", "extension", "build", "--source-dir", str(src),
-                         "--output-dir", str(dist))
+        shutil.copytree(
+            REPO,
+            src,
+            ignore=shutil.ignore_patterns(
+                ".git",
+                ".venv",
+                "__pycache__",
+                ".pytest_cache",
+                "dist",
+                "sample_blends",
+                "bench",
+                "tests",
+                "tools",
+                "docs",
+                "examples",
+            ),
+        )
+        self.blender_cmd(
+            "--command", "extension", "build", "--source-dir", str(src), "--output-dir", str(dist)
+        )
         zips = list(dist.glob("*.zip"))
         self.check(len(zips) == 1, f"extension build made {len(zips)} zips in {dist}")
         self.facts["zip"] = f"{zips[0].name}, {zips[0].stat().st_size // 1024} KiB"
-        self.blender_cmd("--command", "extension", "install-file", "-r", "user_default", "-e",
-                         str(zips[0]))
+        self.blender_cmd(
+            "--command", "extension", "install-file", "-r", "user_default", "-e", str(zips[0])
+        )
         # No splash over the window; the add-on must be enabled in the saved preferences.
-        out = self.blender_cmd("--background", "--python-expr",
-                               "import bpy, addon_utils\n"
-                               "bpy.context.preferences.view.show_splash = False\n"
-                               "bpy.ops.wm.save_userpref()\n"
-                               f"print('ENABLED', addon_utils.check({MODULE!r}))\n")
-        self.check("ENABLED (True, True)" in out,
-                   f"{MODULE} is not enabled after install-file -e: {out[-500:]}")
+        out = self.blender_cmd(
+            "--background",
+            "--python-expr",
+            "import bpy, addon_utils\n"
+            "bpy.context.preferences.view.show_splash = False\n"
+            "bpy.ops.wm.save_userpref()\n"
+            f"print('ENABLED', addon_utils.check({MODULE!r}))\n",
+        )
+        self.check(
+            "ENABLED (True, True)" in out,
+            f"{MODULE} is not enabled after install-file -e: {out[-500:]}",
+        )
         return f"Blender {self.facts['blender']}; {self.facts['zip']} installed and enabled"
 
     # --- screen helpers -----------------------------------------------------------------
@@ -176,7 +216,7 @@ class Suite:
         self.s.xdo("key", "ctrl+c" if kind == "op" else "ctrl+shift+c")
         text = self.s.py("result = take_clipboard()") or ""
         if kind == "op":
-            return text[len("bpy.ops."):].split("(")[0] if text.startswith("bpy.ops.") else ""
+            return text[len("bpy.ops.") :].split("(")[0] if text.startswith("bpy.ops.") else ""
         return text if re.fullmatch(r"[A-Za-z_][\w.\[\]\"']*", text) else ""
 
     def find(self, ident, kind="op", cols=(0.3, 0.7), step=9, below=None):
@@ -201,15 +241,19 @@ class Suite:
                     if got == ident:
                         self.cache[got] = (px, y)
                         return px, y
-        raise GuiError(f"no button '{ident}' found in the sidebar (probed {len(ys) * len(xs)} "
-                       f"places with {'Ctrl+C' if kind == 'op' else 'Ctrl+Shift+C'})")
+        raise GuiError(
+            f"no button '{ident}' found in the sidebar (probed {len(ys) * len(xs)} "
+            f"places with {'Ctrl+C' if kind == 'op' else 'Ctrl+Shift+C'})"
+        )
 
     def press(self, ident, kind="op", cols=(0.3, 0.7), timeout=180, below=None):
         t = time.monotonic()
         n = self.probes
         x, y = self.find(ident, kind, cols, below=below)
-        self.log(f"  {ident} found at ({x}, {y}) after {self.probes - n} probes, "
-                 f"{time.monotonic() - t:.1f} s")
+        self.log(
+            f"  {ident} found at ({x}, {y}) after {self.probes - n} probes, "
+            f"{time.monotonic() - t:.1f} s"
+        )
         since = len(self.log_lines())
         self.s.click(x, y)
         self.s.wait_idle(timeout=timeout)  # a long operator blocks Blender's loop until done
@@ -220,11 +264,15 @@ class Suite:
     def grab_checked(self, name, crop=None, min_colours=24):
         """A screenshot (the screen or a crop) saved as ``name``.png; fails when blank."""
         img = self.s.grab()
-        part = img if crop is None else img[crop[1]:crop[1] + crop[3], crop[0]:crop[0] + crop[2]]
+        part = (
+            img if crop is None else img[crop[1] : crop[1] + crop[3], crop[0] : crop[0] + crop[2]]
+        )
         flat = part.reshape(-1, 3)
         colours = len(np.unique(flat[:: max(1, len(flat) // 200000)], axis=0))
-        self.check(colours >= min_colours and float(flat.std()) > 4.0,
-                   f"screenshot '{name}' is blank ({colours} colours, std {flat.std():.1f})")
+        self.check(
+            colours >= min_colours and float(flat.std()) > 4.0,
+            f"screenshot '{name}' is blank ({colours} colours, std {flat.std():.1f})",
+        )
         path = self.out / f"{name}.png"
         self.s.save(img, path, crop)
         self.shots[name] = (path, crop, img)
@@ -238,7 +286,7 @@ class Suite:
     def reports(self):
         """Every report Blender showed in its window so far (the Info editor's text, types
         not included): the status bar's messages, errors included."""
-        return self.s.py('''
+        return self.s.py("""
 a = area("DOPESHEET_EDITOR")
 old = a.type, a.ui_type
 a.type = "INFO"
@@ -248,7 +296,7 @@ with bpy.context.temp_override(window=window(), area=a,
     bpy.ops.info.report_copy()
 text = take_clipboard()
 a.type, a.ui_type = old
-result = text.splitlines()''')
+result = text.splitlines()""")
 
     def log_lines(self):
         return (self.work / "blender.log").read_text(errors="replace").splitlines()
@@ -262,8 +310,10 @@ result = text.splitlines()''')
         bad = [ln for ln in lines if "Cancelled" in ln and op in ln]
         if bad or not started:
             why = self.reports()[-3:]
-            raise GuiError(f"{ident} {'was cancelled' if bad else 'never started'} after the "
-                           f"click; last reports: {why}")
+            raise GuiError(
+                f"{ident} {'was cancelled' if bad else 'never started'} after the "
+                f"click; last reports: {why}"
+            )
 
     # --- the scenario -------------------------------------------------------------------
 
@@ -320,10 +370,13 @@ result = text.splitlines()''')
 
     def start(self):
         self.s.start()
-        info = self.s.py('''
+        info = self.s.py(
+            """
 import addon_utils, gpu, sys
 result = dict(enabled=addon_utils.check(%r), gpu=gpu.platform.renderer_get(),
-              version=bpy.app.version_string, size=[window().width, window().height])''' % MODULE)
+              version=bpy.app.version_string, size=[window().width, window().height])"""
+            % MODULE
+        )
         self.check(info["enabled"] == [True, True], f"add-on not enabled in the window: {info}")
         self.check(info["size"] == [1920, 1200], f"window is {info['size']}, not 1920x1200")
         self.facts["gpu"] = info["gpu"]
@@ -335,7 +388,7 @@ result = dict(enabled=addon_utils.check(%r), gpu=gpu.platform.renderer_get(),
         cmu = mocap / "cmu"
         for f in ("16_15", "16_18", "16_06"):
             self.check((cmu / f"{f}.bvh").exists(), f"mocap {cmu}/{f}.bvh not found")
-        self.s.py(f'''
+        self.s.py(f"""
 import numpy as np
 scene = bpy.context.scene
 for ob in list(scene.objects):
@@ -366,9 +419,11 @@ chair.scale = (0.4, 0.44, 0.5)
 for ob in scene.objects:
     ob.select_set(False)
 bpy.context.view_layer.objects.active = None
-result = 1''')
-        return ("Source (16_15, 16_18, 16_06 at 30 fps), Walker facing +X, Goal 6 m ahead, "
-                "Chair 0.4 m half way")
+result = 1""")
+        return (
+            "Source (16_15, 16_18, 16_06 at 30 fps), Walker facing +X, Goal 6 m ahead, "
+            "Chair 0.4 m half way"
+        )
 
     def open_tab(self):
         view = self.s.py('result = rect(region("VIEW_3D", "WINDOW"))')
@@ -391,21 +446,26 @@ result = 1''')
 
     def bake(self):
         self.press("motion_patches.turn_add", cols=(12,))
-        n = self.s.py('result = len(bpy.context.scene.motion_patches.turn_actions)')
+        n = self.s.py("result = len(bpy.context.scene.motion_patches.turn_actions)")
         self.check(n == 1, f"+ beside the turn list left {n} rows (want 1)")
-        self.s.py('s = bpy.context.scene.motion_patches\n'
-                  's.turn_actions[0].action = bpy.data.actions["16_18"]\nresult = 1')
+        self.s.py(
+            "s = bpy.context.scene.motion_patches\n"
+            's.turn_actions[0].action = bpy.data.actions["16_18"]\nresult = 1'
+        )
         self.settle()
         t = time.monotonic()
-        self.press("motion_patches.bake_locomotion_patch", timeout=300,
-                   below="motion_patches.turn_add")
+        self.press(
+            "motion_patches.bake_locomotion_patch", timeout=300, below="motion_patches.turn_add"
+        )
         secs = time.monotonic() - t
-        stats = self.s.py('''
+        stats = self.s.py("""
 import json
 s = bpy.context.scene.motion_patches
-result = [len(s.patches), json.loads(s.patches[0].stats) if len(s.patches) else None]''')
-        self.check(stats[0] == 1 and stats[1]["kept"] > 100,
-                   f"Bake did not leave a patch with kept segments: {stats}")
+result = [len(s.patches), json.loads(s.patches[0].stats) if len(s.patches) else None]""")
+        self.check(
+            stats[0] == 1 and stats[1]["kept"] > 100,
+            f"Bake did not leave a patch with kept segments: {stats}",
+        )
         self.settle()
         self.sidebar_shot("02-locomotion-baked")
         # Collapse the Locomotion panel (a click on its header, the sidebar's first) so the
@@ -416,17 +476,19 @@ result = [len(s.patches), json.loads(s.patches[0].stats) if len(s.patches) else 
         return f"{stats[1]['kept']} segments kept, {stats[1]['culled']} culled, {secs:.0f} s"
 
     def tag(self):
-        self.s.py('''
+        self.s.py("""
 chair = bpy.data.objects["Chair"]
 chair.select_set(True)
 bpy.context.view_layer.objects.active = chair
-result = 1''')
+result = 1""")
         self.settle()
         self.press("motion_patches.clip_add", cols=(12,))
         n = self.s.py('result = len(bpy.data.objects["Chair"].motion_patch.clips)')
         self.check(n == 1, f"+ beside the clip list left {n} rows (want 1)")
-        self.s.py('c = bpy.data.objects["Chair"].motion_patch.clips[0]\n'
-                  'c.action = bpy.data.actions["16_06"]\nc.kind = "TRAVERSAL"\nresult = 1')
+        self.s.py(
+            'c = bpy.data.objects["Chair"].motion_patch.clips[0]\n'
+            'c.action = bpy.data.actions["16_06"]\nc.kind = "TRAVERSAL"\nresult = 1'
+        )
         self.settle()
         self.press("motion_patches.tag_object_patch", below="motion_patches.clip_add")
         ok = self.s.py('result = bpy.data.objects["Chair"].motion_patch.enabled')
@@ -435,16 +497,16 @@ result = 1''')
         self.sidebar_shot("03-object-patch")
 
     def plan(self):
-        self.s.py('''
+        self.s.py("""
 for ob in bpy.context.scene.objects:
     ob.select_set(False)
 w = bpy.data.objects["Walker"]
 w.select_set(True)
 bpy.context.view_layer.objects.active = w
-result = 1''')
+result = 1""")
         self.settle()
         self.press("motion_patches.plan_path", cols=(0.25,))
-        res = self.s.py('''
+        res = self.s.py("""
 import json
 w = bpy.data.objects["Walker"]
 ad = w.animation_data
@@ -454,36 +516,46 @@ sc = bpy.context.scene
 result = dict(tracks=tracks, strips=sum(len(t.strips) for t in ad.nla_tracks) if ad else 0,
               plan=[meta["frame_start"], meta["frame_end"]] if meta else None,
               traversals=meta.get("traversals") if meta else None,
-              scene=[sc.frame_start, sc.frame_end])''')
+              scene=[sc.frame_start, sc.frame_end])""")
         self.check(res["plan"] is not None, "Plan Path left no plan record on the Walker")
-        self.check("MP motion" in res["tracks"] and res["strips"] > 0,
-                   f"Plan Path wrote no NLA strips on the Walker: {res}")
+        self.check(
+            "MP motion" in res["tracks"] and res["strips"] > 0,
+            f"Plan Path wrote no NLA strips on the Walker: {res}",
+        )
         self.facts["plan"] = res
         self.settle()
         self.sidebar_shot("04-planning")
-        return (f"tracks {res['tracks']}, frames {res['plan'][0]}-{res['plan'][1]}, scene range "
-                f"{res['scene'][0]}-{res['scene'][1]}, traversals {res['traversals']}")
+        return (
+            f"tracks {res['tracks']}, frames {res['plan'][0]}-{res['plan'][1]}, scene range "
+            f"{res['scene'][0]}-{res['scene'][1]}, traversals {res['traversals']}"
+        )
 
     def frame_range(self):
         res = self.facts["plan"]
-        self.check(res["scene"] == res["plan"],
-                   f"the scene's frame range {res['scene']} does not follow the plan "
-                   f"{res['plan']} (the scene's was Blender's default 1-250)")
+        self.check(
+            res["scene"] == res["plan"],
+            f"the scene's frame range {res['scene']} does not follow the plan "
+            f"{res['plan']} (the scene's was Blender's default 1-250)",
+        )
         return f"{res['scene'][0]}-{res['scene'][1]}"
 
     def analyse(self):
         self.press("motion_patches.analyse_motion", timeout=300, below="motion_patches.plan_path")
-        fig = self.s.py('''
+        fig = self.s.py("""
 import json
 w = bpy.data.objects["Walker"]
 raw = w.get("motion_patches_analysis")
-result = json.loads(raw) if raw else None''')
-        self.check(fig is not None and "foot_skate" in fig,
-                   "Analyse Motion stored no figures on the Walker")
+result = json.loads(raw) if raw else None""")
+        self.check(
+            fig is not None and "foot_skate" in fig,
+            "Analyse Motion stored no figures on the Walker",
+        )
         self.settle()
         self.sidebar_shot("05-analysis")
-        return (f"foot skate {fig['foot_skate']['mean_cm_per_frame']:.2f} cm/frame, goal error "
-                f"{fig['goal_position_error_cm']:.1f} cm")
+        return (
+            f"foot skate {fig['foot_skate']['mean_cm_per_frame']:.2f} cm/frame, goal error "
+            f"{fig['goal_position_error_cm']:.1f} cm"
+        )
 
     # --- overlay ------------------------------------------------------------------------
 
@@ -521,7 +593,8 @@ covers = [rect(r) for r in area("VIEW_3D").regions if r.type != "WINDOW" and r.w
           and r.height > 1]
 def covered(x, y):
     return any(cx - 6 <= x < cx + cw + 6 and cy - 6 <= y < cy + ch + 6 for cx, cy, cw, ch in covers)
-ends = [Vector(w.matrix_world.translation), Vector(bpy.data.objects["Goal"].matrix_world.translation)]
+ends = [Vector(w.matrix_world.translation),
+        Vector(bpy.data.objects["Goal"].matrix_world.translation)]
 path = []
 for k in np.linspace(0, len(g) - 1, 80).astype(int):
     p = (float(g[k, 0]), float(g[k, 1]), 0.01)
@@ -551,10 +624,16 @@ result = dict(path=path, chair=inside, view=[rx, ry, rw, rh], covers=covers,
         """The overlay is where it must be and nowhere it must not: along the visible
         planned path a path colour appears (with the overlay, not without it), behind the
         chair and inside its outline the picture does not change with the overlay."""
+
         def near_colour(img, x, y, r=3):
-            patch = img[max(0, y - r):y + r + 1, max(0, x - r):x + r + 1].reshape(-1, 3).astype(float)
+            patch = (
+                img[max(0, y - r) : y + r + 1, max(0, x - r) : x + r + 1]
+                .reshape(-1, 3)
+                .astype(float)
+            )
             d = np.abs(patch[:, None, :] - PATH_COLOURS[None]).max(axis=2)
             return bool((d <= COLOUR_TOLERANCE).any())
+
         visible = [(int(round(x)), int(round(y))) for x, y, hid in st["path"] if not hid]
         hidden = [(int(round(x)), int(round(y))) for x, y, hid in st["path"] if hid]
         self.check(len(visible) >= 10, f"{name}: only {len(visible)} path points in view")
@@ -562,55 +641,74 @@ result = dict(path=path, chair=inside, view=[rx, ry, rw, rh], covers=covers,
         before = [near_colour(img_off, x, y) for x, y in visible]
         frac = float(np.mean(hits))
         changed = float(np.mean([hits[i] and not before[i] for i in range(len(hits))]))
-        self.check(frac >= 0.8, f"{name}: the path colour shows at only {frac:.0%} of "
-                                f"{len(visible)} visible path points (want >= 80 %)")
-        self.check(changed >= 0.6, f"{name}: the path colour was already there without the "
-                                   f"overlay at {1 - changed:.0%} of the points")
-        diff = [float(np.abs(img_on[y, x].astype(int) - img_off[y, x].astype(int)).max())
-                for x, y in (tuple(map(int, map(round, p))) for p in st["chair"])]
-        self.check(diff and max(diff) <= 12,
-                   f"{name}: the overlay shows through the chair (largest change inside its "
-                   f"outline {max(diff) if diff else 'n/a'} of 255; depth test?)")
-        through = [p for p in hidden if near_colour(img_on, *p, r=1)
-                   and not near_colour(img_off, *p, r=1)]
-        self.check(len(through) <= max(1, len(hidden) // 5),
-                   f"{name}: {len(through)} of {len(hidden)} path points behind the chair "
-                   f"show the path colour")
-        return (f"path colour at {frac:.0%} of {len(visible)} visible points; chair outline "
-                f"unchanged (max {max(diff):.0f}); {len(hidden)} hidden points, "
-                f"{len(through)} showing")
+        self.check(
+            frac >= 0.8,
+            f"{name}: the path colour shows at only {frac:.0%} of "
+            f"{len(visible)} visible path points (want >= 80 %)",
+        )
+        self.check(
+            changed >= 0.6,
+            f"{name}: the path colour was already there without the "
+            f"overlay at {1 - changed:.0%} of the points",
+        )
+        diff = [
+            float(np.abs(img_on[y, x].astype(int) - img_off[y, x].astype(int)).max())
+            for x, y in (tuple(map(int, map(round, p))) for p in st["chair"])
+        ]
+        self.check(
+            diff and max(diff) <= 12,
+            f"{name}: the overlay shows through the chair (largest change inside its "
+            f"outline {max(diff) if diff else 'n/a'} of 255; depth test?)",
+        )
+        through = [
+            p for p in hidden if near_colour(img_on, *p, r=1) and not near_colour(img_off, *p, r=1)
+        ]
+        self.check(
+            len(through) <= max(1, len(hidden) // 5),
+            f"{name}: {len(through)} of {len(hidden)} path points behind the chair "
+            f"show the path colour",
+        )
+        return (
+            f"path colour at {frac:.0%} of {len(visible)} visible points; chair outline "
+            f"unchanged (max {max(diff):.0f}); {len(hidden)} hidden points, "
+            f"{len(through)} showing"
+        )
 
     def overlay_top(self):
-        self.press("motion_patches.show_overlay", kind="prop", cols=(0.1, 0.3),
-                   below="motion_patches.analyse_motion")
-        on = self.s.py('result = bpy.context.scene.motion_patches.show_overlay')
+        self.press(
+            "motion_patches.show_overlay",
+            kind="prop",
+            cols=(0.1, 0.3),
+            below="motion_patches.analyse_motion",
+        )
+        on = self.s.py("result = bpy.context.scene.motion_patches.show_overlay")
         self.check(on, "the Show Planner Overlay checkbox did not turn the overlay on")
         self.settle()
         self.sidebar_shot("06-overlay-panel")
         # Nothing selected: a selected object's orange outline would pass for the path.
-        self.s.py('for ob in bpy.context.scene.objects:\n    ob.select_set(False)\nresult = 1')
+        self.s.py("for ob in bpy.context.scene.objects:\n    ob.select_set(False)\nresult = 1")
         view = self.s.py('result = rect(region("VIEW_3D", "WINDOW"))')
         self.s.key("KP_7", at=(view[0] + view[2] // 3, view[1] + view[3] // 2))
         self.s.wait_idle()
-        top = self.s.py('''
+        top = self.s.py("""
 r3d = area("VIEW_3D").spaces[0].region_3d
 r3d.view_perspective = "ORTHO"
 r3d.view_location = (4.2, 1.5, 0.0)  # the whole path left of the sidebar
 r3d.view_distance = 6.4
 redraw_all()
-result = r3d.view_rotation.to_euler()[:]''')
+result = r3d.view_rotation.to_euler()[:]""")
         self.check(max(abs(a) for a in top) < 1e-3, f"numpad 7 did not give the top view ({top})")
         return self.overlay_pair("07-overlay-top")
 
     def overlay_pair(self, name):
         """Screenshots of the viewport with the overlay off, then on; pixel checks."""
         self.s.move(5, 5)
-        self.s.py('bpy.context.scene.motion_patches.show_overlay = False\nredraw_all()\nresult=1')
+        self.s.py("bpy.context.scene.motion_patches.show_overlay = False\nredraw_all()\nresult=1")
         self.s.wait_idle()
         time.sleep(0.3)
         view = self.s.py('result = rect(region("VIEW_3D", "WINDOW"))')
         img_off = self.s.grab()
-        self.s.py('bpy.context.scene.motion_patches.show_overlay = True\nredraw_all()\nresult=1')
+        self.s.py("bpy.context.scene.motion_patches.show_overlay = True\nredraw_all()\nresult=1")
         self.s.wait_idle()
         time.sleep(0.3)
         st = self.view_state()
@@ -626,8 +724,12 @@ result = r3d.view_rotation.to_euler()[:]''')
                         left = max(left, cx - view[0] + cw)
                     else:
                         right = min(right, cx - view[0])
-            self.doc_boxes[name] = (max(int(lo[0]), left), max(int(lo[1]), 0),
-                                    min(int(hi[0]), right), min(int(hi[1]), view[3]))
+            self.doc_boxes[name] = (
+                max(int(lo[0]), left),
+                max(int(lo[1]), 0),
+                min(int(hi[0]), right),
+                min(int(hi[1]), view[3]),
+            )
         self.s.save(img_off, self.out / f"{name}-off.png", crop=tuple(view))
         return self.overlay_pixels(img_off, img_on, st, name)
 
@@ -635,7 +737,7 @@ result = r3d.view_rotation.to_euler()[:]''')
         # From the side, low, the path running across the view behind the chair: what
         # lies on the ground behind it (the far half of its blocked area, clip markers, the
         # traversal's ground line) must be hidden by it.
-        self.s.py('''
+        self.s.py("""
 from mathutils import Euler
 import math
 r3d = area("VIEW_3D").spaces[0].region_3d
@@ -644,21 +746,21 @@ r3d.view_location = (3.9, 1.6, 0.2)
 r3d.view_rotation = Euler((math.radians(72), 0.0, math.radians(-12)), "XYZ").to_quaternion()
 r3d.view_distance = 3.6
 redraw_all()
-result = 1''')
+result = 1""")
         return self.overlay_pair("08-overlay-perspective")
 
     # --- preferences --------------------------------------------------------------------
 
     def preferences(self):
-        self.s.py('''
+        self.s.py("""
 bpy.context.preferences.active_section = "ADDONS"
 bpy.context.window_manager.addon_search = "Motion"
 with override("VIEW_3D"):
     bpy.ops.screen.userpref_show()
-result = 1''')
+result = 1""")
         self.s.wait_idle()
         time.sleep(0.5)
-        win = self.s.py(f'''
+        win = self.s.py(f"""
 import addon_utils
 wins = bpy.context.window_manager.windows
 pw = wins[-1]
@@ -668,9 +770,11 @@ if len(wins) > 1:
         bpy.ops.preferences.addon_expand(module={MODULE!r})
     for a in pw.screen.areas:
         a.tag_redraw()
-    result = [pw.x, pw.y, pw.width, pw.height, pw.screen.areas[0].type]''')
-        self.check(win is not None and win[4] == "PREFERENCES",
-                   f"the Preferences window did not open: {win}")
+    result = [pw.x, pw.y, pw.width, pw.height, pw.screen.areas[0].type]""")
+        self.check(
+            win is not None and win[4] == "PREFERENCES",
+            f"the Preferences window did not open: {win}",
+        )
         self.s.wait_idle()
         # The window's own position on the X screen (Blender's x, y are from the bottom).
         x, y, w, h = win[:4]
@@ -691,7 +795,9 @@ if len(wins) > 1:
     def check_log(self):
         text = (self.work / "blender.log").read_text(errors="replace")
         shutil.copy(self.work / "blender.log", self.out / "blender.log")
-        bad = [ln for ln in text.splitlines() if LOG_BAD.search(ln) and not LOG_ALLOWED.fullmatch(ln)]
+        bad = [
+            ln for ln in text.splitlines() if LOG_BAD.search(ln) and not LOG_ALLOWED.fullmatch(ln)
+        ]
         self.check(not bad, "Blender's log has errors:\n  " + "\n  ".join(bad[:20]))
         return f"{len(text.splitlines())} lines, clean"
 
@@ -701,8 +807,14 @@ if len(wins) > 1:
         256-colour PNGs, a few hundred KB in all."""
         if not self.args.docs or not hasattr(self, "s"):
             return
-        need = ("02-locomotion-baked", "03-object-patch", "05-analysis", "07-overlay-top",
-                "08-overlay-perspective", "09-preferences")
+        need = (
+            "02-locomotion-baked",
+            "03-object-patch",
+            "05-analysis",
+            "07-overlay-top",
+            "08-overlay-perspective",
+            "09-preferences",
+        )
         if not all(n in self.shots for n in need):
             self.log("docs not written: the suite did not get as far as every screenshot")
             return
@@ -712,7 +824,8 @@ if len(wins) > 1:
         def cut(name, w=None):
             path, crop, img = self.shots[name]
             x, y, cw, ch = crop
-            return img[y:y + ch, x:x + (w or cw)]
+            return img[y : y + ch, x : x + (w or cw)]
+
         panel_w = self.sidebar_panel_width
         parts = [cut(n, panel_w) for n in need[:3]]
         h = max(p.shape[0] for p in parts)
@@ -720,13 +833,15 @@ if len(wins) > 1:
         row = [np.pad(p, ((0, h - p.shape[0]), (0, 0), (0, 0)), constant_values=255) for p in parts]
         sidebar = np.hstack([row[0], gap, row[1], gap, row[2]])
         written = [self.s.save(sidebar, docs / "sidebar.png", palette=True)]
-        for name, out in (("07-overlay-top", "overlay-top.png"),
-                          ("08-overlay-perspective", "overlay-perspective.png")):
+        for name, out in (
+            ("07-overlay-top", "overlay-top.png"),
+            ("08-overlay-perspective", "overlay-perspective.png"),
+        ):
             img = cut(name)
             box = self.doc_boxes.get(name)
             if box:
                 x0, y0, x1, y1 = box
-                img = img[max(0, y0):y1, max(0, x0):x1]
+                img = img[max(0, y0) : y1, max(0, x0) : x1]
             written.append(self.s.save(img, docs / out, scale=0.75, palette=True))
         written.append(self.s.save(cut("09-preferences"), docs / "preferences.png", palette=True))
         sizes = ", ".join(f"{p.name} {p.stat().st_size // 1024} KiB" for p in written)
@@ -735,8 +850,10 @@ if len(wins) > 1:
     def summary(self):
         ok = all(st.ok for st in self.steps) and self.steps
         total = time.monotonic() - self.t0
-        print("\n== GUI suite summary" + (f" (Blender {self.facts['blender']})"
-                                          if "blender" in self.facts else ""))
+        print(
+            "\n== GUI suite summary"
+            + (f" (Blender {self.facts['blender']})" if "blender" in self.facts else "")
+        )
         for st in self.steps:
             mark = "PASS" if st.ok else "FAIL"
             first = (st.detail.splitlines() or [""])[0]
@@ -747,10 +864,26 @@ if len(wins) > 1:
         passed = sum(1 for st in self.steps if st.ok)
         print(f"\ngui: {passed} passed, {len(self.steps) - passed} failed")
         print(f"GUI suite: {'PASS' if ok else 'FAIL'} ({total:.0f} s)")
-        (self.out / "summary.json").write_text(json.dumps({
-            "ok": bool(ok), "seconds": round(total, 1), "facts": self.facts,
-            "steps": [{"name": s.name, "ok": s.ok, "detail": s.detail, "seconds": round(s.seconds, 1)}
-                      for s in self.steps]}, indent=1, default=str))
+        (self.out / "summary.json").write_text(
+            json.dumps(
+                {
+                    "ok": bool(ok),
+                    "seconds": round(total, 1),
+                    "facts": self.facts,
+                    "steps": [
+                        {
+                            "name": s.name,
+                            "ok": s.ok,
+                            "detail": s.detail,
+                            "seconds": round(s.seconds, 1),
+                        }
+                        for s in self.steps
+                    ],
+                },
+                indent=1,
+                default=str,
+            )
+        )
         self.ok = bool(ok)
 
 
@@ -760,8 +893,11 @@ def _without_allowed(text):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default=str(REPO / "dist" / "gui"),
-                    help="where the screenshots, Blender's log and summary.json go")
+    ap.add_argument(
+        "--out",
+        default=str(REPO / "dist" / "gui"),
+        help="where the screenshots, Blender's log and summary.json go",
+    )
     ap.add_argument("--docs", default=None, help="also write the README's screenshots here")
     ap.add_argument("--keep", action="store_true", help="keep the temporary Blender home")
     args = ap.parse_args(argv)
