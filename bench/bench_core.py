@@ -47,21 +47,26 @@ WEIGHTS = tuple(DEFAULTS[k] for k in ("alpha", "beta", "gamma"))
 PILLAR_SIDES = 12
 
 
-def parse_args(argv=None):
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--layouts", type=int, default=20, help="random layouts to plan (default 20)")
-    p.add_argument("--seed", type=int, default=0, help="random seed of the layouts (default 0)")
+MOCAP_DEFAULT = os.environ.get("MOTION_PATCHES_MOCAP", str(REPO.parent / "shared" / "mocap"))
+
+
+def add_layout_arguments(p, layouts="random layouts to plan", seed="random seed of the layouts"):
+    """The arguments :func:`layouts` reads (layouts, seed, density, field) and the planning
+    ones every bench takes (radius, weights): one definition for bench_core, bench_paths
+    and bench_speed, so the same flags give the same layouts everywhere."""
+    p.add_argument("--layouts", type=int, default=20, help=f"{layouts} (default 20)")
+    p.add_argument("--seed", type=int, default=0, help=f"{seed} (default 0)")
     p.add_argument(
         "--density",
         type=float,
         default=0.1,
-        help="pillars per square metre of the field (default 0.1)",
+        help="pillars per square metre of the random fields (default 0.1)",
     )
     p.add_argument(
         "--field",
         type=float,
         default=30.0,
-        help="side of the square pillar field in metres (default 30)",
+        help="side of the square random pillar fields in metres (default 30)",
     )
     p.add_argument(
         "--radius",
@@ -77,11 +82,24 @@ def parse_args(argv=None):
         metavar=("ALPHA", "BETA", "GAMMA"),
         help="Eq. 5 weights (default %s)" % " ".join(f"{w:g}" for w in WEIGHTS),
     )
-    p.add_argument(
-        "--mocap",
-        default=os.environ.get("MOTION_PATCHES_MOCAP", str(REPO.parent / "shared" / "mocap")),
-        help="folder holding cmu/16_15.bvh and cmu/16_18.bvh",
+
+
+def machine():
+    """The machine line every bench prints first."""
+    return (
+        f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+        f"Python {platform.python_version()}, numpy {np.__version__}"
     )
+
+
+def add_mocap_argument(p, holding):
+    p.add_argument("--mocap", default=MOCAP_DEFAULT, help=f"folder holding {holding}")
+
+
+def parse_args(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_layout_arguments(p)
+    add_mocap_argument(p, "cmu/16_15.bvh and cmu/16_18.bvh")
     p.add_argument("--json", metavar="PATH", help="also write all figures as JSON")
     p.add_argument(
         "--profile",
@@ -558,8 +576,7 @@ def main(argv=None):
         "foot_lock_seconds": stats([r["foot_lock_seconds"] for r in records]),
     }
     res = {
-        "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-        f"Python {platform.python_version()}, numpy {np.__version__}",
+        "machine": machine(),
         "args": {
             "layouts": args.layouts,
             "seed": args.seed,

@@ -22,8 +22,6 @@ import argparse
 import cProfile
 import io
 import json
-import os
-import platform
 import pstats
 import resource
 import sys
@@ -57,11 +55,7 @@ def parse_args(argv=None):
     p.add_argument("--area", type=float, default=12.0, help="plaza m² per character")
     p.add_argument("--seed", type=int, default=17)
     p.add_argument("--max-wait", type=float, default=4.0, help="longest wait / hold, s")
-    p.add_argument(
-        "--mocap",
-        type=Path,
-        default=Path(os.environ.get("MOTION_PATCHES_MOCAP", REPO.parent / "shared" / "mocap")),
-    )
+    core.add_mocap_argument(p, "cmu/16_15.bvh and cmu/16_18.bvh")
     p.add_argument(
         "--profile",
         type=int,
@@ -267,15 +261,14 @@ def markdown(rows):
 
 def main(argv=None):
     args = parse_args(argv)
-    missing = core.missing_mocap(args.mocap)
+    missing = core.missing_mocap(Path(args.mocap))
     if missing:
         print(missing, file=sys.stderr)
         return 2
     print("bake ...", flush=True)
-    patch, _, bake = core.bench_bake(args.mocap)
+    patch, _, bake = core.bench_bake(Path(args.mocap))
     res = {
-        "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-        f"Python {platform.python_version()}, numpy {np.__version__}",
+        "machine": core.machine(),
         "args": {k: str(v) for k, v in vars(args).items() if k != "json"},
         "crowds": [],
     }

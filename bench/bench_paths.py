@@ -27,8 +27,6 @@ One line per plan while running, then Markdown tables with each target met / not
 import argparse
 import heapq
 import json
-import os
-import platform
 import sys
 import time
 from dataclasses import dataclass, field
@@ -75,43 +73,10 @@ TARGETS = {  # figure: (comparison, value, shown)
 
 def parse_args(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument(
-        "--layouts",
-        type=int,
-        default=20,
-        help="random pillar fields of bench_core (default 20; 0: none)",
-    )
-    p.add_argument(
-        "--seed",
-        type=int,
-        default=0,
-        help="seed of the random fields and the 40-pillar scene (default 0)",
-    )
-    p.add_argument(
-        "--density",
-        type=float,
-        default=0.1,
-        help="pillars per square metre of the random fields (default 0.1)",
-    )
-    p.add_argument(
-        "--field",
-        type=float,
-        default=30.0,
-        help="side of the random pillar fields in metres (default 30)",
-    )
-    p.add_argument(
-        "--radius",
-        type=float,
-        default=DEFAULTS["radius"],
-        help=f"character radius (default {DEFAULTS['radius']:g} m)",
-    )
-    p.add_argument(
-        "--weights",
-        type=float,
-        nargs=3,
-        default=WEIGHTS,
-        metavar=("ALPHA", "BETA", "GAMMA"),
-        help="Eq. 5 weights (default %s)" % " ".join(f"{w:g}" for w in WEIGHTS),
+    core.add_layout_arguments(
+        p,
+        layouts="random pillar fields of bench_core (0: none)",
+        seed="seed of the random fields and the 40-pillar scene",
     )
     p.add_argument(
         "--variants",
@@ -126,11 +91,7 @@ def parse_args(argv=None):
         default=None,
         help="comma-separated scene names or prefixes ('random' for the fields)",
     )
-    p.add_argument(
-        "--mocap",
-        default=os.environ.get("MOTION_PATCHES_MOCAP", str(REPO.parent / "shared" / "mocap")),
-        help="folder holding cmu/16_15.bvh and cmu/16_18.bvh",
-    )
+    core.add_mocap_argument(p, "cmu/16_15.bvh and cmu/16_18.bvh")
     p.add_argument("--json", metavar="PATH", help="also write all figures as JSON")
     return p.parse_args(argv)
 
@@ -1015,8 +976,7 @@ def main(argv=None):
             if recs:
                 summary[f"{group}, {v}"] = summarise(recs)
     res = {
-        "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-        f"Python {platform.python_version()}, numpy {np.__version__}",
+        "machine": core.machine(),
         "args": {
             k: (list(v) if isinstance(v, (list, tuple)) else v) for k, v in vars(args).items()
         },

@@ -40,8 +40,6 @@ import cProfile
 import inspect
 import io
 import json
-import os
-import platform
 import pstats
 import sys
 import time
@@ -104,24 +102,7 @@ def parse_args(argv=None):
         default=",".join(SECTIONS),
         help=f"comma-separated sections to run (default all: {','.join(SECTIONS)})",
     )
-    p.add_argument("--layouts", type=int, default=20, help="random layouts / pairs (default 20)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the layouts (default 0)")
-    p.add_argument("--density", type=float, default=0.1, help="pillars per m² (default 0.1)")
-    p.add_argument("--field", type=float, default=30.0, help="side of the field, m (default 30)")
-    p.add_argument(
-        "--radius",
-        type=float,
-        default=DEFAULTS["radius"],
-        help=f"character radius (default {DEFAULTS['radius']:g} m)",
-    )
-    p.add_argument(
-        "--weights",
-        type=float,
-        nargs=3,
-        default=WEIGHTS,
-        metavar=("ALPHA", "BETA", "GAMMA"),
-        help="Eq. 5 weights (default %s)" % " ".join(f"{w:g}" for w in WEIGHTS),
-    )
+    core.add_layout_arguments(p, layouts="random layouts / pairs", seed="seed of the layouts")
     p.add_argument(
         "--repeat",
         type=int,
@@ -140,11 +121,7 @@ def parse_args(argv=None):
     p.add_argument(
         "--length-layouts", type=int, default=5, help="length: layouts per path length (default 5)"
     )
-    p.add_argument(
-        "--mocap",
-        default=os.environ.get("MOTION_PATCHES_MOCAP", str(REPO.parent / "shared" / "mocap")),
-        help="folder holding cmu/16_15, 16_18, 16_06, 13_05, 13_05_standup .bvh",
-    )
+    core.add_mocap_argument(p, "cmu/16_15, 16_18, 16_06, 13_05, 13_05_standup .bvh")
     p.add_argument("--json", metavar="PATH", help="also write every figure and record as JSON")
     p.add_argument(
         "--profile",
@@ -881,8 +858,7 @@ def main(argv=None):
     args = parse_args(argv)
     t_all = time.perf_counter()
     res = {
-        "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-        f"Python {platform.python_version()}, numpy {np.__version__}",
+        "machine": core.machine(),
         "args": {k: v for k, v in vars(args).items() if k not in ("mocap", "json")},
     }
     print("bake ...", flush=True)
