@@ -20,6 +20,17 @@ from .synthesis import cycles_along, follow, frame_arclengths
 
 EDGES = 4  # 0 south (y = 0), 1 east (x = side), 2 north (y = side), 3 west (x = 0)
 DIRECTIONS = 8  # headings in 45 degree steps, direction d has heading d * 45 degrees
+SEGMENT_ARRAYS = (  # the per-segment fields of LocomotionPatch, in their order
+    "seg_entry",
+    "seg_exit",
+    "seg_scale",
+    "seg_cycles",
+    "seg_mask",
+    "seg_length",
+    "seg_turn",
+    "seg_effort",
+    "seg_pose",
+)
 INWARD = np.array([2, 4, 6, 0])  # direction of each edge's inward normal
 MAX_CYCLES = 4
 MIN_ENTRY_SHARE = 0.5
@@ -154,20 +165,7 @@ class LocomotionPatch:
     def without(self, segments):
         """The patch with the given segments removed (caches dropped)."""
         keep = np.setdiff1d(np.arange(self.segment_count), np.asarray(segments, int))
-        arrays = {
-            name: getattr(self, name)[keep]
-            for name in (
-                "seg_entry",
-                "seg_exit",
-                "seg_scale",
-                "seg_cycles",
-                "seg_mask",
-                "seg_length",
-                "seg_turn",
-                "seg_effort",
-                "seg_pose",
-            )
-        }
+        arrays = {name: getattr(self, name)[keep] for name in SEGMENT_ARRAYS}
         return LocomotionPatch(
             self.layer,
             self.gait,

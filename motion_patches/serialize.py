@@ -14,24 +14,13 @@ import json
 import numpy as np
 
 from .gait import Gait
-from .locomotion_patch import DIRECTIONS, EDGES, LocomotionPatch
+from .locomotion_patch import DIRECTIONS, EDGES, SEGMENT_ARRAYS, LocomotionPatch
 
 _KIND_NAMES = dict(f="float", i="integer", u="uint64", b="bool", U="text")  # dtype kinds
 
 FORMAT = "motion_patches.locomotion_patch"
 VERSION = 1
-_ARRAYS = (
-    "seg_entry",
-    "seg_exit",
-    "seg_scale",
-    "seg_cycles",
-    "seg_mask",
-    "seg_length",
-    "seg_turn",
-    "seg_effort",
-    "seg_pose",
-    "pose_centres",
-)
+_ARRAYS = (*SEGMENT_ARRAYS, "pose_centres")
 
 
 def patch_to_bytes(patch):
@@ -71,8 +60,7 @@ def patch_from_bytes(data):
         int(header["cells"]),
         int(header["nodes"]),
         float(header["effort_rate"]),
-        *(d[k] for k in _ARRAYS[:8]),
-        d["seg_pose"],
+        *(d[k] for k in SEGMENT_ARRAYS),
         d["pose_centres"],
         header["stats"],
     )
