@@ -22,6 +22,15 @@ def progress(context):
         wm.progress_end()
 
 
+def report_conflicts(op, result):
+    """A warning per pair of a crowd that still comes too close (Plan Crowd, Duplicate Crowd)."""
+    for c in result.conflicts:
+        op.report(
+            {"WARNING"},
+            f"'{c['a']}' and '{c['b']}' come within {c['distance_m']:.2f} m at frame {c['frame']}",
+        )
+
+
 def list_operators(name, noun, where, owner, items, index):
     """The Add and Remove operators (``motion_patches.<name>_add`` / ``_remove``) of the
     list ``owner(context).<items>`` whose active row is ``<index>``; ``owner`` returns None

@@ -5,7 +5,7 @@ import bpy
 from bpy.props import FloatVectorProperty, IntProperty, StringProperty
 
 from .. import api
-from .common import progress
+from .common import progress, report_conflicts
 
 
 class MOTION_PATCHES_OT_duplicate_crowd(bpy.types.Operator):
@@ -68,12 +68,7 @@ class MOTION_PATCHES_OT_duplicate_crowd(bpy.types.Operator):
             return {"CANCELLED"}
         for name, why in res.failed:
             self.report({"WARNING"}, f"unreachable: {why}")
-        for c in res.conflicts:
-            self.report(
-                {"WARNING"},
-                f"'{c['a']}' and '{c['b']}' come within "
-                f"{c['distance_m']:.2f} m at frame {c['frame']}",
-            )
+        report_conflicts(self, res)
         holds = sum(len(h) for h in getattr(res, "holds", {}).values())
         waits = sum(1 for d in res.delays.values() if d)
         self.report(

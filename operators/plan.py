@@ -6,7 +6,7 @@ import bpy
 from bpy.props import StringProperty
 
 from .. import api, props
-from .common import progress
+from .common import progress, report_conflicts
 
 
 class MOTION_PATCHES_OT_plan_path(bpy.types.Operator):
@@ -80,12 +80,7 @@ class MOTION_PATCHES_OT_plan_crowd(bpy.types.Operator):
         if not res.plans:
             self.report({"ERROR"}, "No character found a path; nothing was written")
             return {"CANCELLED"}
-        for c in res.conflicts:
-            self.report(
-                {"WARNING"},
-                f"'{c['a']}' and '{c['b']}' come within "
-                f"{c['distance_m']:.2f} m at frame {c['frame']}",
-            )
+        report_conflicts(self, res)
         waits = [f"{n} {d} frames" for n, d in res.delays.items() if d]
         self.report(
             {"INFO"},
