@@ -16,8 +16,9 @@ from motion_patches import gait as gait_mod
 MOCAP = Path(os.environ.get("MOTION_PATCHES_MOCAP", REPO.parent / "shared" / "mocap"))
 
 
-def cmu(name):
-    path = MOCAP / "cmu" / f"{name}.bvh"
+def cmu(name, folder="cmu"):
+    """A clip of the shared mocap (``folder``: cmu, or cmu16max for the 3ds Max naming)."""
+    path = MOCAP / folder / f"{name}.bvh"
     if not path.exists():
         pytest.fail(f"mocap clip missing: {path} (set MOTION_PATCHES_MOCAP)")
     return bvh.read(path)

@@ -5,7 +5,7 @@ of layer by Eq. 5 cost, and traversal clips used only in the layers they declare
 import numpy as np
 import pytest
 
-from motion_patches import bvh, contacts, layers, locomotion_patch, metrics
+from motion_patches import contacts, layers, locomotion_patch, metrics
 from motion_patches import gait as gait_mod
 from motion_patches.environment import Environment, Obstacle
 from motion_patches.motion import concatenate
@@ -13,14 +13,11 @@ from motion_patches.object_patch import ObjectPatch, PatchClip
 from motion_patches.planner import SegmentPlanner, plan_motions
 from motion_patches.retarget import rig_map
 
-from conftest import MOCAP
+from conftest import cmu
 
 
 def max16(name):
-    path = MOCAP / "cmu16max" / f"{name}.bvh"
-    if not path.exists():
-        pytest.fail(f"mocap clip missing: {path}")
-    return bvh.read(path)
+    return cmu(name, folder="cmu16max")
 
 
 @pytest.fixture(scope="module")
