@@ -145,22 +145,27 @@ def two_bone_ik(hip, knee, ankle, target, hinge, forward=None):
     return np.where(second, s2, s1), np.where(second, k2, k1)
 
 
-def lock_feet(skel, world, blend=BLEND_FRAMES):
+def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None):
     """Rotation channels (F, J, 4) of ``world`` (a Motion) with planted feet pinned.
 
     Only the hip (thigh) and knee (shin) channels of each leg change, and the ankle's so
-    that the foot keeps its world orientation."""
+    that the foot keeps its world orientation. ``offsets`` is a function (side, ankle xy
+    (F, 2), toe xy (F, 2)) -> (F, 2) horizontal ankle corrections replacing
+    :func:`planted_offsets` (a turn in place moves its feet its own way)."""
     m = world.world_matrices(skel)
     g = m[..., :3, :3].copy()
     p = m[..., :3, 3]
     for side, (hip, knee, ankle, toe) in enumerate(leg_chains(skel)):
-        d = planted_offsets(
-            p[:, ankle, :2],
-            p[:, toe, :2],
-            world.contacts[:, 2 * side],
-            world.contacts[:, 2 * side + 1],
-            blend,
-        )
+        if offsets is not None:
+            d = offsets(side, p[:, ankle, :2], p[:, toe, :2])
+        else:
+            d = planted_offsets(
+                p[:, ankle, :2],
+                p[:, toe, :2],
+                world.contacts[:, 2 * side],
+                world.contacts[:, 2 * side + 1],
+                blend,
+            )
         moving = np.linalg.norm(d, axis=-1) > 1e-7
         if not moving.any():
             continue

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import astar, curves, dubins, retime, shortcut
+from . import astar, curves, dubins, retime, shortcut, turn_in_place
 from .defaults import PLANNING as DEFAULTS
 from .environment import PATH_MARGIN, SUB, Obstacle
 from .high_level import TilePlanner
@@ -52,6 +52,8 @@ DUBINS_TRIES = 3  # Dubins words of a node sampled and tested together
 START_BATCH = 24  # start nodes whose connectors are tested together
 GOAL_BATCH = 8  # goal links tested together
 CORRIDOR_TILES = 2  # tiles either side of the high-level path the corridor holds
+LOOP_TURN = np.radians(90.0)  # a last walking piece turning more than this may loop into
+# the goal's heading: a walk to the goal facing any way and a turn on the spot is tried too
 
 
 class PlanError(ValueError):
@@ -74,9 +76,12 @@ class Piece:
     prop: object = None  # ObjectPatch of a traversal
     clip_index: int = -1
     frame: tuple = IDENTITY  # plan frame (x, y, angle) taking the piece to the world
+    turn: tuple = None  # (x, y, heading, angle) of a turn on the spot (kind "turn"), world
 
     @property
     def label(self):
+        if self.kind == "turn":
+            return f"turn {np.degrees(self.turn[3]):+.0f}deg in place (derived)"
         if self.kind == "segment":
             return f"seg{self.segment:04d}"
         if self.kind == "part":
@@ -626,14 +631,124 @@ class SegmentPlanner:
 
     # -- search ---------------------------------------------------------------------------
     def plan(
-        self, start, goal, margin_tiles=3, max_expansions=400_000, use_corridor=False, shorten=True
+        self,
+        start,
+        goal,
+        margin_tiles=3,
+        max_expansions=400_000,
+        use_corridor=False,
+        shorten=True,
+        turn_in_place=True,
     ):
         """Cheapest path from ``start`` to ``goal`` (x, y, heading); raises PlanError.
 
         The search runs in the plan frame (:mod:`.plan_frame`): the lattice anchored at the
         start and turned to the goal; the obstacles and props near the way are moved into
         it, and every piece of the result carries the frame back to the world.
+
+        With ``turn_in_place``, when the walk would loop into the goal's heading (its last
+        piece turns more than ``LOOP_TURN``) or cannot arrive facing it at all, a walk to
+        the goal facing any way followed by a turn on the spot (:mod:`.turn_in_place`) is
+        planned too, and the cheaper by Eq. 5 is kept.
         """
+        args = (margin_tiles, max_expansions, use_corridor, shorten)
+        start, goal = np.asarray(start, float), np.asarray(goal, float)
+        if not (turn_in_place and self.turns_in_place):
+            return self._plan_once(start, goal, *args)
+        try:
+            exact, error = self._plan_once(start, goal, *args), None
+        except PlanError as e:
+            exact, error = None, e
+            if "inside or within" in str(e) or "finite" in str(e):
+                raise
+        loops = (True, True) if exact is None else self._loops(exact)
+        if not any(loops):
+            return exact
+        # One alternative: a turn on the spot at each end the walk loops at (towards the
+        # goal at the start; to the goal's heading at the goal, walking in facing any way).
+        turn_to = float(np.arctan2(goal[1] - start[1], goal[0] - start[0])) if loops[0] else None
+        free = loops[1] and not np.isnan(goal[2])
+        best = exact
+        if turn_to is not None or free:
+            s = start if turn_to is None else np.array([start[0], start[1], turn_to])
+            g = np.array([goal[0], goal[1], np.nan]) if free else goal
+            try:
+                found = self._plan_once(s, g, *args)
+            except PlanError:
+                found = None
+            if found is not None:
+                found = self._with_turns(
+                    found, start if turn_to is not None else None, goal if free else None
+                )
+                if best is None or _final_cost(found) < _final_cost(best):
+                    best = found
+        if best is None:
+            raise error
+        if best is not exact:
+            best.stats["exact_facing_cost"] = None if exact is None else _final_cost(exact)
+        return best
+
+    @property
+    def turns_in_place(self):
+        """The gait can turn on the spot within the patch's curvature range."""
+        got = self.__dict__.get("_turns_in_place")
+        if got is None:
+            got = self._turns_in_place = turn_in_place.can_turn(
+                self.patch.gait, self.kmin, self.kmax
+            )
+        return got
+
+    def _loops(self, plan):
+        """(first, last) walking piece turns more than ``LOOP_TURN``: the walk may loop
+        out of the start's heading or into the goal's."""
+        out = []
+        for piece in (plan.pieces[0], plan.pieces[-1]):
+            if piece.kind in ("traversal", "interaction", "turn"):
+                out.append(False)
+                continue
+            curve = piece.curve if piece.curve is not None else self._segment_curve(piece)
+            out.append(bool(curve.total_turn() > LOOP_TURN))
+        return tuple(out)
+
+    def _turn_piece(self, x, y, heading, delta):
+        gait = self.patch.gait
+        frames = turn_in_place.frames_needed(gait, delta)
+        frames = retime.warp_phases(frames, True, True, gait.frames).size
+        cost = self.beta * abs(delta) + self.gamma * self.patch.effort_rate * frames / gait.fps
+        return Piece("turn", cost=cost, turn=(float(x), float(y), float(heading), float(delta)))
+
+    def _with_turns(self, plan, start=None, goal=None):
+        """``plan`` with a turn on the spot from ``start``'s heading before it and / or
+        one to ``goal``'s heading after it (the plan then starts facing its first piece's
+        way, ends facing any way); Eq. 5 costs count each turn and its time."""
+        pieces, added, degrees = list(plan.pieces), 0.0, []
+        if start is not None:
+            delta = _wrap(plan.start[2] - start[2])
+            piece = self._turn_piece(start[0], start[1], start[2], delta)
+            pieces.insert(0, piece)
+            added += piece.cost
+            degrees.append(float(np.degrees(delta)))
+        if goal is not None:
+            arrive = float(plan.goal[2])
+            delta = _wrap(goal[2] - arrive)
+            piece = self._turn_piece(goal[0], goal[1], arrive, delta)
+            pieces.append(piece)
+            added += piece.cost
+            degrees.append(float(np.degrees(delta)))
+        stats = dict(
+            plan.stats, turn_in_place_deg=degrees, cost_shortened=_final_cost(plan) + added
+        )
+        return Plan(
+            pieces,
+            plan.cost + added,
+            plan.expansions,
+            plan.seconds,
+            tuple(start) if start is not None else plan.start,
+            tuple(goal) if goal is not None else plan.goal,
+            stats,
+        )
+
+    def _plan_once(self, start, goal, margin_tiles, max_expansions, use_corridor, shorten):
         t0 = time.perf_counter()
         start, goal = np.asarray(start, float), np.asarray(goal, float)
         for what, pt in (("start", start), ("goal", goal)):
@@ -1145,6 +1260,15 @@ def _patch_cache(patch, key, make):
     return got
 
 
+def _wrap(a):
+    return float((a + np.pi) % (2 * np.pi) - np.pi)
+
+
+def _final_cost(plan):
+    """Eq. 5 cost of a plan's pieces as they will be walked (after shortening)."""
+    return float(plan.stats.get("cost_shortened", plan.cost))
+
+
 def _dubins_curve(samples):
     """A :class:`~.curves.Curve` of a Dubins word from its samples (arc length, positions,
     headings, curvatures; :func:`.dubins.samples`), the curvature smoothed for blending."""
@@ -1162,30 +1286,41 @@ def _derivs(curve):
 def plan_motions(patch, plan, standing=True):
     """World-space motion of every piece, eased across stitches into and out of clips;
     with ``standing`` a plan that starts (ends) walking starts from (ends in) standing:
-    its first (last) piece is time-warped (:mod:`.retime`), ramps one gait cycle long."""
-    ms = [piece_motion(patch, p) for p in plan.pieces]
-    clips = ("traversal", "interaction")
-    if standing:
-        ramp = patch.gait.frames
-        first_walks, last_walks = (
-            plan.pieces[0].kind not in clips,
-            plan.pieces[-1].kind not in clips,
-        )
-        if len(ms) == 1:
-            ms[0] = retime.eased(ms[0], first_walks, last_walks, ramp)
-        else:
-            ms[0] = retime.eased(ms[0], ease_in=first_walks, ramp=ramp)
-            ms[-1] = retime.eased(ms[-1], ease_out=last_walks, ramp=ramp)
-        if last_walks and np.isfinite(np.asarray(plan.goal[:2], float)).all():
-            ms[-1] = hips_to(ms[-1], plan.goal[:2], 2 * patch.gait.frames)
+    its first (last) piece is time-warped (:mod:`.retime`), ramps one gait cycle long. A
+    turn on the spot continues from the pose the walk before it stopped in; the walk
+    slows to a stop at the goal and the turn eases in and out."""
+    ms = []
     for i, p in enumerate(plan.pieces):
-        if p.kind in clips:
+        if p.kind == "turn":
+            ms.append(turn_motion(patch, p, ms[-1] if ms else None))
+        else:
+            ms.append(piece_motion(patch, p))
+    clips = ("traversal", "interaction")
+    kinds = [p.kind for p in plan.pieces]
+    if standing:
+        ramp, n = patch.gait.frames, len(ms)
+        for i, kind in enumerate(kinds):
+            if kind in clips:
+                continue
+            ease_in = i == 0 or kind == "turn" or kinds[i - 1] == "turn"
+            ease_out = i == n - 1 or kind == "turn" or kinds[i + 1] == "turn"
+            ms[i] = retime.eased(ms[i], ease_in, ease_out, ramp)
+        if kinds[-1] not in clips and np.isfinite(np.asarray(plan.goal[:2], float)).all():
+            ms[-1] = hips_to(ms[-1], plan.goal[:2], 2 * patch.gait.frames)
+    for i, kind in enumerate(kinds):
+        if kind in clips:
             continue
-        if i + 1 < len(ms) and plan.pieces[i + 1].kind in clips:
+        if i + 1 < len(ms) and kinds[i + 1] in clips:
             ms[i] = ease_to(ms[i], ms[i + 1], BLEND_FRAMES, at_end=True)
-        if i > 0 and plan.pieces[i - 1].kind in clips:
+        if i > 0 and (kinds[i - 1] in clips or "turn" in (kind, kinds[i - 1])):
             ms[i] = ease_to(ms[i], ms[i - 1], BLEND_FRAMES, at_end=False)
     return ms
+
+
+def turn_motion(patch, piece, previous=None):
+    """World-space motion of a turn on the spot (kind "turn"), continuing ``previous``."""
+    x, y, heading, delta = piece.turn
+    return turn_in_place.turn_motion(patch.gait, (x, y), heading, delta, previous)
 
 
 def hips_to(motion, xy, window):
@@ -1253,6 +1388,8 @@ def interaction_states(start=None, goal=None):
 
 def piece_motion(patch, piece):
     """World-space motion of one planned piece (not eased; see :func:`plan_motions`)."""
+    if piece.kind == "turn":
+        return turn_motion(patch, piece)
     m = _local_piece_motion(patch, piece)
     return m if piece.frame == IDENTITY else m.transformed(*piece.frame)
 

@@ -112,9 +112,11 @@ def test_goal_inside_an_obstacle_is_refused(walk_patch):
         SegmentPlanner(walk_patch, env).plan((0.5, 0.5, 0), (5.0, 5.0, 0.0))
 
 
-def test_a_goal_facing_out_of_a_dead_end_needs_any_facing(walk_patch):
-    """The goal stands deep in a dead-end corridor facing its mouth: no walk can turn round
-    in there, so the exact facing is refused; with any facing the walk ends facing in."""
+def test_a_goal_facing_out_of_a_dead_end_is_reached_by_turning_on_the_spot(walk_patch):
+    """The goal stands deep in a dead-end corridor facing its mouth: no walk can curve
+    round in there, so without turning on the spot the exact facing is refused; with any
+    facing the walk ends facing in; by default it walks in and turns round where it
+    stands (the derived turn in place), ending on the goal facing the mouth."""
     from motion_patches.planner import plan_motions
 
     def box(name, x0, y0, x1, y1):
@@ -130,9 +132,16 @@ def test_a_goal_facing_out_of_a_dead_end_needs_any_facing(walk_patch):
     planner = SegmentPlanner(walk_patch, env)
     start = (-2.0, 0.0, 0.0)
     with pytest.raises(PlanError):
-        planner.plan(start, (5.4, 0.0, np.pi))
+        planner.plan(start, (5.4, 0.0, np.pi), turn_in_place=False)
     plan = planner.plan(start, (5.4, 0.0, np.nan))
     assert abs(plan.goal[2]) < np.radians(30)  # it walks in and stops facing the end wall
     world = concatenate(plan_motions(walk_patch, plan))
     assert np.linalg.norm(world.ground[-1, :2] - (5.4, 0.0)) < 0.01
+    assert not env.blocked(world.ground[:, :2]).any()
+    plan = planner.plan(start, (5.4, 0.0, np.pi))
+    assert [p.kind for p in plan.pieces][-1] == "turn"
+    world = concatenate(plan_motions(walk_patch, plan))
+    assert np.linalg.norm(world.ground[-1, :2] - (5.4, 0.0)) < 0.01
+    heading = (world.ground[-1, 2] - np.pi + np.pi) % (2 * np.pi) - np.pi
+    assert abs(np.degrees(heading)) < 5.0
     assert not env.blocked(world.ground[:, :2]).any()
