@@ -52,12 +52,17 @@ DUBINS_TRIES = 3  # Dubins words of a node sampled and tested together
 START_BATCH = 24  # start nodes whose connectors are tested together
 GOAL_BATCH = 8  # goal links tested together
 CORRIDOR_TILES = 2  # tiles either side of the high-level path the corridor holds
-LOOP_TURN = np.radians(90.0)  # a last walking piece turning more than this may loop into
-# the goal's heading: a walk to the goal facing any way and a turn on the spot is tried too
+LOOP_TURN = np.radians(90.0)  # a walk turning more than this near its start (goal) may loop
+LOOP_REACH = 2.0  # gait cycles of way from either end where such a loop is looked for
+MIN_TURN_IN_PLACE = np.radians(20.0)  # a start this close to facing the goal walks off
 
 
 class PlanError(ValueError):
     """The goal cannot be reached, or the request is malformed; the message says why."""
+
+
+class SearchLimit(PlanError):
+    """The search stopped at its node limit before finding a way (not proof there is none)."""
 
 
 STITCH_PAYLOAD = -10  # payloads at or below this are stitched edges: -10 - index
@@ -659,14 +664,16 @@ class SegmentPlanner:
             exact, error = self._plan_once(start, goal, *args), None
         except PlanError as e:
             exact, error = None, e
-            if "inside or within" in str(e) or "finite" in str(e):
-                raise
+            if isinstance(e, SearchLimit) or not ("facing" in str(e) or "unreachable" in str(e)):
+                raise  # a search limit, a goal inside a prop: no turn on the spot helps
         loops = (True, True) if exact is None else self._loops(exact)
         if not any(loops):
             return exact
         # One alternative: a turn on the spot at each end the walk loops at (towards the
         # goal at the start; to the goal's heading at the goal, walking in facing any way).
-        turn_to = float(np.arctan2(goal[1] - start[1], goal[0] - start[0])) if loops[0] else None
+        bearing = float(np.arctan2(goal[1] - start[1], goal[0] - start[0]))
+        off = abs(_wrap(bearing - start[2]))
+        turn_to = bearing if loops[0] and off >= MIN_TURN_IN_PLACE else None
         free = loops[1] and not np.isnan(goal[2])
         best = exact
         if turn_to is not None or free:
@@ -699,15 +706,19 @@ class SegmentPlanner:
         return got
 
     def _loops(self, plan):
-        """(first, last) walking piece turns more than ``LOOP_TURN``: the walk may loop
-        out of the start's heading or into the goal's."""
+        """(start, goal): the walk turns more than ``LOOP_TURN`` within its first (last)
+        ``LOOP_REACH`` gait cycles of way: it may loop out of the start's heading (into
+        the goal's), where a turn on the spot would do."""
+        reach = LOOP_REACH * self.patch.gait.cycle_distance
         out = []
-        for piece in (plan.pieces[0], plan.pieces[-1]):
+        for piece, end in ((plan.pieces[0], 0), (plan.pieces[-1], -1)):
             if piece.kind in ("traversal", "interaction", "turn"):
                 out.append(False)
                 continue
-            curve = piece.curve if piece.curve is not None else self._segment_curve(piece)
-            out.append(bool(curve.total_turn() > LOOP_TURN))
+            c = piece.curve if piece.curve is not None else self._segment_curve(piece)
+            near = c.s <= c.s[0] + reach if end == 0 else c.s >= c.s[-1] - reach
+            h = np.unwrap(c.heading[near])
+            out.append(bool(h.size > 1 and np.sum(np.abs(np.diff(h))) > LOOP_TURN))
         return tuple(out)
 
     def _turn_piece(self, x, y, heading, delta):
@@ -999,7 +1010,7 @@ class SegmentPlanner:
         ):
             raise PlanError("no walkable way into the goal: " + self._boxed_in("goal", goal))
         if not result.found:
-            raise PlanError(
+            raise (SearchLimit if result.expansions >= max_expansions else PlanError)(
                 f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is unreachable: obstacles "
                 f"close every path within {margin_tiles} tiles of start and goal "
                 f"({result.expansions} nodes searched)"

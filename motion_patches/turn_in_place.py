@@ -23,6 +23,7 @@ from .poses import pose_features
 
 LABEL = "turn in place (derived from the sharpest turn loop)"
 MIN_SHARE = 0.75  # the turn may end on a double-support frame from this share of the angle
+SWAY = 0.5  # share of the stride's horizontal hip sway kept when stepping on the spot
 
 
 MIN_LOOP_TURN = np.radians(30.0)  # a loop turning less per cycle cannot turn on the spot
@@ -104,7 +105,9 @@ def turn_motion(gait, xy, heading, delta, previous=None):
     ph, steps = turn_phases(gait, delta, phase)
     h = heading + np.concatenate(([0.0], np.cumsum(steps)))
     ground = np.column_stack((np.full(ph.size, xy[0]), np.full(ph.size, xy[1]), h))
-    m = Motion(ground, loop.root_local[ph].copy(), loop.rotations[ph].copy(), loop.contacts[ph])
+    root = loop.root_local[ph].copy()
+    root[:, :2] *= SWAY  # stepping on the spot shifts the weight less than striding
+    m = Motion(ground, root, loop.rotations[ph].copy(), loop.contacts[ph])
     return stride_removed(gait.skeleton, m)
 
 

@@ -89,3 +89,33 @@ def test_a_gap_of_twice_the_radius_plus_0_3_m_is_used(baked_blend, addon_module)
     assert gap_lo + 0.25 <= x <= gap_hi - 0.25  # through the gap, clear of both ends
     straight = np.hypot(goal.location.x - start[0], goal.location.y - start[1])
     assert result.length_m < 1.25 * straight  # round a wall end would be over 1.6 x
+
+
+def test_a_goal_behind_facing_minus_y_is_reached_by_turning_on_the_spot(baked_blend, addon_module):
+    """The character faces away from a goal 6 m behind it, an unrotated empty (facing -Y as
+    a user leaves it): it turns round where it stands (the turn in place derived from the
+    walk's sharpest turn loop), walks straight there and turns to face -Y, instead of
+    looping twice; evaluated hips path within 10 % of the straight line, feet planted,
+    standing at both ends, the end facing -Y."""
+    bpy.ops.wm.open_mainfile(filepath=str(baked_blend))
+    scene = bpy.context.scene
+    char = walker_from(scene.motion_patches.source_armature, location=(0.3, -0.2, 0.0))
+    bpy.context.view_layer.update()
+    skel = addon_module.adapter.storage.load_patch(scene, "walk").gait.skeleton
+    start = addon_module.adapter.scene.character_state(char, skel)
+    behind = start[:2] - 6.0 * np.array([np.cos(start[2]), np.sin(start[2])])
+    goal = bpy.data.objects.new("Goal", None)  # an empty as added: no rotation, facing -Y
+    scene.collection.objects.link(goal)
+    goal.location = (behind[0], behind[1], 0.0)
+    result = plan(addon_module, char, goal)
+    assert any(p.startswith("turn") for p in result.pieces), result.pieces
+    hips, fps = evaluated_hips(addon_module, char)
+    length = np.sum(np.linalg.norm(np.diff(hips, axis=0), axis=1))
+    assert length < 1.10 * 6.0, length
+    assert result.length_m < 1.02 * 6.0
+    speed = np.linalg.norm(np.diff(hips, axis=0), axis=1) * fps
+    assert speed[0] < 0.2 and speed[-1] < 0.2, (speed[:3], speed[-3:])
+    figures = addon_module.api.analyse(bpy.context, char)
+    assert figures["goal_heading_error_deg"] < 5.0
+    assert figures["goal_root_position_error_cm"] < 5.0
+    assert figures["foot_skate"]["mean_cm_per_frame"] < 1.0
