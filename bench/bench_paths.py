@@ -628,6 +628,10 @@ def measure(scene, env, patch, lim, start, goal, args, ref):
                 - goal[:2]
             )
         ),
+        hips_path_m=path_length(
+            to_world(patch.gait.skeleton, g, m.root_local, m.rotations)[0][:, :2]
+        ),
+        turns_in_place=sum(p.kind == "turn" for p in plan.pieces),
         frames_inside=int(env.blocked(xy).sum()),
         min_clearance_m=min_clearance(scene.obstacles, xy),
         glitches=glitches,
@@ -637,6 +641,7 @@ def measure(scene, env, patch, lim, start, goal, args, ref):
     if ref.get("length"):
         L = ref["length"]
         rec["detour"] = rec["path_m"] / L
+        rec["hips_detour"] = rec["hips_path_m"] / L
         rec["detour_vs_bound"] = rec["path_m"] / rec["bound_m"]
         cats = ("start", "goal", "lattice", "shortcut", "clips", "other")
         chords = sum(rec[f"{c}_chord_m"] for c in cats)
@@ -744,6 +749,7 @@ def summarise(recs):
     found = [r for r in recs if not r["failed"]]
     det = [r["detour"] for r in found if r.get("detour")]
     dvb = [r["detour_vs_bound"] for r in found if r.get("detour_vs_bound")]
+    hips = [r["hips_detour"] for r in found if r.get("hips_detour")]
     dev = [
         r["straight_deviation_m"]
         for r in found
@@ -766,6 +772,9 @@ def summarise(recs):
         "detour_worst": float(max(det)) if det else None,
         "detour_vs_bound_median": float(np.median(dvb)) if dvb else None,
         "detour_vs_bound_worst": float(max(dvb)) if dvb else None,
+        "hips_detour_median": float(np.median(hips)) if hips else None,
+        "hips_detour_worst": float(max(hips)) if hips else None,
+        "plans_turning_in_place": int(sum(r["turns_in_place"] > 0 for r in found)),
         "straight_deviation_m": float(max(dev)) if dev else None,
         "glitches": int(sum(sum(r["glitch_count"].values()) for r in found)),
         "plans_with_glitches": int(sum(bool(r["glitch_count"]) for r in found)),
@@ -879,6 +888,9 @@ def markdown(records, summary):
         ("detour_mean", "detour mean"),
         ("detour_vs_bound_median", "detour vs heading-aware bound, median"),
         ("detour_vs_bound_worst", "detour vs heading-aware bound, worst"),
+        ("hips_detour_median", "detour of the hips (sway and steps included), median"),
+        ("hips_detour_worst", "detour of the hips (sway and steps included), worst"),
+        ("plans_turning_in_place", "plans turning on the spot (derived turn)"),
         ("plans_with_glitches", "plans with glitches"),
         ("plan_seconds_median", "plan time median"),
     ):
@@ -889,7 +901,7 @@ def markdown(records, summary):
                 cells.append(f"{s['plans']} ({s['found']})")
             elif key == "plan_seconds_median":
                 cells.append(f"{s[key] * 1000:.0f} ms" if s[key] is not None else "–")
-            elif key.startswith("detour"):
+            elif "detour" in key:
                 cells.append(f"{s[key]:.2f}" if s[key] is not None else "–")
             else:
                 cells.append(str(s[key]))

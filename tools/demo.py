@@ -323,10 +323,13 @@ def main(argv):
         "    frames with the root inside a pillar (+%.2f m radius): %d"
         % (s.radius, f["frames_root_inside_obstacle"])
     )
-    print(
-        "    largest joint jump at a strip boundary: %.1f deg (p99 elsewhere %.1f deg)"
-        % (f["boundary_pop"]["max_boundary_jump_deg"], f["boundary_pop"]["p99_step_deg"])
-    )
+    if len(plan.pieces) > 1:
+        print(
+            "    largest joint jump at a strip boundary: %.1f deg (p99 elsewhere %.1f deg)"
+            % (f["boundary_pop"]["max_boundary_jump_deg"], f["boundary_pop"]["p99_step_deg"])
+        )
+    else:
+        print("    one strip (the path was shortened to one curve): no strip boundary to jump at")
     for name, rows in chairs.items():
         d, st, ev = rows["dynamic"], rows["static"], rows["evaluated"]
         print(
