@@ -660,40 +660,56 @@ class SegmentPlanner:
         start, goal = np.asarray(start, float), np.asarray(goal, float)
         if not (turn_in_place and self.turns_in_place):
             return self._plan_once(start, goal, *args)
+        # The goal behind the character (or its heading against the way in): turn on the
+        # spot first (last), as a person does, and plan the walk once.
+        bearing = float(np.arctan2(goal[1] - start[1], goal[0] - start[0]))
+        ends = (
+            abs(_wrap(bearing - start[2])) > LOOP_TURN,
+            not np.isnan(goal[2]) and abs(_wrap(goal[2] - bearing)) > LOOP_TURN,
+        )
+        if any(ends):
+            found = self._turned(start, goal, bearing, ends, args)
+            if found is not None:
+                return found
         try:
             exact, error = self._plan_once(start, goal, *args), None
         except PlanError as e:
             exact, error = None, e
             if isinstance(e, SearchLimit) or not ("facing" in str(e) or "unreachable" in str(e)):
                 raise  # a search limit, a goal inside a prop: no turn on the spot helps
+        # A walk that still loops near an end (props in the way): the turn on the spot
+        # there is tried too and the cheaper by Eq. 5 kept.
         loops = (True, True) if exact is None else self._loops(exact)
-        if not any(loops):
-            return exact
-        # One alternative: a turn on the spot at each end the walk loops at (towards the
-        # goal at the start; to the goal's heading at the goal, walking in facing any way).
-        bearing = float(np.arctan2(goal[1] - start[1], goal[0] - start[0]))
-        off = abs(_wrap(bearing - start[2]))
-        turn_to = bearing if loops[0] and off >= MIN_TURN_IN_PLACE else None
-        free = loops[1] and not np.isnan(goal[2])
+        loops = (loops[0] and not ends[0], loops[1] and not ends[1])
         best = exact
-        if turn_to is not None or free:
-            s = start if turn_to is None else np.array([start[0], start[1], turn_to])
-            g = np.array([goal[0], goal[1], np.nan]) if free else goal
-            try:
-                found = self._plan_once(s, g, *args)
-            except PlanError:
-                found = None
-            if found is not None:
-                found = self._with_turns(
-                    found, start if turn_to is not None else None, goal if free else None
-                )
-                if best is None or _final_cost(found) < _final_cost(best):
-                    best = found
+        if any(loops):
+            found = self._turned(start, goal, bearing, loops, args)
+            if found is not None and (best is None or _final_cost(found) < _final_cost(best)):
+                best = found
+                best.stats["exact_facing_cost"] = None if exact is None else _final_cost(exact)
         if best is None:
             raise error
-        if best is not exact:
-            best.stats["exact_facing_cost"] = None if exact is None else _final_cost(exact)
         return best
+
+    def _turned(self, start, goal, bearing, ends, args):
+        """The plan with a turn on the spot at the start (towards the goal) and / or at the
+        goal (to its heading, the walk arriving facing any way) where ``ends`` says, or
+        None when that walk finds no path (or no turn is needed after all)."""
+        turn_to = (
+            bearing if ends[0] and abs(_wrap(bearing - start[2])) >= MIN_TURN_IN_PLACE else None
+        )
+        free = ends[1] and not np.isnan(goal[2])
+        if turn_to is None and not free:
+            return None
+        s = start if turn_to is None else np.array([start[0], start[1], turn_to])
+        g = np.array([goal[0], goal[1], np.nan]) if free else goal
+        try:
+            found = self._plan_once(s, g, *args)
+        except PlanError:
+            return None
+        return self._with_turns(
+            found, start if turn_to is not None else None, goal if free else None
+        )
 
     @property
     def turns_in_place(self):
