@@ -119,3 +119,5 @@ def test_a_goal_behind_facing_minus_y_is_reached_by_turning_on_the_spot(baked_bl
     assert figures["goal_heading_error_deg"] < 5.0
     assert figures["goal_root_position_error_cm"] < 5.0
     assert figures["foot_skate"]["mean_cm_per_frame"] < 1.0
+    pop = figures["boundary_pop"]  # no pop where the walk and the turns meet
+    assert pop["max_boundary_jump_deg"] <= pop["p99_step_deg"], pop
