@@ -898,13 +898,21 @@ def _write(
     )
 
 
-def _avoid_moving(planner, patch, plan, tracks, character, frame_start, fps):
+def _avoid_moving(
+    planner, patch, plan, tracks, character, frame_start, fps, longest_wait=moving_props.MAX_DELAY_S
+):
     """(plan, seconds to wait at the start) clear of the props that move during it
-    (:mod:`moving_props`: a wait or a repaired run); :class:`PathNotFound` naming the prop
-    and the frame when neither keeps clear of it. ``fps``: the scene's rate."""
+    (:mod:`moving_props`: a wait of at most ``longest_wait`` or a repaired run);
+    :class:`PathNotFound` naming the prop and the frame when neither keeps clear of it.
+    ``fps``: the scene's rate."""
     scene_fps_ratio = fps / patch.gait.fps
     plan, wait, repairs, left = moving_props.avoid(
-        planner, patch, plan, tracks, lambda p: plan_motions(patch, p)
+        planner,
+        patch,
+        plan,
+        tracks,
+        lambda p: plan_motions(patch, p),
+        longest_wait=longest_wait,
     )
     if left:
         raise PathNotFound(
@@ -1260,7 +1268,14 @@ def plan_crowd(
                 scene, depsgraph, patch, radius, _not_obstacles([c for c, _ in pairs]), size
             )
             props = object_patches(scene, depsgraph, patch, size)
-            worlds[size] = [env, props, {p.name: p for p in props}, None]
+            # props that move (keyframed): where each stands on the first frame; the ones
+            # moving then are left out of the global plans and walked round after (Sec. 4.4)
+            tracks = moving_io.tracks(scene, depsgraph, list(env.obstacles), first, size)
+            for t in tracks:
+                env.remove(t.name)
+                env.place(Obstacle(t.name, t.polygon_at(t.pose_at(0.0)[0])))
+            awake = [t.name for t in tracks if t.awake_at(0.0)]
+            worlds[size] = [env, props, {p.name: p for p in props}, None, tracks, awake]
         return worlds[size]
 
     ends = [
@@ -1314,7 +1329,7 @@ def plan_crowd(
         """Plan character n round the standing spots (dropped when they box it in) and,
         when re-routing, round ``ghosts`` (world polygons; PathNotFound if they box it in)."""
         character, e = pairs[n][0], ends[n]
-        env, _, _, planner = world_of(sizes[n])
+        env, _, _, planner, tracks, awake = world_of(sizes[n])
         spots = [
             Obstacle(f"{CROWD_SPOT}{pairs[order[m]][0].name}", polygon / sizes[n])
             for m, polygon in crowd.standing_spots(rank_ends, order.index(n), spacing, radius)
@@ -1328,15 +1343,21 @@ def plan_crowd(
             for ob in spots + extra:  # where the others stand still while this one walks
                 env.place(ob)
             try:
-                try:
-                    return _solve(planner, character, e, explain=not (spots or extra))
-                except PathNotFound:
-                    if not spots or extra:
-                        raise
-                    for spot in spots:  # boxed in by the others: plan past them
-                        env.remove(spot.name)
-                    spots = []
-                    return _solve(planner, character, e)
+                with _without(env, awake):
+                    try:
+                        plan = _solve(planner, character, e, explain=not (spots or extra))
+                    except PathNotFound:
+                        if not spots or extra:
+                            raise
+                        for spot in spots:  # boxed in by the others: plan past them
+                            env.remove(spot.name)
+                        spots = []
+                        plan = _solve(planner, character, e)
+                if tracks:  # round the moving props by re-routing (the crowd times waits)
+                    plan, _ = _avoid_moving(
+                        planner, patch, plan, tracks, character, first, fps, longest_wait=0.0
+                    )
+                return plan
             finally:
                 for ob in spots + extra:
                     env.remove(ob.name)
@@ -1405,6 +1426,24 @@ def plan_crowd(
         [schedules[k].delay for k in ranked],
         spacing,
     )
+    # the props that move, against each walk as scheduled (its wait and holds included)
+    moving_left = []
+    for p, s in zip(planned, schedules):
+        planner_n, tracks = world_of(sizes[p[0]])[3], world_of(sizes[p[0]])[4]
+        if not tracks:
+            continue
+        wait = s.delay / fps
+        for c in moving_props.conflicts(
+            p[2], tracks, planner_n.world_env.radius, patch.gait.fps, wait
+        ):
+            moving_left.append(
+                {
+                    "character": pairs[p[0]][0].name,
+                    "prop": c.prop,
+                    "frame": first + s.delay + int(round(c.frame * fps / patch.gait.fps)),
+                    "distance_m": float(c.distance),
+                }
+            )
     if progress is not None:
         progress(0.9)
     written = {}
@@ -1455,6 +1494,7 @@ def plan_crowd(
         [nm for nm, s in zip(names, schedules) if s.rerouted],
         holds,
         [names[k] for k in ranked],
+        moving_left,
     )
 
 
@@ -1707,6 +1747,9 @@ class CrowdSchedule(CrowdResult):
     # name -> [{"frame": first scene frame standing still, "frames": how many}]
     holds: dict = field(default_factory=dict)
     order: list = field(default_factory=list)  # planned names in the order they were placed
+    # [{"character", "prop", "frame", "distance_m"}]: a walk as scheduled (waits and holds
+    # of the crowd included) meeting a prop that moves
+    moving_conflicts: list = field(default_factory=list)
 
 
 _CLIPS = ("traversal", "interaction")

@@ -462,13 +462,15 @@ def cmd_crowd(args):
     finally:
         progress.close()
     fps = api.scene_fps(scene)
-    ok = not res.failed and not res.conflicts
+    moving = list(getattr(res, "moving_conflicts", []))
+    ok = not res.failed and not res.conflicts and not moving
     saved = _save(save) if ok else None
     doc = {
         "characters": len(pairs),
         "planned": [_plan_doc(p, fps) for p in res.plans],
         "failed": [{"character": c, "error": e} for c, e in res.failed],
         "conflicts": res.conflicts,
+        "moving_prop_conflicts": moving,
         "delays_frames": res.delays,
         "rerouted": res.rerouted,
         "seconds": res.seconds,
@@ -494,6 +496,11 @@ def cmd_crowd(args):
         text.append(
             f"  CONFLICT '{c['a']}' and '{c['b']}' come {c['distance_m'] * 100:.0f} cm "
             f"apart at frame {c['frame']}"
+        )
+    for c in moving:
+        text.append(
+            f"  CONFLICT '{c['character']}' meets the moving prop '{c['prop']}' at frame "
+            f"{c['frame']} ({c['distance_m'] * 100:.0f} cm from its footprint)"
         )
     if saved:
         text.append(f"saved {saved}")

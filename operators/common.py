@@ -23,11 +23,18 @@ def progress(context):
 
 
 def report_conflicts(op, result):
-    """A warning per pair of a crowd that still comes too close (Plan Crowd, Duplicate Crowd)."""
+    """A warning per pair of a crowd that still comes too close, and per walk meeting a prop
+    that moves (Plan Crowd, Duplicate Crowd)."""
     for c in result.conflicts:
         op.report(
             {"WARNING"},
             f"'{c['a']}' and '{c['b']}' come within {c['distance_m']:.2f} m at frame {c['frame']}",
+        )
+    for c in getattr(result, "moving_conflicts", ()):
+        op.report(
+            {"WARNING"},
+            f"'{c['character']}' meets the moving prop '{c['prop']}' at frame {c['frame']} "
+            f"({c['distance_m']:.2f} m from its footprint)",
         )
 
 

@@ -189,3 +189,43 @@ def test_a_cart_parking_on_the_goal_is_reported_and_nothing_is_written(walk_blen
     after = char.animation_data.nla_tracks.keys() if char.animation_data else []
     assert list(after) == list(before)
     assert scene.frame_current == 1
+
+
+def test_a_crowd_walks_round_a_cart_parked_across_its_way(walk_blend, addon_module):
+    """Plan Crowd follows the props that move too: two walkers side by side, a long cart
+    rolling into both their ways before they get there; each walk is repaired round it
+    (through the depsgraph, the hips never come within the radius less the sway), and a
+    third walker whose goal the cart parks on is reported, the others written."""
+    scene, char, goal, start, d = setup(addon_module, walk_blend)
+    side = np.array([-d[1], d[0]])
+    f, p = crossing_frame(addon_module, char, goal, start, d, 7.0)
+    assert f > 60
+    other = walker_from(
+        scene.motion_patches.source_armature, name="Other", location=(*(start[:2] + 1.5 * side), 0)
+    )
+    other_goal = empty("OtherGoal", *(start[:2] + 1.5 * side + 14.0 * d), start[2])
+    third = walker_from(
+        scene.motion_patches.source_armature, name="Third", location=(*(start[:2] - 3.0 * side), 0)
+    )
+    third_goal = empty("ThirdGoal", *(start[:2] - 3.0 * side + 10.0 * d), start[2])
+    ob = cart(
+        "Cart",
+        [(1, *(p - 6.0 * side)), (20, *(p - 6.0 * side)), (60, *(p + 0.75 * side))],
+        size=(1.6, 0.8, 1.0),
+    )
+    parked = np.array(third_goal.location[:2])
+    cart("Blocker", [(1, *(parked - 5.0 * d)), (30, *(parked - 5.0 * d)), (90, *parked)])
+    bpy.context.view_layer.update()
+    res = addon_module.api.plan_crowd(
+        scene,
+        [(char, goal), (other, other_goal), (third, third_goal)],
+        radius=RADIUS,
+        frame_start=1,
+    )
+    assert [name for name, _ in res.failed] == ["Third"], res.failed
+    assert "'Blocker' meets the walk" in res.failed[0][1]
+    assert res.moving_conflicts == [], res.moving_conflicts
+    for walker, g in ((char, goal), (other, other_goal)):
+        frames, hips, closest = clearances(addon_module, walker, ob)
+        assert closest.min() > RADIUS - 0.06, (walker.name, closest.min())
+        assert np.linalg.norm(hips[-1] - np.array(g.location[:2])) < 0.05
