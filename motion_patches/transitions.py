@@ -139,6 +139,43 @@ def _entries_before(planner, plan):
     return out
 
 
+def _stops(planner, pieces):
+    """Candidate runs up to a node where the run may blend back into the walk, after the
+    last traversal of ``pieces`` (a run leg, unshortened, in the planner's frame): the
+    pieces up to each segment after it, up to the segment part leaving the clip when it
+    holds a whole run cycle, and up to each of the ``SWITCH_CANDIDATES`` cheapest run
+    segments (cost + heuristic) out of that part's end node. A part shorter than a cycle
+    is all ease off the clip's landing (a standing jump lands on both feet), not a run's
+    stride: blended from at once, foot locking pins the landing feet into the blend (a 31
+    degree knee step after 16_06's 8-frame landing part)."""
+    from .node_keys import unpack
+
+    last = max(i for i, p in enumerate(pieces) if p.kind == "traversal")
+    out = []
+    for i in range(last + 1, len(pieces)):
+        p = pieces[i]
+        if p.kind == "segment":
+            out.append(list(pieces[: i + 1]))
+        elif p.kind == "part" and p.frames[0] > 0:
+            if p.frames[1] - p.frames[0] >= planner.patch.gait.frames:
+                out.append(list(pieces[: i + 1]))
+            key = planner._node_key(*shortcut.exit_state(planner, p))
+            nxt, costs, segs = planner.expand(key)
+            rank = np.argsort(costs + planner.heuristic(nxt), kind="stable")[:SWITCH_CANDIDATES]
+            ti, tj, _ = unpack(key)
+            for m in rank.tolist():
+                seg = int(segs[m])
+                step = Piece(
+                    "segment",
+                    segment=seg,
+                    tile=(int(ti), int(tj)),
+                    cycles=int(planner.patch.seg_cycles[seg]),
+                    cost=float(costs[m]),
+                )
+                out.append([*pieces[: i + 1], step])
+    return out[: 2 * SWITCH_CANDIDATES]
+
+
 def _nearest_nodes(planner, local, count):
     """[(key, position, heading)] of the ``count`` nodes of the planner's (framed) lattice
     nearest the local state ``local`` with its heading."""
@@ -225,18 +262,12 @@ def compose(walk, run, start, goal, margin_tiles=3, max_expansions=400_000):
     #    walk and a walk leg from its end (a walk node by construction) to the goal.
     best, tried_count = None, 0
     for _, cost1, a_world, b_world, pieces1, leg in runs[:RUN_LEGS_KEPT]:
-        last_t = max(i for i, p in enumerate(leg.pieces) if p.kind == "traversal")
-        stops = [
-            i
-            for i in range(last_t + 1, len(leg.pieces))
-            if leg.pieces[i].kind == "segment"
-            or (leg.pieces[i].kind == "part" and leg.pieces[i].frames[0] > 0)
-        ][:SWITCH_CANDIDATES]
-        with on_node(run, b_world, goal, margin_tiles) as (bl, _, _, fb):
-            for j in stops:
-                cp, ch = shortcut.exit_state(run, leg.pieces[j])
+        with on_node(run, b_world, goal, margin_tiles) as (bl, _, gl, fb):
+            run.goal = gl  # the heuristic's goal (on_node framed towards a point ahead)
+            for prefix in _stops(run, leg.pieces):
+                cp, ch = shortcut.exit_state(run, prefix[-1])
                 c_local = np.r_[cp, ch]
-                prefix = shortcut.shorten(run, list(leg.pieces[: j + 1]), bl, c_local)
+                prefix = shortcut.shorten(run, prefix, bl, c_local)
                 c_world = _world(fb, cp, ch)
                 d_world = after(c_world, rw.offset)
                 if (
@@ -365,3 +396,26 @@ def plan_layer_motions(plan, standing=True):
             if np.isfinite(np.asarray(plan.goal[:2], float)).all():
                 ms[-1] = hips_to(ms[-1], plan.goal[:2], 2 * gait.frames)
     return ms
+
+
+def glitches(plan, motions):
+    """Glitch records (:func:`.validate.motion_glitches`) of a plan that changes layer:
+    each piece judged by the limits of its own layer's gait (a blend and the clips by the
+    faster layer's, the one it is entered from or blends into), joins included."""
+    from . import validate
+
+    def speed(patch):
+        return patch.gait.cycle_distance / patch.gait.frames
+
+    patches = {id(p.patch): p.patch for p in plan.pieces if p.patch is not None}
+    fastest = max(patches.values(), key=speed)
+    out = []
+    for patch in patches.values():
+        lim = validate.limits(patch)
+        for r in validate.motion_glitches(motions, plan.pieces, lim):
+            piece = plan.pieces[r["piece"]]
+            own = piece.patch if piece.kind not in ("transition", *CLIPS) else fastest
+            if own is patch:
+                out.append(r)
+    out.sort(key=lambda r: (r["frame"], r["kind"]))
+    return out
