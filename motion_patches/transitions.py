@@ -260,14 +260,16 @@ def compose(walk, run, start, goal, margin_tiles=3, max_expansions=400_000):
     runs.sort(key=lambda r: r[0])
     # 3. The way back: from run nodes after the run leg's last traversal, a blend into the
     #    walk and a walk leg from its end (a walk node by construction) to the goal.
-    best, tried_count = None, 0
+    #    Candidates are searched in the order of a lower bound of their total (the walk's
+    #    heuristic cost per metre to the goal after the blend), until the bound passes the
+    #    best total found.
+    stops = []
     for _, cost1, a_world, b_world, pieces1, leg in runs[:RUN_LEGS_KEPT]:
         with on_node(run, b_world, goal, margin_tiles) as (bl, _, gl, fb):
             run.goal = gl  # the heuristic's goal (on_node framed towards a point ahead)
             for prefix in _stops(run, leg.pieces):
                 cp, ch = shortcut.exit_state(run, prefix[-1])
-                c_local = np.r_[cp, ch]
-                prefix = shortcut.shorten(run, prefix, bl, c_local)
+                prefix = shortcut.shorten(run, prefix, bl, np.r_[cp, ch])
                 c_world = _world(fb, cp, ch)
                 d_world = after(c_world, rw.offset)
                 if (
@@ -275,37 +277,41 @@ def compose(walk, run, start, goal, margin_tiles=3, max_expansions=400_000):
                     or walk.world_env.blocked(d_world[None, :2])[0]
                 ):
                     continue
-                with on_node(walk, d_world, goal, margin_tiles) as (dl, dkey, gl2, fd):
-                    try:
-                        back = walk._plan_local(
-                            dl, gl2, margin_tiles, max_expansions, False, start_key=dkey
-                        )
-                    except PlanError:
-                        continue
-                    expansions += back.expansions
-                    tail = shortcut.shorten(walk, back.pieces, dl, gl2)
-                    tail = shortcut.pull_tail(walk, tail, gl2)
-                    tail = walk._long_last_piece(tail)
-                    end_heading = (
-                        tail[-1].curve.heading[-1] if tail[-1].curve is not None else back.goal[2]
-                    )
-                tried_count += 1
-                total = (
-                    cost1 + c_wr + sum(p.cost for p in prefix) + c_rw + sum(p.cost for p in tail)
+                partial = cost1 + c_wr + sum(p.cost for p in prefix) + c_rw
+                bound = partial + walk._per_metre * float(np.hypot(*(goal[:2] - d_world[:2])))
+                head = [
+                    *(layered(p, walk.patch) for p in pieces1),
+                    _transition(wr, run.patch, a_world, c_wr),
+                    *(_framed(layered(p, run.patch), fb) for p in prefix),
+                    _transition(rw, walk.patch, c_world, c_rw),
+                ]
+                stops.append((bound, partial, head, (a_world, b_world, c_world, d_world)))
+    stops.sort(key=lambda c: c[0])
+    best, tried_count = None, 0
+    for bound, partial, head, ends in stops:
+        if best is not None and bound >= best[0]:
+            break
+        with on_node(walk, ends[3], goal, margin_tiles) as (dl, dkey, gl2, fd):
+            try:
+                back = walk._plan_local(
+                    dl, gl2, margin_tiles, max_expansions, False, start_key=dkey
                 )
-                if best is None or total < best[0]:
-                    best = (
-                        total,
-                        [
-                            *(layered(p, walk.patch) for p in pieces1),
-                            _transition(wr, run.patch, a_world, c_wr),
-                            *(_framed(layered(p, run.patch), fb) for p in prefix),
-                            _transition(rw, walk.patch, c_world, c_rw),
-                            *(_framed(layered(p, walk.patch), fd) for p in tail),
-                        ],
-                        float(end_heading) + fd[2],
-                        (a_world, b_world, c_world, d_world),
-                    )
+            except PlanError:
+                continue
+            expansions += back.expansions
+            tail = shortcut.shorten(walk, back.pieces, dl, gl2)
+            tail = shortcut.pull_tail(walk, tail, gl2)
+            tail = walk._long_last_piece(tail)
+            end_heading = tail[-1].curve.heading[-1] if tail[-1].curve is not None else back.goal[2]
+        tried_count += 1
+        total = partial + sum(p.cost for p in tail)
+        if best is None or total < best[0]:
+            best = (
+                total,
+                [*head, *(_framed(layered(p, walk.patch), fd) for p in tail)],
+                float(end_heading) + fd[2],
+                ends,
+            )
     if best is None:
         raise PlanError(
             f"no {walk.patch.layer} -> {run.patch.layer} -> {walk.patch.layer} plan: "
@@ -344,6 +350,7 @@ def compose(walk, run, start, goal, margin_tiles=3, max_expansions=400_000):
                 },
             ],
             "compositions_tried": tried_count,
+            "compositions_bounded": len(stops),
             "cost_shortened": float(total),
             "traversals_used": sum(p.kind == "traversal" for p in pieces),
         },

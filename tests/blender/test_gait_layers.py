@@ -217,6 +217,9 @@ def test_on_open_ground_auto_walks(layers_blend, addon_module):
     res = plan(api, "auto")
     assert res.stats["layer"] == "walk"
     assert res.stats["layers"]["walk"] < res.stats["layers"]["run"]
+    # Nothing to run for: no plan that changes gait is offered, and the plan says why.
+    assert "walk+run" not in res.stats["layers"]
+    assert "takes no traversal" in res.stats["gait_change"]
     run = plan(api, "run")
     assert run.stats["layer"] == "run"
     hips = evaluated(api, bpy.data.objects["Walker"])
