@@ -258,3 +258,20 @@ def test_cli_plan_gait(layers_blend, addon_module_name, capsys):
     err = capsys.readouterr().err
     assert code != 0 and "no locomotion patch of layer 'swim'" in err
     assert "motion_patches_plan" not in bpy.data.objects["Walker"]
+
+
+def test_with_props_that_move_auto_keeps_one_layer_and_says_why(layers_blend, addon_module):
+    """Props that move are avoided after planning, leg by leg of one layer's plan (issue
+    17); a plan that changes gait is not offered then, and the plan says so."""
+    api = addon_module.api
+    bpy.ops.wm.open_mainfile(filepath=str(layers_blend))
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(12.0, -8.0, 0.5))
+    cart = bpy.context.object
+    cart.name = "Cart"
+    for f, y in ((1, -8.0), (200, -7.0)):  # creeping along far from the way
+        cart.location = (12.0, y, 0.5)
+        cart.keyframe_insert("location", frame=f)
+    res = plan(api, "auto")
+    assert res.stats["layer"] in ("walk", "run")
+    assert "walk+run" not in res.stats["layers"]
+    assert res.stats["gait_change"] == "not offered with props that move"

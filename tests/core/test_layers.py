@@ -381,6 +381,8 @@ def test_the_gait_change_has_no_pop_and_no_root_jump(gait_change):
     """At every join of the walk -> run -> walk plan the largest joint step is below the
     99th percentile of the steps inside its pieces; the hips never move farther in a frame
     than 1.5 x the per-frame speed of the faster layer a piece plays in."""
+    from motion_patches import transitions
+
     walk, run, _, _, mixed, ms = gait_change
     m = concatenate(ms)
     steps = joint_steps(m.rotations)
@@ -402,6 +404,8 @@ def test_the_gait_change_has_no_pop_and_no_root_jump(gait_change):
         step = np.linalg.norm(np.diff(hips, axis=0), axis=1).max()
         assert step < 1.5 * per_frame, piece.label
         first += x.frames - 1
+    # Ground track checks of the validator, each piece by its own layer's limits.
+    assert transitions.glitches(mixed, ms) == []
     joined = m.world_matrices(skel)[:, skel.root, :2, 3]
     assert np.linalg.norm(np.diff(joined, axis=0), axis=1).max() < 1.5 * (
         layers.speed(run.patch.gait) / run.patch.gait.fps
