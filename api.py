@@ -1059,6 +1059,8 @@ def _gait_change(tried):
         return None, None
     walk_t = min(tried, key=lambda t: t[0].effort_rate)
     run_t = max(tried, key=lambda t: t[0].effort_rate)
+    if walk_t[0].effort_rate == run_t[0].effort_rate:
+        return None, "the layers cost the same effort: none of them is a run"
     walk, run = walk_t[6], run_t[6]
     if walk["moving"] or run["moving"]:
         return None, "not offered with props that move"

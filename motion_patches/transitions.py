@@ -25,6 +25,7 @@ the cheapest competes with the walk-only and run-only plans (the caller's choice
 """
 
 import contextlib
+import heapq
 import time
 from dataclasses import dataclass, fields
 
@@ -37,7 +38,6 @@ from .planner import Piece, Plan, PlanError, hips_to, plan_motions
 
 SWITCH_CANDIDATES = 3  # run nodes tried on each side of the run plan's traversals
 WALK_NODES_PER_SWITCH = 2  # walk nodes tried for each run node the blend must reach
-RUN_LEGS_KEPT = 2  # cheapest walk -> run switches whose way back to walking is searched
 CLIPS = ("traversal", "interaction")
 
 
@@ -98,6 +98,10 @@ def before(state, offset):
 
 def _world(frame, p, h):
     return np.array([*to_world(frame, np.asarray(p, float)), float(h) + frame[2]])
+
+
+def _distance(a, b):
+    return float(np.hypot(b[0] - a[0], b[1] - a[1]))
 
 
 def _wrap(a):
@@ -242,55 +246,69 @@ def compose(walk, run, start, goal, margin_tiles=3, max_expansions=400_000):
             for pc in pieces:
                 pc.frame = fw
             firsts.append((float(sum(pc.cost for pc in pieces)), a_world, pieces))
-    # 2. Run legs from each blend's end (a run node by construction) on to the goal; the
-    #    cheapest few switches are kept.
-    runs = []
-    for cost1, a_world, pieces1 in firsts:
-        b_world = after(a_world, wr.offset)
-        if run.world_env.blocked(b_world[None, :2])[0]:
-            continue
-        with on_node(run, b_world, goal, margin_tiles) as (bl, bkey, gl, _):
-            try:
-                leg = run._plan_local(bl, gl, margin_tiles, max_expansions, False, start_key=bkey)
-            except PlanError:
-                continue
-        expansions += leg.expansions
-        if any(p.kind == "traversal" for p in leg.pieces):
-            runs.append((cost1 + c_wr + leg.cost, cost1, a_world, b_world, pieces1, leg))
-    runs.sort(key=lambda r: r[0])
-    # 3. The way back: from run nodes after the run leg's last traversal, a blend into the
-    #    walk and a walk leg from its end (a walk node by construction) to the goal.
-    #    Candidates are searched in the order of a lower bound of their total (the walk's
-    #    heuristic cost per metre to the goal after the blend), until the bound passes the
-    #    best total found.
-    stops = []
-    for _, cost1, a_world, b_world, pieces1, leg in runs[:RUN_LEGS_KEPT]:
-        with on_node(run, b_world, goal, margin_tiles) as (bl, _, gl, fb):
-            run.goal = gl  # the heuristic's goal (on_node framed towards a point ahead)
-            for prefix in _stops(run, leg.pieces):
-                cp, ch = shortcut.exit_state(run, prefix[-1])
-                prefix = shortcut.shorten(run, prefix, bl, np.r_[cp, ch])
-                c_world = _world(fb, cp, ch)
-                d_world = after(c_world, rw.offset)
-                if (
-                    not _blend_clear(run, rw, c_world)
-                    or walk.world_env.blocked(d_world[None, :2])[0]
-                ):
-                    continue
-                partial = cost1 + c_wr + sum(p.cost for p in prefix) + c_rw
-                bound = partial + walk._per_metre * float(np.hypot(*(goal[:2] - d_world[:2])))
-                head = [
-                    *(layered(p, walk.patch) for p in pieces1),
-                    _transition(wr, run.patch, a_world, c_wr),
-                    *(_framed(layered(p, run.patch), fb) for p in prefix),
-                    _transition(rw, walk.patch, c_world, c_rw),
-                ]
-                stops.append((bound, partial, head, (a_world, b_world, c_world, d_world)))
-    stops.sort(key=lambda c: c[0])
-    best, tried_count = None, 0
-    for bound, partial, head, ends in stops:
+    # 2. Run legs from each blend's end (a run node by construction) on to the goal, and
+    # 3. the ways back: from run nodes after the run leg's last traversal, a blend into
+    #    the walk and a walk leg from its end (a walk node by construction) to the goal.
+    #    Best first: run legs and ways back are searched in the order of a lower bound of
+    #    the total they can give (the legs known so far, both blends, and a heuristic cost
+    #    per metre for the rest of the way), until the next bound reaches the best total.
+    per_metre = min(walk._per_metre, run._per_metre)
+    queue = [
+        (cost1 + c_wr + c_rw + per_metre * _distance(after(a_world, wr.offset), goal), n, None)
+        for n, (cost1, _, _) in enumerate(firsts)
+    ]
+    heapq.heapify(queue)
+    best, tried_count, run_legs, bounded, count = None, 0, 0, 0, len(queue)
+    while queue:
+        bound, _, stop = heapq.heappop(queue)
         if best is not None and bound >= best[0]:
             break
+        if stop is None:  # a run leg to search: its ways back join the queue
+            cost1, a_world, pieces1 = firsts[_]
+            b_world = after(a_world, wr.offset)
+            if run.world_env.blocked(b_world[None, :2])[0]:
+                continue
+            with on_node(run, b_world, goal, margin_tiles) as (bl, bkey, gl, fb):
+                try:
+                    leg = run._plan_local(
+                        bl, gl, margin_tiles, max_expansions, False, start_key=bkey
+                    )
+                except PlanError:
+                    continue
+                expansions += leg.expansions
+                run_legs += 1
+                if not any(p.kind == "traversal" for p in leg.pieces):
+                    continue
+                run.goal = gl  # the heuristic's goal (on_node framed towards a point ahead)
+                for prefix in _stops(run, leg.pieces):
+                    cp, ch = shortcut.exit_state(run, prefix[-1])
+                    prefix = shortcut.shorten(run, prefix, bl, np.r_[cp, ch])
+                    c_world = _world(fb, cp, ch)
+                    d_world = after(c_world, rw.offset)
+                    if (
+                        not _blend_clear(run, rw, c_world)
+                        or walk.world_env.blocked(d_world[None, :2])[0]
+                    ):
+                        continue
+                    partial = cost1 + c_wr + sum(p.cost for p in prefix) + c_rw
+                    head = [
+                        *(layered(p, walk.patch) for p in pieces1),
+                        _transition(wr, run.patch, a_world, c_wr),
+                        *(_framed(layered(p, run.patch), fb) for p in prefix),
+                        _transition(rw, walk.patch, c_world, c_rw),
+                    ]
+                    count += 1
+                    bounded += 1
+                    heapq.heappush(
+                        queue,
+                        (
+                            partial + walk._per_metre * _distance(d_world, goal),
+                            count,
+                            (partial, head, (a_world, b_world, c_world, d_world)),
+                        ),
+                    )
+            continue
+        partial, head, ends = stop
         with on_node(walk, ends[3], goal, margin_tiles) as (dl, dkey, gl2, fd):
             try:
                 back = walk._plan_local(
@@ -302,7 +320,8 @@ def compose(walk, run, start, goal, margin_tiles=3, max_expansions=400_000):
             tail = shortcut.shorten(walk, back.pieces, dl, gl2)
             tail = shortcut.pull_tail(walk, tail, gl2)
             tail = walk._long_last_piece(tail)
-            end_heading = tail[-1].curve.heading[-1] if tail[-1].curve is not None else back.goal[2]
+            last = tail[-1]
+            end_heading = last.curve.heading[-1] if last.curve is not None else back.goal[2]
         tried_count += 1
         total = partial + sum(p.cost for p in tail)
         if best is None or total < best[0]:
@@ -315,7 +334,7 @@ def compose(walk, run, start, goal, margin_tiles=3, max_expansions=400_000):
     if best is None:
         raise PlanError(
             f"no {walk.patch.layer} -> {run.patch.layer} -> {walk.patch.layer} plan: "
-            f"{len(firsts)} walk legs into a blend, {len(runs)} run legs taking a traversal, "
+            f"{len(firsts)} walk legs into a blend, {run_legs} run legs searched, "
             f"no way back to walking found"
         )
     total, pieces, end_heading, (a, b, c, d) = best
@@ -349,8 +368,10 @@ def compose(walk, run, start, goal, margin_tiles=3, max_expansions=400_000):
                     "cost": c_rw,
                 },
             ],
+            "walk_legs_into_run": len(firsts),
+            "run_legs": run_legs,
             "compositions_tried": tried_count,
-            "compositions_bounded": len(stops),
+            "compositions_bounded": bounded,
             "cost_shortened": float(total),
             "traversals_used": sum(p.kind == "traversal" for p in pieces),
         },
