@@ -881,6 +881,10 @@ def _write(
             "foot_lock": bool(lock),
             "traversals": [[s["start"], s["end"]] for s in strips if s["kind"] == "traversal"],
             "interactions": [[s["start"], s["end"]] for s in strips if s["kind"] == "interaction"],
+            "layers": [
+                [s["start"], s["end"], transitions.piece_layer(p, patch.layer)]
+                for s, p in zip(strips, plan.pieces)
+            ],
             "obstacles": {o.name: (o.polygon * scale).tolist() for o in env.obstacles.values()},
         },
     )
@@ -1543,6 +1547,7 @@ def _analyse(context, character):
     fps = scene_fps(context.scene)
     root, feet = pos[:, 0], pos[:, 1:]
     skate = metrics.foot_skate(feet, fps, arrays["contacts"])
+    by_layer = _skate_by_layer(meta, frames, feet, fps, arrays["contacts"])
     goal = np.array(meta["goal"])
     planned_root = arrays["root"]
     root_err = np.linalg.norm(root[:, :2] - planned_root[:, :2], axis=1)
@@ -1560,6 +1565,7 @@ def _analyse(context, character):
         "frames": int(frames.size),
         "seconds": float((frames.size - 1) / fps),
         "foot_skate": skate,
+        **({"foot_skate_by_layer": by_layer} if by_layer else {}),
         "root_from_plan_cm": {
             "mean": float(root_err.mean() * 100),
             "max": float(root_err.max() * 100),
@@ -1575,6 +1581,23 @@ def _analyse(context, character):
         "traversals": len(meta.get("traversals", [])),
         "boundary_pop": pops,
     }
+
+
+def _skate_by_layer(meta, frames, feet, fps, planted):
+    """{layer: foot skate} over the frames of each layer's strips (blends and clips counted
+    in none) of a plan that changes layer; None for a plan in one layer."""
+    spans = meta.get("layers") or []
+    names = sorted({n for _, _, n in spans if n != "clip" and "->" not in n})
+    if len(names) < 2:
+        return None
+    out = {}
+    for name in names:
+        mine = np.zeros(frames.size, bool)
+        for a, b, n in spans:
+            if n == name:
+                mine[(frames >= a) & (frames <= b)] = True
+        out[name] = metrics.foot_skate(feet, fps, np.asarray(planted, bool) & mine[:, None])
+    return out
 
 
 def _resolve(scene, place, what, patch):

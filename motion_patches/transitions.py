@@ -58,6 +58,17 @@ class LayerPiece(Piece):
         return base if self.kind in CLIPS else f"{self.patch.layer} {base}"
 
 
+def piece_layer(piece, layer):
+    """What a piece plays, for reports: its layer (``layer`` for a piece of a one-layer
+    plan), "walk -> run" for a blend, "clip" for a traversal or interaction clip."""
+    if piece.kind in CLIPS:
+        return "clip"
+    if piece.kind == "transition":
+        return piece.label
+    own = getattr(piece, "patch", None)
+    return own.layer if own is not None else layer
+
+
 def layered(piece, patch):
     """``piece`` as a :class:`LayerPiece` of ``patch``'s layer."""
     return LayerPiece(**{f.name: getattr(piece, f.name) for f in fields(Piece)}, patch=patch)

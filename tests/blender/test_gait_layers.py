@@ -124,6 +124,7 @@ def test_auto_walks_runs_hurdles_and_walks_back_to_a_walking_goal(
     walk_hips = evaluated(api, walker)
     i = int(np.argmax(walk_hips[:, 0] >= LINE_X))
     assert abs(walk_hips[i, 1]) > 5.0  # round the end of the line
+    assert "foot_skate_by_layer" not in api.analyse(bpy.context, walker)  # one layer
     res = plan(api, "auto")
     costs = res.stats["layers"]
     print("auto:", costs, res.pieces)
@@ -196,6 +197,11 @@ def test_auto_walks_runs_hurdles_and_walks_back_to_a_walking_goal(
         got = api.metrics.foot_skate(feet, 30.0, planted & mine[:, None])
         skate[layer] = (got["mean_cm_per_s"], source_skate(addon_module, mocap_dir, layer))
         assert got["planted_steps"] > 20
+        # Analyse reports the same, from the plan record's layer of each strip.
+        assert f["foot_skate_by_layer"][layer]["mean_cm_per_s"] == pytest.approx(
+            got["mean_cm_per_s"], abs=1e-9
+        )
+    assert set(f["foot_skate_by_layer"]) == {"walk", "run"}
     print(
         f"hips step / gait pace per frame: worst walk {worst['walk']:.2f}, run "
         f"{worst['run']:.2f}; joint step at the transitions "
