@@ -246,11 +246,8 @@ def compose(walk, run, start, goal, margin_tiles=3, max_expansions=400_000):
             a_world = _world(fw, p, h)
             if not _blend_clear(walk, wr, a_world):
                 continue
-            try:
-                leg = walk._plan_local(
-                    ls, a_local, margin_tiles, max_expansions, False, goal_key=key
-                )
-            except PlanError:
+            leg = _search(walk, ls, a_local, margin_tiles, max_expansions, goal_key=key)
+            if leg is None:
                 continue
             expansions += leg.expansions
             pieces = shortcut.shorten(walk, leg.pieces, ls, a_local)
@@ -271,20 +268,17 @@ def compose(walk, run, start, goal, margin_tiles=3, max_expansions=400_000):
     heapq.heapify(queue)
     best, tried_count, run_legs, bounded, count = None, 0, 0, 0, len(queue)
     while queue:
-        bound, _, stop = heapq.heappop(queue)
+        bound, n, stop = heapq.heappop(queue)
         if best is not None and bound >= best[0]:
             break
         if stop is None:  # a run leg to search: its ways back join the queue
-            cost1, a_world, pieces1 = firsts[_]
+            cost1, a_world, pieces1 = firsts[n]
             b_world = after(a_world, wr.offset)
             if run.world_env.blocked(b_world[None, :2])[0]:
                 continue
             with on_node(run, b_world, goal, margin_tiles) as (bl, bkey, gl, fb):
-                try:
-                    leg = run._plan_local(
-                        bl, gl, margin_tiles, max_expansions, False, start_key=bkey
-                    )
-                except PlanError:
+                leg = _search(run, bl, gl, margin_tiles, max_expansions, start_key=bkey)
+                if leg is None:
                     continue
                 expansions += leg.expansions
                 run_legs += 1
@@ -321,11 +315,8 @@ def compose(walk, run, start, goal, margin_tiles=3, max_expansions=400_000):
             continue
         partial, head, ends = stop
         with on_node(walk, ends[3], goal, margin_tiles) as (dl, dkey, gl2, fd):
-            try:
-                back = walk._plan_local(
-                    dl, gl2, margin_tiles, max_expansions, False, start_key=dkey
-                )
-            except PlanError:
+            back = _search(walk, dl, gl2, margin_tiles, max_expansions, start_key=dkey)
+            if back is None:
                 continue
             expansions += back.expansions
             tail = shortcut.shorten(walk, back.pieces, dl, gl2)
@@ -387,6 +378,15 @@ def compose(walk, run, start, goal, margin_tiles=3, max_expansions=400_000):
             "traversals_used": sum(p.kind == "traversal" for p in pieces),
         },
     )
+
+
+def _search(planner, start, goal, margin_tiles, max_expansions, **node):
+    """The planner's search (framed) from ``start`` to ``goal`` (local states), beginning
+    or ending on a node (``start_key`` / ``goal_key``); None when there is no way."""
+    try:
+        return planner._plan_local(start, goal, margin_tiles, max_expansions, False, **node)
+    except PlanError:
+        return None
 
 
 def _framed(piece, frame):
