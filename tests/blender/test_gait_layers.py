@@ -157,7 +157,7 @@ def test_auto_walks_runs_hurdles_and_walks_back_to_a_walking_goal(
     frames = np.arange(meta["frame_start"], meta["frame_end"] + 1)
     bones = [meta["root_name"], *meta["foot_names"]]
     evaluate = addon_module.adapter.evaluate
-    pos, _, rot, _ = evaluate.sample_armature(bpy.context, walker, frames, bones)
+    pos, ground, rot, _ = evaluate.sample_armature(bpy.context, walker, frames, bones)
     hips, feet = pos[:, 0, :2], pos[:, 1:]
     gaits = {
         n: addon_module.adapter.storage.load_patch(bpy.context.scene, n).gait
@@ -172,6 +172,9 @@ def test_auto_walks_runs_hurdles_and_walks_back_to_a_walking_goal(
         s = step[a:b].max()
         worst[gait] = max(worst.get(gait, 0.0), s / per_frame[gait])
         assert s < 1.5 * per_frame[gait], (layer, a, b, s)
+    # The object's root track (one action for the whole plan) runs on across the joins.
+    ground_step = np.linalg.norm(np.diff(ground[:, :2], axis=0), axis=1)
+    assert ground_step.max() < 1.5 * per_frame["run"]
     q = rot / np.linalg.norm(rot, axis=-1, keepdims=True)
     dots = np.abs((q[1:] * q[:-1]).sum(axis=-1)).clip(0, 1)
     jstep = np.degrees(2 * np.arccos(dots)).max(axis=1)  # largest joint step per frame step
