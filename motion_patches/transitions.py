@@ -222,6 +222,10 @@ def compose(walk, run, start, goal, margin_tiles=3, max_expansions=400_000):
             f"layers '{walk.patch.layer}' and '{run.patch.layer}' differ in skeleton or frame "
             f"rate: no blend between them"
         )
+    if not any(p.traversals() for p in run.world_props):
+        raise PlanError(
+            f"no prop offers a {run.patch.layer} traversal clip: nothing to change gait for"
+        )
     wr, rw = from_node(walk.patch, run.patch), from_node(run.patch, walk.patch)
     c_wr, c_rw = transition_cost(wr, walk, run), transition_cost(rw, run, walk)
     ref = run.plan(start, goal, margin_tiles, max_expansions, shorten=False)

@@ -428,7 +428,7 @@ def test_where_walking_round_is_short_auto_walks(walk_patch, run_patch, run_hurd
     assert layers.choose(costs) == 0
     env_w = Environment(walk_patch.side, walk_patch.cells, radius=0.25)
     env_r = Environment(run_patch.side, run_patch.cells, radius=0.25)
-    with pytest.raises(PlanError, match="no traversal"):
+    with pytest.raises(PlanError, match="no prop offers a run traversal clip"):
         transitions.compose(
             SegmentPlanner(walk_patch, env_w), SegmentPlanner(run_patch, env_r), START, GOAL
         )
