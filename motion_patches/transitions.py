@@ -17,11 +17,14 @@ node of the target layer in that layer's node pose, and the leg's segments start
 
 Candidate switch points come from the run plan: its run nodes before its first traversal
 (where a run would have to start) and, on each run leg, the run nodes after its last
-traversal (where it may stop); a blend into the run starts on the walk node nearest the
-point the blend must start from to reach that run node. Every composition is scored by
-the sum of the Eq. 5 costs of its legs and blends (a blend costs alpha x its length +
-gamma x its seconds x the mean of the two layers' effort rates: it goes straight), and
-the cheapest competes with the walk-only and run-only plans (the caller's choice).
+traversal (where it may stop, :func:`_stops`); a blend into the run starts on the walk
+node nearest the point the blend must start from to reach that run node. Every
+composition is scored by the sum of the Eq. 5 costs of its legs and blends (a blend costs
+alpha x its length + gamma x its seconds x the mean of the two layers' effort rates: it
+goes straight); legs are searched best first by a lower bound of that sum, and the
+cheapest composition competes with the walk-only and run-only plans (the caller's
+choice). Only walk -> run -> walk is composed: a plan starting or ending in the run is
+the run-only plan.
 """
 
 import contextlib
