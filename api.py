@@ -35,6 +35,7 @@ from .motion_patches import (
     moving_props,
     object_patch,
     scene_rate,
+    transitions,
     validate,
 )
 from .motion_patches.defaults import GOAL_FACING, STITCHING
@@ -828,10 +829,12 @@ def _write(
     lock=True,
     rig=None,
     fit=True,
+    layer_keys=None,
 ):
     """NLA strips and the plan record of one planned character (``placed``: its motion,
     :func:`_placed`; ``env``: the planner's world, shrunk by the character's size).
-    ``fit``: fit the scene's frame range now (a crowd fits it once, after every write)."""
+    ``fit``: fit the scene's frame range now (a crowd fits it once, after every write).
+    ``layer_keys``: {layer: patch key} of a plan that changes layer (:func:`_gait_change`)."""
     scale = _size(rig)
     goal_state = _shrunk(plan.goal, 1.0 / scale)  # the facing reached when any would do
     skel = rig.target if rig is not None else patch.gait.skeleton
@@ -849,6 +852,7 @@ def _write(
         locked,
         rig,
         bounds,
+        layer_keys,
     )
     wm = world.world_matrices(skel)
     foot = contacts.foot_joints(skel)
@@ -877,6 +881,10 @@ def _write(
             "foot_lock": bool(lock),
             "traversals": [[s["start"], s["end"]] for s in strips if s["kind"] == "traversal"],
             "interactions": [[s["start"], s["end"]] for s in strips if s["kind"] == "interaction"],
+            "layers": [
+                [s["start"], s["end"], transitions.piece_layer(p, patch.layer)]
+                for s, p in zip(strips, plan.pieces)
+            ],
             "obstacles": {o.name: (o.polygon * scale).tolist() for o in env.obstacles.values()},
         },
     )
@@ -962,9 +970,11 @@ def plan_path(
     an Add track over the shared segment strips. ``goal_facing="any"`` lets the walk end
     facing whichever way is cheapest (the goal object's facing is then ignored).
     ``gait`` picks the layer: a layer name ("walk", "run") plans with the stored patch of
-    that layer, "auto" plans in every layer stored and keeps the cheapest Eq. 5 cost
-    (:mod:`motion_patches.layers`; ``stats["layers"]`` gives each layer's cost), None
-    plans with ``patch_name`` (or the active patch). Raises
+    that layer, "auto" plans in every layer stored, and a plan that changes layer (walk,
+    run through the run layer's traversals, walk: :func:`_gait_change`), and keeps the
+    cheapest Eq. 5 cost of the motion played (``stats["cost_shortened"]``;
+    ``stats["layers"]`` gives each one's, "walk+run" the change's), None plans with
+    ``patch_name`` (or the active patch). Raises
     :class:`PathNotFound` when the props leave no way, and
     :class:`MotionPatchesError` for bad input; either way the scene is unchanged."""
     candidates = _layer_patches(scene, patch_name, gait)
@@ -1011,18 +1021,76 @@ def plan_path(
         raise PathNotFound(
             "; ".join(f"{layer}: {exc}" for layer, exc in failures), first.cause, first.props
         )
-    best = layers.choose([t[3].cost for t in tried])
-    patch, rig, env, plan, motions, start_frame, name = tried[best]
+    costs = [float(t[3].stats.get("cost_shortened", t[3].cost)) for t in tried]
+    change, why = _gait_change(tried) if gait == "auto" else (None, None)
+    best = layers.choose(costs + ([change[0].cost] if change else []))
+    layer_keys = None
+    if best == len(tried):  # the plan that changes layer: written with the walk's patch
+        patch, rig, env, _, _, start_frame, _, name = min(tried, key=lambda t: t[0].effort_rate)
+        plan, motions = change
+        layer_keys = {t[0].layer: storage.patch_key(scene, t[7]) for t in tried}
+    else:
+        patch, rig, env, plan, motions, start_frame, _, name = tried[best]
     if gait is not None:
-        plan.stats["layer"] = patch.layer
-        plan.stats["layers"] = {t[0].layer: round(float(t[3].cost), 4) for t in tried}
+        plan.stats["layer"] = (
+            plan.stats.get("layer") if change and best == len(tried) else patch.layer
+        )
+        plan.stats["layers"] = {t[0].layer: round(c, 4) for t, c in zip(tried, costs)}
         plan.stats["layers"].update({layer: None for layer, _ in failures})
+        if change:
+            plan.stats["layers"][change[0].stats["layer"]] = round(change[0].cost, 4)
+        elif why:
+            plan.stats["gait_change"] = why
     placed = _placed(scene, patch, rig, motions)
     _writable(character, start_frame, placed[2].frames)
     with transaction.kept(bpy, scene, [character], (PLAN_KEY, FRAME_RANGE_KEY)):
         return _write(
-            scene, character, patch, name, plan, placed, start_frame, env, radius, foot_lock, rig
+            scene,
+            character,
+            patch,
+            name,
+            plan,
+            placed,
+            start_frame,
+            env,
+            radius,
+            foot_lock,
+            rig,
+            layer_keys=layer_keys,
         )
+
+
+def _gait_change(tried):
+    """((plan, piece motions), None) of the cheapest plan that walks, runs through the run
+    layer's traversals and walks again (:func:`motion_patches.transitions.compose`), from
+    the layers' plans ``tried`` (:func:`_plan_in_layer`: the layer of least effort walks,
+    that of most runs), or (None, why not). Not offered with props that move, with a start
+    or goal on a prop's clip (sitting), nor when the plan's hips would come within the
+    radius of a prop."""
+    if len(tried) < 2:
+        return None, None
+    walk_t = min(tried, key=lambda t: t[0].effort_rate)
+    run_t = max(tried, key=lambda t: t[0].effort_rate)
+    if walk_t[0].effort_rate == run_t[0].effort_rate:
+        return None, "the layers cost the same effort: none of them is a run"
+    walk, run = walk_t[6], run_t[6]
+    if walk["moving"] or run["moving"]:
+        return None, "not offered with props that move"
+    ends = walk["ends"]
+    if ends[2] is not None or ends[3] is not None:
+        return None, "not offered when the path starts or ends on a prop's clip"
+    try:
+        plan = transitions.compose(walk["planner"], run["planner"], ends[0], ends[1])
+    except PlanError as exc:
+        return None, str(exc)
+    motions = transitions.plan_layer_motions(plan)
+    close = body_clearance.hips_too_close(
+        walk_t[0], plan.pieces, motions, walk["planner"].world_env
+    )
+    if close:
+        return None, f"its hips come within the radius of a prop on {len(close)} frames"
+    plan.stats["glitches"] = validate.count(transitions.glitches(plan, motions))
+    return (plan, motions), None
 
 
 def _layer_patches(scene, patch_name, gait):
@@ -1083,9 +1151,10 @@ def _plan_in_layer(
     start_prop,
     goal_facing,
 ):
-    """(patch, rig map, planner world, plan, piece motions, first frame) of one character
-    planned in the layer of ``patch``; its props offer only the traversal clips that
-    serve that layer (:func:`motion_patches.layers.serves`)."""
+    """(patch, rig map, planner world, plan, piece motions, first frame, {planner, ends,
+    moving: whether props move}) of one character planned in the layer of ``patch``; its
+    props offer only the traversal clips that serve that layer
+    (:func:`motion_patches.layers.serves`)."""
     rig = _check_character(character, patch)
     scale = _size(rig)
     depsgraph = context.evaluated_depsgraph_get()
@@ -1124,7 +1193,8 @@ def _plan_in_layer(
         frame_start += int(round(wait * scene_fps(scene)))
         motions = plan_motions(patch, plan)
     plan.stats["glitches"] = validate.count(validate.plan_glitches(patch, plan, motions))
-    return patch, rig, env, plan, motions, frame_start
+    layer = {"planner": planner, "ends": ends, "moving": bool(tracks)}  # for _gait_change
+    return patch, rig, env, plan, motions, frame_start, layer
 
 
 def crowd_members(scene: "bpy.types.Scene", characters=None) -> list[tuple]:
@@ -1517,6 +1587,7 @@ def _analyse(context, character):
     fps = scene_fps(context.scene)
     root, feet = pos[:, 0], pos[:, 1:]
     skate = metrics.foot_skate(feet, fps, arrays["contacts"])
+    by_layer = _skate_by_layer(meta, frames, feet, fps, arrays["contacts"])
     goal = np.array(meta["goal"])
     planned_root = arrays["root"]
     root_err = np.linalg.norm(root[:, :2] - planned_root[:, :2], axis=1)
@@ -1534,6 +1605,7 @@ def _analyse(context, character):
         "frames": int(frames.size),
         "seconds": float((frames.size - 1) / fps),
         "foot_skate": skate,
+        **({"foot_skate_by_layer": by_layer} if by_layer else {}),
         "root_from_plan_cm": {
             "mean": float(root_err.mean() * 100),
             "max": float(root_err.max() * 100),
@@ -1549,6 +1621,23 @@ def _analyse(context, character):
         "traversals": len(meta.get("traversals", [])),
         "boundary_pop": pops,
     }
+
+
+def _skate_by_layer(meta, frames, feet, fps, planted):
+    """{layer: foot skate} over the frames of each layer's strips (blends and clips counted
+    in none) of a plan that changes layer; None for a plan in one layer."""
+    spans = meta.get("layers") or []
+    names = sorted({n for _, _, n in spans if n != "clip" and "->" not in n})
+    if len(names) < 2:
+        return None
+    out = {}
+    for name in names:
+        mine = np.zeros(frames.size, bool)
+        for a, b, n in spans:
+            if n == name:
+                mine[(frames >= a) & (frames <= b)] = True
+        out[name] = metrics.foot_skate(feet, fps, np.asarray(planted, bool) & mine[:, None])
+    return out
 
 
 def _resolve(scene, place, what, patch):

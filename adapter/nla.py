@@ -204,6 +204,7 @@ def write_plan(
     locked=None,
     rig=None,
     bounds=None,
+    layer_keys=None,
 ):
     """Write a plan's strips and root trajectory on ``obj``; returns strip records.
 
@@ -217,7 +218,10 @@ def write_plan(
     (``bounds[-1] + 1`` of them), which the per-character root trajectory is keyed from.
     ``locked``: rotation channels (F, J, 4) of ``world`` with the feet pinned
     (:func:`motion_patches.foot_lock.lock_feet`); the difference is written as a
-    per-character correction on its own track, added over the shared segment actions."""
+    per-character correction on its own track, added over the shared segment actions.
+    ``layer_keys``: {layer: patch key} of a plan that changes layer, whose segment pieces
+    name their own patch (:class:`motion_patches.transitions.LayerPiece`): their strips
+    play that patch's shared segment actions, on the one motion track."""
     skel = rig.target if rig is not None else patch.gait.skeleton
     modes = rig_rotation_modes(obj, skel)
     if bounds is None:
@@ -235,8 +239,16 @@ def write_plan(
     index = segment_index(bpy)
     for n, (piece, m) in enumerate(zip(plan.pieces, motions)):
         if piece.kind == "segment":
+            own = getattr(piece, "patch", None) if layer_keys else None
             action, slot = segment_action(
-                bpy, patch, patch_key, piece.segment, skel, modes, rig, index
+                bpy,
+                own or patch,
+                layer_keys[own.layer] if own is not None else patch_key,
+                piece.segment,
+                skel,
+                modes,
+                rig,
+                index,
             )
         else:
             action, slot = _inplace_action(

@@ -92,6 +92,30 @@ def blend(gait_a, gait_b, phase=0):
     return Motion(ground, root, quat.make_continuous(q), con)
 
 
+def from_node(patch_a, patch_b):
+    """The blend table's entry for the node pose of ``patch_a`` (every segment starts and
+    ends on it: its straight loop's cycle start, phase 0) into ``patch_b``: a layer is
+    changed where one of its segments ends, feet planted as both gaits plant them. The
+    blend is computed from phase 0 itself (:func:`table` starts an entry on the loop frame
+    nearest its cluster centre) and kept with the patch."""
+    cache = patch_a.__dict__.setdefault("_node_transitions", {})
+    key = (patch_b.layer, id(patch_b))
+    got = cache.get(key)
+    if got is None:
+        m = blend(patch_a.gait, patch_b.gait, 0)
+        end = poses.pose_features(m.root_local[-1:], m.rotations[-1:])
+        got = cache[key] = Transition(
+            patch_a.layer,
+            patch_b.layer,
+            int(patch_a.seg_pose[0, 0]),
+            0,
+            m,
+            m.ground[-1].copy(),
+            int(poses.nearest(patch_b.pose_centres, end)[0]),
+        )
+    return got
+
+
 def table(patch_a, patch_b):
     """The blend table from ``patch_a``'s layer into ``patch_b``'s: one
     :class:`Transition` per pose cluster of A, starting at the straight loop's frame

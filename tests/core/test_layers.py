@@ -234,3 +234,225 @@ def test_blend_table_walk_to_run_ends_on_the_run_node_pose_without_a_pop(walk_pa
     back = blend_table.table(run_patch, walk_patch)
     assert len(back) == run_patch.pose_centres.shape[0]
     assert all(t.end_pose == walk_patch.seg_pose[0, 0] for t in back)
+
+
+# -- gait changes inside one plan (motion_patches.transitions) ---------------------------
+
+CHAIR = np.array([[-0.2, -0.22], [0.2, -0.22], [0.2, 0.22], [-0.2, 0.22]])
+LINE_X = 5.0
+
+
+@pytest.fixture(scope="module")
+def run_hurdle(walk_gait):
+    """CMU 16_06, a standing forward jump (subject 16's only jump), declared here as a
+    run-layer clip only: the walk cannot take it and must go round the chairs."""
+    from motion_patches import object_patch as op
+
+    c = op.patch_clip_from(cmu("16_06"), op.TRAVERSAL, walk_gait.fps, effort=8.0)
+    c.layer_in = c.layer_out = "run"
+    return c
+
+
+def chair_world(patch, clip, half=5.0, pillars=()):
+    """A line of chairs 0.5 m apart across the way at x = 5 (from -half to +half), each
+    with the jump's copies every 10 degrees, and pillars; the props of ``patch``'s layer."""
+    from motion_patches import object_patch as op
+
+    env = Environment(patch.side, patch.cells, radius=0.25)
+    props = []
+    for k, y in enumerate(np.linspace(-half, half, int(round(2 * half / 0.5)) + 1)):
+        o = op.ObjectPatch(f"chair{k}", CHAIR, pose=(LINE_X, y, 0.0))
+        o.add_traversal_copies(clip)
+        env.place(Obstacle(o.name, o.world_footprint()))
+        props.append(layers.for_layer(o, patch.layer))
+    for n, (x, y) in enumerate(pillars):
+        env.place(pillar(f"pillar{n}", x, y))
+    return env, props
+
+
+def planners(walk_patch, run_patch, clip, **kw):
+    return tuple(
+        SegmentPlanner(p, *chair_world(p, clip, **kw)[:1], props=chair_world(p, clip, **kw)[1])
+        for p in (walk_patch, run_patch)
+    )
+
+
+START, GOAL = (-4.0, 0.3, 0.0), (14.0, 0.3, 0.0)
+
+
+@pytest.fixture(scope="module")
+def gait_change(walk_patch, run_patch, run_hurdle):
+    """Walk-only, run-only and walk -> run -> walk plans across a 10 m line of chairs."""
+    from motion_patches import transitions
+
+    walk, run = planners(walk_patch, run_patch, run_hurdle)
+    w, r = walk.plan(START, GOAL), run.plan(START, GOAL)
+    mixed = transitions.compose(walk, run, START, GOAL)
+    return walk, run, w, r, mixed, transitions.plan_layer_motions(mixed)
+
+
+def layer_of(piece):
+    return piece.kind if piece.kind in ("traversal", "transition") else piece.patch.layer
+
+
+def test_auto_walks_runs_hurdles_and_walks_back_when_the_way_round_is_long(gait_change):
+    walk, run, w, r, mixed, ms = gait_change
+    assert w.stats["traversals_used"] == 0  # the jump is a run clip: the walk goes round
+    whole = concatenate(plan_motions(walk.patch, w))
+    at_line = whole.ground[np.argmax(whole.ground[:, 0] >= LINE_X)]
+    assert abs(at_line[1]) > 5.0
+    seq = [layer_of(p) for p in mixed.pieces]
+    collapsed = [s for i, s in enumerate(seq) if i == 0 or s != seq[i - 1]]
+    assert collapsed == ["walk", "transition", "run", "traversal", "run", "transition", "walk"]
+    assert [p.label for p in mixed.pieces if p.kind == "transition"] == [
+        "walk -> run",
+        "run -> walk",
+    ]
+    costs = [w.stats["cost_shortened"], r.stats["cost_shortened"], mixed.cost]
+    print(
+        f"Eq. 5 cost: walk {costs[0]:.2f}, run {costs[1]:.2f}, walk+run {costs[2]:.2f} "
+        f"(composed in {mixed.seconds:.2f} s, {mixed.stats['compositions_tried']} ways back "
+        f"searched of {mixed.stats['compositions_bounded']})"
+    )
+    assert layers.choose(costs) == 2
+    assert mixed.cost == pytest.approx(sum(p.cost for p in mixed.pieces))
+    m = concatenate(ms)
+    assert np.allclose(m.ground[-1, :2], GOAL[:2], atol=1e-6)
+    assert np.allclose(m.ground[0, :2], START[:2], atol=1e-6)
+
+
+def test_a_transition_lands_on_a_node_of_the_target_layer_within_the_stitch_threshold(
+    gait_change,
+):
+    """The blend's end (its start state concatenated with the table's relative transform)
+    is where the next piece begins, a node of the target layer's lattice in that piece's
+    plan frame (on a tile edge, in a node slot, at a 45-degree heading), and the blend's
+    last pose is the target's node pose: the pose distance to the target loop's phase 0 is
+    within the stitch's pose tolerance of the best phase's."""
+    from motion_patches import poses, shortcut, stitching, transitions
+    from motion_patches.plan_frame import state_to_local
+
+    walk, run, _, _, mixed, ms = gait_change
+    by_layer = {"walk": walk, "run": run}
+    k = [i for i, p in enumerate(mixed.pieces) if p.kind == "transition"]
+    assert len(k) == 2
+    for i in k:
+        t, nxt = mixed.pieces[i], mixed.pieces[i + 1]
+        target = by_layer[t.transition.target]
+        assert nxt.patch is target.patch
+        end = transitions.after(t.frame, t.transition.offset)
+        p, h = shortcut.entry_state(target, nxt)
+        local_end = state_to_local(nxt.frame, end)
+        err = np.linalg.norm(local_end[:2] - p)
+        dh = abs((local_end[2] - h + np.pi) % (2 * np.pi) - np.pi)
+        print(f"{t.label}: lands {err * 1000:.4f} mm, {np.degrees(dh):.5f} deg from the node")
+        assert err < stitching.POSITION_TOLERANCE / 100 and dh < stitching.HEADING_TOLERANCE / 100
+        side, n = target.patch.side, target.patch.nodes
+        q = p / side - np.floor(p / side + 1e-9)  # place in the tile, 0..1
+        on_edge = np.isclose(q, 0.0, atol=1e-6) | np.isclose(q, 1.0, atol=1e-6)
+        assert on_edge.sum() == 1
+        slot = q[~on_edge][0] * n - 0.5
+        assert slot == pytest.approx(round(slot), abs=1e-6)
+        assert (h / (np.pi / 4)) == pytest.approx(round(h / (np.pi / 4)), abs=1e-6)
+        last = t.transition.motion
+        d = stitching.phase_pose_distance(
+            target.patch.gait, last.root_local[-1], last.rotations[-1]
+        )
+        assert d[0] <= stitching.POSE_TOLERANCE * d.min() + 1e-9
+        # The next piece starts on that pose (its first frame, as synthesised).
+        first = ms[i + 1]
+        gap = np.abs(
+            poses.pose_features(first.root_local[:1], first.rotations[:1])
+            - poses.pose_features(last.root_local[-1:], last.rotations[-1:])
+        ).max()
+        loop = target.patch.gait.straight
+        f = poses.pose_features(loop.root_local, loop.rotations)
+        assert gap <= np.median(np.abs(np.diff(f, axis=0)).max(axis=1))
+
+
+def joint_steps(rot):
+    from motion_patches import quat
+
+    d = quat.mul(quat.conj(rot[:-1]), rot[1:])
+    return 2 * np.arccos(np.clip(np.abs(d[..., 0]), 0, 1)).max(axis=1)
+
+
+def test_the_gait_change_has_no_pop_and_no_root_jump(gait_change):
+    """At every join of the walk -> run -> walk plan the largest joint step is below the
+    99th percentile of the steps inside its pieces; the hips never move farther in a frame
+    than 1.5 x the per-frame speed of the faster layer a piece plays in."""
+    from motion_patches import transitions
+
+    walk, run, _, _, mixed, ms = gait_change
+    m = concatenate(ms)
+    steps = joint_steps(m.rotations)
+    bounds = np.cumsum([x.frames - 1 for x in ms])[:-1]
+    joins = np.concatenate([steps[b - 1 : b + 1] for b in bounds])
+    inside = np.concatenate([joint_steps(x.rotations) for x in ms])
+    p99 = np.percentile(inside, 99)
+    print(
+        f"largest joint step at a join {np.degrees(joins.max()):.1f} deg, p99 inside "
+        f"{np.degrees(p99):.1f} deg"
+    )
+    assert joins.max() < p99
+    skel = walk.patch.gait.skeleton
+    first = 0
+    for piece, x in zip(mixed.pieces, ms):
+        hips = x.world_matrices(skel)[:, skel.root, :2, 3]
+        fast = walk.patch if layer_of(piece) == "walk" else run.patch
+        per_frame = layers.speed(fast.gait) / fast.gait.fps
+        step = np.linalg.norm(np.diff(hips, axis=0), axis=1).max()
+        assert step < 1.5 * per_frame, piece.label
+        first += x.frames - 1
+    # Ground track checks of the validator, each piece by its own layer's limits.
+    assert transitions.glitches(mixed, ms) == []
+    joined = m.world_matrices(skel)[:, skel.root, :2, 3]
+    assert np.linalg.norm(np.diff(joined, axis=0), axis=1).max() < 1.5 * (
+        layers.speed(run.patch.gait) / run.patch.gait.fps
+    )
+
+
+def test_where_walking_round_is_short_auto_walks(walk_patch, run_patch, run_hurdle):
+    """Five chairs (a 2 m line): the run plan hurdles them and a walk -> run -> walk plan is
+    found, but walking round is cheaper than either; on open ground there is nothing to
+    run for (no composition is offered)."""
+    from motion_patches import transitions
+    from motion_patches.planner import PlanError
+
+    walk, run = planners(walk_patch, run_patch, run_hurdle, half=1.0)
+    w, r = walk.plan(START, GOAL), run.plan(START, GOAL)
+    assert r.stats["traversals_used"] == 1
+    mixed = transitions.compose(walk, run, START, GOAL).cost
+    costs = [w.stats["cost_shortened"], r.stats["cost_shortened"], mixed]
+    print("short line, Eq. 5 cost walk / run / walk+run:", costs)
+    assert layers.choose(costs) == 0
+    env_w = Environment(walk_patch.side, walk_patch.cells, radius=0.25)
+    env_r = Environment(run_patch.side, run_patch.cells, radius=0.25)
+    with pytest.raises(PlanError, match="no prop offers a run traversal clip"):
+        transitions.compose(
+            SegmentPlanner(walk_patch, env_w), SegmentPlanner(run_patch, env_r), START, GOAL
+        )
+
+
+def test_a_gait_change_avoids_pillars_in_every_layer(walk_patch, run_patch, run_hurdle):
+    """Pillars before and after the chair line, on the straight way: the walk, blend and
+    run pieces of the plan that changes gait keep the radius from every footprint (the
+    hurdle clip alone crosses its chair)."""
+    from motion_patches import transitions
+
+    field = [(0.5, 0.2), (2.8, 0.6), (7.5, 0.0), (10.5, 0.5)]
+    walk, run = planners(walk_patch, run_patch, run_hurdle, pillars=field)
+    mixed = transitions.compose(walk, run, START, GOAL)
+    ms = transitions.plan_layer_motions(mixed)
+    env = walk.world_env
+    seen = set()
+    for piece, m in zip(mixed.pieces, ms):
+        if piece.kind == "traversal":
+            continue
+        seen.add(layer_of(piece))
+        assert not env.blocked(m.ground[:, :2]).any(), piece.label
+    assert seen == {"walk", "run", "transition"}
+    g = concatenate(ms).ground
+    near = [np.hypot(g[:, 0] - x, g[:, 1] - y).min() for x, y in field]
+    print("closest approach to each pillar (m):", np.round(near, 3))
+    assert min(near) >= 0.25 + 0.25 - 1e-6
