@@ -231,7 +231,7 @@ def compose(walk, run, start, goal, margin_tiles=3, max_expansions=400_000):
         )
     wr, rw = from_node(walk.patch, run.patch), from_node(run.patch, walk.patch)
     c_wr, c_rw = transition_cost(wr, walk, run), transition_cost(rw, run, walk)
-    ref = run.plan(start, goal, margin_tiles, max_expansions, shorten=False)
+    ref = run.plan(start, goal, margin_tiles, max_expansions, shorten=False, turn_in_place=False)
     expansions = ref.expansions
     switches = _entries_before(run, ref)[-SWITCH_CANDIDATES:]
     if not any(p.kind == "traversal" for p in ref.pieces) or not switches:
