@@ -706,9 +706,12 @@ def planning_settings(scene: "bpy.types.Scene", **given) -> dict:
                 f"{key.replace('_', ' ')} must be "
                 f"{' or '.join(repr(a) for a in allowed)}, not {out[key]!r}"
             )
-    if out["foot_lock"] not in (True, False):
-        raise MotionPatchesError(f"foot lock must be True or False, not {out['foot_lock']!r}")
-    out["foot_lock"] = bool(out["foot_lock"])
+    for key in ("foot_lock", "turn_in_place"):
+        if out[key] not in (True, False):
+            raise MotionPatchesError(
+                f"{key.replace('_', ' ')} must be True or False, not {out[key]!r}"
+            )
+        out[key] = bool(out[key])
     return out
 
 
@@ -958,6 +961,7 @@ def plan_path(
     foot_lock: bool | None = None,
     goal_facing: str | None = None,
     gait: str | None = None,
+    turn_in_place: bool | None = None,
 ) -> PlanResult:
     """Plan ``character`` to ``goal`` (an object or (x, y, heading); None: the scene's goal)
     and write it as NLA. Settings left None are the scene's (:func:`planning_settings`).
@@ -968,7 +972,9 @@ def plan_path(
     ``start_prop`` with a stand-up clip starts it there (the character's own position is
     then not used). With ``foot_lock`` planted feet are pinned by leg IK, written as a
     an Add track over the shared segment strips. ``goal_facing="any"`` lets the walk end
-    facing whichever way is cheapest (the goal object's facing is then ignored).
+    facing whichever way is cheapest (the goal object's facing is then ignored). With
+    ``turn_in_place`` a character facing away turns on the spot first (last) instead of
+    walking a loop (a turn derived from the gait's sharpest turn loop).
     ``gait`` picks the layer: a layer name ("walk", "run") plans with the stored patch of
     that layer, "auto" plans in every layer stored, and a plan that changes layer (walk,
     run through the run layer's traversals, walk: :func:`_gait_change`), and keeps the
@@ -1009,6 +1015,7 @@ def plan_path(
                     stitching,
                     start_prop,
                     goal_facing,
+                    turn_in_place,
                 )
                 + (name,)
             )
@@ -1150,6 +1157,7 @@ def _plan_in_layer(
     stitching,
     start_prop,
     goal_facing,
+    turn_in_place=DEFAULTS["turn_in_place"],
 ):
     """(patch, rig map, planner world, plan, piece motions, first frame, {planner, ends,
     moving: whether props move}) of one character planned in the layer of ``patch``; its
@@ -1183,7 +1191,16 @@ def _plan_in_layer(
         env.place(Obstacle(t.name, t.polygon_at(t.pose_at(0.0)[0])))
     with _without(env, awake):  # awake props are avoided locally, after (Sec. 4.4)
         _check_clear(env, character, ends, by_name)
-        planner = SegmentPlanner(patch, env, alpha, beta, gamma, props=props, mode=stitching)
+        planner = SegmentPlanner(
+            patch,
+            env,
+            alpha,
+            beta,
+            gamma,
+            props=props,
+            mode=stitching,
+            turn_in_place=turn_in_place,
+        )
         plan = _solve(planner, character, ends)
         plan, motions = _body_clear(planner, plan, plan_motions(patch, plan), ends)
     if tracks:
@@ -1254,6 +1271,7 @@ def plan_crowd(
     spacing: float | None = None,
     foot_lock: bool | None = None,
     goal_facing: str | None = None,
+    turn_in_place: bool | None = None,
 ) -> CrowdResult:
     """Plan several characters and write each one's NLA; ``pairs`` = [(armature, goal)] or
     [(armature, goal, options)], a goal being an object or (x, y, heading); ``options``:
@@ -1373,7 +1391,16 @@ def plan_crowd(
         with _without(world_of(sz)[0], mine):
             _check_clear(world_of(sz)[0], c, e, world_of(sz)[2])
     for w in worlds.values():
-        w[3] = SegmentPlanner(patch, w[0], alpha, beta, gamma, props=w[1], mode=stitching)
+        w[3] = SegmentPlanner(
+            patch,
+            w[0],
+            alpha,
+            beta,
+            gamma,
+            props=w[1],
+            mode=stitching,
+            turn_in_place=turn_in_place,
+        )
     world_ends = [(_shrunk(e[0], 1.0 / sz), _shrunk(e[1], 1.0 / sz)) for e, sz in zip(ends, sizes)]
     goals = np.array([g[1][:2] for g in world_ends])
     for i in range(len(pairs)):
@@ -1757,7 +1784,13 @@ def check_layout(scene: "bpy.types.Scene", spec: dict, context=None) -> list[dic
             usable = [pr for pr in props[size] if pr.name not in exclude] if allow else []
             try:
                 planner = SegmentPlanner(
-                    patch, env, w["alpha"], w["beta"], w["gamma"], props=usable
+                    patch,
+                    env,
+                    w["alpha"],
+                    w["beta"],
+                    w["gamma"],
+                    props=usable,
+                    turn_in_place=w["turn_in_place"],
                 )
             except PlanError as exc:
                 raise MotionPatchesError(str(exc)) from None

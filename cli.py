@@ -941,6 +941,23 @@ def _planning_options(p):
         const="exact",
         help="end facing the goal's facing",
     )
+    g = p.add_mutually_exclusive_group()
+    g.add_argument(
+        "--turn-in-place",
+        dest="turn_in_place",
+        action="store_const",
+        const=True,
+        help="turn on the spot where a walk would loop to leave the start or reach the "
+        "goal facing its way (a turn derived from the walk's sharpest turn loop); default: "
+        "the scene's Turn on the Spot",
+    )
+    g.add_argument(
+        "--no-turn-in-place",
+        dest="turn_in_place",
+        action="store_const",
+        const=False,
+        help="walk the loops instead of turning on the spot",
+    )
 
 
 def _save_options(p):

@@ -72,6 +72,13 @@ PLANNING = {  # name -> factory of the bpy property (one fresh definition per cl
             ("ANY", "Any", "Arrive facing whichever way is cheapest (e.g. a goal in a dead end)"),
         ),
     ),
+    "turn_in_place": lambda: BoolProperty(
+        name="Turn on the Spot",
+        default=DEFAULTS["turn_in_place"],
+        description="Where a walk would loop to leave the start or reach the goal facing its "
+        "way, stop and turn on the spot (a turn derived from the walk's sharpest turn loop; "
+        "the mocap has no turn-in-place clip)",
+    ),
     "foot_lock": lambda: BoolProperty(
         name="Lock Planted Feet",
         default=DEFAULTS["foot_lock"],
@@ -231,6 +238,7 @@ class MOTION_PATCHES_PG_scene(bpy.types.PropertyGroup):
     stitching: PLANNING["stitching"]()
     foot_lock: PLANNING["foot_lock"]()
     goal_facing: PLANNING["goal_facing"]()
+    turn_in_place: PLANNING["turn_in_place"]()
     fit_frame_range: PLANNING["fit_frame_range"]()
     show_overlay: BoolProperty(
         name="Show Planner Overlay",
@@ -251,6 +259,7 @@ class MOTION_PATCHES_AP_preferences(bpy.types.AddonPreferences):
     stitching: PLANNING["stitching"]()
     foot_lock: PLANNING["foot_lock"]()
     goal_facing: PLANNING["goal_facing"]()
+    turn_in_place: PLANNING["turn_in_place"]()
     fit_frame_range: PLANNING["fit_frame_range"]()
     cells: BAKE["cells"]()
     nodes: BAKE["nodes"]()

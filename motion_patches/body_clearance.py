@@ -65,6 +65,7 @@ def keep_clear(planner, plan, motions, start, goal, motions_of, finish=lambda p:
         planner.gamma,
         props=planner.world_props,
         mode=planner.mode,
+        turn_in_place=planner.turn_in_place,
     )
     try:
         again = finish(wider.plan(start, goal))

@@ -107,6 +107,7 @@ def no_path_cause(planner, start, goal, margin_tiles=MARGIN_TILES, limit_hit=Non
         planner.alpha,
         planner.beta,
         planner.gamma,
+        turn_in_place=planner.turn_in_place,
     )
     try:
         found = free.plan(

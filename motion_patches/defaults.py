@@ -12,6 +12,7 @@ PLANNING = {
     "stitching": "dynamic",  # "dynamic" (lazy, the paper's method) or "static" (Lee 2006)
     "foot_lock": True,  # pin planted feet with leg IK
     "goal_facing": "exact",  # "exact": arrive facing the goal's heading; "any": the cheapest
+    "turn_in_place": True,  # turn on the spot where a walk would loop (a derived turn)
 }
 STITCHING = ("dynamic", "static")
 GOAL_FACING = ("exact", "any")

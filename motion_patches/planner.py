@@ -120,7 +120,9 @@ class SegmentPlanner:
         gamma=DEFAULTS["gamma"],
         props=(),
         mode=DEFAULTS["stitching"],
+        turn_in_place=DEFAULTS["turn_in_place"],
     ):
+        self.turn_in_place = bool(turn_in_place)  # plan() turns on the spot where it helps
         if mode not in ("dynamic", "static"):
             raise PlanError(f"unknown stitching mode '{mode}' (dynamic or static)")
         self.props, self.mode = list(props), mode
@@ -643,7 +645,7 @@ class SegmentPlanner:
         max_expansions=400_000,
         use_corridor=False,
         shorten=True,
-        turn_in_place=True,
+        turn_in_place=None,
     ):
         """Cheapest path from ``start`` to ``goal`` (x, y, heading); raises PlanError.
 
@@ -651,13 +653,17 @@ class SegmentPlanner:
         start and turned to the goal; the obstacles and props near the way are moved into
         it, and every piece of the result carries the frame back to the world.
 
-        With ``turn_in_place``, when the walk would loop into the goal's heading (its last
-        piece turns more than ``LOOP_TURN``) or cannot arrive facing it at all, a walk to
-        the goal facing any way followed by a turn on the spot (:mod:`.turn_in_place`) is
-        planned too, and the cheaper by Eq. 5 is kept.
+        With ``turn_in_place`` (None: the planner's own setting) the walk turns on the spot
+        (:mod:`.turn_in_place`) where a person would: at the start when the goal lies more
+        than ``LOOP_TURN`` off its facing, at the goal when the goal's heading is that far off
+        the way in; and when a walk planned without still loops near an end (or cannot leave
+        or arrive facing its way at all), one with a turn there is planned too and the
+        cheaper by Eq. 5 kept.
         """
         args = (margin_tiles, max_expansions, use_corridor, shorten)
         start, goal = np.asarray(start, float), np.asarray(goal, float)
+        if turn_in_place is None:
+            turn_in_place = self.turn_in_place
         if not (turn_in_place and self.turns_in_place):
             return self._plan_once(start, goal, *args)
         # The goal behind the character (or its heading against the way in): turn on the

@@ -181,6 +181,7 @@ def test_the_cli_plans_with_the_scene_settings_and_its_flags_override_them(
     record = mp.api.load_plan_record
     s = scene.motion_patches
     s.stitching, s.foot_lock, s.goal_facing, s.radius = "STATIC", False, "ANY", 0.3
+    s.turn_in_place = False
     path = tmp_path / "settings.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(path))
     capsys.readouterr()
@@ -194,6 +195,7 @@ def test_the_cli_plans_with_the_scene_settings_and_its_flags_override_them(
         "stitching": "static",
         "foot_lock": False,
         "goal_facing": "any",
+        "turn_in_place": False,
     }
     assert doc["goal"]["object"] == "Goal"  # no --goal: the scene's
     meta = record(bpy.data.objects["A"])[0]
@@ -211,6 +213,7 @@ def test_the_cli_plans_with_the_scene_settings_and_its_flags_override_them(
                 "--stitching",
                 "dynamic",
                 "--exact-facing",
+                "--turn-in-place",
                 "--radius",
                 "0.25",
             ]
@@ -219,7 +222,7 @@ def test_the_cli_plans_with_the_scene_settings_and_its_flags_override_them(
     )
     doc = json.loads(capsys.readouterr().out)
     assert doc["weights"]["stitching"] == "dynamic" and doc["weights"]["foot_lock"] is True
-    assert doc["weights"]["goal_facing"] == "exact"
+    assert doc["weights"]["goal_facing"] == "exact" and doc["weights"]["turn_in_place"] is True
     meta = record(bpy.data.objects["A"])[0]
     assert meta["foot_lock"] is True and meta["radius"] == pytest.approx(0.25)
 

@@ -121,3 +121,27 @@ def test_a_goal_behind_facing_minus_y_is_reached_by_turning_on_the_spot(baked_bl
     assert figures["foot_skate"]["mean_cm_per_frame"] < 1.0
     pop = figures["boundary_pop"]  # no pop where the walk and the turns meet
     assert pop["max_boundary_jump_deg"] <= pop["p99_step_deg"], pop
+
+
+def test_turning_on_the_spot_can_be_switched_off(baked_blend, addon_module):
+    """The scene's Turn on the Spot off (or ``turn_in_place=False``): the same walker facing
+    away from a goal behind it walks its loops instead, and says so in no strip."""
+    bpy.ops.wm.open_mainfile(filepath=str(baked_blend))
+    scene = bpy.context.scene
+    char = walker_from(scene.motion_patches.source_armature, location=(0.3, -0.2, 0.0))
+    bpy.context.view_layer.update()
+    skel = addon_module.adapter.storage.load_patch(scene, "walk").gait.skeleton
+    start = addon_module.adapter.scene.character_state(char, skel)
+    behind = start[:2] - 6.0 * np.array([np.cos(start[2]), np.sin(start[2])])
+    goal = empty("Goal", behind[0], behind[1], start[2])
+    assert scene.motion_patches.turn_in_place  # on by default
+    turned = plan(addon_module, char, goal)
+    assert turned.pieces[0].startswith("turn")
+    scene.motion_patches.turn_in_place = False
+    looped = plan(addon_module, char, goal)
+    assert not any(p.startswith("turn") for p in looped.pieces), looped.pieces
+    assert looped.length_m > 1.2 * turned.length_m
+    again = plan(addon_module, char, goal, turn_in_place=True)  # given beats the scene's
+    assert again.pieces[0].startswith("turn")
+    figures = addon_module.api.analyse(bpy.context, char)
+    assert figures["goal_heading_error_deg"] < 5.0
