@@ -979,10 +979,13 @@ def plan_path(
     that layer, "auto" plans in every layer stored, and a plan that changes layer (walk,
     run through the run layer's traversals, walk: :func:`_gait_change`), and keeps the
     cheapest Eq. 5 cost of the motion played (``stats["cost_shortened"]``;
-    ``stats["layers"]`` gives each one's, "walk+run" the change's), None plans with
-    ``patch_name`` (or the active patch). Raises
+    ``stats["layers"]`` gives each one's, "walk+run" the change's), None takes the
+    scene's Gait (Planning panel), whose default plans with ``patch_name`` (or the active
+    patch). Raises
     :class:`PathNotFound` when the props leave no way, and
     :class:`MotionPatchesError` for bad input; either way the scene is unchanged."""
+    if gait is None:  # the scene's choice (Planning panel); "active": the active patch
+        gait = {"ACTIVE": None}.get(scene.motion_patches.gait, scene.motion_patches.gait.lower())
     candidates = _layer_patches(scene, patch_name, gait)
     context = context or bpy.context
     # Objects moved by a script have stale matrix_world until the view layer updates.

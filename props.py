@@ -240,6 +240,22 @@ class MOTION_PATCHES_PG_scene(bpy.types.PropertyGroup):
     goal_facing: PLANNING["goal_facing"]()
     turn_in_place: PLANNING["turn_in_place"]()
     fit_frame_range: PLANNING["fit_frame_range"]()
+    gait: EnumProperty(
+        name="Gait",
+        default="ACTIVE",
+        items=(
+            ("ACTIVE", "Active Patch", "Plan with the active locomotion patch"),
+            ("WALK", "Walk", "Plan with the patch of the walk layer"),
+            ("RUN", "Run", "Plan with the patch of the run layer"),
+            (
+                "AUTO",
+                "Automatic",
+                "Plan in every layer baked (and walk, run, walk where a run-layer hurdle "
+                "pays) and keep the cheapest",
+            ),
+        ),
+        description="Which gait layer Plan Path walks in",
+    )
     show_overlay: BoolProperty(
         name="Show Planner Overlay",
         default=False,

@@ -33,6 +33,7 @@ class MOTION_PATCHES_PT_planning(SidebarPanel, bpy.types.Panel):
         layout.prop(s, "fit_frame_range")
         layout.prop(s, "goal_facing", text="Facing")  # "Goal Facing" does not fit beside
         layout.prop(s, "turn_in_place")
+        layout.prop(s, "gait")
         layout.operator("motion_patches.reset_planning", icon="LOOP_BACK")
         row = layout.row(align=True)
         row.operator("motion_patches.plan_path", icon="PLAY")

@@ -284,3 +284,20 @@ def test_with_props_that_move_auto_keeps_one_layer_and_says_why(layers_blend, ad
     assert res.stats["layer"] in ("walk", "run")
     assert "walk+run" not in res.stats["layers"]
     assert res.stats["gait_change"] == "not offered with props that move"
+
+
+def test_the_scene_gait_choice_is_the_plans_unless_one_is_given(layers_blend, addon_module):
+    """The Planning panel's Gait: Run plans in the run layer, Automatic picks the gait
+    change on the chair line, Active Patch the active patch; ``gait=`` given beats it."""
+    api = addon_module.api
+    bpy.ops.wm.open_mainfile(filepath=str(layers_blend))
+    scene = bpy.context.scene
+    assert scene.motion_patches.gait == "ACTIVE"
+    active = plan(api, None)
+    assert "layers" not in active.stats  # one patch, no layers compared
+    scene.motion_patches.gait = "RUN"
+    assert plan(api, None).stats["layer"] == "run"
+    assert plan(api, "walk").stats["layer"] == "walk"  # given beats the scene's
+    scene.motion_patches.gait = "AUTO"
+    auto = plan(api, None)
+    assert "walk+run" in auto.stats["layers"]
