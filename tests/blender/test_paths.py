@@ -91,19 +91,25 @@ def test_a_gap_of_twice_the_radius_plus_0_3_m_is_used(baked_blend, addon_module)
     assert result.length_m < 1.25 * straight  # round a wall end would be over 1.6 x
 
 
-def test_a_goal_behind_facing_minus_y_is_reached_by_turning_on_the_spot(baked_blend, addon_module):
-    """The character faces away from a goal 6 m behind it, an unrotated empty (facing -Y as
-    a user leaves it): it turns round where it stands (the turn in place derived from the
-    walk's sharpest turn loop), walks straight there and turns to face -Y, instead of
-    looping twice; evaluated hips path within 10 % of the straight line, feet planted,
-    standing at both ends, the end facing -Y."""
+def walker_facing_away(addon_module, baked_blend, distance=6.0):
+    """(scene, walker, its start state, the ground point ``distance`` m behind it)."""
     bpy.ops.wm.open_mainfile(filepath=str(baked_blend))
     scene = bpy.context.scene
     char = walker_from(scene.motion_patches.source_armature, location=(0.3, -0.2, 0.0))
     bpy.context.view_layer.update()
     skel = addon_module.adapter.storage.load_patch(scene, "walk").gait.skeleton
     start = addon_module.adapter.scene.character_state(char, skel)
-    behind = start[:2] - 6.0 * np.array([np.cos(start[2]), np.sin(start[2])])
+    behind = start[:2] - distance * np.array([np.cos(start[2]), np.sin(start[2])])
+    return scene, char, start, behind
+
+
+def test_a_goal_behind_facing_minus_y_is_reached_by_turning_on_the_spot(baked_blend, addon_module):
+    """The character faces away from a goal 6 m behind it, an unrotated empty (facing -Y as
+    a user leaves it): it turns round where it stands (the turn in place derived from the
+    walk's sharpest turn loop), walks straight there and turns to face -Y, instead of
+    looping twice; evaluated hips path within 10 % of the straight line, feet planted,
+    standing at both ends, the end facing -Y."""
+    scene, char, start, behind = walker_facing_away(addon_module, baked_blend)
     goal = bpy.data.objects.new("Goal", None)  # an empty as added: no rotation, facing -Y
     scene.collection.objects.link(goal)
     goal.location = (behind[0], behind[1], 0.0)
@@ -126,13 +132,7 @@ def test_a_goal_behind_facing_minus_y_is_reached_by_turning_on_the_spot(baked_bl
 def test_turning_on_the_spot_can_be_switched_off(baked_blend, addon_module):
     """The scene's Turn on the Spot off (or ``turn_in_place=False``): the same walker facing
     away from a goal behind it walks its loops instead, and says so in no strip."""
-    bpy.ops.wm.open_mainfile(filepath=str(baked_blend))
-    scene = bpy.context.scene
-    char = walker_from(scene.motion_patches.source_armature, location=(0.3, -0.2, 0.0))
-    bpy.context.view_layer.update()
-    skel = addon_module.adapter.storage.load_patch(scene, "walk").gait.skeleton
-    start = addon_module.adapter.scene.character_state(char, skel)
-    behind = start[:2] - 6.0 * np.array([np.cos(start[2]), np.sin(start[2])])
+    scene, char, start, behind = walker_facing_away(addon_module, baked_blend)
     goal = empty("Goal", behind[0], behind[1], start[2])
     assert scene.motion_patches.turn_in_place  # on by default
     turned = plan(addon_module, char, goal)
