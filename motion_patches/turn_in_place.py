@@ -18,6 +18,7 @@ import numpy as np
 
 from . import foot_lock
 from .contacts import runs
+from .layers import has_flight
 from .motion import Motion
 from .poses import pose_features
 
@@ -33,7 +34,10 @@ def can_turn(gait, kmin, kmax):
     """True when the gait has a loop turning at least ``MIN_LOOP_TURN`` per cycle each way
     within the curvature range ``kmin``..``kmax`` the patch was baked to follow: a patch
     of a lone straight walk (or one limited to straight segments) has nothing to turn on
-    the spot with."""
+    the spot with. Nor does a run (a gait with a flight phase): a runner slows to a walk to
+    turn round, which a plan in the run layer alone cannot."""
+    if has_flight(gait):
+        return False
     for sign, limit in ((1.0, kmax), (-1.0, kmin)):
         ok = [
             sign * lp.turn >= MIN_LOOP_TURN and abs(lp.curvature) <= abs(limit) * 1.01

@@ -456,3 +456,12 @@ def test_a_gait_change_avoids_pillars_in_every_layer(walk_patch, run_patch, run_
     near = [np.hypot(g[:, 0] - x, g[:, 1] - y).min() for x, y in field]
     print("closest approach to each pillar (m):", np.round(near, 3))
     assert min(near) >= 0.25 + 0.25 - 1e-6
+
+
+def test_a_run_does_not_turn_on_the_spot(run_gait, walk_gait):
+    """The turn in place is derived from a walk's turn loop; a runner slows to a walk to
+    turn round, so a run layer (flight phase) loops as before."""
+    from motion_patches import turn_in_place
+
+    assert turn_in_place.can_turn(walk_gait, *walk_gait.kappa_limits)
+    assert not turn_in_place.can_turn(run_gait, *run_gait.kappa_limits)
