@@ -51,6 +51,7 @@ APPROACH = 0.35  # metres of the way into the goal (out of the start) checked fi
 DUBINS_TRIES = 3  # Dubins words of a node sampled and tested together
 START_BATCH = 24  # start nodes whose connectors are tested together
 GOAL_BATCH = 8  # goal links tested together
+COARSE = 4  # every COARSE-th sample of a connector is tested first (most blocked ones stop)
 CORRIDOR_TILES = 2  # tiles either side of the high-level path the corridor holds
 
 
@@ -149,6 +150,7 @@ class SegmentPlanner:
             if segs.size:
                 self._out[local] = (segs, patch.seg_mask[segs], rel[segs], self.costs[segs])
         self._cos, self._sin = np.cos(self.local_heading), np.sin(self.local_heading)
+        self._entry_ids = {}  # edges of a tile -> local ids of their entry states
         self._lx, self._ly = self.local_pos[:, 0].copy(), self.local_pos[:, 1].copy()
 
     # -- graph -------------------------------------------------------------------------
@@ -169,7 +171,23 @@ class SegmentPlanner:
         dist = np.sqrt(dx * dx + dy * dy)
         cosang = (dx * self._cos[local] + dy * self._sin[local]) / np.maximum(dist, 1e-9)
         ang = np.arccos(np.clip(cosang, -1.0, 1.0)) - HEADING_SLACK
-        return self._per_metre * dist + self.beta * np.maximum(ang, 0.0)
+        ang = np.maximum(ang, self._goal_turn()[local])
+        return self._per_metre * dist + self.beta * ang
+
+    def _goal_turn(self):
+        """(LOCAL,) a lower bound of the radians a walk from each local entry state turns
+        to end facing the goal heading (zeros when any facing will do): a path turns at
+        least both to face the goal and to end with its heading, so the heuristic's turn
+        term is the larger of the two (still admissible)."""
+        hg = float(self.goal[2])
+        got = self.__dict__.get("_goal_turn_table")
+        if got is None or not (got[0] == hg or (np.isnan(hg) and np.isnan(got[0]))):
+            if np.isnan(hg):
+                table = np.zeros(LOCAL)
+            else:
+                table = _turn_bound(self.local_heading, hg)
+            got = self._goal_turn_table = (hg, table)
+        return got[1]
 
     def state_heuristic(self, p, h):
         """:meth:`heuristic` of states: positions (n, 2), headings (n,)."""
@@ -177,6 +195,8 @@ class SegmentPlanner:
         dist = np.linalg.norm(d, axis=-1)
         cosang = (d[:, 0] * np.cos(h) + d[:, 1] * np.sin(h)) / np.maximum(dist, 1e-9)
         ang = np.maximum(np.arccos(np.clip(cosang, -1, 1)) - HEADING_SLACK, 0.0)
+        if np.isfinite(self.goal[2]):
+            ang = np.maximum(ang, _turn_bound(h, self.goal[2]))
         return self._per_metre * dist + self.beta * ang
 
     @property
@@ -255,9 +275,13 @@ class SegmentPlanner:
         n = self.patch.nodes
         keys = []
         for tile, edges in tiles_edges:
-            e, k, dd = np.meshgrid(edges, np.arange(n), (-1, 0, 1), indexing="ij")
-            e, k, dd = e.ravel(), k.ravel(), dd.ravel()
-            keys.append(pack(tile[0], tile[1], node_id(e, k, (INWARD[e] + dd) % DIRECTIONS, n)))
+            edges = tuple(edges)
+            local = self._entry_ids.get(edges)
+            if local is None:
+                e, k, dd = np.meshgrid(edges, np.arange(n), (-1, 0, 1), indexing="ij")
+                e, k, dd = e.ravel(), k.ravel(), dd.ravel()
+                local = self._entry_ids[edges] = node_id(e, k, (INWARD[e] + dd) % DIRECTIONS, n)
+            keys.append(pack(tile[0], tile[1], 0) + local)
         keys = np.concatenate(keys)
         p, h = self.node_pose(keys)
         return keys, p, h
@@ -591,8 +615,7 @@ class SegmentPlanner:
                 arc, pos, heading, kappa, first = dubins.samples(
                     p0[who[k]], h0[who[k]], words[rows[k]], lens[k], radii[rows[k]]
                 )
-                hit = self.env.blocked(pos, radius=self.env.radius + PATH_MARGIN)
-                clear[k] = ~np.logical_or.reduceat(hit, first[:-1])
+                clear[k] = ~self._samples_blocked(pos, first)
                 at[k] = np.arange(k.size)
             more = []
             for i in todo:
@@ -623,6 +646,24 @@ class SegmentPlanner:
                 c = self.alpha * float(part[0][-1]) + self.beta * turn + self.gamma * effort
                 found[i] = (c, n, lambda part=part: _dubins_curve(part))
         return found
+
+    def _samples_blocked(self, pos, first):
+        """(C,) True where path c (samples ``pos[first[c]:first[c + 1]]``) has a sample
+        within the radius (+ ``PATH_MARGIN``) of a footprint. Every ``COARSE``-th sample
+        is tested first: a path hit there is blocked, and only the other samples of the
+        paths still clear are tested (the same answer as testing every sample)."""
+        radius = self.env.radius + PATH_MARGIN
+        n = first[1:] - first[:-1]
+        owner = np.repeat(np.arange(n.size), n)
+        coarse = (np.arange(pos.shape[0]) - first[owner]) % COARSE == 0
+        hit = np.zeros(pos.shape[0], bool)
+        hit[coarse] = self.env.blocked(pos[coarse], radius=radius)
+        out = np.logical_or.reduceat(hit, first[:-1])
+        rest = np.flatnonzero(~coarse & ~out[owner])
+        if rest.size:
+            hit[rest] = self.env.blocked(pos[rest], radius=radius)
+            out = np.logical_or.reduceat(hit, first[:-1])
+        return out
 
     # -- search ---------------------------------------------------------------------------
     def plan(
@@ -1016,7 +1057,11 @@ class SegmentPlanner:
             wx = c * ends[..., 0] - s * ends[..., 1] + x  # as ObjectPatch.world_clip moves them
             wy = s * ends[..., 0] + c * ends[..., 1] + y
             wh = ends[..., 2] + heading
+            # Walking to the entry turns from the start's heading to the keyframe's (the
+            # stitch pays the heading gap), and walking on from the exit turns to the
+            # goal's: beta x each turn bounds those costs from below too.
             approach = per_metre * np.hypot(wx[:, 0] - start[0], wy[:, 0] - start[1])
+            approach += self.beta * _turn_bound(start[2], wh[:, 0])
             cost = np.array(
                 [
                     self.alpha * prop.clips[ci].length()
@@ -1133,6 +1178,14 @@ class TraversalObserver:
                 edges += more
                 self.at_goal += n
         return edges
+
+
+def _turn_bound(a, b):
+    """A lower bound of the radians any walk turns from heading ``a`` to heading ``b``:
+    their angle, less ``HEADING_SLACK`` for sampled headings (the turn a piece pays is
+    the sum of its samples' heading steps, at least the angle between its ends)."""
+    gap = np.abs((np.asarray(b, float) - a + np.pi) % (2 * np.pi) - np.pi)
+    return np.maximum(gap - HEADING_SLACK, 0.0)
 
 
 def _patch_cache(patch, key, make):
