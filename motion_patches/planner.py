@@ -151,6 +151,8 @@ class SegmentPlanner:
                 self._out[local] = (segs, patch.seg_mask[segs], rel[segs], self.costs[segs])
         self._cos, self._sin = np.cos(self.local_heading), np.sin(self.local_heading)
         self._entry_ids = {}  # edges of a tile -> local ids of their entry states
+        self._all_local = np.arange(LOCAL, dtype=np.int64)
+        self._h_tiles = {}  # tile id -> heuristic of its LOCAL keys (:meth:`heuristic_of`)
         self._lx, self._ly = self.local_pos[:, 0].copy(), self.local_pos[:, 1].copy()
 
     # -- graph -------------------------------------------------------------------------
@@ -173,6 +175,15 @@ class SegmentPlanner:
         ang = np.arccos(np.clip(cosang, -1.0, 1.0)) - HEADING_SLACK
         ang = np.maximum(ang, self._goal_turn()[local])
         return self._per_metre * dist + self.beta * ang
+
+    def heuristic_of(self, key):
+        """:meth:`heuristic` of one key, looked up in a table of its tile's entry states
+        (each tile's table computed once per search, all 256 at once)."""
+        t = key // LOCAL
+        row = self._h_tiles.get(t)
+        if row is None:
+            row = self._h_tiles[t] = self.heuristic(t * LOCAL + self._all_local).tolist()
+        return row[key - t * LOCAL]
 
     def _goal_turn(self):
         """(LOCAL,) a lower bound of the radians a walk from each local entry state turns
@@ -816,6 +827,7 @@ class SegmentPlanner:
         """
         t0 = time.perf_counter()
         self.goal = goal
+        self._h_tiles = {}  # the heuristic's tables are the goal's
         ts, tg = self.env.tile_of(start[:2]), self.env.tile_of(goal[:2])
         self.region = (
             min(ts[0], tg[0]) - margin_tiles,
@@ -906,6 +918,7 @@ class SegmentPlanner:
                 lazy_starts=starts,
                 start_cost=start_cost,
                 goal_bound=bound,
+                heuristic_of=self.heuristic_of,
             )
             return result, observer
 
