@@ -35,7 +35,7 @@ from .plan_frame import (
     state_to_local,
     to_local,
 )
-from .stitching import BLEND_FRAMES, stitch
+from .stitching import BLEND_FRAMES, POSITION_TOLERANCE, Stitch, stitch_table
 from .synthesis import cycles_along, cycles_along_many, follow
 from .traversal_probability import accessibility, tile_traversal
 
@@ -171,10 +171,28 @@ class SegmentPlanner:
         dx = (gx - self._lx[local]) - (tile // (2 * BIAS)) * self.patch.side
         dy = (gy - self._ly[local]) - (tile % (2 * BIAS)) * self.patch.side
         dist = np.sqrt(dx * dx + dy * dy)
-        cosang = (dx * self._cos[local] + dy * self._sin[local]) / np.maximum(dist, 1e-9)
-        ang = np.arccos(np.clip(cosang, -1.0, 1.0)) - HEADING_SLACK
-        ang = np.maximum(ang, self._goal_turn()[local])
-        return self._per_metre * dist + self.beta * ang
+        return self._per_metre * dist + self.beta * self._turn_to_goal(
+            dx, dy, dist, self._cos[local], self._sin[local], self._goal_turn()[local]
+        )
+
+    def _turn_to_goal(self, dx, dy, dist, cos_h, sin_h, to_heading):
+        """A lower bound of the radians a walk turns from states of heading (cos_h,
+        sin_h) at (-dx, -dy) from the goal into the goal: the headings a walk takes span
+        (when they span less than half a turn) its start heading, its end heading and the
+        direction of its chord, so it turns at least the largest angle between two of
+        them: start heading to chord, start heading to goal heading (``to_heading``, the
+        angle already), chord to goal heading (none of the last two when any facing will
+        do). Less ``HEADING_SLACK`` each, for sampled headings; none where the state is
+        on the goal (no chord)."""
+        on = dist > 1e-6
+        inv = np.where(on, 1.0 / np.maximum(dist, 1e-9), 0.0)
+        ux, uy = dx * inv, dy * inv
+        ang = np.arccos(np.clip(ux * cos_h + uy * sin_h, -1.0, 1.0)) - HEADING_SLACK
+        hg = float(self.goal[2])
+        if np.isfinite(hg):
+            arrive = np.arccos(np.clip(ux * np.cos(hg) + uy * np.sin(hg), -1.0, 1.0))
+            ang = np.maximum(ang, arrive - HEADING_SLACK)
+        return np.maximum(np.where(on, ang, 0.0), to_heading)
 
     def heuristic_of(self, key):
         """:meth:`heuristic` of one key, looked up in a table of its tile's entry states
@@ -204,11 +222,10 @@ class SegmentPlanner:
         """:meth:`heuristic` of states: positions (n, 2), headings (n,)."""
         d = self.goal[:2] - p
         dist = np.linalg.norm(d, axis=-1)
-        cosang = (d[:, 0] * np.cos(h) + d[:, 1] * np.sin(h)) / np.maximum(dist, 1e-9)
-        ang = np.maximum(np.arccos(np.clip(cosang, -1, 1)) - HEADING_SLACK, 0.0)
-        if np.isfinite(self.goal[2]):
-            ang = np.maximum(ang, _turn_bound(h, self.goal[2]))
-        return self._per_metre * dist + self.beta * ang
+        h = np.asarray(h, float)
+        to = _turn_bound(h, self.goal[2]) if np.isfinite(self.goal[2]) else np.zeros_like(h)
+        turn = self._turn_to_goal(d[:, 0], d[:, 1], dist, np.cos(h), np.sin(h), to)
+        return self._per_metre * dist + self.beta * turn
 
     @property
     def _per_metre(self):
@@ -874,11 +891,16 @@ class SegmentPlanner:
             if (pi, ci) not in stitched:
                 t_s = time.perf_counter()
                 edges = []
-                for st in stitch(
+                table = stitch_table(
                     self.patch, self.env, self.props[pi], ci, self.alpha, self.beta, self.gamma
-                ):
-                    edges.append((st.from_key, st.to_key, st.cost, STITCH_PAYLOAD - len(stitches)))
-                    stitches.append(st)
+                )
+                if table is not None:
+                    ins, outs, from_keys, to_keys, clip_cost = table
+                    for a, from_key in zip(ins, from_keys):
+                        for b, to_key in zip(outs, to_keys):
+                            cost = a.cost + clip_cost + b.cost
+                            edges.append((from_key, to_key, cost, STITCH_PAYLOAD - len(stitches)))
+                            stitches.append((pi, ci, a, b, cost, from_key, to_key))
                 stitched[(pi, ci)] = edges
                 counters["stitch_seconds"] += time.perf_counter() - t_s
             return stitched[(pi, ci)]
@@ -953,8 +975,9 @@ class SegmentPlanner:
                 if payloads[prev] is not None:
                     pieces.append(payloads[prev]())
             elif payload <= STITCH_PAYLOAD:
-                st = stitches[STITCH_PAYLOAD - payload]
-                prop = next(p for p in self.props if p.name == st.prop)
+                pi, ci, a, b, cost, from_key, to_key = stitches[STITCH_PAYLOAD - payload]
+                prop = self.props[pi]
+                st = Stitch(prop.name, ci, a, b, cost, from_key, to_key)
                 a, b = st.entry, st.exit
                 pieces += [
                     Piece("part", segment=a.segment, tile=a.tile, frames=(0, a.frame), cost=a.cost),
@@ -1073,8 +1096,9 @@ class SegmentPlanner:
             # Walking to the entry turns from the start's heading to the keyframe's (the
             # stitch pays the heading gap), and walking on from the exit turns to the
             # goal's: beta x each turn bounds those costs from below too.
-            approach = per_metre * np.hypot(wx[:, 0] - start[0], wy[:, 0] - start[1])
-            approach += self.beta * _turn_bound(start[2], wh[:, 0])
+            cx, cy = wx[:, 0] - start[0], wy[:, 0] - start[1]
+            far = np.hypot(cx, cy)
+            approach = per_metre * far + self.beta * _approach_turn(start[2], wh[:, 0], cx, cy)
             cost = np.array(
                 [
                     self.alpha * prop.clips[ci].length()
@@ -1199,6 +1223,25 @@ def _turn_bound(a, b):
     the sum of its samples' heading steps, at least the angle between its ends)."""
     gap = np.abs((np.asarray(b, float) - a + np.pi) % (2 * np.pi) - np.pi)
     return np.maximum(gap - HEADING_SLACK, 0.0)
+
+
+def _approach_turn(h0, h1, cx, cy):
+    """A lower bound of the radians a walk turns from heading ``h0`` to a traversal's
+    entry keyframe of heading ``h1`` at (cx, cy) from its start (the stitch pays the
+    heading gap to the keyframe): the angle between the two headings, and between each
+    and the chord, whose end (the segment frame the stitch joins) may lie up to
+    ``stitching.POSITION_TOLERANCE`` from the keyframe: its direction is known only
+    within the angle that distance subtends (none near the start)."""
+    turn = _turn_bound(h0, h1)
+    far = np.hypot(cx, cy)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        spread = np.arcsin(np.clip(POSITION_TOLERANCE / far, 0.0, 1.0))
+    chord = np.arctan2(cy, cx)
+    known = far > 2.0 * POSITION_TOLERANCE
+    for h in (h0, h1):
+        by_chord = np.maximum(_turn_bound(h, chord) - spread, 0.0)
+        turn = np.maximum(turn, np.where(known, by_chord, 0.0))
+    return turn
 
 
 def _patch_cache(patch, key, make):
