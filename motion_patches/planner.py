@@ -624,15 +624,18 @@ class SegmentPlanner:
         chosen = {}  # column position -> (arc, pos, heading, kappa)
         rank = np.zeros(len(columns), int)  # how far down its order each column has got
         todo = list(range(len(columns)))
+        columns = np.asarray(columns)
+        step = np.arange(tries)
         while todo:
-            rows, who = [], []
-            for i in todo:
-                m = columns[i]
-                r = order[rank[i] : rank[i] + tries, m]
-                r = r[np.isfinite(cost[r, m])]
-                rows.append(r)
-                who.append(np.full(r.size, i))
-            rows, who = np.concatenate(rows), np.concatenate(who)
+            # The next ``tries`` words down each column's order (fewer at its end), the
+            # finite ones, column by column in ``todo`` order.
+            at_col = np.array(todo)
+            m = columns[at_col][:, None]
+            idx = rank[at_col][:, None] + step
+            inside = idx < order.shape[0]
+            r = order[np.minimum(idx, order.shape[0] - 1), m]
+            keep = inside & np.isfinite(cost[r, m])
+            rows, who = r[keep], np.repeat(at_col, keep.sum(axis=1))
             if rows.size == 0:
                 break
             lens = lengths[rows, columns[who]]
@@ -646,16 +649,20 @@ class SegmentPlanner:
                 clear[k] = ~self._samples_blocked(pos, first)
                 at[k] = np.arange(k.size)
             more = []
-            for i in todo:
-                mine = np.flatnonzero(who == i)
-                for j in mine[clear[mine]].tolist():
-                    a, b = first[at[j]], first[at[j] + 1]
+            lo = np.searchsorted(who, at_col, side="left").tolist()
+            hi = np.searchsorted(who, at_col, side="right").tolist()
+            clear_l, wide_l, at_l = clear.tolist(), (radii[rows] == wide).tolist(), at.tolist()
+            for i, a0, b0 in zip(todo, lo, hi):  # each column's words, in its order
+                for j in range(a0, b0):
+                    if not clear_l[j]:
+                        continue
+                    a, b = first[at_l[j]], first[at_l[j] + 1]
                     samples = (arc[a:b], pos[a:b], heading[a:b], kappa[a:b])
-                    if radii[rows[j]] == wide or self._bends_within(_dubins_curve(samples)):
+                    if wide_l[j] or self._bends_within(_dubins_curve(samples)):
                         chosen[i] = samples
                         break
                 else:
-                    if mine.size == tries:  # more words down its order
+                    if b0 - a0 == tries:  # more words down its order
                         rank[i] += tries
                         more.append(i)
             todo = more
