@@ -509,7 +509,9 @@ class Environment:
             (i0, j0) = self._grid_origin
             slot = self._grid[tx - i0, ty - j0]
         a = self._atlas
-        return (a[0, slot, local], a[1, slot, local], a[2, slot, local], a[3, slot, local]), ox, oy
+        flat = slot * a.shape[2] + local  # one 1-D take per array: cheaper than 2-D indexing
+        rows = tuple(a[k].reshape(-1).take(flat) for k in range(4))
+        return rows, ox, oy
 
     def decided(self, rows, ox, oy, radius):
         """(blocked, unsure) of points at offsets (``ox``, ``oy``) from the centres of raster
@@ -587,15 +589,15 @@ class Environment:
     def _rasterable(self, points):
         """The points are finite and span few enough tiles for the raster's grid of slots
         (a handful of far-flung points is cheaper to test exactly)."""
-        lo, hi = points.min(axis=0), points.max(axis=0)
-        if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
+        x, y = points[:, 0], points[:, 1]  # 1-D reductions: far cheaper than axis=0 ones
+        lox, hix, loy, hiy = float(x.min()), float(x.max()), float(y.min()), float(y.max())
+        if not all(math.isfinite(v) for v in (lox, hix, loy, hiy)):  # NaN spreads to min/max
             return False
         (i0, j0), (n, m) = self._grid_origin, self._grid.shape
-        span = (
-            np.maximum(hi, (np.array([i0 + n, j0 + m]) * self.side))
-            - np.minimum(lo, np.array([i0, j0]) * self.side)
-        ) / self.side
-        return bool(span[0] * span[1] < MAX_RASTER_TILES)
+        side = self.side
+        sx = (max(hix, (i0 + n) * side) - min(lox, i0 * side)) / side
+        sy = (max(hiy, (j0 + m) * side) - min(loy, j0 * side)) / side
+        return sx * sy < MAX_RASTER_TILES
 
     def _blocked_exact(self, points, exclude, radius):
         """:meth:`blocked` by the footprints themselves (bounding boxes, then distances)."""
