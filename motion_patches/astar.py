@@ -101,8 +101,9 @@ def search(
         lazy = np.array([k for k, _ in lazy_starts], np.int64)
         for (k, bound), h in zip(lazy_starts, heuristic(lazy).tolist()):
             h_of[k] = h
-            heapq.heappush(heap, (bound + h, tie, _LAZY - 1 - 2 * k))
+            heap.append((bound + h, tie, _LAZY - 1 - 2 * k))
             tie += 1
+        heapq.heapify(heap)  # the same order of pops as pushing them one by one
     closed = set()
     expansions = 0
     best_goal = np.inf

@@ -390,13 +390,13 @@ class SegmentPlanner:
             "table": table,
             "keys": keys,
             "ranked": ranked,
-            "rank": {int(keys[m]): r for r, m in enumerate(ranked)},
+            "rank": dict(zip(keys[ranked].tolist(), range(ranked.size))),
             "done": 0,
             "valid": 0,
             "links": {},
             "shortest": MIN_CONNECTOR_CYCLES * self.patch.gait.cycle_distance,
         }
-        return [(int(keys[m]), float(bound[m])) for m in ranked]
+        return list(zip(keys[ranked].tolist(), bound[ranked].tolist()))
 
     def start_link(self, key):
         """(cost, Piece maker) of the start connector joining node ``key``: the Dubins path
@@ -463,7 +463,7 @@ class SegmentPlanner:
         table = (cost, lens, radii, words, np.argsort(rank, axis=0, kind="stable"))
         too_close = np.linalg.norm(p - goal[:2], axis=1) < 0.2 * self.patch.gait.cycle_distance
         self._goal_table = {
-            "index": {int(k): m for m, k in enumerate(keys) if not too_close[m]},
+            "index": dict(zip(keys[~too_close].tolist(), np.flatnonzero(~too_close).tolist())),
             "p": p,
             "h": h,
             "table": table,
