@@ -156,14 +156,6 @@ def _candidates(patch, env, state, phase_ok, exclude, at_entry, alpha, beta, gam
     seg, fk, start = segs[ks], f[ks], first[segs[ks]]
     end = first[seg + 1] - 1  # last row of each segment
     lo, hi = (start, start + fk) if at_entry else (start + fk, end)  # the used rows
-    # The used parts (every other frame) keep the radius from the other props: one test.
-    counts = (hi - lo) // 2 + 1
-    owner = np.repeat(np.arange(ks.size), counts)
-    tested = lo[owner] + 2 * (
-        np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
-    )
-    hit = env.blocked(ground[tested, :2] + origin, exclude=(exclude,))
-    clear = ~np.logical_or.reduceat(hit, np.cumsum(counts) - counts)
     length = arc[hi] - arc[lo]
     turn = _turned(patch)[hi] - _turned(patch)[lo]
     frames = hi - lo
@@ -172,8 +164,23 @@ def _candidates(patch, env, state, phase_ok, exclude, at_entry, alpha, beta, gam
     # which also keeps the A* heuristic consistent across stitched edges.
     cost = alpha * (length + best[ks]) + beta * (turn + dh[ks]) + gamma * effort
     err = best[ks] / POSITION_TOLERANCE + dh[ks] / HEADING_TOLERANCE
-    keep = np.flatnonzero(clear)
-    keep = keep[np.argsort(cost[keep], kind="stable")][:MAX_PER_END]
+    # The cheapest MAX_PER_END connections whose used parts (every other frame) keep the
+    # radius from the other props are kept: the parts are tested cheapest first, a few
+    # more than are still wanted at a time, until enough are clear (most never are).
+    order = np.argsort(cost, kind="stable")
+    keep, done = [], 0
+    while len(keep) < MAX_PER_END and done < order.size:
+        want = MAX_PER_END - len(keep)
+        batch = order[done : done + want + want // 2 + 2]
+        done += batch.size
+        b_lo, b_hi = lo[batch], hi[batch]
+        counts = (b_hi - b_lo) // 2 + 1
+        owner = np.repeat(np.arange(batch.size), counts)
+        starts = np.cumsum(counts) - counts
+        tested = b_lo[owner] + 2 * (np.arange(counts.sum()) - starts[owner])
+        hit = env.blocked(ground[tested, :2] + origin, exclude=(exclude,))
+        keep += batch[~np.logical_or.reduceat(hit, starts)].tolist()
+    keep = keep[:MAX_PER_END]
     return [Connection(tile, int(seg[k]), int(fk[k]), float(err[k]), float(cost[k])) for k in keep]
 
 
