@@ -175,23 +175,27 @@ class SegmentPlanner:
             dx, dy, dist, self._cos[local], self._sin[local], self._goal_turn()[local]
         )
 
-    def _turn_to_goal(self, dx, dy, dist, cos_h, sin_h, to_heading):
+    def _turn_to_goal(self, dx, dy, dist, cos_h, sin_h, to_heading, gap=0.0):
         """A lower bound of the radians a walk turns from states of heading (cos_h,
         sin_h) at (-dx, -dy) from the goal into the goal: the headings a walk takes span
         (when they span less than half a turn) its start heading, its end heading and the
         direction of its chord, so it turns at least the largest angle between two of
         them: start heading to chord, start heading to goal heading (``to_heading``, the
         angle already), chord to goal heading (none of the last two when any facing will
-        do). Less ``HEADING_SLACK`` each, for sampled headings; none where the state is
-        on the goal (no chord)."""
-        on = dist > 1e-6
+        do). Less ``HEADING_SLACK`` each, for sampled headings; no chord term where the
+        state is on the goal. With ``gap`` the walk may start up to that far from the
+        state (a stitch's position gap): the chord's direction is then known only within
+        the angle the gap subtends, which the chord terms lose (all of them nearer than
+        twice the gap)."""
+        on = dist > max(1e-6, 2.0 * gap)
         inv = np.where(on, 1.0 / np.maximum(dist, 1e-9), 0.0)
         ux, uy = dx * inv, dy * inv
-        ang = np.arccos(np.clip(ux * cos_h + uy * sin_h, -1.0, 1.0)) - HEADING_SLACK
+        slack = HEADING_SLACK + (np.arcsin(np.minimum(gap * inv, 1.0)) if gap > 0 else 0.0)
+        ang = np.arccos(np.clip(ux * cos_h + uy * sin_h, -1.0, 1.0)) - slack
         hg = float(self.goal[2])
         if np.isfinite(hg):
             arrive = np.arccos(np.clip(ux * np.cos(hg) + uy * np.sin(hg), -1.0, 1.0))
-            ang = np.maximum(ang, arrive - HEADING_SLACK)
+            ang = np.maximum(ang, arrive - slack)
         return np.maximum(np.where(on, ang, 0.0), to_heading)
 
     def heuristic_of(self, key):
@@ -218,13 +222,14 @@ class SegmentPlanner:
             got = self._goal_turn_table = (hg, table)
         return got[1]
 
-    def state_heuristic(self, p, h):
-        """:meth:`heuristic` of states: positions (n, 2), headings (n,)."""
+    def state_heuristic(self, p, h, gap=0.0):
+        """:meth:`heuristic` of states: positions (n, 2), headings (n,); ``gap``: the walk
+        on may start that far from the state (see :meth:`_turn_to_goal`)."""
         d = self.goal[:2] - p
         dist = np.linalg.norm(d, axis=-1)
         h = np.asarray(h, float)
         to = _turn_bound(h, self.goal[2]) if np.isfinite(self.goal[2]) else np.zeros_like(h)
-        turn = self._turn_to_goal(d[:, 0], d[:, 1], dist, np.cos(h), np.sin(h), to)
+        turn = self._turn_to_goal(d[:, 0], d[:, 1], dist, np.cos(h), np.sin(h), to, gap)
         return self._per_metre * dist + self.beta * turn
 
     @property
@@ -1114,7 +1119,10 @@ class SegmentPlanner:
                     for ci in which.tolist()
                 ]
             )
-            h = self.state_heuristic(np.column_stack((wx[:, 1], wy[:, 1])), wh[:, 1])
+            # The walk on joins a segment frame up to POSITION_TOLERANCE from the exit.
+            h = self.state_heuristic(
+                np.column_stack((wx[:, 1], wy[:, 1])), wh[:, 1], gap=POSITION_TOLERANCE
+            )
             # The tile stitching indexes for the entry, as a node key's tile id.
             ti = np.floor(wx[:, 0] / self.env.side).astype(np.int64)
             tj = np.floor(wy[:, 0] / self.env.side).astype(np.int64)
