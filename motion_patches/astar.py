@@ -21,6 +21,14 @@ START = -2
 _LAZY = -3
 
 
+_INF = float("inf")
+
+
+def _listed(a):
+    """A list of the values of a numpy array or sequence."""
+    return a.tolist() if hasattr(a, "tolist") else list(a)
+
+
 @dataclass
 class SearchResult:
     found: bool
@@ -39,11 +47,16 @@ def search(
     lazy_starts=(),
     start_cost=None,
     goal_bound=None,
+    heuristic_of=None,
 ):
     """Cheapest path from any of ``starts`` [(key, cost, payload)] to the virtual goal.
 
-    ``expand(key) -> (keys, costs, payloads)``; ``heuristic(keys) -> h`` (admissible);
-    ``goal_cost(key) -> (cost, payload) or None`` links a node to the goal.
+    ``expand(key) -> (keys, costs, payloads)`` (numpy arrays or lists); ``heuristic(keys)
+    -> h`` (admissible, numpy arrays); ``goal_cost(key) -> (cost, payload) or None`` links
+    a node to the goal. ``heuristic_of(key) -> float``, when given, is the same heuristic
+    of one key (a table look-up, say): the inner loop then relaxes edges one by one in
+    plain Python, with no numpy call per expansion (most expansions have a handful of
+    successors, for which numpy's call overhead is most of the work).
 
     Costs that are dear to compute (the planner's connectors: curves sampled and tested)
     may be known by a lower bound first and computed only when the search gets to them
@@ -88,15 +101,17 @@ def search(
         lazy = np.array([k for k, _ in lazy_starts], np.int64)
         for (k, bound), h in zip(lazy_starts, heuristic(lazy).tolist()):
             h_of[k] = h
-            heapq.heappush(heap, (bound + h, tie, _LAZY - 1 - 2 * k))
+            heap.append((bound + h, tie, _LAZY - 1 - 2 * k))
             tie += 1
+        heapq.heapify(heap)  # the same order of pops as pushing them one by one
     closed = set()
     expansions = 0
     best_goal = np.inf
     extra = {}  # from_key -> [(to_key, cost, payload)] added by the observer
+    heappop, push, gget, discard, inf = heapq.heappop, heapq.heappush, g.get, closed.discard, _INF
     while heap or observer is not None:
         if heap:
-            f, _, key = heapq.heappop(heap)
+            f, _, key = heappop(heap)
         else:  # every reachable node expanded: the observer may still open a way
             f, key = np.inf, GOAL
         if key <= _LAZY:  # a connector known by its bound so far: its cost now
@@ -130,7 +145,12 @@ def search(
                 g[b] = g[a] + c
                 parent[b] = (a, p)
                 closed.discard(b)  # reopen: its successors may get cheaper too
-                heapq.heappush(heap, (g[b] + float(heuristic(np.array([b]))[0]), tie, b))
+                hb = (
+                    heuristic_of(b)
+                    if heuristic_of is not None
+                    else float(heuristic(np.array([b]))[0])
+                )
+                heapq.heappush(heap, (g[b] + hb, tie, b))
                 tie += 1
         if key == GOAL:
             if not added:
@@ -157,6 +177,24 @@ def search(
             tie += 1
         nkeys, ncosts, payloads = expand(key)
         more = extra.get(key)
+        if heuristic_of is not None:
+            if type(nkeys) is list:
+                ks, cs, ps = nkeys, ncosts, payloads
+            else:
+                ks, cs, ps = _listed(nkeys), _listed(ncosts), _listed(payloads)
+            if more:
+                ks = ks + [m[0] for m in more]
+                cs = cs + [m[1] for m in more]
+                ps = ps + [m[2] for m in more]
+            for k, c, p in zip(ks, cs, ps):
+                c += gk
+                if c < gget(k, inf):  # parallel edges: the cheapest wins
+                    g[k] = c
+                    parent[k] = (key, p)
+                    discard(k)  # only after a late edge: with a consistent h, never closed
+                    push(heap, (c + heuristic_of(k), tie, k))
+                    tie += 1
+            continue
         if more:
             nkeys = np.concatenate((nkeys, np.array([m[0] for m in more], np.int64)))
             ncosts = np.concatenate((ncosts, np.array([m[1] for m in more], float)))

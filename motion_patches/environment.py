@@ -20,6 +20,7 @@ The cell bitfields ``B_t`` are read off the same raster (the cells it leaves und
 tested exactly).
 """
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -43,6 +44,9 @@ class Obstacle:
     def __post_init__(self):
         self.polygon = np.asarray(self.polygon, float)
         self.lo, self.hi = self.polygon.min(axis=0), self.polygon.max(axis=0)
+        # The bounds as plain floats (x0, y0, x1, y1): box tests of a few obstacles at a
+        # time are cheaper in Python than in numpy.
+        self.box = (float(self.lo[0]), float(self.lo[1]), float(self.hi[0]), float(self.hi[1]))
 
     def bounds(self):
         return self.lo, self.hi
@@ -251,13 +255,13 @@ class Environment:
         self._grid_origin = (0, 0)
 
     def tile_of(self, xy):
-        return (int(np.floor(xy[0] / self.side)), int(np.floor(xy[1] / self.side)))
+        return (math.floor(float(xy[0]) / self.side), math.floor(float(xy[1]) / self.side))
 
     def _tiles_overlapping(self, obstacle):
-        lo, hi = obstacle.bounds()
-        lo, hi = lo - self.radius, hi + self.radius
-        i0, j0 = self.tile_of(lo)
-        i1, j1 = self.tile_of(hi)
+        x0, y0, x1, y1 = obstacle.box
+        r, side = self.radius, self.side
+        i0, j0 = math.floor((x0 - r) / side), math.floor((y0 - r) / side)
+        i1, j1 = math.floor((x1 + r) / side), math.floor((y1 + r) / side)
         return {(i, j) for i in range(i0, i1 + 1) for j in range(j0, j1 + 1)}
 
     def place(self, obstacle):
@@ -505,7 +509,9 @@ class Environment:
             (i0, j0) = self._grid_origin
             slot = self._grid[tx - i0, ty - j0]
         a = self._atlas
-        return (a[0, slot, local], a[1, slot, local], a[2, slot, local], a[3, slot, local]), ox, oy
+        flat = slot * a.shape[2] + local  # one 1-D take per array: cheaper than 2-D indexing
+        rows = tuple(a[k].reshape(-1).take(flat) for k in range(4))
+        return rows, ox, oy
 
     def decided(self, rows, ox, oy, radius):
         """(blocked, unsure) of points at offsets (``ox``, ``oy``) from the centres of raster
@@ -539,12 +545,15 @@ class Environment:
             for i in range(i0, i1 + 1):
                 for j in range(j0, j1 + 1):
                     names |= self._members.get((i, j), set())
-        lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-        return sorted(
-            n
-            for n in names
-            if np.all(self.obstacles[n].lo <= hi) and np.all(self.obstacles[n].hi >= lo)
-        )
+        lx, ly, hx, hy = float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1])
+        obs = self.obstacles
+        out = []
+        for n in names:
+            b = obs[n].box
+            if b[0] <= hx and b[1] <= hy and b[2] >= lx and b[3] >= ly:
+                out.append(n)
+        out.sort()
+        return out
 
     def near(self, xy):
         """Sorted names of the obstacles a point (x, y) comes within the radius of."""
@@ -580,15 +589,15 @@ class Environment:
     def _rasterable(self, points):
         """The points are finite and span few enough tiles for the raster's grid of slots
         (a handful of far-flung points is cheaper to test exactly)."""
-        lo, hi = points.min(axis=0), points.max(axis=0)
-        if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
+        x, y = points[:, 0], points[:, 1]  # 1-D reductions: far cheaper than axis=0 ones
+        lox, hix, loy, hiy = float(x.min()), float(x.max()), float(y.min()), float(y.max())
+        if not all(math.isfinite(v) for v in (lox, hix, loy, hiy)):  # NaN spreads to min/max
             return False
         (i0, j0), (n, m) = self._grid_origin, self._grid.shape
-        span = (
-            np.maximum(hi, (np.array([i0 + n, j0 + m]) * self.side))
-            - np.minimum(lo, np.array([i0, j0]) * self.side)
-        ) / self.side
-        return bool(span[0] * span[1] < MAX_RASTER_TILES)
+        side = self.side
+        sx = (max(hix, (i0 + n) * side) - min(lox, i0 * side)) / side
+        sy = (max(hiy, (j0 + m) * side) - min(loy, j0 * side)) / side
+        return sx * sy < MAX_RASTER_TILES
 
     def _blocked_exact(self, points, exclude, radius):
         """:meth:`blocked` by the footprints themselves (bounding boxes, then distances)."""

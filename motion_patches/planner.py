@@ -35,7 +35,7 @@ from .plan_frame import (
     state_to_local,
     to_local,
 )
-from .stitching import BLEND_FRAMES, stitch
+from .stitching import BLEND_FRAMES, POSITION_TOLERANCE, Stitch, stitch_table
 from .synthesis import cycles_along, cycles_along_many, follow
 from .traversal_probability import accessibility, tile_traversal
 
@@ -51,6 +51,7 @@ APPROACH = 0.35  # metres of the way into the goal (out of the start) checked fi
 DUBINS_TRIES = 3  # Dubins words of a node sampled and tested together
 START_BATCH = 24  # start nodes whose connectors are tested together
 GOAL_BATCH = 8  # goal links tested together
+COARSE = 4  # every COARSE-th sample of a connector is tested first (most blocked ones stop)
 CORRIDOR_TILES = 2  # tiles either side of the high-level path the corridor holds
 LOOP_TURN = np.radians(90.0)  # a walk turning more than this near its start (goal) may loop
 LOOP_REACH = 2.0  # gait cycles of way from either end where such a loop is looked for
@@ -161,6 +162,9 @@ class SegmentPlanner:
             if segs.size:
                 self._out[local] = (segs, patch.seg_mask[segs], rel[segs], self.costs[segs])
         self._cos, self._sin = np.cos(self.local_heading), np.sin(self.local_heading)
+        self._entry_ids = {}  # edges of a tile -> local ids of their entry states
+        self._all_local = np.arange(LOCAL, dtype=np.int64)
+        self._h_tiles = {}  # tile id -> heuristic of its LOCAL keys (:meth:`heuristic_of`)
         self._lx, self._ly = self.local_pos[:, 0].copy(), self.local_pos[:, 1].copy()
 
     # -- graph -------------------------------------------------------------------------
@@ -179,17 +183,66 @@ class SegmentPlanner:
         dx = (gx - self._lx[local]) - (tile // (2 * BIAS)) * self.patch.side
         dy = (gy - self._ly[local]) - (tile % (2 * BIAS)) * self.patch.side
         dist = np.sqrt(dx * dx + dy * dy)
-        cosang = (dx * self._cos[local] + dy * self._sin[local]) / np.maximum(dist, 1e-9)
-        ang = np.arccos(np.clip(cosang, -1.0, 1.0)) - HEADING_SLACK
-        return self._per_metre * dist + self.beta * np.maximum(ang, 0.0)
+        return self._per_metre * dist + self.beta * self._turn_to_goal(
+            dx, dy, dist, self._cos[local], self._sin[local], self._goal_turn()[local]
+        )
 
-    def state_heuristic(self, p, h):
-        """:meth:`heuristic` of states: positions (n, 2), headings (n,)."""
+    def _turn_to_goal(self, dx, dy, dist, cos_h, sin_h, to_heading, gap=0.0):
+        """A lower bound of the radians a walk turns from states of heading (cos_h,
+        sin_h) at (-dx, -dy) from the goal into the goal: the headings a walk takes span
+        (when they span less than half a turn) its start heading, its end heading and the
+        direction of its chord, so it turns at least the largest angle between two of
+        them: start heading to chord, start heading to goal heading (``to_heading``, the
+        angle already), chord to goal heading (none of the last two when any facing will
+        do). Less ``HEADING_SLACK`` each, for sampled headings; no chord term where the
+        state is on the goal. With ``gap`` the walk may start up to that far from the
+        state (a stitch's position gap): the chord's direction is then known only within
+        the angle the gap subtends, which the chord terms lose (all of them nearer than
+        twice the gap)."""
+        on = dist > max(1e-6, 2.0 * gap)
+        inv = np.where(on, 1.0 / np.maximum(dist, 1e-9), 0.0)
+        ux, uy = dx * inv, dy * inv
+        slack = HEADING_SLACK + (np.arcsin(np.minimum(gap * inv, 1.0)) if gap > 0 else 0.0)
+        ang = np.arccos(np.clip(ux * cos_h + uy * sin_h, -1.0, 1.0)) - slack
+        hg = float(self.goal[2])
+        if np.isfinite(hg):
+            arrive = np.arccos(np.clip(ux * np.cos(hg) + uy * np.sin(hg), -1.0, 1.0))
+            ang = np.maximum(ang, arrive - slack)
+        return np.maximum(np.where(on, ang, 0.0), to_heading)
+
+    def heuristic_of(self, key):
+        """:meth:`heuristic` of one key, looked up in a table of its tile's entry states
+        (each tile's table computed once per search, all 256 at once)."""
+        t = key // LOCAL
+        row = self._h_tiles.get(t)
+        if row is None:
+            row = self._h_tiles[t] = self.heuristic(t * LOCAL + self._all_local).tolist()
+        return row[key - t * LOCAL]
+
+    def _goal_turn(self):
+        """(LOCAL,) a lower bound of the radians a walk from each local entry state turns
+        to end facing the goal heading (zeros when any facing will do): a path turns at
+        least both to face the goal and to end with its heading, so the heuristic's turn
+        term is the larger of the two (still admissible)."""
+        hg = float(self.goal[2])
+        got = self.__dict__.get("_goal_turn_table")
+        if got is None or not (got[0] == hg or (np.isnan(hg) and np.isnan(got[0]))):
+            if np.isnan(hg):
+                table = np.zeros(LOCAL)
+            else:
+                table = _turn_bound(self.local_heading, hg)
+            got = self._goal_turn_table = (hg, table)
+        return got[1]
+
+    def state_heuristic(self, p, h, gap=0.0):
+        """:meth:`heuristic` of states: positions (n, 2), headings (n,); ``gap``: the walk
+        on may start that far from the state (see :meth:`_turn_to_goal`)."""
         d = self.goal[:2] - p
         dist = np.linalg.norm(d, axis=-1)
-        cosang = (d[:, 0] * np.cos(h) + d[:, 1] * np.sin(h)) / np.maximum(dist, 1e-9)
-        ang = np.maximum(np.arccos(np.clip(cosang, -1, 1)) - HEADING_SLACK, 0.0)
-        return self._per_metre * dist + self.beta * ang
+        h = np.asarray(h, float)
+        to = _turn_bound(h, self.goal[2]) if np.isfinite(self.goal[2]) else np.zeros_like(h)
+        turn = self._turn_to_goal(d[:, 0], d[:, 1], dist, np.cos(h), np.sin(h), to, gap)
+        return self._per_metre * dist + self.beta * turn
 
     @property
     def _per_metre(self):
@@ -267,9 +320,13 @@ class SegmentPlanner:
         n = self.patch.nodes
         keys = []
         for tile, edges in tiles_edges:
-            e, k, dd = np.meshgrid(edges, np.arange(n), (-1, 0, 1), indexing="ij")
-            e, k, dd = e.ravel(), k.ravel(), dd.ravel()
-            keys.append(pack(tile[0], tile[1], node_id(e, k, (INWARD[e] + dd) % DIRECTIONS, n)))
+            edges = tuple(edges)
+            local = self._entry_ids.get(edges)
+            if local is None:
+                e, k, dd = np.meshgrid(edges, np.arange(n), (-1, 0, 1), indexing="ij")
+                e, k, dd = e.ravel(), k.ravel(), dd.ravel()
+                local = self._entry_ids[edges] = node_id(e, k, (INWARD[e] + dd) % DIRECTIONS, n)
+            keys.append(pack(tile[0], tile[1], 0) + local)
         keys = np.concatenate(keys)
         p, h = self.node_pose(keys)
         return keys, p, h
@@ -350,13 +407,13 @@ class SegmentPlanner:
             "table": table,
             "keys": keys,
             "ranked": ranked,
-            "rank": {int(keys[m]): r for r, m in enumerate(ranked)},
+            "rank": dict(zip(keys[ranked].tolist(), range(ranked.size))),
             "done": 0,
             "valid": 0,
             "links": {},
             "shortest": MIN_CONNECTOR_CYCLES * self.patch.gait.cycle_distance,
         }
-        return [(int(keys[m]), float(bound[m])) for m in ranked]
+        return list(zip(keys[ranked].tolist(), bound[ranked].tolist()))
 
     def start_link(self, key):
         """(cost, Piece maker) of the start connector joining node ``key``: the Dubins path
@@ -423,7 +480,7 @@ class SegmentPlanner:
         table = (cost, lens, radii, words, np.argsort(rank, axis=0, kind="stable"))
         too_close = np.linalg.norm(p - goal[:2], axis=1) < 0.2 * self.patch.gait.cycle_distance
         self._goal_table = {
-            "index": {int(k): m for m, k in enumerate(keys) if not too_close[m]},
+            "index": dict(zip(keys[~too_close].tolist(), np.flatnonzero(~too_close).tolist())),
             "p": p,
             "h": h,
             "table": table,
@@ -584,15 +641,18 @@ class SegmentPlanner:
         chosen = {}  # column position -> (arc, pos, heading, kappa)
         rank = np.zeros(len(columns), int)  # how far down its order each column has got
         todo = list(range(len(columns)))
+        columns = np.asarray(columns)
+        step = np.arange(tries)
         while todo:
-            rows, who = [], []
-            for i in todo:
-                m = columns[i]
-                r = order[rank[i] : rank[i] + tries, m]
-                r = r[np.isfinite(cost[r, m])]
-                rows.append(r)
-                who.append(np.full(r.size, i))
-            rows, who = np.concatenate(rows), np.concatenate(who)
+            # The next ``tries`` words down each column's order (fewer at its end), the
+            # finite ones, column by column in ``todo`` order.
+            at_col = np.array(todo)
+            m = columns[at_col][:, None]
+            idx = rank[at_col][:, None] + step
+            inside = idx < order.shape[0]
+            r = order[np.minimum(idx, order.shape[0] - 1), m]
+            keep = inside & np.isfinite(cost[r, m])
+            rows, who = r[keep], np.repeat(at_col, keep.sum(axis=1))
             if rows.size == 0:
                 break
             lens = lengths[rows, columns[who]]
@@ -603,20 +663,23 @@ class SegmentPlanner:
                 arc, pos, heading, kappa, first = dubins.samples(
                     p0[who[k]], h0[who[k]], words[rows[k]], lens[k], radii[rows[k]]
                 )
-                hit = self.env.blocked(pos, radius=self.env.radius + PATH_MARGIN)
-                clear[k] = ~np.logical_or.reduceat(hit, first[:-1])
+                clear[k] = ~self._samples_blocked(pos, first)
                 at[k] = np.arange(k.size)
             more = []
-            for i in todo:
-                mine = np.flatnonzero(who == i)
-                for j in mine[clear[mine]].tolist():
-                    a, b = first[at[j]], first[at[j] + 1]
+            lo = np.searchsorted(who, at_col, side="left").tolist()
+            hi = np.searchsorted(who, at_col, side="right").tolist()
+            clear_l, wide_l, at_l = clear.tolist(), (radii[rows] == wide).tolist(), at.tolist()
+            for i, a0, b0 in zip(todo, lo, hi):  # each column's words, in its order
+                for j in range(a0, b0):
+                    if not clear_l[j]:
+                        continue
+                    a, b = first[at_l[j]], first[at_l[j] + 1]
                     samples = (arc[a:b], pos[a:b], heading[a:b], kappa[a:b])
-                    if radii[rows[j]] == wide or self._bends_within(_dubins_curve(samples)):
+                    if wide_l[j] or self._bends_within(_dubins_curve(samples)):
                         chosen[i] = samples
                         break
                 else:
-                    if mine.size == tries:  # more words down its order
+                    if b0 - a0 == tries:  # more words down its order
                         rank[i] += tries
                         more.append(i)
             todo = more
@@ -635,6 +698,24 @@ class SegmentPlanner:
                 c = self.alpha * float(part[0][-1]) + self.beta * turn + self.gamma * effort
                 found[i] = (c, n, lambda part=part: _dubins_curve(part))
         return found
+
+    def _samples_blocked(self, pos, first):
+        """(C,) True where path c (samples ``pos[first[c]:first[c + 1]]``) has a sample
+        within the radius (+ ``PATH_MARGIN``) of a footprint. Every ``COARSE``-th sample
+        is tested first: a path hit there is blocked, and only the other samples of the
+        paths still clear are tested (the same answer as testing every sample)."""
+        radius = self.env.radius + PATH_MARGIN
+        n = first[1:] - first[:-1]
+        owner = np.repeat(np.arange(n.size), n)
+        coarse = (np.arange(pos.shape[0]) - first[owner]) % COARSE == 0
+        hit = np.zeros(pos.shape[0], bool)
+        hit[coarse] = self.env.blocked(pos[coarse], radius=radius)
+        out = np.logical_or.reduceat(hit, first[:-1])
+        rest = np.flatnonzero(~coarse & ~out[owner])
+        if rest.size:
+            hit[rest] = self.env.blocked(pos[rest], radius=radius)
+            out = np.logical_or.reduceat(hit, first[:-1])
+        return out
 
     # -- search ---------------------------------------------------------------------------
     def plan(
@@ -923,6 +1004,7 @@ class SegmentPlanner:
         """
         t0 = time.perf_counter()
         self.goal = goal
+        self._h_tiles = {}  # the heuristic's tables are the goal's
         ts, tg = self.env.tile_of(start[:2]), self.env.tile_of(goal[:2])
         self.region = (
             min(ts[0], tg[0]) - margin_tiles,
@@ -969,11 +1051,16 @@ class SegmentPlanner:
             if (pi, ci) not in stitched:
                 t_s = time.perf_counter()
                 edges = []
-                for st in stitch(
+                table = stitch_table(
                     self.patch, self.env, self.props[pi], ci, self.alpha, self.beta, self.gamma
-                ):
-                    edges.append((st.from_key, st.to_key, st.cost, STITCH_PAYLOAD - len(stitches)))
-                    stitches.append(st)
+                )
+                if table is not None:
+                    ins, outs, from_keys, to_keys, clip_cost = table
+                    for a, from_key in zip(ins, from_keys):
+                        for b, to_key in zip(outs, to_keys):
+                            cost = a.cost + clip_cost + b.cost
+                            edges.append((from_key, to_key, cost, STITCH_PAYLOAD - len(stitches)))
+                            stitches.append((pi, ci, a, b, cost, from_key, to_key))
                 stitched[(pi, ci)] = edges
                 counters["stitch_seconds"] += time.perf_counter() - t_s
             return stitched[(pi, ci)]
@@ -1013,6 +1100,7 @@ class SegmentPlanner:
                 lazy_starts=starts,
                 start_cost=start_cost,
                 goal_bound=bound,
+                heuristic_of=self.heuristic_of,
             )
             return result, observer
 
@@ -1047,8 +1135,9 @@ class SegmentPlanner:
                 if payloads[prev] is not None:
                     pieces.append(payloads[prev]())
             elif payload <= STITCH_PAYLOAD:
-                st = stitches[STITCH_PAYLOAD - payload]
-                prop = next(p for p in self.props if p.name == st.prop)
+                pi, ci, a, b, cost, from_key, to_key = stitches[STITCH_PAYLOAD - payload]
+                prop = self.props[pi]
+                st = Stitch(prop.name, ci, a, b, cost, from_key, to_key)
                 a, b = st.entry, st.exit
                 pieces += [
                     Piece("part", segment=a.segment, tile=a.tile, frames=(0, a.frame), cost=a.cost),
@@ -1164,7 +1253,12 @@ class SegmentPlanner:
             wx = c * ends[..., 0] - s * ends[..., 1] + x  # as ObjectPatch.world_clip moves them
             wy = s * ends[..., 0] + c * ends[..., 1] + y
             wh = ends[..., 2] + heading
-            approach = per_metre * np.hypot(wx[:, 0] - start[0], wy[:, 0] - start[1])
+            # Walking to the entry turns from the start's heading to the keyframe's (the
+            # stitch pays the heading gap), and walking on from the exit turns to the
+            # goal's: beta x each turn bounds those costs from below too.
+            cx, cy = wx[:, 0] - start[0], wy[:, 0] - start[1]
+            far = np.hypot(cx, cy)
+            approach = per_metre * far + self.beta * _approach_turn(start[2], wh[:, 0], cx, cy)
             cost = np.array(
                 [
                     self.alpha * prop.clips[ci].length()
@@ -1173,7 +1267,10 @@ class SegmentPlanner:
                     for ci in which.tolist()
                 ]
             )
-            h = self.state_heuristic(np.column_stack((wx[:, 1], wy[:, 1])), wh[:, 1])
+            # The walk on joins a segment frame up to POSITION_TOLERANCE from the exit.
+            h = self.state_heuristic(
+                np.column_stack((wx[:, 1], wy[:, 1])), wh[:, 1], gap=POSITION_TOLERANCE
+            )
             # The tile stitching indexes for the entry, as a node key's tile id.
             ti = np.floor(wx[:, 0] / self.env.side).astype(np.int64)
             tj = np.floor(wy[:, 0] / self.env.side).astype(np.int64)
@@ -1281,6 +1378,33 @@ class TraversalObserver:
                 edges += more
                 self.at_goal += n
         return edges
+
+
+def _turn_bound(a, b):
+    """A lower bound of the radians any walk turns from heading ``a`` to heading ``b``:
+    their angle, less ``HEADING_SLACK`` for sampled headings (the turn a piece pays is
+    the sum of its samples' heading steps, at least the angle between its ends)."""
+    gap = np.abs((np.asarray(b, float) - a + np.pi) % (2 * np.pi) - np.pi)
+    return np.maximum(gap - HEADING_SLACK, 0.0)
+
+
+def _approach_turn(h0, h1, cx, cy):
+    """A lower bound of the radians a walk turns from heading ``h0`` to a traversal's
+    entry keyframe of heading ``h1`` at (cx, cy) from its start (the stitch pays the
+    heading gap to the keyframe): the angle between the two headings, and between each
+    and the chord, whose end (the segment frame the stitch joins) may lie up to
+    ``stitching.POSITION_TOLERANCE`` from the keyframe: its direction is known only
+    within the angle that distance subtends (none near the start)."""
+    turn = _turn_bound(h0, h1)
+    far = np.hypot(cx, cy)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        spread = np.arcsin(np.clip(POSITION_TOLERANCE / far, 0.0, 1.0))
+    chord = np.arctan2(cy, cx)
+    known = far > 2.0 * POSITION_TOLERANCE
+    for h in (h0, h1):
+        by_chord = np.maximum(_turn_bound(h, chord) - spread, 0.0)
+        turn = np.maximum(turn, np.where(known, by_chord, 0.0))
+    return turn
 
 
 def _patch_cache(patch, key, make):

@@ -18,7 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import poses
-from .node_keys import next_entry, pack
+from .locomotion_patch import node_id, split_node_id
+from .node_keys import NEXT_EDGE, TILE_STEP, pack
 
 POSITION_TOLERANCE = 0.2  # metres between the segment frame and the keyframe
 HEADING_TOLERANCE = np.radians(20)  # radians
@@ -94,6 +95,21 @@ def _cell_frames(patch):
     return got
 
 
+def _cell_rows(patch, cell):
+    """The rows of :func:`_cell_frames` of segments through ``cell`` (its bit set in
+    their cell masks), their segments and their frames' x and y (cached per patch and
+    cell: every copy whose keyframe falls in the cell reads the same rows)."""
+    memo = patch.__dict__.setdefault("_stitch_cell_rows", {})
+    got = memo.get(cell)
+    if got is None:
+        rows, owner = _cell_frames(patch)[cell]
+        keep = (patch.seg_mask[owner] & (np.uint64(1) << np.uint64(cell))) != 0
+        rows, owner = rows[keep], owner[keep]
+        ground = patch.all_ground()[0]
+        got = memo[cell] = (rows, owner, ground[rows, 0].copy(), ground[rows, 1].copy())
+    return got
+
+
 def _candidates(patch, env, state, phase_ok, exclude, at_entry, alpha, beta, gamma):
     """Segments crossing the keyframe's cell with a frame close to ``state``: of each the
     frame nearest the keyframe (the first, of equally near ones), kept when it is within
@@ -106,16 +122,13 @@ def _candidates(patch, env, state, phase_ok, exclude, at_entry, alpha, beta, gam
         np.clip(local[1] // c, 0, patch.cells - 1) * patch.cells
         + np.clip(local[0] // c, 0, patch.cells - 1)
     )
-    bit = np.uint64(1) << np.uint64(cell)
     ground, arc, first = patch.all_ground()
     # Only the frames near the cell can lie within the tolerance of the keyframe, so the
     # nearest frame of a segment crossing the cell is among them whenever it matters.
-    rows, owner = _cell_frames(patch)[cell]
-    keep = (patch.seg_mask[owner] & bit) != 0
-    rows, owner = rows[keep], owner[keep]
+    rows, owner, gx, gy = _cell_rows(patch, cell)
     if rows.size == 0:
         return []
-    d = np.hypot(ground[rows, 0] - local[0], ground[rows, 1] - local[1])
+    d = np.hypot(gx - local[0], gy - local[1])
     offs = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
     segs = owner[offs]
     lens = first[segs + 1] - first[segs]
@@ -143,14 +156,6 @@ def _candidates(patch, env, state, phase_ok, exclude, at_entry, alpha, beta, gam
     seg, fk, start = segs[ks], f[ks], first[segs[ks]]
     end = first[seg + 1] - 1  # last row of each segment
     lo, hi = (start, start + fk) if at_entry else (start + fk, end)  # the used rows
-    # The used parts (every other frame) keep the radius from the other props: one test.
-    counts = (hi - lo) // 2 + 1
-    owner = np.repeat(np.arange(ks.size), counts)
-    tested = lo[owner] + 2 * (
-        np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
-    )
-    hit = env.blocked(ground[tested, :2] + origin, exclude=(exclude,))
-    clear = ~np.logical_or.reduceat(hit, np.cumsum(counts) - counts)
     length = arc[hi] - arc[lo]
     turn = _turned(patch)[hi] - _turned(patch)[lo]
     frames = hi - lo
@@ -159,8 +164,23 @@ def _candidates(patch, env, state, phase_ok, exclude, at_entry, alpha, beta, gam
     # which also keeps the A* heuristic consistent across stitched edges.
     cost = alpha * (length + best[ks]) + beta * (turn + dh[ks]) + gamma * effort
     err = best[ks] / POSITION_TOLERANCE + dh[ks] / HEADING_TOLERANCE
-    keep = np.flatnonzero(clear)
-    keep = keep[np.argsort(cost[keep], kind="stable")][:MAX_PER_END]
+    # The cheapest MAX_PER_END connections whose used parts (every other frame) keep the
+    # radius from the other props are kept: the parts are tested cheapest first, a few
+    # more than are still wanted at a time, until enough are clear (most never are).
+    order = np.argsort(cost, kind="stable")
+    keep, done = [], 0
+    while len(keep) < MAX_PER_END and done < order.size:
+        want = MAX_PER_END - len(keep)
+        batch = order[done : done + want + want // 2 + 2]
+        done += batch.size
+        b_lo, b_hi = lo[batch], hi[batch]
+        counts = (b_hi - b_lo) // 2 + 1
+        owner = np.repeat(np.arange(batch.size), counts)
+        starts = np.cumsum(counts) - counts
+        tested = b_lo[owner] + 2 * (np.arange(counts.sum()) - starts[owner])
+        hit = env.blocked(ground[tested, :2] + origin, exclude=(exclude,))
+        keep += batch[~np.logical_or.reduceat(hit, starts)].tolist()
+    keep = keep[:MAX_PER_END]
     return [Connection(tile, int(seg[k]), int(fk[k]), float(err[k]), float(cost[k])) for k in keep]
 
 
@@ -180,10 +200,27 @@ def _turned(patch):
 
 def stitch(patch, env, prop, clip_index, alpha, beta, gamma):
     """Every edge a traversal copy adds to the low-level graph (maybe none)."""
+    table = stitch_table(patch, env, prop, clip_index, alpha, beta, gamma)
+    if table is None:
+        return []
+    ins, outs, from_keys, to_keys, clip_cost = table
+    return [
+        Stitch(prop.name, clip_index, a, b, a.cost + clip_cost + b.cost, from_key, to_key)
+        for a, from_key in zip(ins, from_keys)
+        for b, to_key in zip(outs, to_keys)
+    ]
+
+
+def stitch_table(patch, env, prop, clip_index, alpha, beta, gamma):
+    """The edges of :func:`stitch` as a table, or None when there are none: (entry
+    connections, exit connections, their node keys (lists), the clip's Eq. 5 cost). Edge
+    (a, b) runs from ``from_keys[a]`` to ``to_keys[b]`` and costs ``ins[a].cost +
+    clip_cost + outs[b].cost`` (the planner makes :class:`Stitch` objects only of the
+    edges its path takes)."""
     clip = prop.clips[clip_index]
     world = prop.world_clip(clip)
     if env.blocked(world.ground[:, :2], exclude=(prop.name,), radius=CLIP_CLEARANCE).any():
-        return []  # another prop stands in the way of the jump itself
+        return None  # another prop stands in the way of the jump itself
     gait = patch.gait
     d_in = phase_pose_distance(gait, clip.motion.root_local[0], clip.motion.rotations[0])
     d_out = phase_pose_distance(gait, clip.motion.root_local[-1], clip.motion.rotations[-1])
@@ -199,7 +236,7 @@ def stitch(patch, env, prop, clip_index, alpha, beta, gamma):
         gamma,
     )
     if not ins:
-        return []
+        return None
     outs = _candidates(
         patch,
         env,
@@ -211,13 +248,25 @@ def stitch(patch, env, prop, clip_index, alpha, beta, gamma):
         beta,
         gamma,
     )
+    if not outs:
+        return None
     clip_cost = alpha * clip.length() + beta * clip.turn() + gamma * clip.effort
-    to_keys = [int(pack(*next_entry(patch, b.tile, b.segment))) for b in outs]
-    result = []
-    for a in ins:
-        from_key = int(pack(a.tile[0], a.tile[1], patch.seg_entry[a.segment]))
-        for b, to_key in zip(outs, to_keys):
-            result.append(
-                Stitch(prop.name, clip_index, a, b, a.cost + clip_cost + b.cost, from_key, to_key)
-            )
-    return result
+    return ins, outs, _from_keys(patch, ins), _to_keys(patch, outs), clip_cost
+
+
+def _from_keys(patch, conns):
+    """Node keys (a list) of the entry nodes of the connections' segments (one tile)."""
+    tile = conns[0].tile
+    segs = np.array([c.segment for c in conns])
+    return pack(tile[0], tile[1], patch.seg_entry[segs]).tolist()
+
+
+def _to_keys(patch, conns):
+    """Node keys (a list) of the nodes the connections' segments lead to (one tile):
+    :func:`.node_keys.next_entry` of each, at once."""
+    tile = conns[0].tile
+    segs = np.array([c.segment for c in conns])
+    e1, k1, h1 = split_node_id(patch.seg_exit[segs], patch.nodes)
+    step = TILE_STEP[e1]
+    local = node_id(NEXT_EDGE[e1], k1, h1, patch.nodes)
+    return pack(tile[0] + step[:, 0], tile[1] + step[:, 1], local).tolist()

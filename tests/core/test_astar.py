@@ -36,8 +36,14 @@ def brute_force(starts, edges, goals, n):
     return best
 
 
+def one_by_one(heuristic):
+    """The per-key form of a vectorised heuristic (``astar.search``'s ``heuristic_of``)."""
+    return lambda k: float(heuristic(np.array([k]))[0])
+
+
+@pytest.mark.parametrize("per_key", (False, True))
 @pytest.mark.parametrize("seed", range(25))
-def test_astar_finds_the_brute_force_optimum(seed):
+def test_astar_finds_the_brute_force_optimum(seed, per_key):
     rng = np.random.default_rng(seed)
     n = 9
     pos, edges = random_graph(rng, n, 0.3)
@@ -62,7 +68,13 @@ def test_astar_finds_the_brute_force_optimum(seed):
     def goal_cost(k):
         return (goals[k], -1) if k in goals else None
 
-    res = astar.search([(s, c, -1) for s, c in starts], expand, heuristic, goal_cost)
+    res = astar.search(
+        [(s, c, -1) for s, c in starts],
+        expand,
+        heuristic,
+        goal_cost,
+        heuristic_of=one_by_one(heuristic) if per_key else None,
+    )
     expected = brute_force(starts, edges, goals, n)
     if np.isinf(expected):
         assert not res.found
@@ -197,9 +209,12 @@ def late_observer(hidden):
 SEEDS = range(40)
 
 
+@pytest.mark.parametrize("per_key", (False, True))
 @pytest.mark.parametrize("seed", SEEDS)
-def test_edges_added_by_observers_reach_the_brute_force_optimum(seed):
+def test_edges_added_by_observers_reach_the_brute_force_optimum(seed, per_key):
     problem, hidden, estimates, full, visible_only = lazy_problem(seed)
+    if per_key:
+        problem["heuristic_of"] = one_by_one(problem["heuristic"])
     for observer in (per_tile_observer(hidden, estimates), late_observer(hidden)):
         res = astar.search(observer=observer, **problem)
         if np.isinf(full):
@@ -261,3 +276,40 @@ def test_observer_sees_each_expanded_node_once_with_its_f_then_the_goal(seed):
         assert calls[-1] == (res.cost, astar.GOAL)
     else:  # out of nodes: the observer is still asked once, with f = inf, to open a way
         assert calls[-1] == (np.inf, astar.GOAL)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_per_key_heuristic_searches_exactly_as_the_vectorised_one(seed):
+    """Same expansions in the same order, same path: the one-by-one relaxation of
+    ``heuristic_of`` is only a faster way of doing the same search."""
+    rng = np.random.default_rng(100 + seed)
+    n = 14
+    pos, edges = random_graph(rng, n, 0.3)
+    h = np.linalg.norm(pos - pos[n - 1], axis=1)
+
+    def expand(k):
+        out = edges.get(k, [])
+        return (
+            np.array([b for b, _ in out], np.int64),
+            np.array([c for _, c in out]),
+            np.array([b for b, _ in out], np.int64),
+        )
+
+    runs = []
+    for per_key in (False, True):
+        seen = []
+
+        def observer(f, key, seen=seen):
+            seen.append((round(f, 9), key))
+            return ()
+
+        res = astar.search(
+            [(0, 0.0, -1)],
+            expand,
+            lambda k: h[k],
+            lambda k: (0.0, -1) if k == n - 1 else None,
+            observer=observer,
+            heuristic_of=(lambda k: float(h[k])) if per_key else None,
+        )
+        runs.append((seen, res.path, res.cost, res.expansions))
+    assert runs[0] == runs[1]

@@ -263,3 +263,54 @@ def test_stand_up_walk_and_sit_down_on_retargeted_real_clips(walk_patch, walk_ga
     wm = m.world_matrices(walk_gait.skeleton)
     hips = wm[-1, walk_gait.skeleton.root, :3, 3]
     assert hips[2] < 0.7 and np.linalg.norm(hips[:2] - (8.0, 3.0)) < 0.25
+
+
+def test_stitching_keeps_the_cheapest_clear_connections_and_lists_every_pair(
+    walk_patch, hurdle_clip, monkeypatch
+):
+    """stitch_table tests the used parts cheapest first and stops once MAX_PER_END are
+    clear: the connections kept are those of testing every candidate (MAX_PER_END
+    lifted) cut to the cheapest MAX_PER_END; stitch() lists every entry x exit pair of
+    the table with its summed cost. On these chairs some ends have more clear
+    candidates than are kept (the early stop is exercised)."""
+    from motion_patches import stitching
+
+    env, props = scattered_chairs(walk_patch, hurdle_clip, 3, 14)
+    weights = (1.0, 0.5, 0.2)
+    tables, full = [], []
+    for prop in props:
+        for ci, clip in enumerate(prop.clips):
+            if clip.kind == "traversal":
+                tables.append(stitching.stitch_table(walk_patch, env, prop, ci, *weights))
+    with monkeypatch.context() as m:
+        m.setattr(stitching, "MAX_PER_END", 10**6)
+        for prop in props:
+            for ci, clip in enumerate(prop.clips):
+                if clip.kind == "traversal":
+                    full.append(stitching.stitch_table(walk_patch, env, prop, ci, *weights))
+    cut = 0
+    for got, every in zip(tables, full):
+        assert (got is None) == (every is None)
+        if got is None:
+            continue
+        for mine, theirs in ((got[0], every[0]), (got[1], every[1])):
+            assert [(c.segment, c.frame, c.cost) for c in mine] == [
+                (c.segment, c.frame, c.cost) for c in theirs[: stitching.MAX_PER_END]
+            ]
+            cut += len(theirs) > stitching.MAX_PER_END
+    assert cut > 0
+    copies = [(p, i) for p in props for i, c in enumerate(p.clips) if c.kind == "traversal"]
+    listed = 0
+    for (prop, ci), table in zip(copies, tables):
+        edges = stitching.stitch(walk_patch, env, prop, ci, *weights)
+        if table is None:
+            assert edges == []
+            continue
+        ins, outs, from_keys, to_keys, clip_cost = table
+        assert len(edges) == len(ins) * len(outs)
+        for st in edges:
+            a, b = ins.index(st.entry), outs.index(st.exit)
+            assert (st.from_key, st.to_key) == (from_keys[a], to_keys[b])
+            assert st.cost == st.entry.cost + clip_cost + st.exit.cost
+        listed += len(edges)
+    assert listed > 0
