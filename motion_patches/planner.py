@@ -741,12 +741,28 @@ class SegmentPlanner:
         or arrive facing its way at all), one with a turn there is planned too and the
         cheaper by Eq. 5 kept.
         """
+        t0 = time.perf_counter()
         args = (margin_tiles, max_expansions, use_corridor, shorten)
         start, goal = np.asarray(start, float), np.asarray(goal, float)
         if turn_in_place is None:
             turn_in_place = self.turn_in_place
         if not (turn_in_place and self.turns_in_place):
             return self._plan_once(start, goal, *args)
+        made = []  # every walk searched, for the plan's time and counts
+
+        def once(s, g):
+            made.append(self._plan_once(s, g, *args))
+            return made[-1]
+
+        best = self._plan_turning(start, goal, once)
+        # The plan's time is the whole call's, every search made counted.
+        best.seconds = time.perf_counter() - t0
+        best.stats["shortening_seconds"] = sum(p.stats["shortening_seconds"] for p in made)
+        best.stats["walks_searched"] = len(made)
+        return best
+
+    def _plan_turning(self, start, goal, once):
+        """:meth:`plan` with turns on the spot; ``once(start, goal)`` searches one walk."""
         # The goal behind the character (or its heading against the way in): turn on the
         # spot first (last), as a person does, and plan the walk once.
         bearing = float(np.arctan2(goal[1] - start[1], goal[0] - start[0]))
@@ -755,11 +771,11 @@ class SegmentPlanner:
             not np.isnan(goal[2]) and abs(_wrap(goal[2] - bearing)) > LOOP_TURN,
         )
         if any(ends):
-            found = self._turned(start, goal, bearing, ends, args)
+            found = self._turned(start, goal, bearing, ends, once)
             if found is not None:
                 return found
         try:
-            exact, error = self._plan_once(start, goal, *args), None
+            exact, error = once(start, goal), None
         except PlanError as e:
             exact, error = None, e
             if isinstance(e, SearchLimit) or not ("facing" in str(e) or "unreachable" in str(e)):
@@ -770,7 +786,7 @@ class SegmentPlanner:
         loops = (loops[0] and not ends[0], loops[1] and not ends[1])
         best = exact
         if any(loops):
-            found = self._turned(start, goal, bearing, loops, args)
+            found = self._turned(start, goal, bearing, loops, once)
             if found is not None and (best is None or _final_cost(found) < _final_cost(best)):
                 best = found
                 best.stats["exact_facing_cost"] = None if exact is None else _final_cost(exact)
@@ -778,7 +794,7 @@ class SegmentPlanner:
             raise error
         return best
 
-    def _turned(self, start, goal, bearing, ends, args):
+    def _turned(self, start, goal, bearing, ends, once):
         """The plan with a turn on the spot at the start (towards the goal) and / or at the
         goal (to its heading, the walk arriving facing any way) where ``ends`` says, or
         None when that walk finds no path (or no turn is needed after all)."""
@@ -791,7 +807,7 @@ class SegmentPlanner:
         s = start if turn_to is None else np.array([start[0], start[1], turn_to])
         g = np.array([goal[0], goal[1], np.nan]) if free else goal
         try:
-            found = self._plan_once(s, g, *args)
+            found = once(s, g)
         except PlanError:
             return None
         return self._with_turns(
