@@ -77,6 +77,18 @@ VIEWS = {
         size=(960, 720),
         out="docs/demo_render_chairs.png",
     ),
+    "gaits": dict(
+        characters=("Walker",),
+        labels=False,
+        props="Chair",
+        near=6.0,
+        azimuth=-15.0,
+        pitch=40.0,
+        lens=50.0,
+        copies=12,
+        size=(960, 540),
+        out="docs/gaits_render.png",
+    ),
     "crowd": dict(
         characters=tuple(f"Crowd.{n}" for n in range(6)),
         labels=False,
@@ -104,7 +116,9 @@ def parse_args(argv):
         choices=sorted(VIEWS),
         default="pillars",
         help="pillars: the Walker through the pillar field; chairs: the hurried "
-        "and the calm walker at the two chair lines (default: %(default)s)",
+        "and the calm walker at the two chair lines; crowd: the six walkers; gaits: the "
+        "walker of tools/gaits_demo.py (--blend sample_blends/gaits_demo.blend) walking, "
+        "running over the chair line and walking on (default: %(default)s)",
     )
     p.add_argument(
         "--out",
