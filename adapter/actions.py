@@ -275,42 +275,75 @@ COMPACT = 1e-5  # tolerance of compact keys (metres, radians, quaternion compone
 
 
 def key_curve(action, slot, data_path, index, frames, values, group=None, tol=None, stored=None):
-    """Create one F-curve keyed at ``frames`` with ``values`` in one bulk write.
+    """Create one F-curve keyed at ``frames`` with ``values`` in one bulk write
+    (:func:`key_curves` of one curve; ``stored``: its storage, already chosen)."""
+    return key_curves(
+        action, slot, frames, [(data_path, index, group, values)], tol, None if stored is None
+        else [stored]
+    )[0]
 
-    With ``tol`` the curve is stored compactly (:mod:`motion_patches.keys`): one key when
-    constant, linear keys on the frames that need them, or, when those would cost more,
-    one sample per frame (``convert_to_samples``: 16 bytes a frame in the .blend instead
-    of a keyframe's 72; it plays the same values, linear between frames). ``stored``:
-    that choice made already (:func:`motion_patches.keys.plan_columns`)."""
-    fc = compat.new_fcurve(action, slot, data_path, index, group)
-    frames, values = np.asarray(frames, float), np.asarray(values, float)
-    how, kept = stored or (("all", None) if tol is None else key_plan.plan(values, tol))
-    if how == "samples" and not (np.all(np.diff(frames) == 1.0) and frames[0] == int(frames[0])):
-        how = "all"  # samples sit on whole frames, one apart
-    if how == "constant":
-        frames, values = frames[:1], values[:1]
-    elif how == "keys":
-        frames, values = frames[kept], values[kept]
-    n = len(frames)
-    fc.keyframe_points.add(n)
-    co = np.empty(2 * n)
-    co[0::2] = frames
-    co[1::2] = values
-    fc.keyframe_points.foreach_set("co", co)
-    fc.keyframe_points.foreach_set("interpolation", np.full(n, LINEAR, dtype=np.int32))
-    fc.update()
-    if how == "samples":
-        fc.convert_to_samples(int(frames[0]), int(frames[-1]) + 1)
-    return fc
+
+def key_curves(action, slot, frames, curves, tol=None, stored=None):
+    """Create the F-curves ``curves`` = [(data_path, index, group, values (F,))], all keyed
+    at ``frames``, each in one bulk write (``keyframe_points.add`` + ``foreach_set`` of
+    float32 arrays, the type Blender stores, so nothing is converted value by value).
+
+    With ``tol`` each curve is stored compactly (:mod:`motion_patches.keys`, the choices of
+    all curves made in one vectorised pass): one key when constant, linear keys on the
+    frames that need them, or, when those would cost more, one sample per frame
+    (``convert_to_samples``: 16 bytes a frame in the .blend instead of a keyframe's 72; it
+    plays the same values, linear between frames). ``stored``: those choices made already
+    (:func:`motion_patches.keys.plan_columns`). Curves to be sampled get no interpolation
+    or handles: sampling reads a key's own value on its frame, and the keys are dropped."""
+    frames = np.asarray(frames, float)
+    if stored is None:
+        stored = (
+            key_plan.plan_columns(np.column_stack([c[3] for c in curves]), tol)
+            if tol is not None and curves
+            else [("all", None)] * len(curves)
+        )
+    # samples sit on whole frames, one apart
+    whole = bool(frames.size) and np.all(np.diff(frames) == 1.0) and frames[0] == int(frames[0])
+    bag = compat.channelbag(action, slot, create=True)
+    groups, out = {}, []
+    for (data_path, index, group, values), (how, kept) in zip(curves, stored):
+        fc = bag.fcurves.new(data_path, index=index)
+        if group:
+            grp = groups.get(group)
+            if grp is None:
+                grp = groups[group] = bag.groups.get(group) or bag.groups.new(group)
+            fc.group = grp
+        values = np.asarray(values, float)
+        if how == "samples" and not whole:
+            how = "all"
+        if how == "constant":
+            f, v = frames[:1], values[:1]
+        elif how == "keys":
+            f, v = frames[kept], values[kept]
+        else:
+            f, v = frames, values
+        n = len(f)
+        fc.keyframe_points.add(n)
+        co = np.empty(2 * n, np.float32)
+        co[0::2] = f
+        co[1::2] = v
+        fc.keyframe_points.foreach_set("co", co)
+        if how == "samples":
+            fc.convert_to_samples(int(f[0]), int(f[-1]) + 1)
+        else:
+            fc.keyframe_points.foreach_set("interpolation", np.full(n, LINEAR, np.int32))
+            fc.update()
+        out.append(fc)
+    return out
 
 
 def curve_points(fc):
     """(N, 2) frames and values of an F-curve's keys, or of its samples when it was
-    converted to samples (:func:`key_curve` with ``tol``)."""
+    converted to samples (:func:`key_curves` with ``tol``)."""
     points = fc.keyframe_points if len(fc.keyframe_points) else fc.sampled_points
-    co = np.empty(2 * len(points))
+    co = np.empty(2 * len(points), np.float32)  # what Blender stores: read without conversion
     points.foreach_get("co", co)
-    return co.reshape(-1, 2)
+    return co.reshape(-1, 2).astype(float)
 
 
 def key_pose(action, slot, skel, frames, root_location, rotations, modes=None, tol=None):
@@ -338,32 +371,27 @@ def key_pose(action, slot, skel, frames, root_location, rotations, modes=None, t
                 (f'pose.bones["{name}"].{path}', i, name, values[:, c, i])
                 for i in range(values.shape[-1])
             ]
-    stored = (
-        key_plan.plan_columns(np.column_stack([c[3] for c in curves]), tol)
-        if tol is not None
-        else [None] * len(curves)
-    )
-    for (path, i, group, v), how in zip(curves, stored):
-        key_curve(action, slot, path, i, frames, v, group=group, tol=tol, stored=how)
+    key_curves(action, slot, frames, curves, tol)
 
 
 def read_channels(action, slot, bone, mode, frames, cache=None):
     """Values (F, 3 or 4) an action gives a bone's ``mode`` channel at (action) ``frames``,
     linear between keys (or samples), the rest value where the channel is not keyed.
-    ``cache``: a dict kept by the caller, so each action's curves are read once."""
+    Only that channel's curves are read. ``cache``: a dict kept by the caller, so each
+    curve is read once."""
     path = f'pose.bones["{bone}"].{rotation_path(mode)}'
     rest = rest_channels(mode)
     out = np.tile(rest, (len(frames), 1))
-    key = (action.name, slot.handle if slot is not None else None)
+    key = (action.name, slot.handle if slot is not None else None, path)
     points = cache.get(key) if cache is not None else None
     if points is None:
-        points = {
-            (fc.data_path, fc.array_index): curve_points(fc) for fc in compat.fcurves(action, slot)
-        }
+        slot = slot or compat.action_slot(action)
+        bag = compat.channelbag(action, slot) if slot is not None else None
+        found = [bag.fcurves.find(path, index=i) if bag else None for i in range(rest.size)]
+        points = [None if fc is None else curve_points(fc) for fc in found]
         if cache is not None:
             cache[key] = points
-    for i in range(rest.size):
-        co = points.get((path, i))
+    for i, co in enumerate(points):
         if co is not None:
             out[:, i] = np.interp(frames, co[:, 0], co[:, 1])
     return out

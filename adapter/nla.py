@@ -15,7 +15,6 @@ import json
 
 import numpy as np
 
-from ..motion_patches import keys as key_plan
 from ..motion_patches import quat
 from ..motion_patches.clip import Clip
 from ..motion_patches.inplace import rest_facing, to_inplace, to_world
@@ -268,17 +267,10 @@ def write_plan(
     heading = np.unwrap(world.ground[:, 2]) - facing_angle(skel)
     frames = np.arange(world.frames, dtype=float)
     z0 = float(obj.location[2])
-    for i, v in enumerate((world.ground[:, 0], world.ground[:, 1], np.full(world.frames, z0))):
-        act_io.key_curve(
-            root_action,
-            root_slot,
-            "location",
-            i,
-            frames,
-            v,
-            group="Object Transforms",
-            tol=act_io.COMPACT,
-        )
+    curves = [
+        ("location", i, "Object Transforms", v)
+        for i, v in enumerate((world.ground[:, 0], world.ground[:, 1], np.full(world.frames, z0)))
+    ]
     # A turn about Z only: (0, 0, heading) is that turn in every Euler order, (heading, +Z)
     # in axis-angle; the heading is unwrapped, so no channel jumps by a turn.
     zero = np.zeros(world.frames)
@@ -289,17 +281,8 @@ def write_plan(
         rot_path, rot_values = "rotation_axis_angle", (heading, zero, zero, zero + 1.0)
     else:
         rot_path, rot_values = "rotation_euler", (zero, zero, heading)
-    for i, v in enumerate(rot_values):
-        act_io.key_curve(
-            root_action,
-            root_slot,
-            rot_path,
-            i,
-            frames,
-            v,
-            group="Object Transforms",
-            tol=act_io.COMPACT,
-        )
+    curves += [(rot_path, i, "Object Transforms", v) for i, v in enumerate(rot_values)]
+    act_io.key_curves(root_action, root_slot, frames, curves, act_io.COMPACT)
     root_track = ad.nla_tracks.new()
     root_track.name = TRACK_ROOT
     rs = root_track.strips.new(f"{obj.name} root", first, root_action)
@@ -361,12 +344,7 @@ def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=(
         delta[~moved[:, j]] = 0.0
         path = f'pose.bones["{name}"].{act_io.rotation_path(mode)}'
         curves += [(path, i, name, delta[:, i]) for i in range(delta.shape[1])]
-    if curves:
-        stored = key_plan.plan_columns(np.column_stack([c[3] for c in curves]), act_io.COMPACT)
-        for (path, i, name, v), how in zip(curves, stored):
-            act_io.key_curve(
-                action, slot, path, i, frames, v, group=name, tol=act_io.COMPACT, stored=how
-            )
+    act_io.key_curves(action, slot, frames, curves, act_io.COMPACT)
     track = obj.animation_data.nla_tracks.new()
     track.name = TRACK_FOOT
     strip = track.strips.new(f"{obj.name} foot lock", int(frame_start), action)

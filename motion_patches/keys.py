@@ -22,11 +22,15 @@ SAMPLE_BYTES = 16  # an FPoint
 BASE = 64  # the coarsest key spacing tried, frames
 
 
-def linear_keys(values, tol, base=BASE):
+def linear_keys(values, tol, base=BASE, give_up_at=None):
     """Mask (F, C) of the frames to key per column of ``values`` (F, C) so that linear
     interpolation between kept frames is within ``tol`` of every value; the first and last
     frames are always kept. Intervals that miss are halved until they fit (vectorised over
-    all columns: a few passes)."""
+    the columns still refining: a few passes).
+
+    ``give_up_at``: stop refining a column once it keeps that many frames (it will be
+    stored as samples, :func:`plan_columns`; its mask is then partial) and return
+    ``(mask, gave_up (C,))``."""
     v = np.asarray(values, float)
     if v.ndim == 1:
         return linear_keys(v[:, None], tol, base)[:, 0]
@@ -34,19 +38,26 @@ def linear_keys(values, tol, base=BASE):
     keep = np.zeros((n, c), bool)
     keep[::base] = True
     keep[-1] = True
-    idx = np.broadcast_to(np.arange(n)[:, None], (n, c))
-    cols = np.broadcast_to(np.arange(c)[None], (n, c))
-    while True:
-        prev = np.maximum.accumulate(np.where(keep, idx, 0), axis=0)
-        nxt = np.minimum.accumulate(np.where(keep, idx, n - 1)[::-1], axis=0)[::-1]
-        span = np.maximum(nxt - prev, 1)
-        w = (idx - prev) / span
-        line = v[prev, cols] * (1 - w) + v[nxt, cols] * w
-        bad = (np.abs(line - v) > tol) & ~keep
-        if not bad.any():
-            return keep
-        f, col = np.nonzero(bad)
-        keep[(prev[f, col] + nxt[f, col]) // 2, col] = True
+    gave_up = np.zeros(c, bool)
+    active = np.arange(c)
+    idx = np.arange(n)[:, None]
+    while active.size:
+        k, va = keep[:, active], v[:, active]
+        cols = np.arange(active.size)[None]
+        prev = np.maximum.accumulate(np.where(k, idx, 0), axis=0)
+        nxt = np.minimum.accumulate(np.where(k, idx, n - 1)[::-1], axis=0)[::-1]
+        w = (idx - prev) / np.maximum(nxt - prev, 1)
+        line = va[prev, cols] * (1 - w) + va[nxt, cols] * w
+        f, col = np.nonzero((np.abs(line - va) > tol) & ~k)
+        keep[(prev[f, col] + nxt[f, col]) // 2, active[col]] = True
+        refining = np.zeros(active.size, bool)
+        refining[col] = True
+        if give_up_at is not None:
+            full = keep[:, active].sum(axis=0) >= give_up_at
+            gave_up[active[full & refining]] = True
+            refining &= ~full
+        active = active[refining]
+    return keep if give_up_at is None else (keep, gave_up)
 
 
 def plan(values, tol):
@@ -65,12 +76,15 @@ def plan_columns(values, tol):
     out = [("constant", None)] * v.shape[1]
     cols = np.flatnonzero(varies)
     if cols.size:
-        keep = linear_keys(v[:, cols], tol)
-        for c, k in zip(cols, keep.T):
+        n = v.shape[0]
+        # keys cost more than samples from this many on: stop refining such a column
+        limit = -(-n * SAMPLE_BYTES // KEY_BYTES)
+        keep, gave_up = linear_keys(v[:, cols], tol, give_up_at=limit)
+        for c, k, many in zip(cols, keep.T, gave_up):
             kept = np.flatnonzero(k)
             out[c] = (
                 ("keys", kept)
-                if kept.size * KEY_BYTES < v.shape[0] * SAMPLE_BYTES
+                if not many and kept.size * KEY_BYTES < n * SAMPLE_BYTES
                 else ("samples", None)
             )
     return out
