@@ -297,19 +297,38 @@ def write_plan(
     return strips, stashed
 
 
-def _lower_channels(played, bone, mode, n_frames, cache=None):
-    """What the motion track gives a bone's ``mode`` channel on each plan frame, read from
-    the keys of its strips' actions: ``played`` = [(action, slot, first plan frame, scene
-    frames it spans, strip scale)] in track order; where two strips meet on a frame the
-    earlier one plays (Blender takes the first strip whose range holds the frame). A
-    scaled strip plays action frame ``(frame - start) / scale``, between keys linearly."""
-    out = np.tile(act_io.rest_channels(mode), (n_frames, 1))
-    done = np.zeros(n_frames, bool)
-    for action, slot, start, frames, scale in played:
+def _played_frames(played, n_frames):
+    """Which strip plays each plan frame and the action frame it plays there: ``played`` =
+    [(action, slot, first plan frame, scene frames it spans, strip scale)] in track order;
+    where two strips meet on a frame the earlier one plays (Blender takes the first strip
+    whose range holds the frame). A scaled strip plays action frame
+    ``(frame - start) / scale``. Returns {(action, slot): (plan frames, action frames)},
+    the frames of every strip of one action together, so each channel is read once per
+    action (a plan plays one segment action on many strips)."""
+    owner = np.full(n_frames, -1)
+    at = np.zeros(n_frames)
+    for s, (_, _, start, frames, scale) in enumerate(played):
         idx = np.arange(start, min(start + frames, n_frames))
-        idx = idx[~done[idx]]
-        out[idx] = act_io.read_channels(action, slot, bone, mode, (idx - start) / scale, cache)
-        done[idx] = True
+        idx = idx[owner[idx] < 0]
+        owner[idx] = s
+        at[idx] = (idx - start) / scale
+    by_action = {}
+    for s, (action, slot, *_) in enumerate(played):
+        by_action.setdefault((action, slot), []).append(s)
+    out = {}
+    for key, strips in by_action.items():
+        idx = np.flatnonzero(np.isin(owner, strips))
+        out[key] = (idx, at[idx])
+    return out
+
+
+def _lower_channels(frames_of, bone, mode, n_frames, cache=None):
+    """What the motion track gives a bone's ``mode`` channel on each plan frame, read from
+    the keys of its strips' actions (``frames_of``: :func:`_played_frames`), between keys
+    linearly; the rest value on frames no strip plays."""
+    out = np.tile(act_io.rest_channels(mode), (n_frames, 1))
+    for (action, slot), (idx, at) in frames_of.items():
+        out[idx] = act_io.read_channels(action, slot, bone, mode, at, cache)
     return out
 
 
@@ -336,10 +355,11 @@ def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=(
     action[CHARACTER_KEY] = obj.name
     frames = np.arange(world.frames, dtype=float)
     cache, curves = {}, []
+    frames_of = _played_frames(played, world.frames)
     for j in changed:
         name = skel.names[j]
         mode = modes.get(name, "QUATERNION")
-        lower = _lower_channels(played, name, mode, world.frames, cache)
+        lower = _lower_channels(frames_of, name, mode, world.frames, cache)
         delta = act_io.closest_channels(locked[:, j], mode, lower) - lower
         delta[~moved[:, j]] = 0.0
         path = f'pose.bones["{name}"].{act_io.rotation_path(mode)}'
