@@ -174,21 +174,46 @@ def _leg_skeleton(skel, chains):
     return Skeleton([skel.names[j] for j in idx], parents, skel.rest[idx]), idx
 
 
+def _rest_offsets(sub):
+    """(K, 4, 4) rest matrix of each bone of ``sub`` relative to its parent's
+    (:meth:`Skeleton.local_rest <motion_patches.skeleton.Skeleton.local_rest>`, the
+    inverses taken in one call)."""
+    out = sub.rest.copy()
+    child = np.flatnonzero(sub.parents >= 0)
+    out[child] = np.linalg.inv(sub.rest[sub.parents[child]]) @ sub.rest[child]
+    return out
+
+
+def _leg_world(sub, rest_offsets, root_pos, rotations):
+    """World rotations (F, K, 3, 3) and positions (F, K, 3) of the bones of ``sub``
+    (:func:`~motion_patches.skeleton.forward_kinematics` in rotations and positions)."""
+    basis = quat.to_matrix(rotations)
+    nf, nk = basis.shape[:2]
+    g = np.empty((nf, nk, 3, 3))
+    p = np.empty((nf, nk, 3))
+    for j, parent in enumerate(sub.parents):
+        if parent < 0:
+            g[:, j] = sub.rest[j, :3, :3] @ basis[:, j]
+            p[:, j] = root_pos
+            continue
+        lr = rest_offsets[j]
+        g[:, j] = g[:, parent] @ (lr[:3, :3] @ basis[:, j])
+        p[:, j] = g[:, parent] @ lr[:3, 3] + p[:, parent]
+    return g, p
+
+
 def lock_feet(skel, world, blend=BLEND_FRAMES):
     """Rotation channels (F, J, 4) of ``world`` (a Motion) with planted feet pinned.
 
     Only the hip (thigh) and knee (shin) channels of each leg change, and the ankle's so
     that the foot keeps its world orientation. Both legs are solved at once over all
     frames, on the legs' bones alone (:func:`_leg_skeleton`)."""
-    from .skeleton import forward_kinematics
-
     chains = leg_chains(skel)
     sub, idx = _leg_skeleton(skel, chains)
     at = {int(j): i for i, j in enumerate(idx)}
+    offsets = _rest_offsets(sub)
     pos, rot = to_world(sub, world.ground, world.root_local, world.rotations[:, idx])
-    m = forward_kinematics(sub, pos, rot)
-    g = m[..., :3, :3].copy()
-    p = m[..., :3, 3]
+    g, p = _leg_world(sub, offsets, pos, rot)
     n = world.frames
     legs = np.array([[at[j] for j in chain] for chain in chains])  # (2, 4) in ``sub``
     hip, knee, ankle, toe = legs.T  # (2,) each: left, right
@@ -236,8 +261,7 @@ def lock_feet(skel, world, blend=BLEND_FRAMES):
         changed += thigh_bones + shin_bones + [c_ankle]
     # Pose channels of the changed bones only (local_rotations_from_global, per bone).
     k = np.array([at[j] for j in changed])
-    local_rest = sub.local_rest()[k, :3, :3]
-    parent_rest = g[:, sub.parents[k]] @ local_rest  # (F, K, 3, 3)
+    parent_rest = g[:, sub.parents[k]] @ offsets[k, :3, :3]  # (F, K, 3, 3)
     local = quat.make_continuous(
         quat.from_matrix(np.swapaxes(parent_rest, -1, -2) @ g[:, k]), axis=0
     )
