@@ -258,16 +258,88 @@ def rotation_channels(q, mode, first=None):
     """Channel values (F, ..., 3 or 4) of ``mode`` for quaternions ``q`` (F, ..., 4), made
     continuous over frames (axis 0): each frame takes the representation nearest the
     previous one, so no key jumps by a turn, flips an Euler solution or an axis-angle
-    axis. The first frame is nearest ``first`` (default: the rest values)."""
+    axis. The first frame is nearest ``first`` (default: the rest values).
+
+    Vectorised over frames: the frame-by-frame choice (:func:`closest_channels` of each
+    frame against the last) depends only on which Euler solution, or which axis sign, the
+    last frame took, never on its whole turns; so the choices are a chain of two-state
+    steps (:func:`_chained_choice`, :func:`quat.make_continuous`) and the turns a
+    cumulative sum of each step's nearest whole turn (:func:`_continuous_turns`)."""
     q = np.asarray(q, float)
     rest = rest_channels(mode)
     prev = np.broadcast_to(rest if first is None else first, q.shape[1:-1] + rest.shape)
     if mode == "QUATERNION":
         return quat.make_continuous(closest_channels(q, mode, np.broadcast_to(prev, q.shape)))
-    out = np.empty(q.shape[:-1] + rest.shape)
-    for f in range(q.shape[0]):
-        prev = out[f] = closest_channels(q[f], mode, prev)
-    return out
+    if q.shape[0] == 0:
+        return np.empty(q.shape[:-1] + rest.shape)
+    if mode == "AXIS_ANGLE":
+        return _continuous_axis_angle(quat.normalize(q), prev)
+    rotation_path(mode)
+    pair = np.stack(_euler_pair(quat.normalize(q), mode))  # (2, F, ..., 3) principal
+    # distance of solution a on frame f to solution b on frame f - 1, angles wrapped
+    step = np.stack(
+        [np.sum(np.abs(_turn(pair[b, :-1] - pair[:, 1:])), axis=-1) for b in (0, 1)], axis=1
+    )  # (2 a, 2 b, F - 1, ...)
+    start = np.sum(np.abs(_turn(prev - pair[:, 0])), axis=-1)  # (2, ...)
+    choice = _chained_choice(start[1] < start[0], step[1] < step[0])  # (F, ...) bool
+    chosen = np.where(choice[..., None], pair[1], pair[0])
+    return _continuous_turns(chosen, prev)
+
+
+def _turn(x):
+    """``x`` less the whole turns nearest it: the wrapped difference, in [-pi, pi]."""
+    return x - _TWO_PI * np.round(x / _TWO_PI)
+
+
+def _chained_choice(first, takes):
+    """(F, ...) bool: frame 0 takes ``first``; frame f takes ``takes[:, f - 1]`` (2, F - 1,
+    ...) at the index of what frame f - 1 took (a two-state chain, composed in log2(F)
+    doubling passes instead of a loop over frames)."""
+    # map of each step: what frame f takes if frame f - 1 took False (m0) or True (m1)
+    m0 = np.concatenate((first[None], takes[0]))
+    m1 = np.concatenate((first[None], takes[1]))
+    # frame 0's map is constant (it takes ``first`` whatever came before)
+    n, span = m0.shape[0], 1
+    while span < n:
+        # compose each map with the one ``span`` frames before it
+        p0, p1 = m0[:-span], m1[:-span]
+        m0[span:], m1[span:] = np.where(p0, m1[span:], m0[span:]), np.where(p1, m1[span:], m0[span:])
+        span *= 2
+    return m0  # frame 0's map is constant, so every composed map is too
+
+
+def _continuous_turns(values, first):
+    """``values`` (F, ..., C) plus the whole turns that bring each frame within half a turn
+    of the frame before (the first of ``first``): :func:`_wrap_near` frame by frame."""
+    turns = np.round((first - values[0]) / _TWO_PI)[None]
+    steps = np.round((values[:-1] - values[1:]) / _TWO_PI)
+    return values + _TWO_PI * np.cumsum(np.concatenate((turns, steps)), axis=0)
+
+
+def _continuous_axis_angle(q, first):
+    """Axis-angle channels (F, ..., 4) of unit quaternions ``q``, continuous from
+    ``first``: each axis takes the sign nearest the last frame's (a frame with no
+    rotation keeps the last axis), each angle follows its axis's sign and the turns
+    nearest the last angle."""
+    v = q[..., 1:]
+    s = np.linalg.norm(v, axis=-1, keepdims=True)
+    angle = 2.0 * np.arctan2(s[..., 0], q[..., 0])
+    ref = first[..., 1:]
+    rn = np.linalg.norm(ref, axis=-1, keepdims=True)
+    ref = np.where(rn > 1e-12, ref / np.maximum(rn, 1e-12), [0.0, 1.0, 0.0])
+    has = s[..., 0] > 1e-12
+    axis = np.where(has[..., None], v / np.maximum(s, 1e-12), 0.0)
+    # a frame without an axis carries the last one on (or ``first``'s, before any)
+    axes = np.concatenate((ref[None], axis))
+    idx = np.arange(axes.shape[0]).reshape((-1,) + (1,) * (axes.ndim - 2))
+    last = np.maximum.accumulate(np.where(np.concatenate((np.ones_like(has[:1]), has)), idx, 0))
+    axes = np.take_along_axis(axes, last[..., None], axis=0)
+    signed = quat.make_continuous(axes, axis=0)[1:]  # each sign nearest the one before
+    flip = has & (np.sum(signed * axes[1:], axis=-1) < 0)  # a carried axis is not flipped
+    angle = np.where(flip, -angle, angle)
+    values = np.concatenate((angle[..., None], signed), axis=-1)
+    values[..., 0] = _continuous_turns(values[..., :1], first[..., :1])[..., 0]
+    return values
 
 
 LINEAR = 1  # Keyframe.interpolation enum value of 'LINEAR' (4.5 and 5.0)
