@@ -16,8 +16,7 @@ import json
 import numpy as np
 
 from ..motion_patches import quat
-from ..motion_patches.clip import Clip
-from ..motion_patches.inplace import rest_facing, to_inplace, to_world
+from ..motion_patches.inplace import rest_facing, root_channel_to_ground
 from ..motion_patches.skeleton import root_position_to_location
 from . import actions as act_io
 from . import compat
@@ -40,15 +39,21 @@ def facing_angle(skel):
 
 def inplace_channels(skel, motion):
     """Root location channels (F, 3) and rotations (F, J, 4) for an object whose Z rotation
-    is the ground heading minus the rig's rest facing."""
-    pos, rot = to_world(skel, motion.ground, motion.root_local, motion.rotations)
-    obj_ground = motion.ground.copy()
-    obj_ground[:, 2] -= facing_angle(skel)
-    clip = Clip("tmp", skel, 1.0, pos, rot)
-    local, rot_ip = to_inplace(clip, obj_ground)
-    # to_inplace expresses the root in a frame whose +X is the ground heading; the object's
-    # frame is that turned by -facing, which to_inplace already applied through obj_ground.
-    return root_position_to_location(skel, local), rot_ip
+    is the ground heading minus the rig's rest facing.
+
+    That object is the motion's ground frame turned by -facing, so the body relative to it
+    is the motion's own in-place channels turned by +facing: the root's position about Z,
+    and its rotation by the same turn conjugated into the root's rest frame (what
+    ``to_world`` then ``to_inplace`` against the object's headings gives, without the round
+    trip through the world)."""
+    facing = facing_angle(skel)
+    c, s = np.cos(facing), np.sin(facing)
+    x, y, z = np.asarray(motion.root_local, float).T
+    local = np.stack((c * x - s * y, s * x + c * y, z), 1)
+    rot = np.array(motion.rotations, float)
+    r = skel.root
+    rot[:, r] = root_channel_to_ground(skel, rot[:, r], -facing)
+    return root_position_to_location(skel, local), quat.make_continuous(rot, axis=0)
 
 
 def check_rig(obj, skel, floor=0.0):

@@ -135,3 +135,35 @@ def test_the_foot_lock_reads_the_strip_that_plays_each_frame(addon_module, clean
     want[on_a2] = (f[on_a2, None] - 20) + 10 * np.arange(4)
     assert np.allclose(out, want), np.argwhere(~np.isclose(out, want))[:5]
     assert len(bpy.data.actions) >= 2
+
+
+def test_inplace_channels_are_the_round_trip_through_the_world(addon_module, mocap_dir):
+    """The in-place channels for the object turned by the rig's facing equal putting the
+    motion in the world (to_world) and taking it back against the object's headings
+    (to_inplace), as they were computed before."""
+    import importlib
+
+    name = addon_module.__name__ + ".motion_patches."
+    mp = {m: importlib.import_module(name + m) for m in ("bvh", "motion", "inplace", "clip")}
+    skeleton = importlib.import_module(name + "skeleton")
+    nla = addon_module.adapter.nla
+    clip = mp["bvh"].read(mocap_dir / "cmu" / "16_15.bvh")
+    skel = clip.skeleton
+    rng = np.random.default_rng(7)
+    n = 90
+    ground = np.column_stack(
+        (rng.normal(size=n).cumsum(), rng.normal(size=n).cumsum(), rng.normal(size=n).cumsum())
+    )
+    motion = mp["motion"].Motion(
+        ground, rng.normal(size=(n, 3)), clip.rotations[:n], np.zeros((n, 4), bool)
+    )
+    loc, rot = nla.inplace_channels(skel, motion)
+    pos, world_rot = mp["inplace"].to_world(skel, ground, motion.root_local, motion.rotations)
+    obj_ground = ground.copy()
+    obj_ground[:, 2] -= nla.facing_angle(skel)
+    local, want_rot = mp["inplace"].to_inplace(
+        mp["clip"].Clip("round trip", skel, 1.0, pos, world_rot), obj_ground
+    )
+    assert abs(nla.facing_angle(skel)) > 0.1  # the turn matters for this rig
+    assert np.allclose(loc, skeleton.root_position_to_location(skel, local), atol=1e-9)
+    assert np.allclose(rot, want_rot, atol=1e-9)
