@@ -140,3 +140,17 @@ def test_the_legs_world_matrices_are_the_whole_skeletons(walk_patch, walk):
     m = walk.world_matrices(skel)[:, idx]
     assert np.allclose(g, m[..., :3, :3], atol=1e-12)
     assert np.allclose(p, m[..., :3, 3], atol=1e-12)
+
+
+def test_locked_channels_are_continuous_where_the_input_flips(walk_patch, walk):
+    """A bone the lock leaves alone whose quaternions change sign mid-walk (the same
+    rotation) comes out continuous, as the whole pose did: only its sign changes."""
+    skel = walk_patch.gait.skeleton
+    legs = {j for chain in foot_lock.leg_chains(skel) for j in chain}
+    other = next(j for j in range(1, len(skel.names)) if j not in legs)
+    flipped = walk.rotations.copy()
+    flipped[walk.frames // 2 :, other] *= -1
+    rot = foot_lock.lock_feet(skel, Motion(walk.ground, walk.root_local, flipped, walk.contacts))
+    assert np.all(np.sum(rot[1:] * rot[:-1], axis=-1) >= 0)
+    assert np.allclose(rot[:, other], quat.make_continuous(flipped[:, other], axis=0))
+    assert np.allclose(rot, foot_lock.lock_feet(skel, walk))
