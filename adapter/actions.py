@@ -303,7 +303,10 @@ def _chained_choice(first, takes):
     while span < n:
         # compose each map with the one ``span`` frames before it
         p0, p1 = m0[:-span], m1[:-span]
-        m0[span:], m1[span:] = np.where(p0, m1[span:], m0[span:]), np.where(p1, m1[span:], m0[span:])
+        m0[span:], m1[span:] = (
+            np.where(p0, m1[span:], m0[span:]),
+            np.where(p1, m1[span:], m0[span:]),
+        )
         span *= 2
     return m0  # frame 0's map is constant, so every composed map is too
 
@@ -344,15 +347,6 @@ def _continuous_axis_angle(q, first):
 
 LINEAR = 1  # Keyframe.interpolation enum value of 'LINEAR' (4.5 and 5.0)
 COMPACT = 1e-5  # tolerance of compact keys (metres, radians, quaternion components)
-
-
-def key_curve(action, slot, data_path, index, frames, values, group=None, tol=None, stored=None):
-    """Create one F-curve keyed at ``frames`` with ``values`` in one bulk write
-    (:func:`key_curves` of one curve; ``stored``: its storage, already chosen)."""
-    return key_curves(
-        action, slot, frames, [(data_path, index, group, values)], tol, None if stored is None
-        else [stored]
-    )[0]
 
 
 def key_curves(action, slot, frames, curves, tol=None, stored=None):
@@ -423,7 +417,7 @@ def key_pose(action, slot, skel, frames, root_location, rotations, modes=None, t
     mode plays: ``modes`` is {bone name: rotation_mode}, quaternion for bones not in it.
     Quaternion channels are keyed as given (the caller makes them continuous); Euler and
     axis-angle ones are converted continuous over ``frames`` (:func:`rotation_channels`).
-    ``tol``: store the curves compactly (:func:`key_curve`)."""
+    ``tol``: store the curves compactly (:func:`key_curves`)."""
     modes = modes or {}
     root = skel.names[skel.root]
     curves = [(f'pose.bones["{root}"].location', i, root, root_location[:, i]) for i in range(3)]
