@@ -114,14 +114,19 @@ SPLIT = ("lock_feet", "write_plan", "world_matrices", "store_plan")
 
 
 def timing(fn, spent, name):
-    """``fn`` adding the seconds of each call to ``spent[name]``."""
+    """``fn`` adding the seconds of each call to ``spent[name]``; a call made inside
+    another timed one is left to that one (``spent`` counts each second once)."""
 
     def timed(*a, **kw):
+        if spent.get("_inside"):
+            return fn(*a, **kw)
+        spent["_inside"] = True
         t0 = time.perf_counter()
         try:
             return fn(*a, **kw)
         finally:
             spent[name] = spent.get(name, 0.0) + time.perf_counter() - t0
+            spent["_inside"] = False
 
     return timed
 
@@ -245,6 +250,7 @@ def section_strips(bpy, addon, args):
                 setattr(owner, name, fn)
         strips = sum(len(c.animation_data.nla_tracks[nla.TRACK_MOTION].strips) for c in chars)
         key = "foot_lock" if lock else "no_foot_lock"
+        split = {n: spent.get(n, 0.0) for n in SPLIT}
         floor, strips_alone = blender_floor(bpy, addon, source, chars)
         out[key] = {
             "characters": count,
@@ -254,7 +260,7 @@ def section_strips(bpy, addon, args):
             "first_write_s": per[0],
             "later_write_ms_median": 1e3 * sorted(per[1:])[len(per[1:]) // 2],
             "fit_frame_range_s": fit,
-            "split_s": spent,
+            "split_s": split,
             "blender_floor_s_per_1000_strips": floor * 1000.0 / strips,
             "strips_alone_s_per_1000_strips": strips_alone * 1000.0 / strips,
         }
@@ -264,8 +270,8 @@ def section_strips(bpy, addon, args):
             f"{per[0] * 1e3:.0f} ms, later {out[key]['later_write_ms_median']:.1f} ms median; "
             f"frame range fitted once {fit * 1e3:.0f} ms)\n"
             f"    split: "
-            + ", ".join(f"{n} {spent.get(n, 0.0):.3f} s" for n in SPLIT)
-            + f", the rest of api._write {total - fit - sum(spent.values()):.3f} s\n"
+            + ", ".join(f"{n} {t:.3f} s" for n, t in split.items())
+            + f", the rest of api._write {total - fit - sum(split.values()):.3f} s\n"
             f"    Blender's own share, replayed without numpy: "
             f"{out[key]['blender_floor_s_per_1000_strips']:.3f} s per 1,000 (tracks, strips "
             f"and the characters' own keys; the strips alone "
