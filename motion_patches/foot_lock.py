@@ -140,19 +140,20 @@ def two_bone_ik(hip, knee, ankle, target, hinge, forward=None):
     n = np.where(ns[:, None] > 1e-6, n / np.maximum(ns, 1e-12)[:, None], hinge)
     v = target - hip
     v = v / np.linalg.norm(v, axis=-1, keepdims=True)
+    bend = quat.to_matrix(quat.exp(n * delta[:, None]))
     options = []
-    for sign in (1.0, -1.0):
-        r_knee = quat.to_matrix(quat.exp(n * (sign * delta)[:, None]))
+    for r_knee in (bend, np.swapaxes(bend, -1, -2)):  # the other sense: the inverse turn
         u = a + np.einsum("fij,fj->fi", r_knee, b)
         err = np.abs(np.linalg.norm(u, axis=-1) - d1)
         swing = _rotation_between(u / np.linalg.norm(u, axis=-1, keepdims=True), v)
         knee_dir = np.einsum("fij,fj->fi", swing, a)
         knee_dir -= np.sum(knee_dir * v, axis=-1, keepdims=True) * v
         ahead = np.zeros(len(a)) if forward is None else np.sum(knee_dir * forward, axis=-1)
-        options.append((err, ahead, swing, swing @ r_knee))
+        options.append((err, ahead, swing, r_knee))
     (e1, f1, s1, k1), (e2, f2, s2, k2) = options
     second = np.where(np.abs(e1 - e2) > 1e-7, e2 < e1, f2 > f1)[:, None, None]
-    return np.where(second, s2, s1), np.where(second, k2, k1)
+    swing = np.where(second, s2, s1)
+    return swing, swing @ np.where(second, k2, k1)
 
 
 def _leg_skeleton(skel, chains):
