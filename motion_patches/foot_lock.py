@@ -270,8 +270,8 @@ def lock_feet(skel, world, blend=BLEND_FRAMES):
     out[:, changed] = local
     # the whole pose made continuous, as the channels were; the changed bones are already,
     # and of the others only those that flip somewhere need the pass
-    others = np.setdiff1d(np.arange(out.shape[1]), changed)
-    flips = np.any(np.sum(out[1:, others] * out[:-1, others], axis=-1) < 0, axis=0)
+    flips = np.any(np.einsum("fjc,fjc->fj", out[1:], out[:-1]) < 0, axis=0)
+    flips[changed] = False
     if flips.any():
-        out[:, others[flips]] = quat.make_continuous(out[:, others[flips]], axis=0)
+        out[:, flips] = quat.make_continuous(out[:, flips], axis=0)
     return out
