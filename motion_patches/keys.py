@@ -93,11 +93,7 @@ def plan_columns(values, tol):
         # keys cost more than samples from this many on: stop refining such a column
         limit = -(-n * SAMPLE_BYTES // KEY_BYTES)
         keep, gave_up = linear_keys(v[:, cols], tol, give_up_at=limit)
-        for c, k, many in zip(cols, keep.T, gave_up):
-            kept = np.flatnonzero(k)
-            out[c] = (
-                ("keys", kept)
-                if not many and kept.size * KEY_BYTES < n * SAMPLE_BYTES
-                else ("samples", None)
-            )
+        keyed = ~gave_up & (keep.sum(axis=0) * KEY_BYTES < n * SAMPLE_BYTES)
+        for c, k, as_keys in zip(cols, keep.T, keyed):
+            out[c] = ("keys", np.flatnonzero(k)) if as_keys else ("samples", None)
     return out
