@@ -362,42 +362,45 @@ def key_curves(action, slot, frames, curves, tol=None, stored=None):
     (:func:`motion_patches.keys.plan_columns`). Curves to be sampled get no interpolation
     or handles: sampling reads a key's own value on its frame, and the keys are dropped."""
     frames = np.asarray(frames, float)
+    values = np.column_stack([np.asarray(c[3], float) for c in curves]) if curves else None
     if stored is None:
         stored = (
-            key_plan.plan_columns(np.column_stack([c[3] for c in curves]), tol)
+            key_plan.plan_columns(values, tol)
             if tol is not None and curves
             else [("all", None)] * len(curves)
         )
     # samples sit on whole frames, one apart
     whole = bool(frames.size) and np.all(np.diff(frames) == 1.0) and frames[0] == int(frames[0])
+    # every curve's (frame, value) pairs, float32, built at once; a curve takes its row
+    rows = np.empty((len(curves), 2 * frames.size), np.float32)
+    rows[:, 0::2] = frames
+    if curves:
+        rows[:, 1::2] = values.T
+    linear = np.full(frames.size, LINEAR, np.int32)
     bag = compat.channelbag(action, slot, create=True)
     groups, out = {}, []
-    for (data_path, index, group, values), (how, kept) in zip(curves, stored):
+    for c, ((data_path, index, group, _), (how, kept)) in enumerate(zip(curves, stored)):
         fc = bag.fcurves.new(data_path, index=index)
         if group:
             grp = groups.get(group)
             if grp is None:
                 grp = groups[group] = bag.groups.get(group) or bag.groups.new(group)
             fc.group = grp
-        values = np.asarray(values, float)
         if how == "samples" and not whole:
             how = "all"
         if how == "constant":
-            f, v = frames[:1], values[:1]
+            co = rows[c, :2]
         elif how == "keys":
-            f, v = frames[kept], values[kept]
+            co = rows[c].reshape(-1, 2)[kept].ravel()
         else:
-            f, v = frames, values
-        n = len(f)
+            co = rows[c]
+        n = co.size // 2
         fc.keyframe_points.add(n)
-        co = np.empty(2 * n, np.float32)
-        co[0::2] = f
-        co[1::2] = v
         fc.keyframe_points.foreach_set("co", co)
         if how == "samples":
-            fc.convert_to_samples(int(f[0]), int(f[-1]) + 1)
+            fc.convert_to_samples(int(frames[0]), int(frames[-1]) + 1)
         else:
-            fc.keyframe_points.foreach_set("interpolation", np.full(n, LINEAR, np.int32))
+            fc.keyframe_points.foreach_set("interpolation", linear[:n])
             fc.update()
         out.append(fc)
     return out
