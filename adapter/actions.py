@@ -258,59 +258,161 @@ def rotation_channels(q, mode, first=None):
     """Channel values (F, ..., 3 or 4) of ``mode`` for quaternions ``q`` (F, ..., 4), made
     continuous over frames (axis 0): each frame takes the representation nearest the
     previous one, so no key jumps by a turn, flips an Euler solution or an axis-angle
-    axis. The first frame is nearest ``first`` (default: the rest values)."""
+    axis. The first frame is nearest ``first`` (default: the rest values).
+
+    Vectorised over frames: the frame-by-frame choice (:func:`closest_channels` of each
+    frame against the last) depends only on which Euler solution, or which axis sign, the
+    last frame took, never on its whole turns; so the choices are a chain of two-state
+    steps (:func:`_chained_choice`, :func:`quat.make_continuous`) and the turns a
+    cumulative sum of each step's nearest whole turn (:func:`_continuous_turns`)."""
     q = np.asarray(q, float)
     rest = rest_channels(mode)
     prev = np.broadcast_to(rest if first is None else first, q.shape[1:-1] + rest.shape)
     if mode == "QUATERNION":
         return quat.make_continuous(closest_channels(q, mode, np.broadcast_to(prev, q.shape)))
-    out = np.empty(q.shape[:-1] + rest.shape)
-    for f in range(q.shape[0]):
-        prev = out[f] = closest_channels(q[f], mode, prev)
-    return out
+    if q.shape[0] == 0:
+        return np.empty(q.shape[:-1] + rest.shape)
+    if mode == "AXIS_ANGLE":
+        return _continuous_axis_angle(quat.normalize(q), prev)
+    rotation_path(mode)
+    pair = np.stack(_euler_pair(quat.normalize(q), mode))  # (2, F, ..., 3) principal
+    # distance of solution a on frame f to solution b on frame f - 1, angles wrapped
+    step = np.stack(
+        [np.sum(np.abs(_turn(pair[b, :-1] - pair[:, 1:])), axis=-1) for b in (0, 1)], axis=1
+    )  # (2 a, 2 b, F - 1, ...)
+    start = np.sum(np.abs(_turn(prev - pair[:, 0])), axis=-1)  # (2, ...)
+    choice = _chained_choice(start[1] < start[0], step[1] < step[0])  # (F, ...) bool
+    chosen = np.where(choice[..., None], pair[1], pair[0])
+    return _continuous_turns(chosen, prev)
+
+
+def _turn(x):
+    """``x`` less the whole turns nearest it: the wrapped difference, in [-pi, pi]."""
+    return x - _TWO_PI * np.round(x / _TWO_PI)
+
+
+def _chained_choice(first, takes):
+    """(F, ...) bool: frame 0 takes ``first``; frame f takes ``takes[:, f - 1]`` (2, F - 1,
+    ...) at the index of what frame f - 1 took (a two-state chain, composed in log2(F)
+    doubling passes instead of a loop over frames)."""
+    # map of each step: what frame f takes if frame f - 1 took False (m0) or True (m1)
+    m0 = np.concatenate((first[None], takes[0]))
+    m1 = np.concatenate((first[None], takes[1]))
+    # frame 0's map is constant (it takes ``first`` whatever came before)
+    n, span = m0.shape[0], 1
+    while span < n:
+        # compose each map with the one ``span`` frames before it
+        p0, p1 = m0[:-span], m1[:-span]
+        m0[span:], m1[span:] = (
+            np.where(p0, m1[span:], m0[span:]),
+            np.where(p1, m1[span:], m0[span:]),
+        )
+        span *= 2
+    return m0  # frame 0's map is constant, so every composed map is too
+
+
+def _continuous_turns(values, first):
+    """``values`` (F, ..., C) plus the whole turns that bring each frame within half a turn
+    of the frame before (the first of ``first``): :func:`_wrap_near` frame by frame."""
+    turns = np.round((first - values[0]) / _TWO_PI)[None]
+    steps = np.round((values[:-1] - values[1:]) / _TWO_PI)
+    return values + _TWO_PI * np.cumsum(np.concatenate((turns, steps)), axis=0)
+
+
+def _continuous_axis_angle(q, first):
+    """Axis-angle channels (F, ..., 4) of unit quaternions ``q``, continuous from
+    ``first``: each axis takes the sign nearest the last frame's (a frame with no
+    rotation keeps the last axis), each angle follows its axis's sign and the turns
+    nearest the last angle."""
+    v = q[..., 1:]
+    s = np.linalg.norm(v, axis=-1, keepdims=True)
+    angle = 2.0 * np.arctan2(s[..., 0], q[..., 0])
+    ref = first[..., 1:]
+    rn = np.linalg.norm(ref, axis=-1, keepdims=True)
+    ref = np.where(rn > 1e-12, ref / np.maximum(rn, 1e-12), [0.0, 1.0, 0.0])
+    has = s[..., 0] > 1e-12
+    axis = np.where(has[..., None], v / np.maximum(s, 1e-12), 0.0)
+    # a frame without an axis carries the last one on (or ``first``'s, before any)
+    axes = np.concatenate((ref[None], axis))
+    idx = np.arange(axes.shape[0]).reshape((-1,) + (1,) * (axes.ndim - 2))
+    last = np.maximum.accumulate(np.where(np.concatenate((np.ones_like(has[:1]), has)), idx, 0))
+    axes = np.take_along_axis(axes, last[..., None], axis=0)
+    signed = quat.make_continuous(axes, axis=0)[1:]  # each sign nearest the one before
+    flip = has & (np.sum(signed * axes[1:], axis=-1) < 0)  # a carried axis is not flipped
+    angle = np.where(flip, -angle, angle)
+    values = np.concatenate((angle[..., None], signed), axis=-1)
+    values[..., 0] = _continuous_turns(values[..., :1], first[..., :1])[..., 0]
+    return values
 
 
 LINEAR = 1  # Keyframe.interpolation enum value of 'LINEAR' (4.5 and 5.0)
 COMPACT = 1e-5  # tolerance of compact keys (metres, radians, quaternion components)
 
 
-def key_curve(action, slot, data_path, index, frames, values, group=None, tol=None, stored=None):
-    """Create one F-curve keyed at ``frames`` with ``values`` in one bulk write.
+def key_curves(action, slot, frames, curves, tol=None, stored=None):
+    """Create the F-curves ``curves`` = [(data_path, index, group, values (F,))], all keyed
+    at ``frames``, each in one bulk write (``keyframe_points.add`` + ``foreach_set`` of
+    float32 arrays, the type Blender stores, so nothing is converted value by value).
 
-    With ``tol`` the curve is stored compactly (:mod:`motion_patches.keys`): one key when
-    constant, linear keys on the frames that need them, or, when those would cost more,
-    one sample per frame (``convert_to_samples``: 16 bytes a frame in the .blend instead
-    of a keyframe's 72; it plays the same values, linear between frames). ``stored``:
-    that choice made already (:func:`motion_patches.keys.plan_columns`)."""
-    fc = compat.new_fcurve(action, slot, data_path, index, group)
-    frames, values = np.asarray(frames, float), np.asarray(values, float)
-    how, kept = stored or (("all", None) if tol is None else key_plan.plan(values, tol))
-    if how == "samples" and not (np.all(np.diff(frames) == 1.0) and frames[0] == int(frames[0])):
-        how = "all"  # samples sit on whole frames, one apart
-    if how == "constant":
-        frames, values = frames[:1], values[:1]
-    elif how == "keys":
-        frames, values = frames[kept], values[kept]
-    n = len(frames)
-    fc.keyframe_points.add(n)
-    co = np.empty(2 * n)
-    co[0::2] = frames
-    co[1::2] = values
-    fc.keyframe_points.foreach_set("co", co)
-    fc.keyframe_points.foreach_set("interpolation", np.full(n, LINEAR, dtype=np.int32))
-    fc.update()
-    if how == "samples":
-        fc.convert_to_samples(int(frames[0]), int(frames[-1]) + 1)
-    return fc
+    With ``tol`` each curve is stored compactly (:mod:`motion_patches.keys`, the choices of
+    all curves made in one vectorised pass): one key when constant, linear keys on the
+    frames that need them, or, when those would cost more, one sample per frame
+    (``convert_to_samples``: 16 bytes a frame in the .blend instead of a keyframe's 72; it
+    plays the same values, linear between frames). ``stored``: those choices made already
+    (:func:`motion_patches.keys.plan_columns`). Curves to be sampled get no interpolation
+    or handles: sampling reads a key's own value on its frame, and the keys are dropped."""
+    frames = np.asarray(frames, float)
+    values = np.column_stack([np.asarray(c[3], float) for c in curves]) if curves else None
+    if stored is None:
+        stored = (
+            key_plan.plan_columns(values, tol)
+            if tol is not None and curves
+            else [("all", None)] * len(curves)
+        )
+    # samples sit on whole frames, one apart
+    whole = bool(frames.size) and np.all(np.diff(frames) == 1.0) and frames[0] == int(frames[0])
+    # every curve's (frame, value) pairs, float32, built at once; a curve takes its row
+    rows = np.empty((len(curves), 2 * frames.size), np.float32)
+    rows[:, 0::2] = frames
+    if curves:
+        rows[:, 1::2] = values.T
+    linear = np.full(frames.size, LINEAR, np.int32)
+    bag = compat.channelbag(action, slot, create=True)
+    groups, out = {}, []
+    for c, ((data_path, index, group, _), (how, kept)) in enumerate(zip(curves, stored)):
+        fc = bag.fcurves.new(data_path, index=index)
+        if group:
+            grp = groups.get(group)
+            if grp is None:
+                grp = groups[group] = bag.groups.get(group) or bag.groups.new(group)
+            fc.group = grp
+        if how == "samples" and not whole:
+            how = "all"
+        if how == "constant":
+            co = rows[c, :2]
+        elif how == "keys":
+            co = rows[c].reshape(-1, 2)[kept].ravel()
+        else:
+            co = rows[c]
+        n = co.size // 2
+        fc.keyframe_points.add(n)
+        fc.keyframe_points.foreach_set("co", co)
+        if how == "samples":
+            fc.convert_to_samples(int(frames[0]), int(frames[-1]) + 1)
+        else:
+            fc.keyframe_points.foreach_set("interpolation", linear[:n])
+            fc.update()
+        out.append(fc)
+    return out
 
 
 def curve_points(fc):
     """(N, 2) frames and values of an F-curve's keys, or of its samples when it was
-    converted to samples (:func:`key_curve` with ``tol``)."""
+    converted to samples (:func:`key_curves` with ``tol``)."""
     points = fc.keyframe_points if len(fc.keyframe_points) else fc.sampled_points
-    co = np.empty(2 * len(points))
+    co = np.empty(2 * len(points), np.float32)  # what Blender stores: read without conversion
     points.foreach_get("co", co)
-    return co.reshape(-1, 2)
+    return co.reshape(-1, 2).astype(float)
 
 
 def key_pose(action, slot, skel, frames, root_location, rotations, modes=None, tol=None):
@@ -318,7 +420,7 @@ def key_pose(action, slot, skel, frames, root_location, rotations, modes=None, t
     mode plays: ``modes`` is {bone name: rotation_mode}, quaternion for bones not in it.
     Quaternion channels are keyed as given (the caller makes them continuous); Euler and
     axis-angle ones are converted continuous over ``frames`` (:func:`rotation_channels`).
-    ``tol``: store the curves compactly (:func:`key_curve`)."""
+    ``tol``: store the curves compactly (:func:`key_curves`)."""
     modes = modes or {}
     root = skel.names[skel.root]
     curves = [(f'pose.bones["{root}"].location', i, root, root_location[:, i]) for i in range(3)]
@@ -338,32 +440,27 @@ def key_pose(action, slot, skel, frames, root_location, rotations, modes=None, t
                 (f'pose.bones["{name}"].{path}', i, name, values[:, c, i])
                 for i in range(values.shape[-1])
             ]
-    stored = (
-        key_plan.plan_columns(np.column_stack([c[3] for c in curves]), tol)
-        if tol is not None
-        else [None] * len(curves)
-    )
-    for (path, i, group, v), how in zip(curves, stored):
-        key_curve(action, slot, path, i, frames, v, group=group, tol=tol, stored=how)
+    key_curves(action, slot, frames, curves, tol)
 
 
 def read_channels(action, slot, bone, mode, frames, cache=None):
     """Values (F, 3 or 4) an action gives a bone's ``mode`` channel at (action) ``frames``,
     linear between keys (or samples), the rest value where the channel is not keyed.
-    ``cache``: a dict kept by the caller, so each action's curves are read once."""
+    Only that channel's curves are read. ``cache``: a dict kept by the caller, so each
+    curve is read once."""
     path = f'pose.bones["{bone}"].{rotation_path(mode)}'
     rest = rest_channels(mode)
     out = np.tile(rest, (len(frames), 1))
-    key = (action.name, slot.handle if slot is not None else None)
+    key = (action.name, slot.handle if slot is not None else None, path)
     points = cache.get(key) if cache is not None else None
     if points is None:
-        points = {
-            (fc.data_path, fc.array_index): curve_points(fc) for fc in compat.fcurves(action, slot)
-        }
+        slot = slot or compat.action_slot(action)
+        bag = compat.channelbag(action, slot) if slot is not None else None
+        found = [bag.fcurves.find(path, index=i) if bag else None for i in range(rest.size)]
+        points = [None if fc is None else curve_points(fc) for fc in found]
         if cache is not None:
             cache[key] = points
-    for i in range(rest.size):
-        co = points.get((path, i))
+    for i, co in enumerate(points):
         if co is not None:
             out[:, i] = np.interp(frames, co[:, 0], co[:, 1])
     return out

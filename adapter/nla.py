@@ -15,10 +15,8 @@ import json
 
 import numpy as np
 
-from ..motion_patches import keys as key_plan
 from ..motion_patches import quat
-from ..motion_patches.clip import Clip
-from ..motion_patches.inplace import rest_facing, to_inplace, to_world
+from ..motion_patches.inplace import rest_facing, root_channel_to_ground
 from ..motion_patches.skeleton import root_position_to_location
 from . import actions as act_io
 from . import compat
@@ -41,15 +39,21 @@ def facing_angle(skel):
 
 def inplace_channels(skel, motion):
     """Root location channels (F, 3) and rotations (F, J, 4) for an object whose Z rotation
-    is the ground heading minus the rig's rest facing."""
-    pos, rot = to_world(skel, motion.ground, motion.root_local, motion.rotations)
-    obj_ground = motion.ground.copy()
-    obj_ground[:, 2] -= facing_angle(skel)
-    clip = Clip("tmp", skel, 1.0, pos, rot)
-    local, rot_ip = to_inplace(clip, obj_ground)
-    # to_inplace expresses the root in a frame whose +X is the ground heading; the object's
-    # frame is that turned by -facing, which to_inplace already applied through obj_ground.
-    return root_position_to_location(skel, local), rot_ip
+    is the ground heading minus the rig's rest facing.
+
+    That object is the motion's ground frame turned by -facing, so the body relative to it
+    is the motion's own in-place channels turned by +facing: the root's position about Z,
+    and its rotation by the same turn conjugated into the root's rest frame (what
+    ``to_world`` then ``to_inplace`` against the object's headings gives, without the round
+    trip through the world)."""
+    facing = facing_angle(skel)
+    c, s = np.cos(facing), np.sin(facing)
+    x, y, z = np.asarray(motion.root_local, float).T
+    local = np.stack((c * x - s * y, s * x + c * y, z), 1)
+    rot = np.array(motion.rotations, float)
+    r = skel.root
+    rot[:, r] = root_channel_to_ground(skel, rot[:, r], -facing)
+    return root_position_to_location(skel, local), quat.make_continuous(rot, axis=0)
 
 
 def check_rig(obj, skel, floor=0.0):
@@ -280,17 +284,10 @@ def write_plan(
     heading = np.unwrap(world.ground[:, 2]) - facing_angle(skel)
     frames = np.arange(world.frames, dtype=float)
     z0 = float(obj.location[2])
-    for i, v in enumerate((world.ground[:, 0], world.ground[:, 1], np.full(world.frames, z0))):
-        act_io.key_curve(
-            root_action,
-            root_slot,
-            "location",
-            i,
-            frames,
-            v,
-            group="Object Transforms",
-            tol=act_io.COMPACT,
-        )
+    curves = [
+        ("location", i, "Object Transforms", v)
+        for i, v in enumerate((world.ground[:, 0], world.ground[:, 1], np.full(world.frames, z0)))
+    ]
     # A turn about Z only: (0, 0, heading) is that turn in every Euler order, (heading, +Z)
     # in axis-angle; the heading is unwrapped, so no channel jumps by a turn.
     zero = np.zeros(world.frames)
@@ -301,17 +298,8 @@ def write_plan(
         rot_path, rot_values = "rotation_axis_angle", (heading, zero, zero, zero + 1.0)
     else:
         rot_path, rot_values = "rotation_euler", (zero, zero, heading)
-    for i, v in enumerate(rot_values):
-        act_io.key_curve(
-            root_action,
-            root_slot,
-            rot_path,
-            i,
-            frames,
-            v,
-            group="Object Transforms",
-            tol=act_io.COMPACT,
-        )
+    curves += [(rot_path, i, "Object Transforms", v) for i, v in enumerate(rot_values)]
+    act_io.key_curves(root_action, root_slot, frames, curves, act_io.COMPACT)
     root_track = ad.nla_tracks.new()
     root_track.name = TRACK_ROOT
     rs = root_track.strips.new(f"{obj.name} root", first, root_action)
@@ -326,19 +314,38 @@ def write_plan(
     return strips, stashed
 
 
-def _lower_channels(played, bone, mode, n_frames, cache=None):
-    """What the motion track gives a bone's ``mode`` channel on each plan frame, read from
-    the keys of its strips' actions: ``played`` = [(action, slot, first plan frame, scene
-    frames it spans, strip scale)] in track order; where two strips meet on a frame the
-    earlier one plays (Blender takes the first strip whose range holds the frame). A
-    scaled strip plays action frame ``(frame - start) / scale``, between keys linearly."""
-    out = np.tile(act_io.rest_channels(mode), (n_frames, 1))
-    done = np.zeros(n_frames, bool)
-    for action, slot, start, frames, scale in played:
+def _played_frames(played, n_frames):
+    """Which strip plays each plan frame and the action frame it plays there: ``played`` =
+    [(action, slot, first plan frame, scene frames it spans, strip scale)] in track order;
+    where two strips meet on a frame the earlier one plays (Blender takes the first strip
+    whose range holds the frame). A scaled strip plays action frame
+    ``(frame - start) / scale``. Returns {(action, slot): (plan frames, action frames)},
+    the frames of every strip of one action together, so each channel is read once per
+    action (a plan plays one segment action on many strips)."""
+    owner = np.full(n_frames, -1)
+    at = np.zeros(n_frames)
+    for s, (_, _, start, frames, scale) in enumerate(played):
         idx = np.arange(start, min(start + frames, n_frames))
-        idx = idx[~done[idx]]
-        out[idx] = act_io.read_channels(action, slot, bone, mode, (idx - start) / scale, cache)
-        done[idx] = True
+        idx = idx[owner[idx] < 0]
+        owner[idx] = s
+        at[idx] = (idx - start) / scale
+    by_action = {}
+    for s, (action, slot, *_) in enumerate(played):
+        by_action.setdefault((action, slot), []).append(s)
+    out = {}
+    for key, strips in by_action.items():
+        idx = np.flatnonzero(np.isin(owner, strips))
+        out[key] = (idx, at[idx])
+    return out
+
+
+def _lower_channels(frames_of, bone, mode, n_frames, cache=None):
+    """What the motion track gives a bone's ``mode`` channel on each plan frame, read from
+    the keys of its strips' actions (``frames_of``: :func:`_played_frames`), between keys
+    linearly; the rest value on frames no strip plays."""
+    out = np.tile(act_io.rest_channels(mode), (n_frames, 1))
+    for (action, slot), (idx, at) in frames_of.items():
+        out[idx] = act_io.read_channels(action, slot, bone, mode, at, cache)
     return out
 
 
@@ -365,20 +372,16 @@ def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=(
     action[CHARACTER_KEY] = obj.name
     frames = np.arange(world.frames, dtype=float)
     cache, curves = {}, []
+    frames_of = _played_frames(played, world.frames)
     for j in changed:
         name = skel.names[j]
         mode = modes.get(name, "QUATERNION")
-        lower = _lower_channels(played, name, mode, world.frames, cache)
+        lower = _lower_channels(frames_of, name, mode, world.frames, cache)
         delta = act_io.closest_channels(locked[:, j], mode, lower) - lower
         delta[~moved[:, j]] = 0.0
         path = f'pose.bones["{name}"].{act_io.rotation_path(mode)}'
         curves += [(path, i, name, delta[:, i]) for i in range(delta.shape[1])]
-    if curves:
-        stored = key_plan.plan_columns(np.column_stack([c[3] for c in curves]), act_io.COMPACT)
-        for (path, i, name, v), how in zip(curves, stored):
-            act_io.key_curve(
-                action, slot, path, i, frames, v, group=name, tol=act_io.COMPACT, stored=how
-            )
+    act_io.key_curves(action, slot, frames, curves, act_io.COMPACT)
     track = obj.animation_data.nla_tracks.new()
     track.name = TRACK_FOOT
     strip = track.strips.new(f"{obj.name} foot lock", int(frame_start), action)

@@ -13,7 +13,8 @@ Sections:
 
 * ``strips``: write 1,000 NLA strips through the API write path (``api._write``, what
   ``plan_path`` and ``plan_crowd`` call after the search: strips, root trajectory, foot
-  lock, plan record). One plan through a slalom of pillars, 36 m, is searched and
+  lock, plan record; the scene's frame range fitted once after the writes, as
+  ``plan_crowd`` does). One plan through a slalom of pillars, 36 m, is searched and
   synthesised once, unshortened (the search's own chain of segments: many strips; the
   shortening pass would join most of them into one connector); it is then written onto
   fresh characters (copies of the source armature) until 1,000 strips
@@ -23,6 +24,13 @@ Sections:
   Plan Crowd operator and ``cli.py crowd`` call it): 10 x 10 characters, each walking
   about 8 m along +X in its own lane, a few pillars between the lanes' ends. Timed end
   to end (search, synthesis, staggering, writing), with its split.
+
+Each pass is followed by its floor: Blender's own share of those writes, replayed on
+fresh characters from what they made with no numpy work (the same tracks, strips and
+keys), and the strips alone on the actions already made.
+
+The strips section also prints the process's CPU time per 1,000 strips: on a machine
+shared with other work it moves far less from run to run than the wall-clock time.
 
 ``--profile N`` prints the N most expensive functions (cProfile, cumulative) of each section.
 """
@@ -67,6 +75,13 @@ def parse_args(argv=None):
         help=f"crowd characters (default {CROWD}, a multiple of 10)",
     )
     p.add_argument("--strips", type=int, default=STRIPS, help=f"strips to write (default {STRIPS})")
+    p.add_argument(
+        "--rotation-mode",
+        default="QUATERNION",
+        choices=("QUATERNION", "XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX", "AXIS_ANGLE"),
+        help="rotation mode of the written characters' bones (strips section; default "
+        "QUATERNION, as the BVH importer leaves them)",
+    )
     p.add_argument("--json", metavar="PATH", help="also write every figure as JSON")
     p.add_argument(
         "--profile",
@@ -93,6 +108,30 @@ def profiled(n, fn, *args, **kw):
     pstats.Stats(prof, stream=s).sort_stats("cumulative").print_stats(n)
     print(s.getvalue())
     return out
+
+
+# Where a write's time goes: the foot-lock solve (core), the NLA writing (adapter: strips,
+# keys, the foot-lock track), and two things api._write does with the result (the whole
+# skeleton's world matrices, for the root's positions in the plan record; the record).
+SPLIT = ("lock_feet", "write_plan", "world_matrices", "store_plan")
+
+
+def timing(fn, spent, name):
+    """``fn`` adding the seconds of each call to ``spent[name]``; a call made inside
+    another timed one is left to that one (``spent`` counts each second once)."""
+
+    def timed(*a, **kw):
+        if spent.get("_inside"):
+            return fn(*a, **kw)
+        spent["_inside"] = True
+        t0 = time.perf_counter()
+        try:
+            return fn(*a, **kw)
+        finally:
+            spent[name] = spent.get(name, 0.0) + time.perf_counter() - t0
+            spent["_inside"] = False
+
+    return timed
 
 
 def baked_scene(bpy, api, mocap):
@@ -161,51 +200,171 @@ def section_strips(bpy, addon, args):
     pieces = len(res.pieces)
     a, kw = captured["args"], captured["kw"]
     out = {
+        "rotation_mode": args.rotation_mode,
         "pieces": pieces,
         "piece_labels": res.pieces,
         "plan_frames": res.frame_end - res.frame_start + 1,
     }
+    nla = addon.adapter.nla
+    kw = {k: v for k, v in kw.items() if k not in ("lock", "fit")}
     for lock in (True, False):
-        # fresh segment actions: the first write creates them, as in a new file
-        nla = addon.adapter.nla
+        # fresh segment actions: the first write creates them, as in a new file; the
+        # characters of the last pass go, so each pass writes into the same scene
+        for ob in [o for o in bpy.data.objects if o.name.startswith(("W0_", "W1_"))]:
+            bpy.data.objects.remove(ob)
         for act in [
             x for x in bpy.data.actions if x.get(nla.SEGMENT_KEY) or x.get(nla.CHARACTER_KEY)
         ]:
-            act.user_clear()
             bpy.data.actions.remove(act)
         count = -(-args.strips // pieces)
         chars = [character(bpy, source, f"W{int(lock)}_{k:03d}", 0.0, 0.0) for k in range(count)]
+        for c in chars:
+            for pb in c.pose.bones:
+                pb.rotation_mode = args.rotation_mode
 
         def write_all():
+            """The writes of a crowd (plan_crowd): each character's write, then the
+            scene's frame range fitted once (timed too)."""
             t = []
             for c in chars:
                 t0 = time.perf_counter()
-                write(
-                    a[0], c, *a[2:9], lock, *a[10:], **{k: v for k, v in kw.items() if k != "lock"}
-                )
+                write(a[0], c, *a[2:9], lock, *a[10:], fit=False, **kw)
                 t.append(time.perf_counter() - t0)
-            return t
+            t0 = time.perf_counter()
+            api._fit_frame_range(scene)
+            return t, time.perf_counter() - t0
 
-        t0 = time.perf_counter()
-        per = profiled(args.profile, write_all)
-        total = time.perf_counter() - t0
+        spent = {}
+        parts = [
+            (addon.motion_patches.foot_lock, "lock_feet"),
+            (addon.adapter.nla, "write_plan"),
+            (addon.motion_patches.motion.Motion, "world_matrices"),
+            (addon.adapter.storage, "store_plan"),
+        ]
+        kept = [getattr(owner, name) for owner, name in parts]
+        for owner, name in parts:
+            setattr(owner, name, timing(getattr(owner, name), spent, name))
+        try:
+            t0, c0 = time.perf_counter(), time.process_time()
+            per, fit = profiled(args.profile, write_all)
+            total, cpu = time.perf_counter() - t0, time.process_time() - c0
+        finally:
+            for (owner, name), fn in zip(parts, kept):
+                setattr(owner, name, fn)
         strips = sum(len(c.animation_data.nla_tracks[nla.TRACK_MOTION].strips) for c in chars)
         key = "foot_lock" if lock else "no_foot_lock"
+        split = {n: spent.get(n, 0.0) for n in SPLIT}
+        floor, strips_alone = blender_floor(bpy, addon, source, chars)
         out[key] = {
             "characters": count,
             "strips": strips,
             "seconds": total,
             "s_per_1000_strips": total * 1000.0 / strips,
+            "cpu_s_per_1000_strips": cpu * 1000.0 / strips,
             "first_write_s": per[0],
             "later_write_ms_median": 1e3 * sorted(per[1:])[len(per[1:]) // 2],
+            "fit_frame_range_s": fit,
+            "split_s": split,
+            "blender_floor_s_per_1000_strips": floor * 1000.0 / strips,
+            "strips_alone_s_per_1000_strips": strips_alone * 1000.0 / strips,
         }
         print(
             f"  {key}: {strips} strips on {count} characters in {total:.3f} s "
-            f"({out[key]['s_per_1000_strips']:.3f} s per 1,000; first write "
-            f"{per[0] * 1e3:.0f} ms, later {out[key]['later_write_ms_median']:.1f} ms median)",
+            f"({out[key]['s_per_1000_strips']:.3f} s per 1,000, CPU "
+            f"{out[key]['cpu_s_per_1000_strips']:.3f} s; first write "
+            f"{per[0] * 1e3:.0f} ms, later {out[key]['later_write_ms_median']:.1f} ms median; "
+            f"frame range fitted once {fit * 1e3:.0f} ms)\n"
+            f"    split: "
+            + ", ".join(f"{n} {t:.3f} s" for n, t in split.items())
+            + f", the rest of api._write {total - fit - sum(split.values()):.3f} s\n"
+            f"    Blender's own share, replayed without numpy: "
+            f"{out[key]['blender_floor_s_per_1000_strips']:.3f} s per 1,000 (tracks, strips "
+            f"and the characters' own keys; the strips alone "
+            f"{out[key]['strips_alone_s_per_1000_strips']:.3f} s)",
             flush=True,
         )
     return out
+
+
+def blender_floor(bpy, addon, source, chars):
+    """Blender's own share of the writes just timed, replayed on fresh characters from
+    what they made, with no numpy work: the same NLA tracks and strips, and each
+    character's own actions (connectors, root, foot lock) keyed again from their points
+    read back (``keyframe_points.add`` + ``foreach_set``, then ``convert_to_samples`` where
+    the write sampled). Also the strips alone (tracks and strips on the actions already
+    there). Returns (seconds for all the characters, seconds for the strips alone)."""
+    import numpy as np
+
+    compat, nla = addon.adapter.compat, addon.adapter.nla
+    curve_points = addon.adapter.actions.curve_points
+    own = {}  # a character's action -> [(path, index, group, sampled, co float32)]
+    layout = []
+    for c in chars:
+        tracks = []
+        for tr in c.animation_data.nla_tracks:
+            strips = []
+            for st in tr.strips:
+                act = st.action
+                if act.get(nla.CHARACTER_KEY) and act.name not in own:
+                    own[act.name] = [
+                        (
+                            fc.data_path,
+                            fc.array_index,
+                            fc.group.name if fc.group else None,
+                            len(fc.keyframe_points) == 0,
+                            curve_points(fc).astype(np.float32).ravel(),
+                        )
+                        for fc in compat.fcurves(act)
+                    ]
+                strips.append(
+                    (st.name, int(st.frame_start), act, st.action_slot, st.blend_type, st.scale)
+                )
+            tracks.append((tr.name, strips))
+        layout.append(tracks)
+
+    def rekey(name):
+        act, slot = compat.new_action(name + " floor")
+        bag = compat.channelbag(act, slot, create=True)
+        groups = {}
+        for path, index, group, sampled, co in own[name]:
+            fc = bag.fcurves.new(path, index=index)
+            if group:
+                fc.group = groups.get(group) or groups.setdefault(group, bag.groups.new(group))
+            n = co.size // 2
+            fc.keyframe_points.add(n)
+            fc.keyframe_points.foreach_set("co", co)
+            if sampled:
+                fc.convert_to_samples(int(co[0]), int(co[-2]) + 1)
+            else:
+                fc.keyframe_points.foreach_set("interpolation", np.ones(n, np.int32))
+                fc.update()
+        return act, slot
+
+    def replay(keys):
+        obs = [character(bpy, source, f"Floor_{k:03d}", 0.0, 0.0) for k in range(len(chars))]
+        before = set(bpy.data.actions)
+        t0 = time.perf_counter()
+        for ob, tracks in zip(obs, layout):
+            ad = ob.animation_data_create()
+            for name, strips in tracks:
+                tr = ad.nla_tracks.new()
+                tr.name = name
+                for sname, start, act, slot, blend, scale in strips:
+                    if keys and act.name in own:
+                        act, slot = rekey(act.name)
+                    st = tr.strips.new(sname, start, act)
+                    compat.set_strip_slot(st, slot)
+                    st.blend_type = blend
+                    if abs(scale - 1.0) > 1e-9:
+                        st.scale = scale
+        took = time.perf_counter() - t0
+        for ob in obs:
+            bpy.data.objects.remove(ob)
+        for act in set(bpy.data.actions) - before:
+            bpy.data.actions.remove(act)
+        return took
+
+    return replay(True), replay(False)
 
 
 def section_crowd(bpy, addon, args):
@@ -267,14 +426,17 @@ def rows(res):
     out = []
     if "strips" in res:
         s = res["strips"]
-        lock, free = s["foot_lock"], s["no_foot_lock"]
+        lock, free, mode = s["foot_lock"], s["no_foot_lock"], s["rotation_mode"]
         out.append(
             (
                 "write 1,000 NLA strips (api write path, foot lock on)",
                 f"< {TARGETS['strips_s']:g} s",
                 f"{lock['s_per_1000_strips']:.2f} s per 1,000 ({lock['strips']} strips of a "
-                f"{s['pieces']}-piece plan on {lock['characters']} characters; without the "
-                f"foot lock {free['s_per_1000_strips']:.2f} s)",
+                f"{s['pieces']}-piece plan on {lock['characters']} characters"
+                + ("" if mode == "QUATERNION" else f" with {mode} bones")
+                + f"; without the foot lock {free['s_per_1000_strips']:.2f} s; Blender's own "
+                f"share of it {lock['blender_floor_s_per_1000_strips']:.2f} s, the strips alone "
+                f"{lock['strips_alone_s_per_1000_strips']:.2f} s)",
                 met(lock["s_per_1000_strips"] < TARGETS["strips_s"]),
             )
         )

@@ -15,7 +15,7 @@ import numpy as np
 
 from . import quat
 from .contacts import foot_joints, runs
-from .skeleton import local_rotations_from_global
+from .inplace import to_world
 
 BLEND_FRAMES = 4  # frames the correction takes to ease in before and out after a contact
 STRETCH = 0.985  # the straightest a locked leg gets, as a fraction of thigh + shin
@@ -58,16 +58,19 @@ def planted_offsets(ankle_xy, toe_xy, ankle_on, toe_on, blend=BLEND_FRAMES):
     ankle_on = np.asarray(ankle_on, bool)
     toe_only = np.asarray(toe_on, bool) & ~ankle_on
     d = np.zeros((n, 2))
-    for a, b in zip(*runs(ankle_on)):
-        d[a:b] = ankle_xy[a:b].mean(axis=0) - ankle_xy[a:b]
-    for a, b in zip(*runs(toe_only)):
-        if a > 0 and ankle_on[a - 1]:  # heel off: the toe stays where it was
-            anchor = toe_xy[a - 1] + d[a - 1]
-        elif b < n and ankle_on[b]:  # toe first: it lands where the heel will
-            anchor = toe_xy[b] + d[b]
-        else:
-            anchor = toe_xy[a:b].mean(axis=0)
-        d[a:b] = anchor - toe_xy[a:b]
+    a, b = runs(ankle_on)
+    if a.size:
+        held = _run_means(ankle_xy, a, b)
+        d[ankle_on] = np.repeat(held, b - a, axis=0) - ankle_xy[ankle_on]
+    a, b = runs(toe_only)
+    if a.size:
+        heel_off = (a > 0) & ankle_on[np.maximum(a - 1, 0)]  # the toe stays where it was
+        toe_first = ~heel_off & (b < n) & ankle_on[np.minimum(b, n - 1)]  # lands at the heel
+        near = np.where(heel_off, a - 1, np.minimum(b, n - 1))
+        anchor = np.where(
+            (heel_off | toe_first)[:, None], toe_xy[near] + d[near], _run_means(toe_xy, a, b)
+        )
+        d[toe_only] = np.repeat(anchor, b - a, axis=0) - toe_xy[toe_only]
     on = ankle_on | toe_only
     if not on.any():
         return d
@@ -90,6 +93,13 @@ def planted_offsets(ankle_xy, toe_xy, ankle_on, toe_on, blend=BLEND_FRAMES):
     out = d[before] * (wb * scale)[:, None] + d[after] * (wa * scale)[:, None]
     out[on] = d[on]
     return out
+
+
+def _run_means(xy, starts, ends):
+    """(R, 2) mean of ``xy`` (F, 2) over each run [start, end), in one reduction."""
+    padded = np.vstack((xy, np.zeros((1, xy.shape[1]))))  # an end may be F
+    sums = np.add.reduceat(padded, np.stack((starts, ends), 1).ravel(), axis=0)[::2]
+    return sums / (ends - starts)[:, None]
 
 
 def _rotation_between(u, v):
@@ -130,64 +140,143 @@ def two_bone_ik(hip, knee, ankle, target, hinge, forward=None):
     n = np.where(ns[:, None] > 1e-6, n / np.maximum(ns, 1e-12)[:, None], hinge)
     v = target - hip
     v = v / np.linalg.norm(v, axis=-1, keepdims=True)
+    bend = quat.to_matrix(quat.exp(n * delta[:, None]))
     options = []
-    for sign in (1.0, -1.0):
-        r_knee = quat.to_matrix(quat.exp(n * (sign * delta)[:, None]))
+    for r_knee in (bend, np.swapaxes(bend, -1, -2)):  # the other sense: the inverse turn
         u = a + np.einsum("fij,fj->fi", r_knee, b)
         err = np.abs(np.linalg.norm(u, axis=-1) - d1)
         swing = _rotation_between(u / np.linalg.norm(u, axis=-1, keepdims=True), v)
         knee_dir = np.einsum("fij,fj->fi", swing, a)
         knee_dir -= np.sum(knee_dir * v, axis=-1, keepdims=True) * v
         ahead = np.zeros(len(a)) if forward is None else np.sum(knee_dir * forward, axis=-1)
-        options.append((err, ahead, swing, swing @ r_knee))
+        options.append((err, ahead, swing, r_knee))
     (e1, f1, s1, k1), (e2, f2, s2, k2) = options
     second = np.where(np.abs(e1 - e2) > 1e-7, e2 < e1, f2 > f1)[:, None, None]
-    return np.where(second, s2, s1), np.where(second, k2, k1)
+    swing = np.where(second, s2, s1)
+    return swing, swing @ np.where(second, k2, k1)
+
+
+def _leg_skeleton(skel, chains):
+    """(sub-skeleton, its joint indices in ``skel``): the leg chains' joints, their limb
+    segments and every ancestor of them, parents before children. Forward kinematics on it
+    gives the same matrices for those joints as on the whole skeleton (a third of the
+    bones of a CMU rig: the arms, spine and head never reach the legs)."""
+    from .skeleton import Skeleton
+
+    keep = set()
+    for chain in chains:
+        for j in chain:
+            while j >= 0 and j not in keep:
+                keep.add(int(j))
+                j = int(skel.parents[j])
+    idx = np.array(sorted(keep))  # parents come before children in a Skeleton
+    where = {int(j): i for i, j in enumerate(idx)}
+    parents = np.array([where.get(int(skel.parents[j]), -1) for j in idx])
+    return Skeleton([skel.names[j] for j in idx], parents, skel.rest[idx]), idx
+
+
+def _rest_offsets(sub):
+    """(K, 4, 4) rest matrix of each bone of ``sub`` relative to its parent's
+    (:meth:`Skeleton.local_rest <motion_patches.skeleton.Skeleton.local_rest>`, the
+    inverses taken in one call)."""
+    out = sub.rest.copy()
+    child = np.flatnonzero(sub.parents >= 0)
+    out[child] = np.linalg.inv(sub.rest[sub.parents[child]]) @ sub.rest[child]
+    return out
+
+
+def _leg_world(sub, rest_offsets, root_pos, rotations):
+    """World rotations (F, K, 3, 3) and positions (F, K, 3) of the bones of ``sub``
+    (:func:`~motion_patches.skeleton.forward_kinematics` in rotations and positions)."""
+    basis = quat.to_matrix(rotations)
+    nf, nk = basis.shape[:2]
+    g = np.empty((nf, nk, 3, 3))
+    p = np.empty((nf, nk, 3))
+    for j, parent in enumerate(sub.parents):
+        if parent < 0:
+            g[:, j] = sub.rest[j, :3, :3] @ basis[:, j]
+            p[:, j] = root_pos
+            continue
+        lr = rest_offsets[j]
+        g[:, j] = g[:, parent] @ (lr[:3, :3] @ basis[:, j])
+        p[:, j] = g[:, parent] @ lr[:3, 3] + p[:, parent]
+    return g, p
 
 
 def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None):
     """Rotation channels (F, J, 4) of ``world`` (a Motion) with planted feet pinned.
 
     Only the hip (thigh) and knee (shin) channels of each leg change, and the ankle's so
-    that the foot keeps its world orientation. ``offsets`` is a function (side, ankle xy
-    (F, 2), toe xy (F, 2)) -> (F, 2) horizontal ankle corrections replacing
-    :func:`planted_offsets` (a turn in place moves its feet its own way)."""
-    m = world.world_matrices(skel)
-    g = m[..., :3, :3].copy()
-    p = m[..., :3, 3]
-    for side, (hip, knee, ankle, toe) in enumerate(leg_chains(skel)):
-        if offsets is not None:
-            d = offsets(side, p[:, ankle, :2], p[:, toe, :2])
-        else:
-            d = planted_offsets(
-                p[:, ankle, :2],
-                p[:, toe, :2],
-                world.contacts[:, 2 * side],
-                world.contacts[:, 2 * side + 1],
+    that the foot keeps its world orientation. Both legs are solved at once over all
+    frames, on the legs' bones alone (:func:`_leg_skeleton`). ``offsets`` is a function
+    (side, ankle xy (F, 2), toe xy (F, 2)) -> (F, 2) horizontal ankle corrections
+    replacing :func:`planted_offsets` (a turn in place moves its feet its own way)."""
+    corrections = offsets
+    chains = leg_chains(skel)
+    sub, idx = _leg_skeleton(skel, chains)
+    at = {int(j): i for i, j in enumerate(idx)}
+    rest = _rest_offsets(sub)
+    pos, rot = to_world(sub, world.ground, world.root_local, world.rotations[:, idx])
+    g, p = _leg_world(sub, rest, pos, rot)
+    n = world.frames
+    legs = np.array([[at[j] for j in chain] for chain in chains])  # (2, 4) in ``sub``
+    hip, knee, ankle, toe = legs.T  # (2,) each: left, right
+    d = np.stack(
+        [
+            planted_offsets(
+                p[:, ankle[s], :2],
+                p[:, toe[s], :2],
+                world.contacts[:, 2 * s],
+                world.contacts[:, 2 * s + 1],
                 blend,
             )
-        moving = np.linalg.norm(d, axis=-1) > 1e-7
-        if not moving.any():
+            if corrections is None
+            else corrections(s, p[:, ankle[s], :2], p[:, toe[s], :2])
+            for s in range(2)
+        ]
+    )  # (2, F, 2)
+    moving = np.linalg.norm(d, axis=-1) > 1e-7  # (2, F)
+    if not moving.any():
+        return quat.make_continuous(world.rotations.copy(), axis=0)
+
+    def both(a):  # (F, 2, ...) -> (2F, ...): the legs one after the other
+        return np.swapaxes(a, 0, 1).reshape((2 * n,) + a.shape[2:])
+
+    target = both(p[:, ankle]).copy()
+    target[:, :2] += d.reshape(2 * n, 2)
+    hinge = both(g[:, hip, :, 0])  # the thigh's X axis: the knee's hinge in a rest-like leg
+    h = world.ground[:, 2]
+    forward = np.tile(np.column_stack((np.cos(h), np.sin(h), np.zeros_like(h))), (2, 1))
+    r_thigh, r_shin = two_bone_ik(
+        both(p[:, hip]), both(p[:, knee]), both(p[:, ankle]), target, hinge, forward
+    )
+    still = ~moving.reshape(2 * n)
+    r_thigh[still] = np.eye(3)
+    r_shin[still] = np.eye(3)
+    r_thigh, r_shin = r_thigh.reshape(2, n, 3, 3), r_shin.reshape(2, n, 3, 3)
+    changed = []
+    for s, (c_hip, c_knee, c_ankle, _) in enumerate(chains):
+        if not moving[s].any():
             continue
-        target = p[:, ankle].copy()
-        target[:, :2] += d
-        hinge = g[:, hip, :, 0]  # the thigh's X axis: the knee's hinge in a rest-like leg
-        h = world.ground[:, 2]
-        forward = np.column_stack((np.cos(h), np.sin(h), np.zeros_like(h)))
-        r_thigh, r_shin = two_bone_ik(p[:, hip], p[:, knee], p[:, ankle], target, hinge, forward)
-        eye = np.eye(3)
-        r_thigh = np.where(moving[:, None, None], r_thigh, eye)
-        r_shin = np.where(moving[:, None, None], r_shin, eye)
-        g[:, hip] = r_thigh @ g[:, hip]
-        g[:, knee] = r_shin @ g[:, knee]
-        for j in _segments(skel, knee, hip):  # limb segments turn with their limb
-            g[:, j] = r_thigh @ g[:, j]
-        for j in _segments(skel, ankle, knee):
-            g[:, j] = r_shin @ g[:, j]
-        # the foot keeps its world rotation (g[:, ankle] unchanged); its children follow it
-    local = local_rotations_from_global(skel, g)
+        thigh_bones = [c_hip, *_segments(skel, c_knee, c_hip)]  # limb segments turn with it
+        shin_bones = [c_knee, *_segments(skel, c_ankle, c_knee)]
+        for bones, r in ((thigh_bones, r_thigh[s]), (shin_bones, r_shin[s])):
+            k = [at[j] for j in bones]
+            g[:, k] = r[:, None] @ g[:, k]
+        # the foot keeps its world rotation (g at the ankle unchanged); its children follow
+        changed += thigh_bones + shin_bones + [c_ankle]
+    # Pose channels of the changed bones only (local_rotations_from_global, per bone).
+    k = np.array([at[j] for j in changed])
+    parent_rest = g[:, sub.parents[k]] @ rest[k, :3, :3]  # (F, K, 3, 3)
+    local = quat.make_continuous(
+        quat.from_matrix(np.swapaxes(parent_rest, -1, -2) @ g[:, k]), axis=0
+    )
     out = world.rotations.copy()
-    for hip, knee, ankle, _ in leg_chains(skel):
-        for j in (hip, knee, ankle, *_segments(skel, knee, hip), *_segments(skel, ankle, knee)):
-            out[:, j] = local[:, j]
-    return quat.make_continuous(out, axis=0)
+    out[:, changed] = local
+    # the whole pose made continuous, as the channels were; the changed bones are already,
+    # and of the others only those that flip somewhere need the pass
+    flips = np.any(np.einsum("fjc,fjc->fj", out[1:], out[:-1]) < 0, axis=0)
+    flips[changed] = False
+    if flips.any():
+        out[:, flips] = quat.make_continuous(out[:, flips], axis=0)
+    return out

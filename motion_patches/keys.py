@@ -22,11 +22,16 @@ SAMPLE_BYTES = 16  # an FPoint
 BASE = 64  # the coarsest key spacing tried, frames
 
 
-def linear_keys(values, tol, base=BASE):
+def linear_keys(values, tol, base=BASE, give_up_at=None):
     """Mask (F, C) of the frames to key per column of ``values`` (F, C) so that linear
     interpolation between kept frames is within ``tol`` of every value; the first and last
-    frames are always kept. Intervals that miss are halved until they fit (vectorised over
-    all columns: a few passes)."""
+    frames are always kept. Intervals that miss are halved until they fit.
+
+    Vectorised over the intervals still failing, of every column at once: each pass
+    tests only the frames inside those (an interval that fits keeps fitting), so the work
+    shrinks as the keys settle. ``give_up_at``: stop refining a column once it keeps that
+    many frames (it will be stored as samples, :func:`plan_columns`; its mask is then
+    partial) and return ``(mask, gave_up (C,))``."""
     v = np.asarray(values, float)
     if v.ndim == 1:
         return linear_keys(v[:, None], tol, base)[:, 0]
@@ -34,19 +39,38 @@ def linear_keys(values, tol, base=BASE):
     keep = np.zeros((n, c), bool)
     keep[::base] = True
     keep[-1] = True
-    idx = np.broadcast_to(np.arange(n)[:, None], (n, c))
-    cols = np.broadcast_to(np.arange(c)[None], (n, c))
-    while True:
-        prev = np.maximum.accumulate(np.where(keep, idx, 0), axis=0)
-        nxt = np.minimum.accumulate(np.where(keep, idx, n - 1)[::-1], axis=0)[::-1]
-        span = np.maximum(nxt - prev, 1)
-        w = (idx - prev) / span
-        line = v[prev, cols] * (1 - w) + v[nxt, cols] * w
-        bad = (np.abs(line - v) > tol) & ~keep
-        if not bad.any():
-            return keep
-        f, col = np.nonzero(bad)
-        keep[(prev[f, col] + nxt[f, col]) // 2, col] = True
+    gave_up = np.zeros(c, bool)
+    ends = np.flatnonzero(keep[:, 0]) if n else np.zeros(0, int)
+    lo = np.tile(ends[:-1], c)  # intervals [lo, hi] between kept frames, per column
+    hi = np.tile(ends[1:], c)
+    col = np.repeat(np.arange(c), max(ends.size - 1, 0))
+    count = np.full(c, ends.size)
+    flat = v.ravel()
+    while lo.size:
+        inner = hi - lo - 1
+        has = inner > 0
+        lo, hi, col, inner = lo[has], hi[has], col[has], inner[has]
+        if not lo.size:
+            break
+        first = np.cumsum(inner) - inner  # where each interval's inner frames begin
+        f = np.arange(first[-1] + inner[-1]) + np.repeat(lo + 1 - first, inner)
+        a, b = np.repeat(lo, inner), np.repeat(hi, inner)
+        k = np.repeat(col, inner)
+        w = (f - a) / (b - a)
+        line = flat[a * c + k] * (1 - w) + flat[b * c + k] * w
+        missed = np.add.reduceat(np.abs(line - flat[f * c + k]) > tol, first) > 0
+        lo, hi, col = lo[missed], hi[missed], col[missed]
+        mid = (lo + hi) // 2
+        keep[mid, col] = True
+        added = np.bincount(col, minlength=c)
+        count += added
+        if give_up_at is not None:
+            full = count >= give_up_at
+            gave_up |= full & (added > 0)
+            go_on = ~full[col]
+            lo, hi, col, mid = lo[go_on], hi[go_on], col[go_on], mid[go_on]
+        lo, hi, col = np.concatenate((lo, mid)), np.concatenate((mid, hi)), np.tile(col, 2)
+    return keep if give_up_at is None else (keep, gave_up)
 
 
 def plan(values, tol):
@@ -65,12 +89,11 @@ def plan_columns(values, tol):
     out = [("constant", None)] * v.shape[1]
     cols = np.flatnonzero(varies)
     if cols.size:
-        keep = linear_keys(v[:, cols], tol)
-        for c, k in zip(cols, keep.T):
-            kept = np.flatnonzero(k)
-            out[c] = (
-                ("keys", kept)
-                if kept.size * KEY_BYTES < v.shape[0] * SAMPLE_BYTES
-                else ("samples", None)
-            )
+        n = v.shape[0]
+        # keys cost more than samples from this many on: stop refining such a column
+        limit = -(-n * SAMPLE_BYTES // KEY_BYTES)
+        keep, gave_up = linear_keys(v[:, cols], tol, give_up_at=limit)
+        keyed = ~gave_up & (keep.sum(axis=0) * KEY_BYTES < n * SAMPLE_BYTES)
+        for c, k, as_keys in zip(cols, keep.T, keyed):
+            out[c] = ("keys", np.flatnonzero(k)) if as_keys else ("samples", None)
     return out

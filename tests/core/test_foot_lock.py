@@ -87,3 +87,70 @@ def test_a_straight_leg_bends_its_knee_forward():
         new_ankle = new_knee + r_shin[0] @ (ankle - knee)[0]
         assert np.allclose(new_ankle, target[0], atol=1e-6)
         assert np.sign(new_knee[0]) == np.sign(forward[0, 0]) and abs(new_knee[0]) > 0.05
+
+
+def planted_offsets_by_run(ankle_xy, toe_xy, ankle_on, toe_on, blend):
+    """planted_offsets' first step written run by run (what the vectorised one replaced)."""
+    from motion_patches.contacts import runs
+
+    n = len(ankle_xy)
+    toe_only = toe_on & ~ankle_on
+    d = np.zeros((n, 2))
+    for a, b in zip(*runs(ankle_on)):
+        d[a:b] = ankle_xy[a:b].mean(axis=0) - ankle_xy[a:b]
+    for a, b in zip(*runs(toe_only)):
+        if a > 0 and ankle_on[a - 1]:
+            anchor = toe_xy[a - 1] + d[a - 1]
+        elif b < n and ankle_on[b]:
+            anchor = toe_xy[b] + d[b]
+        else:
+            anchor = toe_xy[a:b].mean(axis=0)
+        d[a:b] = anchor - toe_xy[a:b]
+    return d
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_planted_offsets_hold_each_run_as_run_by_run(seed):
+    """Random contacts (runs touching the ends, toe-only runs before, after and between
+    heel runs): on every planted frame the correction is the run-by-run one."""
+    rng = np.random.default_rng(seed)
+    n = 300
+    ankle = np.cumsum(rng.normal(size=(n, 2)) * 0.01, axis=0)
+    toe = ankle + rng.normal(size=(n, 2)) * 0.01 + [0.15, 0.0]
+    ankle_on = np.repeat(rng.random(n // 10) < 0.5, 10)
+    toe_on = np.repeat(rng.random(n // 5) < 0.5, 5) | ankle_on
+    toe_on[:3] = True  # a toe-only run at the start (when the heel is not down there)
+    want = planted_offsets_by_run(ankle, toe, ankle_on, toe_on, 4)
+    got = foot_lock.planted_offsets(ankle, toe, ankle_on, toe_on, blend=4)
+    on = ankle_on | toe_on
+    assert on.any() and (toe_on & ~ankle_on).any()
+    assert np.allclose(got[on], want[on], atol=1e-12)
+
+
+def test_the_legs_world_matrices_are_the_whole_skeletons(walk_patch, walk):
+    """lock_feet's forward kinematics on the legs alone gives the armature's matrices."""
+    from motion_patches.inplace import to_world
+
+    skel = walk_patch.gait.skeleton
+    chains = foot_lock.leg_chains(skel)
+    sub, idx = foot_lock._leg_skeleton(skel, chains)
+    assert len(idx) < len(skel.names)
+    pos, rot = to_world(sub, walk.ground, walk.root_local, walk.rotations[:, idx])
+    g, p = foot_lock._leg_world(sub, foot_lock._rest_offsets(sub), pos, rot)
+    m = walk.world_matrices(skel)[:, idx]
+    assert np.allclose(g, m[..., :3, :3], atol=1e-12)
+    assert np.allclose(p, m[..., :3, 3], atol=1e-12)
+
+
+def test_locked_channels_are_continuous_where_the_input_flips(walk_patch, walk):
+    """A bone the lock leaves alone whose quaternions change sign mid-walk (the same
+    rotation) comes out continuous, as the whole pose did: only its sign changes."""
+    skel = walk_patch.gait.skeleton
+    legs = {j for chain in foot_lock.leg_chains(skel) for j in chain}
+    other = next(j for j in range(1, len(skel.names)) if j not in legs)
+    flipped = walk.rotations.copy()
+    flipped[walk.frames // 2 :, other] *= -1
+    rot = foot_lock.lock_feet(skel, Motion(walk.ground, walk.root_local, flipped, walk.contacts))
+    assert np.all(np.sum(rot[1:] * rot[:-1], axis=-1) >= 0)
+    assert np.allclose(rot[:, other], quat.make_continuous(flipped[:, other], axis=0))
+    assert np.allclose(rot, foot_lock.lock_feet(skel, walk))

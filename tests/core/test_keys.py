@@ -1,0 +1,89 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Compact keys: the vectorised halving search keeps the frames the plain one does."""
+
+import numpy as np
+import pytest
+
+from motion_patches import keys
+
+
+def halving(v, tol, base=keys.BASE):
+    """The search one column at a time, as written in keys.py's docstring: intervals
+    between kept frames that miss a value by more than ``tol`` are halved until none does."""
+    n = len(v)
+    kept = set(range(0, n, base)) | {n - 1}
+    todo = sorted(kept)
+    todo = list(zip(todo[:-1], todo[1:]))
+    while todo:
+        lo, hi = todo.pop()
+        inner = np.arange(lo + 1, hi)
+        if not inner.size:
+            continue
+        w = (inner - lo) / (hi - lo)
+        if np.any(np.abs(v[lo] * (1 - w) + v[hi] * w - v[inner]) > tol):
+            mid = (lo + hi) // 2
+            kept.add(mid)
+            todo += [(lo, mid), (mid, hi)]
+    mask = np.zeros(n, bool)
+    mask[sorted(kept)] = True
+    return mask
+
+
+def columns(rng, n):
+    t = np.arange(n)
+    return np.column_stack(
+        [
+            np.sin(t * 0.05),  # smooth: keys
+            np.cumsum(rng.normal(size=n)) * 1e-3,  # noise: samples
+            np.where(t < n // 2, 0.0, (t - n // 2) * 0.01),  # a kink: few keys
+            np.zeros(n),  # constant
+            np.where(t % 7 == 0, 1e-3, 0.0),  # spikes
+            np.cumsum(rng.normal(size=n)) * 1e-6,  # noise just above the tolerance
+            np.sin(t * 0.3) * 1e-4,
+        ]
+    )
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 54, 65, 109, 129, 1002])
+def test_linear_keys_match_the_plain_halving(n):
+    v = columns(np.random.default_rng(n), n)
+    got = keys.linear_keys(v, 1e-5)
+    for c in range(v.shape[1]):
+        assert np.array_equal(got[:, c], halving(v[:, c], 1e-5)), c
+
+
+@pytest.mark.parametrize("n", [54, 109, 1002])
+def test_giving_up_on_a_column_changes_no_choice(n):
+    """plan_columns stops refining a column once keys would cost more than samples: the
+    choice of every column is still the one the full search gives."""
+    v = columns(np.random.default_rng(n + 1), n)
+    plans = keys.plan_columns(v, 1e-5)
+    kinds = set()
+    for c, (how, kept) in enumerate(plans):
+        full = halving(v[:, c], 1e-5)
+        if np.ptp(v[:, c]) <= 1e-5:
+            want = "constant"
+        elif full.sum() * keys.KEY_BYTES < n * keys.SAMPLE_BYTES:
+            want = "keys"
+            assert np.array_equal(kept, np.flatnonzero(full))
+        else:
+            want = "samples"
+        assert how == want, c
+        kinds.add(how)
+    assert kinds == {"constant", "keys", "samples"}  # the data exercises every choice
+    mask, gave_up = keys.linear_keys(v, 1e-5, give_up_at=-(-n * 16 // 72))
+    assert gave_up.any() and not gave_up.all()
+
+
+def test_columns_just_under_and_over_the_cost_of_samples():
+    """Waves of many amplitudes: some columns need just fewer keys than samples would
+    cost, some just more; each is stored as the full search says."""
+    n = 109
+    limit = -(-n * keys.SAMPLE_BYTES // keys.KEY_BYTES)  # keys cost more from here on
+    t = np.arange(n)
+    v = np.column_stack([a * np.sin(t * 0.2) for a in np.logspace(-4.5, -1, 300)])
+    counts = np.array([halving(v[:, c], 1e-5).sum() for c in range(v.shape[1])])
+    assert np.any((counts >= limit - 3) & (counts < limit))
+    assert np.any((counts >= limit) & (counts <= limit + 3))
+    for c, (how, kept) in enumerate(keys.plan_columns(v, 1e-5)):
+        assert how == ("keys" if counts[c] < limit else "samples"), (c, counts[c])
