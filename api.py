@@ -42,6 +42,7 @@ from .motion_patches.defaults import GOAL_FACING, STITCHING
 from .motion_patches.defaults import PLANNING as DEFAULTS
 from .motion_patches.environment import Obstacle
 from .motion_patches.gait import MIN_TURN, build_gait
+from .motion_patches.inplace import to_world
 from .motion_patches.locomotion_patch import bake
 from .motion_patches.motion import concatenate
 from .motion_patches.planner import (
@@ -857,7 +858,7 @@ def _write(
         bounds,
         layer_keys,
     )
-    wm = world.world_matrices(skel)
+    root = to_world(skel, world.ground, world.root_local, world.rotations)[0]  # the hips
     foot = contacts.foot_joints(skel)
     frame_end = frame_start + world.frames - 1
     if rig is not None:
@@ -871,7 +872,7 @@ def _write(
         character,
         {
             "ground": world.ground,
-            "root": wm[:, skel.root, :3, 3],
+            "root": root,
             "contacts": world.contacts,
             "foot_names": [skel.names[i] for i in foot],
             "root_name": skel.names[skel.root],
@@ -1929,7 +1930,7 @@ def _root_track(patch, rig, placed):
     what a crowd keeps apart (the hips sway a few centimetres about the ground track)."""
     skel = rig.target if rig is not None else patch.gait.skeleton
     world = placed[2]
-    return world.world_matrices(skel)[:, skel.root, :2, 3]
+    return to_world(skel, world.ground, world.root_local, world.rotations)[0][:, :2]
 
 
 # --- crowds: duplicating a source armature ---------------------------------------------------

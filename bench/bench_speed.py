@@ -152,7 +152,10 @@ def copy_env(env):
 
 def timed_plan(patch, env, start, goal, args, repeat=None, **kw):
     """(plan, PlanError message) of the fastest of ``repeat`` plans, each on a fresh copy of
-    the environment (``kw`` goes to the planner and ``plan``)."""
+    the environment (``kw`` goes to the planner and ``plan``). The sections that compare
+    searches (Table 1, A* against networkx, the corridor, search time against length) plan
+    with ``turn_in_place=False``: one search per plan, the paper's; the plan section times
+    what a user's plan does, turns on the spot included."""
     alpha, beta, gamma = args.weights
     plan_kw = {k: kw.pop(k) for k in ("use_corridor", "shorten") if k in kw}
     best = None
@@ -358,7 +361,9 @@ def section_table1(patch, args):
             continue
         plans = {}
         for mode in ("dynamic", "static"):
-            plans[mode], err = timed_plan(patch, env, start, goal, args, props=chairs, mode=mode)
+            plans[mode], err = timed_plan(
+                patch, env, start, goal, args, props=chairs, mode=mode, turn_in_place=False
+            )
         if plans["dynamic"] is None or plans["static"] is None:
             failures.append({"pair": (int(a), int(b)), "message": err})
             print(f"  pair {chairs[a].name} -> {chairs[b].name}: no path ({(err or '')[:70]})")
@@ -460,7 +465,7 @@ def section_astar(patch, layouts, args):
         env = environment(patch, obstacles, args.radius)
         planner = SegmentPlanner(patch, env, *args.weights)
         try:
-            lazy, _ = timed_plan(patch, env, start, goal, args, shorten=False)
+            lazy, _ = timed_plan(patch, env, start, goal, args, shorten=False, turn_in_place=False)
         except PlanError:
             lazy = None
         if lazy is None:
@@ -557,8 +562,8 @@ def section_corridor(patch, layouts, args):
     records = []
     for n, (obstacles, start, goal) in enumerate(layouts):
         env = environment(patch, obstacles, args.radius)
-        one, _ = timed_plan(patch, env, start, goal, args, use_corridor=False)
-        two, _ = timed_plan(patch, env, start, goal, args, use_corridor=True)
+        one, _ = timed_plan(patch, env, start, goal, args, use_corridor=False, turn_in_place=False)
+        two, _ = timed_plan(patch, env, start, goal, args, use_corridor=True, turn_in_place=False)
         if one is None or two is None:
             continue
         rec = {
@@ -617,7 +622,9 @@ def section_length(patch, args):
                 continue
             start = np.r_[s, ang + rng.uniform(-0.5, 0.5)]
             goal = np.r_[g, ang + rng.uniform(-0.5, 0.5)]
-            plan, _ = timed_plan(patch, env, start, goal, args, repeat=1, shorten=False)
+            plan, _ = timed_plan(
+                patch, env, start, goal, args, repeat=1, shorten=False, turn_in_place=False
+            )
             if plan is None:
                 continue
             made += 1
