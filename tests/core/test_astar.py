@@ -41,6 +41,21 @@ def one_by_one(heuristic):
     return lambda k: float(heuristic(np.array([k]))[0])
 
 
+def expander(edges):
+    """A search's successor function over ``edges`` {key: [(next key, cost)]}: (keys,
+    costs, payloads), the payload being the next key."""
+
+    def expand(k):
+        out = edges.get(k, [])
+        return (
+            np.array([b for b, _ in out], np.int64),
+            np.array([c for _, c in out]),
+            np.array([b for b, _ in out], np.int64),
+        )
+
+    return expand
+
+
 @pytest.mark.parametrize("per_key", (False, True))
 @pytest.mark.parametrize("seed", range(25))
 def test_astar_finds_the_brute_force_optimum(seed, per_key):
@@ -51,13 +66,7 @@ def test_astar_finds_the_brute_force_optimum(seed, per_key):
     goals = {n - 1: 0.0, n - 2: float(rng.uniform(0, 3))}
     starts = [(0, 0.0), (1, float(rng.uniform(0, 2)))]
 
-    def expand(k):
-        out = edges.get(k, [])
-        return (
-            np.array([b for b, _ in out], np.int64),
-            np.array([c for _, c in out]),
-            np.array([b for b, _ in out], np.int64),
-        )
+    expand = expander(edges)
 
     def heuristic(keys):
         # Admissible: every edge costs at least its straight-line length; node n-2's link
@@ -249,13 +258,7 @@ def test_observer_sees_each_expanded_node_once_with_its_f_then_the_goal(seed):
         calls.append((f, key))
         return ()
 
-    def expand(k):
-        out = edges.get(k, [])
-        return (
-            np.array([b for b, _ in out], np.int64),
-            np.array([c for _, c in out]),
-            np.array([b for b, _ in out], np.int64),
-        )
+    expand = expander(edges)
 
     res = astar.search(
         [(0, 0.0, -1)],
@@ -287,13 +290,7 @@ def test_per_key_heuristic_searches_exactly_as_the_vectorised_one(seed):
     pos, edges = random_graph(rng, n, 0.3)
     h = np.linalg.norm(pos - pos[n - 1], axis=1)
 
-    def expand(k):
-        out = edges.get(k, [])
-        return (
-            np.array([b for b, _ in out], np.int64),
-            np.array([c for _, c in out]),
-            np.array([b for b, _ in out], np.int64),
-        )
+    expand = expander(edges)
 
     runs = []
     for per_key in (False, True):
