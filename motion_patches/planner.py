@@ -746,7 +746,7 @@ class SegmentPlanner:
         start, goal = np.asarray(start, float), np.asarray(goal, float)
         if turn_in_place is None:
             turn_in_place = self.turn_in_place
-        if not (turn_in_place and self.turns_in_place):
+        if not (turn_in_place and self.can_turn_in_place):
             return self._plan_once(start, goal, *args)
         made = []  # every walk searched, for the plan's time and counts
 
@@ -815,11 +815,11 @@ class SegmentPlanner:
         )
 
     @property
-    def turns_in_place(self):
+    def can_turn_in_place(self):
         """The gait can turn on the spot within the patch's curvature range."""
-        got = self.__dict__.get("_turns_in_place")
+        got = self.__dict__.get("_can_turn_in_place")
         if got is None:
-            got = self._turns_in_place = turn_in_place.can_turn(
+            got = self._can_turn_in_place = turn_in_place.can_turn(
                 self.patch.gait, self.kmin, self.kmax
             )
         return got
@@ -840,36 +840,29 @@ class SegmentPlanner:
             out.append(bool(h.size > 1 and np.sum(np.abs(np.diff(h))) > LOOP_TURN))
         return tuple(out)
 
-    def _turn_piece(self, x, y, heading, delta):
-        gait = self.patch.gait
+    def _turn_piece(self, x, y, heading, to_heading):
+        """A turn on the spot at (x, y) from ``heading`` to ``to_heading`` (the shorter
+        way), costed by Eq. 5: its turn and its time, eased in and out."""
+        gait, delta = self.patch.gait, _wrap(to_heading - heading)
         frames = turn_in_place.frames_needed(gait, delta)
         frames = retime.warp_phases(frames, True, True, gait.frames).size
         cost = self.beta * abs(delta) + self.gamma * self.patch.effort_rate * frames / gait.fps
-        return Piece("turn", cost=cost, turn=(float(x), float(y), float(heading), float(delta)))
+        return Piece("turn", cost=cost, turn=(float(x), float(y), float(heading), delta))
 
     def _with_turns(self, plan, start=None, goal=None):
         """``plan`` with a turn on the spot from ``start``'s heading before it and / or
         one to ``goal``'s heading after it (the plan then starts facing its first piece's
         way, ends facing any way); Eq. 5 costs count each turn and its time."""
-        pieces, added, degrees = list(plan.pieces), 0.0, []
-        if start is not None:
-            delta = _wrap(plan.start[2] - start[2])
-            piece = self._turn_piece(start[0], start[1], start[2], delta)
-            pieces.insert(0, piece)
-            added += piece.cost
-            degrees.append(float(np.degrees(delta)))
-        if goal is not None:
-            arrive = float(plan.goal[2])
-            delta = _wrap(goal[2] - arrive)
-            piece = self._turn_piece(goal[0], goal[1], arrive, delta)
-            pieces.append(piece)
-            added += piece.cost
-            degrees.append(float(np.degrees(delta)))
+        before = [] if start is None else [self._turn_piece(*start[:3], plan.start[2])]
+        after = [] if goal is None else [self._turn_piece(*goal[:2], plan.goal[2], goal[2])]
+        added = sum(p.cost for p in before + after)
         stats = dict(
-            plan.stats, turn_in_place_deg=degrees, cost_shortened=_final_cost(plan) + added
+            plan.stats,
+            turn_in_place_deg=[float(np.degrees(p.turn[3])) for p in before + after],
+            cost_shortened=_final_cost(plan) + added,
         )
         return Plan(
-            pieces,
+            before + list(plan.pieces) + after,
             plan.cost + added,
             plan.expansions,
             plan.seconds,

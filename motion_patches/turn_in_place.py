@@ -84,9 +84,8 @@ def turn_phases(gait, delta, phase=0):
         steps.append(step[k % n])
         k += 1
         phases.append(k)
-        if turned >= target or (turned >= MIN_SHARE * target and both[k % n]):
-            if both[k % n] or turned >= target * (2.0 - MIN_SHARE):
-                break
+        if turned >= (MIN_SHARE if both[k % n] else 2.0 - MIN_SHARE) * target:
+            break  # on both feet once most of the way round, else a little past it
     steps = np.array(steps) * (target / max(turned, 1e-12)) * np.sign(delta)
     return np.array(phases) % n, steps
 
