@@ -1530,7 +1530,7 @@ def plan_crowd(
     # the props that move, against each walk as scheduled (its wait and holds included)
     moving_left = []
     for p, s in zip(planned, schedules):
-        planner_n, tracks = world_of(sizes[p[0]])[3], world_of(sizes[p[0]])[4]
+        _, _, _, planner_n, tracks, _ = world_of(sizes[p[0]])
         if not tracks:
             continue
         wait = s.delay / fps
