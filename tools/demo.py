@@ -202,29 +202,11 @@ def main(argv):
     goal_ob.rotation_euler = (0, 0, np.pi / 2 + goal[2])  # its -Y axis (the facing) at goal[2]
     s.goal = goal_ob
 
-    # The same plan without foot locking first: the skate the synthesis alone leaves.
-    api.plan_path(
-        scene,
-        walker,
-        goal_ob,
-        alpha=s.alpha,
-        beta=s.beta,
-        gamma=s.gamma,
-        radius=s.radius,
-        frame_start=1,
-        foot_lock=False,
-    )
+    # The same plan without foot locking first: the skate the synthesis alone leaves. The
+    # weights and radius are the scene's Planning settings, which the API fills in itself.
+    api.plan_path(scene, walker, goal_ob, frame_start=1, foot_lock=False)
     unlocked = api.analyse(bpy.context, walker)["foot_skate"]
-    plan = api.plan_path(
-        scene,
-        walker,
-        goal_ob,
-        alpha=s.alpha,
-        beta=s.beta,
-        gamma=s.gamma,
-        radius=s.radius,
-        frame_start=1,
-    )
+    plan = api.plan_path(scene, walker, goal_ob, frame_start=1)
     scene.frame_start, scene.frame_end = plan.frame_start, plan.frame_end
     figures = api.analyse(bpy.context, walker)
     chairs = chair_lines(bpy, api, arm, acts[2], args.seed)
