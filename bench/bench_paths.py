@@ -605,6 +605,7 @@ def measure(scene, env, patch, lim, start, goal, args, ref):
     g = m.ground
     xy = g[:, :2]
     glitches = validate.motion_glitches(motions, plan.pieces, lim)
+    hips = to_world(patch.gait.skeleton, g, m.root_local, m.rotations)[0][:, :2]
     rec.update(
         failed=False,
         expansions=plan.expansions,
@@ -622,15 +623,8 @@ def measure(scene, env, patch, lim, start, goal, args, ref):
         heading_error_deg=float(np.degrees(abs(wrap(g[-1, 2] - goal[2])))),
         start_heading_error_deg=float(np.degrees(abs(wrap(g[0, 2] - start[2])))),
         position_error_m=float(np.linalg.norm(xy[-1] - goal[:2])),
-        hips_position_error_m=float(
-            np.linalg.norm(
-                to_world(patch.gait.skeleton, g[-1:], m.root_local[-1:], m.rotations[-1:])[0][0, :2]
-                - goal[:2]
-            )
-        ),
-        hips_path_m=path_length(
-            to_world(patch.gait.skeleton, g, m.root_local, m.rotations)[0][:, :2]
-        ),
+        hips_position_error_m=float(np.linalg.norm(hips[-1] - goal[:2])),
+        hips_path_m=path_length(hips),
         turns_in_place=sum(p.kind == "turn" for p in plan.pieces),
         frames_inside=int(env.blocked(xy).sum()),
         min_clearance_m=min_clearance(scene.obstacles, xy),
