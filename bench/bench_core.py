@@ -340,6 +340,9 @@ def bench_plans(patch, args, profiler=None):
     return records, failures, count
 
 
+FEW = 10  # props an animator moves at a time (bench_placement)
+
+
 def bench_placement(density, sizes=(10, 1000), seed=1, min_ops=2000, reocc_moves=40):
     """Per-obstacle cost of place / move / lazy re-occlusion in scenes of ``sizes`` obstacles.
 
@@ -347,7 +350,9 @@ def bench_placement(density, sizes=(10, 1000), seed=1, min_ops=2000, reocc_moves
     holds about as many obstacles in both scenes and only the scene size differs. Placing
     and moving every obstacle once is repeated (at least 5 times, and until ``min_ops``
     operations are timed); the fastest repetition is reported (as timeit does), the
-    least disturbed by other load on the machine.
+    least disturbed by other load on the machine. Placing ``FEW`` new props and moving
+    ``FEW`` props over and over in the scene of n is timed too: what an animator does, and
+    the per-prop work without the cache misses of touching every prop of a big scene.
     Re-occlusion: ``reocc_moves`` single moves, each of an obstacle whose old and new tiles
     were occluded beforehand (as if a plan had used them), timing the occlusion of those
     tiles again afterwards - the work a move leaves for the next plan.
@@ -377,6 +382,27 @@ def bench_placement(density, sizes=(10, 1000), seed=1, min_ops=2000, reocc_moves
             place.append(t1 - t0)
             move.append(t2 - t1)
         place, move = float(np.min(place)), float(np.min(move))
+        # An animator moves a few props at a time: the same FEW props moved min_ops times
+        # in the scene of n (fastest of 5). Moving every prop of a big scene touches
+        # memory the cache no longer holds; this is the per-prop work itself.
+        few_moves = [random_pillar(f"o{k % min(FEW, n)}", field) for k in range(min_ops)]
+        added = [random_pillar(f"new{k}", field) for k in range(FEW)]
+        few, few_place = [], []
+        for _ in range(5):
+            t0 = time.perf_counter()
+            for ob in few_moves:
+                env.place(ob)
+            few.append(time.perf_counter() - t0)
+            spent = 0.0
+            for _ in range(-(-min_ops // FEW)):  # FEW new props placed, then removed again
+                t0 = time.perf_counter()
+                for ob in added:
+                    env.place(ob)
+                spent += time.perf_counter() - t0
+                for ob in added:
+                    env.remove(ob.name)
+            few_place.append(spent / (FEW * -(-min_ops // FEW)))
+        few, few_place = float(np.min(few)) / len(few_moves), float(np.min(few_place))
         # One move at a time, its tiles occluded beforehand as if a plan had used them.
         reocc, tiles, members = 0.0, 0, 0
         for m in range(reocc_moves):
@@ -399,6 +425,8 @@ def bench_placement(density, sizes=(10, 1000), seed=1, min_ops=2000, reocc_moves
             "place_scene_ms": place * 1e3,
             "place_us_per_obstacle": place / n * 1e6,
             "move_us_per_obstacle": move / n * 1e6,
+            "place_few_us": few_place * 1e6,
+            "move_few_us": few * 1e6,
             "reoccluded_tiles_per_moved_obstacle": tiles / reocc_moves,
             "reocclude_ms_per_moved_obstacle": reocc / reocc_moves * 1e3,
             "reocclude_ms_per_tile": reocc / max(tiles, 1) * 1e3,
