@@ -61,9 +61,14 @@ def local_environment(env, frame, lo, hi):
     )
     wlo, whi = corners.min(axis=0) - env.radius, corners.max(axis=0) + env.radius
     out = Environment(env.side, env.cells, env.radius)
-    for name in env.names_in_box(wlo, whi):
-        ob = env.obstacles[name]
-        out.place(Obstacle(name, to_local(frame, ob.polygon)))
+    names = list(env.names_in_box(wlo, whi))
+    if not names:
+        return out
+    # Every footprint moved in one transform, then split back obstacle by obstacle.
+    polygons = [env.obstacles[name].polygon for name in names]
+    ends = np.cumsum([p.shape[0] for p in polygons])[:-1]
+    for name, polygon in zip(names, np.split(to_local(frame, np.concatenate(polygons)), ends)):
+        out.place(Obstacle(name, polygon))
     return out
 
 
