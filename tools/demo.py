@@ -21,6 +21,11 @@ import demo_layout  # noqa: E402
 REPO = blender_session.REPO_ROOT
 
 
+def plural(n, noun):
+    """'1 piece', '3 pieces'."""
+    return f"{n} {noun}" + ("" if n == 1 else "s")
+
+
 def parse_args(argv):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument(
@@ -267,10 +272,10 @@ def main(argv):
         )
     )
     print(
-        "  plan:        %.0f ms, %d pieces, %d nodes expanded, %d frames (%.1f s of motion)"
+        "  plan:        %.0f ms, %s, %d nodes expanded, %d frames (%.1f s of motion)"
         % (
             plan.seconds * 1000,
-            len(plan.pieces),
+            plural(len(plan.pieces), "piece"),
             plan.expansions,
             plan.frame_end - plan.frame_start + 1,
             f["seconds"],
@@ -342,15 +347,16 @@ def main(argv):
         )
     waits = [d for d in crowd["delays_frames"].values() if d]
     print(
-        "  crowd:       %d of %d walkers planned across the pillars in %.1f s; %d wait at "
-        "their start (%s frames), %d conflict(s) left"
+        "  crowd:       %d of %d walkers planned across the pillars in %.1f s; %s; %s left"
         % (
             crowd["planned"],
             crowd["characters"],
             crowd["seconds"],
-            len(waits),
-            ", ".join(map(str, waits)) or "none",
-            len(crowd["conflicts"]),
+            f"{plural(len(waits), 'walker')} wait at their start "
+            f"({', '.join(map(str, waits))} frames)"
+            if waits
+            else "none waits at its start",
+            plural(len(crowd["conflicts"]), "conflict"),
         )
     )
     print(
