@@ -547,9 +547,9 @@ class SegmentPlanner:
         names = ", ".join(repr(n) for n in sorted(hit)[:4]) or "an obstacle"
         way = "leave the start facing" if what == "start" else "arrive at the goal facing"
         raise PlanError(
-            f"no walk can {way} {np.degrees(state[2] + self._frame_angle):.0f} "
+            f"no {self._gait_name} can {way} {np.degrees(state[2] + self._frame_angle):.0f} "
             f"degrees: {names} stand(s) in the way within {APPROACH:.2f} m and the "
-            f"walk cannot turn tighter than {1 / max(self.kmax, -self.kmin):.2f} m; "
+            f"{self._gait_name} cannot turn tighter than {1 / max(self.kmax, -self.kmin):.2f} m; "
             f"turn the {what} or move {'it' if len(hit) <= 1 else 'them'}"
             + (" (or plan with goal facing 'any')" if what == "goal" else "")
         )
@@ -571,7 +571,7 @@ class SegmentPlanner:
         )
         who = ", ".join(repr(n) for n in names[:4]) if names else "nothing near"
         return (
-            f"the walk cannot {way}{facing} (it turns no tighter than "
+            f"the {self._gait_name} cannot {way}{facing} (it turns no tighter than "
             f"{1 / max(self.kmax, -self.kmin):.2f} m and keeps {self.env.radius:.2f} m from "
             f"props; within {reach:.1f} m: {who}); move or turn the {what}, or move those props"
             + (", or plan with goal facing 'any'" if what == "goal" else "")
@@ -815,6 +815,17 @@ class SegmentPlanner:
         )
 
     @property
+    def _gait_name(self):
+        """What the messages call the motion planned: the gait's layer ("walk", "run")."""
+        return self.patch.gait.layer or "walk"
+
+    @property
+    def _way(self):
+        """'walkable way' for a walk, 'way the run can take' for a run (messages)."""
+        name = self._gait_name
+        return "walkable way" if name == "walk" else f"way the {name} can take"
+
+    @property
     def can_turn_in_place(self):
         """The gait can turn on the spot within the patch's curvature range."""
         got = self.__dict__.get("_can_turn_in_place")
@@ -1038,9 +1049,9 @@ class SegmentPlanner:
         if not goals:
             if no_start():
                 raise PlanError(
-                    "no walkable way out of the start: " + self._boxed_in("start", start)
+                    f"no {self._way} out of the start: " + self._boxed_in("start", start)
                 )
-            raise PlanError("no walkable way into the goal: every node around it is too close")
+            raise PlanError(f"no {self._way} into the goal: every node around it is too close")
         payloads = {}
         self.corridor = None
         tiles = None
@@ -1121,13 +1132,13 @@ class SegmentPlanner:
             self.corridor, corridor_fallback = None, True
             result, observer = search()
         if not result.found and no_start():
-            raise PlanError("no walkable way out of the start: " + self._boxed_in("start", start))
+            raise PlanError(f"no {self._way} out of the start: " + self._boxed_in("start", start))
         if (
             not result.found
             and goal_key is None
             and not any(self.goal_link(k) is not None for k in goals)
         ):
-            raise PlanError("no walkable way into the goal: " + self._boxed_in("goal", goal))
+            raise PlanError(f"no {self._way} into the goal: " + self._boxed_in("goal", goal))
         if not result.found:
             raise (SearchLimit if result.expansions >= max_expansions else PlanError)(
                 f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is unreachable: obstacles "

@@ -10,7 +10,7 @@ from motion_patches import gait as gait_mod
 from motion_patches.environment import Environment, Obstacle
 from motion_patches.motion import concatenate
 from motion_patches.object_patch import ObjectPatch, PatchClip
-from motion_patches.planner import SegmentPlanner, plan_motions
+from motion_patches.planner import PlanError, SegmentPlanner, plan_motions
 from motion_patches.retarget import rig_map
 
 from conftest import cmu
@@ -117,6 +117,20 @@ def test_on_open_ground_walking_is_cheaper_and_chosen(run_patch, walk_patch):
     walk_e = SegmentPlanner(walk_patch, env_w, 0.0, 0.0, 1.0).plan(start, goal)
     run_e = SegmentPlanner(run_patch, env_r, 0.0, 0.0, 1.0).plan(start, goal)
     assert run_e.cost > 1.5 * walk_e.cost
+
+
+def test_a_run_refused_says_run_not_walk(run_patch, walk_patch):
+    """A goal facing away from a pillar right behind it: neither gait can arrive facing
+    that way (it would come through the pillar), and each refusal names its own gait."""
+    for patch in (walk_patch, run_patch):
+        env = Environment(patch.side, patch.cells, radius=0.25)
+        env.place(pillar("behind", 9.4, 1.0, 0.3))
+        with pytest.raises(PlanError) as err:
+            SegmentPlanner(patch, env, turn_in_place=False).plan((0.5, 1.0, 0.0), (10.0, 1.0, 0.0))
+        said = str(err.value)
+        assert f"no {patch.layer} can" in said or f"the {patch.layer} cannot" in said, said
+        other = "walk" if patch.layer == "run" else "run"
+        assert f"no {other} can" not in said and f"the {other} cannot" not in said, said
 
 
 def test_planned_run_skates_like_its_source_clip(run_patch, run_gait, run_clips):
