@@ -459,36 +459,66 @@ class SegmentPlanner:
     def goal_connectors(self, goal):
         """Goal links of the entry nodes of the 3 x 3 tiles around the goal: for each node
         the Dubins words into the goal, cheapest first (over ``ANY_FACING`` goal headings
-        when the goal heading is NaN). Nothing is sampled or tested here: the search asks
-        :meth:`goal_link` for the nodes it expands, and only those are tested."""
+        when the goal heading is NaN). Nothing is computed here: the words of a tile's
+        nodes are tabled when the search first asks for the bound of one of them
+        (:meth:`goal_bound`; a short plan asks for a few of the nine tiles), and only the
+        links of the nodes it expands are sampled and tested (:meth:`goal_link`)."""
         keys, p, h = self._entries(self._block(self.env.tile_of(goal[:2])))
         headings = ANY_FACING if np.isnan(goal[2]) else np.array([goal[2]])
-        n, nh = keys.size, headings.size
-        cost, lens, radii, words, _ = self._dubins_table(
-            np.tile(p, (nh, 1)),
-            np.tile(h, nh),
-            np.tile(goal[:2], (nh * n, 1)),
-            np.repeat(headings, n),
-        )
-        # Any facing: every heading's words in one table (rows heading by heading), wider
-        # turns first throughout.
-        rows = cost.shape[0]
-        cost = cost.reshape(rows, nh, n).transpose(1, 0, 2).reshape(nh * rows, n)
-        lens = lens.reshape(rows, nh, n, 3).transpose(1, 0, 2, 3).reshape(nh * rows, n, 3)
-        radii, words = np.tile(radii, nh), np.tile(words, nh)
-        rank = np.where(np.isfinite(cost), cost + 1e6 * (radii < radii.max())[:, None], np.inf)
-        table = (cost, lens, radii, words, np.argsort(rank, axis=0, kind="stable"))
+        n, rows = keys.size, len(self.turn_radii) * len(dubins.WORDS) * headings.size
         too_close = np.linalg.norm(p - goal[:2], axis=1) < 0.2 * self.patch.gait.cycle_distance
         self._goal_table = {
             "index": dict(zip(keys[~too_close].tolist(), np.flatnonzero(~too_close).tolist())),
             "p": p,
             "h": h,
-            "table": table,
-            "bound": cost.min(axis=0),
+            "goal": np.array(goal[:2], float),
+            "headings": headings,
+            "per_tile": n // 9,
+            "tiled": np.zeros(9, bool),
+            # Filled tile by tile (_goal_tiles); columns of tiles not tabled yet unused.
+            "table": [
+                np.full((rows, n), np.inf),
+                np.zeros((rows, n, 3)),
+                None,
+                None,
+                np.zeros((rows, n), np.int64),
+            ],
+            "bound": np.full(n, np.inf),
         }
         self._goal_links = {}
         self._goal_asked = []  # nodes whose bound the search asked for (it expanded them)
         return self._goal_table["index"]
+
+    def _goal_tiles(self, columns):
+        """Table the Dubins words into the goal of every node of the tiles holding nodes
+        ``columns`` (indices into the goal block's nodes) not tabled yet: per node its words
+        at every radius and goal heading (rows heading by heading, wider turns first
+        throughout), their order and its bound."""
+        t = self._goal_table
+        per = t["per_tile"]
+        for b in np.unique(np.asarray(columns) // per).tolist():
+            if t["tiled"][b]:
+                continue
+            t["tiled"][b] = True
+            cols = slice(b * per, (b + 1) * per)
+            p, h, headings = t["p"][cols], t["h"][cols], t["headings"]
+            n, nh = per, headings.size
+            cost, lens, radii, words, _ = self._dubins_table(
+                np.tile(p, (nh, 1)),
+                np.tile(h, nh),
+                np.tile(t["goal"], (nh * n, 1)),
+                np.repeat(headings, n),
+            )
+            rows = cost.shape[0]
+            cost = cost.reshape(rows, nh, n).transpose(1, 0, 2).reshape(nh * rows, n)
+            lens = lens.reshape(rows, nh, n, 3).transpose(1, 0, 2, 3).reshape(nh * rows, n, 3)
+            radii, words = np.tile(radii, nh), np.tile(words, nh)
+            rank = np.where(np.isfinite(cost), cost + 1e6 * (radii < radii.max())[:, None], np.inf)
+            table = t["table"]
+            table[0][:, cols], table[1][:, cols] = cost, lens
+            table[2], table[3] = radii, words
+            table[4][:, cols] = np.argsort(rank, axis=0, kind="stable")
+            t["bound"][cols] = cost.min(axis=0)
 
     def goal_bound(self, key):
         """A lower bound of the cost of node ``key``'s goal link (its cheapest Dubins word's
@@ -496,6 +526,8 @@ class SegmentPlanner:
         m = self._goal_table["index"].get(key)
         if m is None:
             return None
+        if not self._goal_table["tiled"][m // self._goal_table["per_tile"]]:
+            self._goal_tiles([m])
         self._goal_asked.append(key)
         return float(self._goal_table["bound"][m])
 
@@ -515,7 +547,8 @@ class SegmentPlanner:
             if k not in self._goal_links and k not in batch:
                 batch.append(k)
         m = np.array([t["index"][k] for k in batch])
-        found = self._first_valids(t["p"][m], t["h"][m], t["table"], m)
+        self._goal_tiles(m)
+        found = self._first_valids(t["p"][m], t["h"][m], tuple(t["table"]), m)
         for k, got in zip(batch, found):
             link = None
             if got is not None:
