@@ -19,68 +19,12 @@ import bpy
 import numpy as np
 import pytest
 
+from rig_names import MIXAMO, RIGIFY
 from scene_helpers import empty, pillar, walker_from
 
 CMU_SCALE = 0.056444
 FPS = 24
 
-# Subject 16 renamed as Mixamo and Rigify rigs name their bones; bones those conventions
-# have no counterpart of get names of no convention.
-MIXAMO = {
-    "Hips": "mixamorig:Hips",
-    "LowerBack": "mixamorig:Spine",
-    "Spine": "mixamorig:Spine1",
-    "Spine1": "mixamorig:Spine2",
-    "Neck": "mixamorig:Neck",
-    "Neck1": "mixamorig:NeckTwist",
-    "Head": "mixamorig:Head",
-    "LHipJoint": "mixamorig:LeftHipRoot",
-    "RHipJoint": "mixamorig:RightHipRoot",
-    "LThumb": "mixamorig:LeftHandThumb1",
-    "RThumb": "mixamorig:RightHandThumb1",
-    "LeftFingerBase": "mixamorig:LeftPalm",
-    "RightFingerBase": "mixamorig:RightPalm",
-}
-RIGIFY = {
-    "Hips": "DEF-spine",
-    "LowerBack": "DEF-spine.lower",
-    "Spine": "DEF-spine.001",
-    "Spine1": "DEF-spine.003",
-    "Neck": "DEF-spine.004",
-    "Neck1": "DEF-spine.005",
-    "Head": "DEF-spine.006",
-    "LHipJoint": "DEF-pelvis.L",
-    "RHipJoint": "DEF-pelvis.R",
-    "LThumb": "DEF-thumb.01.L",
-    "RThumb": "DEF-thumb.01.R",
-    "LeftFingerBase": "DEF-palm.01.L",
-    "RightFingerBase": "DEF-palm.01.R",
-}
-for _side, _x in (("Left", "L"), ("Right", "R")):
-    for _b in (
-        "UpLeg",
-        "Leg",
-        "Foot",
-        "ToeBase",
-        "Shoulder",
-        "Arm",
-        "ForeArm",
-        "Hand",
-        "HandIndex1",
-    ):
-        MIXAMO[_side + _b] = f"mixamorig:{_side}{_b}"
-    for _b, _r in (
-        ("UpLeg", "thigh"),
-        ("Leg", "shin"),
-        ("Foot", "foot"),
-        ("ToeBase", "toe"),
-        ("Shoulder", "shoulder"),
-        ("Arm", "upper_arm"),
-        ("ForeArm", "forearm"),
-        ("Hand", "hand"),
-        ("HandIndex1", "f_index.01"),
-    ):
-        RIGIFY[_side + _b] = f"DEF-{_r}.{_x}"
 LEGS = [
     "Hips",
     "LeftUpLeg",
