@@ -12,6 +12,7 @@ from .curves import arc_lengths, curvature
 from .motion import Motion
 
 RAMP = 0.25  # of a straight cycle's distance: blend easing length at segment ends
+WEIGHT_WINDOW = 0.125  # of a gait cycle's frames: loop weights averaged this far either side
 
 
 def cycles_along(gait, pos, vel, acc, eased=(True, True), kappa=None):
@@ -104,6 +105,23 @@ def frame_arclengths(gait, curve, cycles=None, start_phase=0, eased=(True, True)
     return k, np.interp(target, phase_at, curve.s), ease
 
 
+def held_weights(weights, half):
+    """Loop weights (K, L) averaged over ``half`` frames either side, the window shrinking
+    towards both ends so the first and last frames keep their own weights (a segment still
+    starts and ends on the node pose). Loops of neighbouring curvatures can be different
+    takes (16_15's straight walk beside 16_18's gentle turns): however gently the
+    curvature changes, the weights swap those loops within a frame or two where their
+    curvatures are close, and bones the takes hold differently (a thumb, the head) would
+    step several times faster than in either clip."""
+    n = weights.shape[0]
+    if half < 1 or n < 3:
+        return weights
+    f = np.arange(n)
+    h = np.minimum(np.minimum(f, n - 1 - f), half)
+    c = np.concatenate((np.zeros((1, weights.shape[1])), np.cumsum(weights, axis=0)))
+    return (c[f + h + 1] - c[f - h]) / (2 * h + 1)[:, None]
+
+
 def follow(gait, curve, cycles=None, start_phase=0, eased=(True, True)):
     """Motion of the gait along ``curve``.
 
@@ -112,8 +130,8 @@ def follow(gait, curve, cycles=None, start_phase=0, eased=(True, True)):
     with ``cycles="to node"`` it starts at the phase that makes it end on the node pose.
     """
     k, s, ease = frame_arclengths(gait, curve, cycles, start_phase, eased)
-    x, y, h, kap = curve.at(s)
-    e = np.interp(s, curve.s, ease)
-    weights = gait.weights(kap * e)
+    x, y, h, _ = curve.at(s)
+    weights = gait.weights(np.interp(s, curve.s, curve.kappa * ease))
+    weights = held_weights(weights, max(int(round(gait.frames * WEIGHT_WINDOW)), 0))
     root, rot, contacts = gait.pose(k, weights)
     return Motion(np.column_stack((x, y, h)), root, rot, contacts)

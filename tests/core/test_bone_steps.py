@@ -1,0 +1,66 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Per-frame bone steps of planned walks against their source clips': no bone turns
+between two frames much faster than it ever does in the mocap (a "spin" a user sees).
+
+The walk patch blends loops of different takes (16_15's straight walk, 16_18's turns
+and their mirror images) by curvature; where the weights swap those takes within a frame
+or two, a hand or the head held differently in each would snap round."""
+
+import numpy as np
+import pytest
+
+from motion_patches import quat
+from motion_patches.environment import Environment, Obstacle
+from motion_patches.motion import concatenate
+from motion_patches.planner import SegmentPlanner, plan_motions
+
+LIMIT = 1.6  # largest step of any bone, as a multiple of that bone's largest in the source
+
+
+def pillar(name, x, y, r):
+    a = np.linspace(0, 2 * np.pi, 13)[:-1]
+    return Obstacle(name, np.column_stack((x + r * np.cos(a), y + r * np.sin(a))))
+
+
+def steps(rot, stride=1):
+    """(F - stride, J) degrees each bone turns over ``stride`` frames."""
+    d = quat.mul(quat.conj(rot[:-stride]), rot[stride:])
+    return np.degrees(2 * np.arccos(np.clip(np.abs(d[..., 0]), 0.0, 1.0)))
+
+
+def source_steps(clips, fps):
+    """(J,) each bone's largest step in the source clips at the patch's frame rate, or its
+    left / right counterpart's (the right turns are 16_18's left turns mirrored: their left
+    hand moves as the recorded right hand did)."""
+    out = 0.0
+    for c in clips:
+        stride = max(int(round(c.fps / fps)), 1)
+        out = np.maximum(out, steps(c.rotations, stride).max(axis=0))
+    return np.maximum(out, out[clips[0].skeleton.mirror_map()])
+
+
+@pytest.mark.parametrize("seed", [3, 7, 11, 19])
+def test_planned_walks_step_no_faster_than_their_source(walk_patch, walk16, turn16, seed):
+    """Pillar fields (12 m square, 14 pillars of 0.2-0.4 m) walked across with random start
+    and goal headings: as synthesised (before foot locking), no bone's per-frame step
+    exceeds ``LIMIT`` times its largest in 16_15 / 16_18 (sampled at the patch's 30 fps;
+    a bone or its mirror image). Before the loop weights were averaged over frames
+    (synthesis.held_weights) the neck stepped 3.7-5.9 times its largest here."""
+    rng = np.random.default_rng(seed)
+    env = Environment(walk_patch.side, walk_patch.cells, radius=0.25)
+    for n in range(14):
+        env.place(pillar(f"p{n}", *rng.uniform(2.0, 10.0, 2), rng.uniform(0.2, 0.4)))
+    start = np.array([0.5, rng.uniform(1.0, 11.0), rng.uniform(-np.pi, np.pi)])
+    goal = np.array([11.5, rng.uniform(1.0, 11.0), rng.uniform(-np.pi, np.pi)])
+    plan = SegmentPlanner(walk_patch, env).plan(start, goal)
+    m = concatenate(plan_motions(walk_patch, plan))
+    skel = walk_patch.gait.skeleton
+    ratio = steps(m.rotations).max(axis=0) / np.maximum(
+        source_steps((walk16, turn16), walk_patch.gait.fps), 1e-3
+    )
+    worst = int(np.argmax(ratio))
+    print(
+        f"seed {seed}: {[p.kind for p in plan.pieces]}, largest step {ratio[worst]:.2f}x "
+        f"the source's ({skel.names[worst]})"
+    )
+    assert ratio[worst] < LIMIT, skel.names[worst]
