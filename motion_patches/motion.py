@@ -40,31 +40,45 @@ def sliced(m, start, stop):
     return Motion(m.ground[sl], m.root_local[sl], m.rotations[sl], m.contacts[sl])
 
 
+EASE_RATE = np.radians(3.0)  # radians per frame a bone is eased at, at most, onto a clip
+
+
 def ease_to(m, target, frames, at_end=True):
     """The motion with its last (or first) ``frames`` frames eased onto ``target``'s first
     (or last) frame: ground offset and body channels, smoothstep weights, so a stitch
-    between two clips lands without a jump."""
+    between two clips lands without a jump. A bone whose rotation differs by more than
+    ``EASE_RATE`` per frame over ``frames`` (another take's hips or shoulders, held
+    differently) is eased over as many more frames as keep it to that rate, so it does
+    not snap round; the legs, matched by the stitch, keep the short window."""
     from . import quat
 
     n = min(frames, m.frames - 1)
-    w = np.zeros(m.frames)
-    t = np.linspace(0.0, 1.0, n + 1)
-    ramp = t * t * (3 - 2 * t)
     if at_end:
-        w[-(n + 1) :] = ramp
-        src = m.frames - 1
-        tgt = 0
+        src, tgt = m.frames - 1, 0
     else:
-        w[: n + 1] = ramp[::-1]
-        src = 0
-        tgt = target.frames - 1
+        src, tgt = 0, target.frames - 1
+    f = np.arange(m.frames)
+    # Frames from the end (start) the blend reaches back, per joint.
+    q0, q1 = m.rotations[src], target.rotations[tgt]
+    angle = 2.0 * np.arccos(np.clip(np.abs(np.sum(q0 * q1, axis=-1)), 0.0, 1.0))  # (J,)
+    span = np.clip(np.ceil(angle / EASE_RATE), n, max(m.frames - 1, 1)).astype(int)
+    span = np.maximum(span, 1)
+
+    def weights(k):  # (F, K) smoothstep from 0 to 1 over the last (first) k frames
+        k = np.asarray(k, float)
+        t = (f[:, None] - (m.frames - 1 - k)) / k if at_end else (k - f[:, None]) / k
+        t = np.clip(t, 0.0, 1.0)
+        return t * t * (3 - 2 * t)
+
+    w = weights([max(n, 1)])[:, 0] if n > 0 else np.zeros(m.frames)
     g = m.ground.copy()
     dg = target.ground[tgt] - m.ground[src]
     dg[2] = (dg[2] + np.pi) % (2 * np.pi) - np.pi
     g += w[:, None] * dg[None]
     root = m.root_local + w[:, None] * (target.root_local[tgt] - m.root_local[src])[None]
-    tq = np.broadcast_to(target.rotations[tgt], m.rotations.shape)
-    rot = quat.slerp(m.rotations, tq, np.repeat(w[:, None], m.rotations.shape[1], 1))
+    tq = np.broadcast_to(q1, m.rotations.shape)
+    wj = weights(span) if n > 0 else np.zeros(m.rotations.shape[:2])
+    rot = quat.slerp(m.rotations, tq, wj)
     con = m.contacts & (w[:, None] < 0.5) | target.contacts[tgt][None] & (w[:, None] >= 0.5)
     return Motion(g, root, quat.make_continuous(rot, axis=0), con)
 
