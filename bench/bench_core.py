@@ -246,7 +246,9 @@ def bench_source_skate(straight, fps):
     return metrics.foot_skate(src.joint_positions()[:, fj], fps, con)
 
 
-def bench_plans(patch, args, profiler=None):
+def bench_plans(patch, args, profiler=None, reference=None):
+    """Plans on the random layouts, measured; ``reference`` (J,): each bone's largest
+    per-frame turn in the source clips (metrics.source_bone_steps), for the spin ratio."""
     count = int(round(args.density * args.field**2))
     alpha, beta, gamma = args.weights
     skel, fps = patch.gait.skeleton, patch.gait.fps
@@ -305,6 +307,11 @@ def bench_plans(patch, args, profiler=None):
         locked = Motion(m.ground, m.root_local, foot_lock.lock_feet(skel, m), m.contacts)
         lock_s = time.perf_counter() - t2
         skate_locked = metrics.foot_skate(foot_positions(locked, skel), fps, m.contacts)
+        spin = spin_locked = (float("nan"), "")
+        if reference is not None:
+            r, j = metrics.step_ratio(m.rotations, reference)
+            rl, jl = metrics.step_ratio(locked.rotations, reference)
+            spin, spin_locked = (r, skel.names[j]), (rl, skel.names[jl])
         rec = {
             "layout": layout,
             "seconds": dt,
@@ -327,6 +334,10 @@ def bench_plans(patch, args, profiler=None):
             "skate": skate,
             "skate_locked": skate_locked,
             "foot_lock_seconds": lock_s,
+            "step_ratio": spin[0],
+            "step_ratio_bone": spin[1],
+            "step_ratio_locked": spin_locked[0],
+            "step_ratio_locked_bone": spin_locked[1],
         }
         records.append(rec)
         print(
@@ -340,6 +351,7 @@ def bench_plans(patch, args, profiler=None):
     return records, failures, count
 
 
+SPIN_RATIO = 1.6  # a bone turning this many times faster than in any source clip: a spin
 FEW = 10  # props an animator moves at a time (bench_placement)
 
 
@@ -516,6 +528,15 @@ def markdown(res):
             f" cm/s); leg IK {fmt_ms(pl['foot_lock_seconds']['mean'])}"
             f" per path",
         ),
+        (
+            "largest per-frame bone turn against the source clips' (16_15, 16_18, a bone "
+            "or its mirror image; under 1 deg counts as 1)",
+            f"median path {pl['step_ratio']['median']:.2f}x, worst {pl['step_ratio']['max']:.2f}x"
+            f" ({pl['paths_stepping_over']['step_ratio']} paths over {SPIN_RATIO}x); with "
+            f"foot locking median {pl['step_ratio_locked']['median']:.2f}x, worst "
+            f"{pl['step_ratio_locked']['max']:.2f}x "
+            f"({pl['paths_stepping_over']['step_ratio_locked']} over {SPIN_RATIO}x)",
+        ),
     ]
     for n, p in res["placement"].items():
         rows.append(
@@ -551,7 +572,11 @@ def main(argv=None):
     )
     print(f"plans on {args.layouts} random layouts ...", flush=True)
     profiler = cProfile.Profile() if args.profile else None
-    records, failures, pillars = bench_plans(patch, args, profiler)
+    turn = bvh.read(mocap / "cmu" / "16_18.bvh")
+    reference = metrics.source_bone_steps(
+        (straight, turn), patch.gait.fps, patch.gait.skeleton.mirror_map()
+    )
+    records, failures, pillars = bench_plans(patch, args, profiler, reference)
     print("source clip skate ...", flush=True)
     floor = bench_source_skate(straight, patch.gait.fps)
     print("placement ...", flush=True)
@@ -602,6 +627,12 @@ def main(argv=None):
         "skate": pooled_skate(records),
         "skate_locked": pooled_skate(records, "skate_locked"),
         "foot_lock_seconds": stats([r["foot_lock_seconds"] for r in records]),
+        "step_ratio": stats([r["step_ratio"] for r in records]),
+        "step_ratio_locked": stats([r["step_ratio_locked"] for r in records]),
+        "paths_stepping_over": {
+            key: sum(r[key] > SPIN_RATIO for r in records)
+            for key in ("step_ratio", "step_ratio_locked")
+        },
     }
     res = {
         "machine": machine(),

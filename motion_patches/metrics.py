@@ -74,3 +74,34 @@ def boundary_pops(local_rotations, boundaries, fps):
         "max_boundary_jump_deg": float(steps[b].max()) if b.size else 0.0,
         "p99_step_deg": float(np.percentile(steps[mask], 99)) if mask.any() else 0.0,
     }
+
+
+def bone_steps(local_rotations, stride=1):
+    """(F - stride, J) degrees each bone turns over ``stride`` frames."""
+    from . import quat
+
+    q = np.asarray(local_rotations, float)
+    return np.degrees(quat.angle_between(q[stride:], q[:-stride]))
+
+
+def source_bone_steps(clips, fps, mirror_map=None):
+    """(J,) each bone's largest per-frame turn in the source ``clips`` at ``fps`` (a clip
+    of another rate sampled every round(its fps / fps) frames), or its left / right
+    counterpart's when ``mirror_map`` is given (a gait's mirrored loops move a left hand as
+    the recorded right hand moved). What a synthesised motion's :func:`bone_steps` are
+    held against: a bone stepping far faster than in any source is a spin."""
+    out = 0.0
+    for c in clips:
+        stride = max(int(round(c.fps / fps)), 1)
+        out = np.maximum(out, bone_steps(c.rotations, stride).max(axis=0))
+    out = np.asarray(out, float)
+    return out if mirror_map is None else np.maximum(out, out[np.asarray(mirror_map)])
+
+
+def step_ratio(local_rotations, reference, floor_deg=1.0):
+    """(worst ratio, joint index): the largest per-frame turn of any bone over that bone's
+    ``reference`` (:func:`source_bone_steps`), steps under ``floor_deg`` counted as that
+    (bones the sources barely move)."""
+    r = bone_steps(local_rotations).max(axis=0) / np.maximum(reference, floor_deg)
+    j = int(np.argmax(r))
+    return float(r[j]), j
