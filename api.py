@@ -843,7 +843,7 @@ def _write(
     goal_state = _shrunk(plan.goal, 1.0 / scale)  # the facing reached when any would do
     skel = rig.target if rig is not None else patch.gait.skeleton
     motions, bounds, world = placed
-    locked = foot_lock.lock_feet(skel, world) if lock else None
+    locked = foot_lock.lock_feet(skel, world, fps=patch.gait.fps) if lock else None
     strips, stashed = nla.write_plan(
         bpy,
         character,

@@ -304,7 +304,7 @@ def bench_plans(patch, args, profiler=None, reference=None):
         ground = m.ground[:, :2]
         skate = metrics.foot_skate(foot_positions(m, skel), fps, m.contacts)
         t2 = time.perf_counter()
-        locked = Motion(m.ground, m.root_local, foot_lock.lock_feet(skel, m), m.contacts)
+        locked = Motion(m.ground, m.root_local, foot_lock.lock_feet(skel, m, fps=fps), m.contacts)
         lock_s = time.perf_counter() - t2
         skate_locked = metrics.foot_skate(foot_positions(locked, skel), fps, m.contacts)
         spin = spin_locked = (float("nan"), "")

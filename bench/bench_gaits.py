@@ -97,7 +97,9 @@ def run_plans(patch, args):
             continue
         dt = time.perf_counter() - t0
         m = concatenate(plan_motions(patch, plan))
-        locked = Motion(m.ground, m.root_local, foot_lock.lock_feet(skel, m), m.contacts)
+        locked = Motion(
+            m.ground, m.root_local, foot_lock.lock_feet(skel, m, fps=patch.gait.fps), m.contacts
+        )
         rec = {
             "layout": n,
             "seconds": dt,

@@ -14,10 +14,11 @@ The correction eases in and out over a few frames around each run, so nothing po
 import numpy as np
 
 from . import quat
-from .contacts import foot_joints, runs
+from .contacts import CONTACT_SPEED, foot_joints, runs
 from .inplace import to_world
 
 BLEND_FRAMES = 4  # frames the correction takes to ease in before and out after a contact
+STILL_FACTOR = 2.0  # x contacts.CONTACT_SPEED: a planted joint moving faster is let go
 STRETCH = 0.985  # the straightest a locked leg gets, as a fraction of thigh + shin
 
 
@@ -43,6 +44,25 @@ def _segments(skel, lower, upper):
         out.append(j)
         j = int(skel.parents[j])
     return out
+
+
+def held_still(planted, xy, fps):
+    """Planted flags (F,) of a foot joint kept only on frames where the joint, as
+    synthesised, moves no faster than ``STILL_FACTOR`` x ``contacts.CONTACT_SPEED`` (the
+    speed above which the source's contacts call a joint moving), or all of them when
+    ``fps`` is None.
+    Flags carried through a blend (a walk eased out of a turn on the spot, a jump's
+    landing eased into a run) can outlast the foot's stillness: pinned there, a foot
+    sliding 5-8 cm a frame built a correction of 15-20 cm that the leg could not reach
+    and let go of within a few frames, and the knee snapped."""
+    planted = np.asarray(planted, bool)
+    if fps is None or len(xy) < 3:
+        return planted
+    xy = np.asarray(xy, float)
+    v = np.empty(len(xy))
+    v[1:-1] = np.linalg.norm(xy[2:] - xy[:-2], axis=1) / 2.0
+    v[0], v[-1] = np.linalg.norm(xy[1] - xy[0]), np.linalg.norm(xy[-1] - xy[-2])
+    return planted & (v * fps <= STILL_FACTOR * CONTACT_SPEED)
 
 
 def planted_offsets(ankle_xy, toe_xy, ankle_on, toe_on, blend=BLEND_FRAMES):
@@ -203,14 +223,16 @@ def _leg_world(sub, rest_offsets, root_pos, rotations):
     return g, p
 
 
-def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None):
+def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None, fps=None):
     """Rotation channels (F, J, 4) of ``world`` (a Motion) with planted feet pinned.
 
     Only the hip (thigh) and knee (shin) channels of each leg change, and the ankle's so
     that the foot keeps its world orientation. Both legs are solved at once over all
     frames, on the legs' bones alone (:func:`_leg_skeleton`). ``offsets`` is a function
     (side, ankle xy (F, 2), toe xy (F, 2)) -> (F, 2) horizontal ankle corrections
-    replacing :func:`planted_offsets` (a turn in place moves its feet its own way)."""
+    replacing :func:`planted_offsets` (a turn in place moves its feet its own way). With
+    ``fps`` a foot joint is pinned only on frames where it moves slower than a planted
+    joint does (:func:`held_still`)."""
     corrections = offsets
     chains = leg_chains(skel)
     sub, idx = _leg_skeleton(skel, chains)
@@ -226,8 +248,8 @@ def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None):
             planted_offsets(
                 p[:, ankle[s], :2],
                 p[:, toe[s], :2],
-                world.contacts[:, 2 * s],
-                world.contacts[:, 2 * s + 1],
+                held_still(world.contacts[:, 2 * s], p[:, ankle[s], :2], fps),
+                held_still(world.contacts[:, 2 * s + 1], p[:, toe[s], :2], fps),
                 blend,
             )
             if corrections is None

@@ -9,7 +9,7 @@ or two, a hand or the head held differently in each would snap round."""
 import numpy as np
 import pytest
 
-from motion_patches import metrics
+from motion_patches import foot_lock, metrics
 from motion_patches.environment import Environment, Obstacle
 from motion_patches.motion import concatenate
 from motion_patches.planner import SegmentPlanner, plan_motions
@@ -22,13 +22,16 @@ def pillar(name, x, y, r):
     return Obstacle(name, np.column_stack((x + r * np.cos(a), y + r * np.sin(a))))
 
 
+@pytest.mark.parametrize("locked", [False, True], ids=["synthesised", "foot-locked"])
 @pytest.mark.parametrize("seed", [3, 7, 11, 19])
-def test_planned_walks_step_no_faster_than_their_source(walk_patch, walk16, turn16, seed):
+def test_planned_walks_step_no_faster_than_their_source(walk_patch, walk16, turn16, seed, locked):
     """Pillar fields (12 m square, 14 pillars of 0.2-0.4 m) walked across with random start
-    and goal headings: as synthesised (before foot locking), no bone's per-frame step
-    exceeds ``LIMIT`` times its largest in 16_15 / 16_18 (sampled at the patch's 30 fps;
-    a bone or its mirror image). Before the loop weights were averaged over frames
-    (synthesis.held_weights) the neck stepped 3.7-5.9 times its largest here."""
+    and goal headings: as synthesised and foot-locked as the API writes it, no bone's
+    per-frame step exceeds ``LIMIT`` times its largest in 16_15 / 16_18 (sampled at the
+    patch's 30 fps; a bone or its mirror image). Before the loop weights were averaged
+    over frames (synthesis.held_weights) the neck stepped 3.7-5.9 times its largest here;
+    before the lock let go of feet the synthesis moves fast (foot_lock.held_still), a
+    thigh 2.7 times at a turn on the spot's end."""
     rng = np.random.default_rng(seed)
     env = Environment(walk_patch.side, walk_patch.cells, radius=0.25)
     for n in range(14):
@@ -39,9 +42,11 @@ def test_planned_walks_step_no_faster_than_their_source(walk_patch, walk16, turn
     m = concatenate(plan_motions(walk_patch, plan))
     skel = walk_patch.gait.skeleton
     reference = metrics.source_bone_steps((walk16, turn16), walk_patch.gait.fps, skel.mirror_map())
-    ratio, worst = metrics.step_ratio(m.rotations, reference, floor_deg=1e-3)
+    rot = foot_lock.lock_feet(skel, m, fps=walk_patch.gait.fps) if locked else m.rotations
+    ratio, worst = metrics.step_ratio(rot, reference, floor_deg=1e-3)
     print(
-        f"seed {seed}: {[p.kind for p in plan.pieces]}, largest step {ratio:.2f}x "
+        f"seed {seed}{' locked' if locked else ''}: {[p.kind for p in plan.pieces]}, largest "
+        f"step {ratio:.2f}x "
         f"the source's ({skel.names[worst]})"
     )
     assert ratio < LIMIT, skel.names[worst]
@@ -54,8 +59,8 @@ def test_easing_onto_another_subjects_clip_keeps_every_bone_to_its_pace(
     sitting down on another: easing the walk onto a clip of another take turns bones
     that take holds differently (the hips' tilt) over as many frames as keep them to
     the clips' pace; eased over the stitch's 4 frames the hips stepped 2.8 times their
-    largest in any of the four clips. Steps under 1 degree count as 1 (bones the takes
-    barely move)."""
+    largest in any of the four clips. As synthesised and foot-locked; steps under 1 degree
+    count as 1 (bones the takes barely move)."""
     from motion_patches import object_patch as op
     from motion_patches.clip import retarget
     from motion_patches.planner import interaction_states, with_interactions
@@ -80,7 +85,10 @@ def test_easing_onto_another_subjects_clip_keeps_every_bone_to_its_pace(
     reference = metrics.source_bone_steps(
         [walk16, turn16, *clips], walk_gait.fps, skel.mirror_map()
     )
-    ratio, worst = metrics.step_ratio(m.rotations, reference)
+    locked = foot_lock.lock_feet(skel, m, fps=walk_gait.fps)
+    ratio, worst = max(
+        metrics.step_ratio(m.rotations, reference), metrics.step_ratio(locked, reference)
+    )
     print(
         f"{[p.kind for p in plan.pieces]}: largest step {ratio:.2f}x the sources' "
         f"({skel.names[worst]})"
