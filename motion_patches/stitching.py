@@ -198,6 +198,30 @@ def _turned(patch):
     return got
 
 
+def part_speed(patch):
+    """The fastest average speed (m/s) of any part a connection can use: a segment from
+    its first frame to a later one, or from a frame to its last, at least 2 frames apart
+    (cached on the patch). Parts of a cycle can walk faster than the gait's cycles on
+    average, so bounds of a part's effort divide its length by this."""
+    got = patch.__dict__.get("_stitch_part_speed")
+    if got is None:
+        _, arc, first = patch.all_ground()
+        owner = np.repeat(np.arange(first.size - 1), np.diff(first))
+        rows = np.arange(arc.size)
+        into = rows - first[owner]  # frames from the segment's first frame
+        out = first[owner + 1] - 1 - rows  # frames to its last
+        speed = 0.0
+        for frames, length in (
+            (into, arc - arc[first[owner]]),
+            (out, arc[first[owner + 1] - 1] - arc),
+        ):
+            ok = frames >= 2
+            if ok.any():
+                speed = max(speed, float((length[ok] / frames[ok]).max()))
+        got = patch.__dict__["_stitch_part_speed"] = speed * patch.gait.fps
+    return got
+
+
 def stitch(patch, env, prop, clip_index, alpha, beta, gamma):
     """Every edge a traversal copy adds to the low-level graph (maybe none)."""
     table = stitch_table(patch, env, prop, clip_index, alpha, beta, gamma)
