@@ -1361,14 +1361,15 @@ class TraversalObserver:
     stitched, and astar puts the goal back and goes on. Without it copies may be missed:
     a copy whose bound lies between the f of the last node taken off and the goal's (a
     goal link dearer than its node's heuristic; test_astar shows one) is never reached
-    by the rule. Copies never bounded can be skipped: take a path cheaper than f whose first copy not yet stitched is X, entered
-    from node n; the part before X uses only edges already in the graph, so with an
-    admissible heuristic each of its nodes, n included, has f below the goal's and was
-    taken off (last) with g at most its cost along the path before the goal came off;
-    then X's bound through n is at most the path's cost, below f. So when the goal comes
-    off and nothing is added, no copy left could give a cheaper path: dynamic stitching
-    finds the cost static stitching (every copy stitched before the search) finds, with
-    ``copies_stitched_by_tile`` + ``copies_stitched_at_goal`` copies stitched.
+    by the rule. Copies never bounded can be skipped: take a path cheaper than f whose
+    first copy not yet stitched is X, entered from node n; the part before X uses only
+    edges already in the graph, so with an admissible heuristic each of its nodes, n
+    included, has f below the goal's and was taken off (last) with g at most its cost
+    along the path before the goal came off; then X's bound through n is at most the
+    path's cost, below f. So when the goal comes off and nothing is added, no copy left
+    could give a cheaper path: dynamic stitching finds the cost static stitching (every
+    copy stitched before the search) finds, with ``copies_stitched_by_tile`` (at nodes)
+    + ``copies_stitched_at_goal`` copies stitched.
     """
 
     def __init__(self, copies, stitch_copy, across, up_front=False, through=None):
