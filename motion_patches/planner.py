@@ -1303,8 +1303,8 @@ class SegmentPlanner:
         return out
 
     def _through(self, copies):
-        """``through(key, f, idx)`` of :class:`TraversalObserver` for ``copies`` of
-        :meth:`_traversal_estimates`: g of the node (f less its heuristic) + a lower bound
+        """``through(keys, fs, idx)`` of :class:`TraversalObserver` for ``copies`` of
+        :meth:`_traversal_estimates`: g of each node (f less its heuristic) + a lower bound
         of the entry part walked from it (its segment starts on the node) into the copy's
         entry keyframe + the clip + the heuristic from the exit.
 
@@ -1318,16 +1318,25 @@ class SegmentPlanner:
         effort = self.gamma * self.patch.effort_rate / part_speed(self.patch)
         beta, h_of, slack = self.beta, self.heuristic_of, 1e-9
 
-        def through(key, f, idx):
-            t = key // LOCAL
-            local = key - t * LOCAL
+        def through(keys, fs, idx, below=None):
+            keys = np.asarray(keys, np.int64)[:, None]
+            t = keys // LOCAL
+            local = keys - t * LOCAL
             cx = ex[idx] - (lx[local] + (t // (2 * BIAS) - BIAS) * side)
             cy = ey[idx] - (ly[local] + (t % (2 * BIAS) - BIAS) * side)
             d = np.hypot(cx, cy)
-            part = walk * d + effort * np.maximum(d - POSITION_TOLERANCE, 0.0)
-            part += beta * _approach_turn(heading[local], eh[idx], cx, cy)
             # f - h is g up to rounding: the slack keeps the bound below the true one
-            return (f - h_of(key)) * (1.0 - slack) - slack + part + rest[idx]
+            g = np.array([f - h_of(int(k)) for k, f in zip(keys[:, 0].tolist(), fs)])
+            out = (g * (1.0 - slack) - slack)[:, None] + rest[idx]
+            out += walk * d + effort * np.maximum(d - POSITION_TOLERANCE, 0.0)
+            if below is None:
+                return out + beta * _approach_turn(heading[local], eh[idx], cx, cy)
+            # one node: the turn only where the bound so far may still come under ``below``
+            need = np.flatnonzero(out[0] < below)
+            if need.size:
+                h0, h1 = heading[local[0, 0]], eh[idx[need]]
+                out[0, need] += beta * _approach_turn(h0, h1, cx[0, need], cy[0, need])
+            return out
 
         return through
 
@@ -1375,14 +1384,23 @@ class TraversalObserver:
     def __init__(self, copies, stitch_copy, across, up_front=False, through=None):
         """``copies`` [(estimate, prop, copy, tile id, ...)]; ``stitch_copy(prop, copy) ->
         edges``; ``across[local]``: tile id offset of the other tile of a node;
-        ``through(key, f, idx) -> (n,)``: lower bounds of the cost + heuristic of paths
-        through copies ``idx`` (indices into ``copies``) whose stitched edge leaves node
-        ``key``, taken off with ``f``; with ``up_front`` (static mode) every copy is
-        stitched now and added at the first call."""
+        ``through(keys, fs, idx, below=None) -> (len(keys), len(idx))``: lower bounds of
+        the cost + heuristic of paths through copies ``idx`` (indices into ``copies``)
+        whose stitched edge leaves node ``keys[k]``, taken off with ``fs[k]`` (with
+        ``below``, for one node, those not under ``below`` may be left lower, for speed);
+        with ``up_front`` (static mode) every copy is stitched now and added at the first
+        call.
+
+        A copy's bound matters only once the search takes off a node with f at least its
+        estimate (the bound is never lower), so the nodes taken off in its tile are kept
+        and the bound is computed over them then, and lowered by each node after."""
         self.stitch_copy, self.across, self.through = stitch_copy, across, through
         self.by_tile = self.at_goal = 0
         self.ready = []
-        self.pending = {}  # tile id -> indices of its copies not yet stitched
+        self.unseen = {}  # tile id -> indices of its copies, for tiles not entered yet
+        self.taken = {}  # tile id -> ([keys], [fs]) of the nodes taken off in it
+        self.waiting = []  # heap of (estimate, copy index) of copies of entered tiles
+        self.active = {}  # tile id -> indices of its copies with a bound, not stitched
         self.due = []  # heap of (bound, copy index)
         if up_front:
             for _, pi, ci, *_ in copies:
@@ -1390,12 +1408,11 @@ class TraversalObserver:
             return
         self.which = [(pi, ci) for _, pi, ci, *_ in copies]
         self.estimate = np.array([c[0] for c in copies], float)
+        self.tile = [c[3] for c in copies]
         self.bound = np.full(len(copies), np.inf)  # lowest bound so far per copy
         self.done = np.zeros(len(copies), bool)
-        tiles = {}
-        for i, c in enumerate(copies):
-            tiles.setdefault(c[3], []).append(i)
-        self.pending = {t: np.array(idx, np.int64) for t, idx in tiles.items()}
+        for i, t in enumerate(self.tile):
+            self.unseen.setdefault(t, []).append(i)
 
     def __call__(self, f, key):
         if self.ready:
@@ -1403,12 +1420,20 @@ class TraversalObserver:
             return ready
         if key == astar.GOAL:
             return self._backstop(f)
-        if self.pending:
-            tile = key // LOCAL
-            for t in (tile, tile + self.across[key - tile * LOCAL]):
-                idx = self.pending.get(t)
+        tile = key // LOCAL
+        for t in (tile, tile + self.across[key - tile * LOCAL]):
+            taken = self.taken.get(t)
+            if taken is not None:
+                taken[0].append(key)
+                taken[1].append(f)
+                idx = self.active.get(t)
                 if idx is not None:
-                    self._bound(t, idx, key, f)
+                    self._lower(t, idx, key, f)
+            elif t in self.unseen:  # the search enters the tile
+                self.taken[t] = ([key], [f])
+                for i in self.unseen.pop(t):
+                    heapq.heappush(self.waiting, (self.estimate[i], i))
+        self._wake(f)
         due = self.due
         if not due or due[0][0] > f:
             return ()
@@ -1416,17 +1441,38 @@ class TraversalObserver:
         self.by_tile += n
         return edges
 
-    def _bound(self, tile, idx, key, f):
-        """Lower the bounds of the pending copies ``idx`` of ``tile`` by node ``key``."""
+    def _wake(self, f):
+        """Bound the copies of entered tiles whose estimates are <= f, over the nodes
+        taken off in their tiles so far."""
+        waiting = self.waiting
+        if not waiting or waiting[0][0] > f:
+            return
+        woken = {}
+        while waiting and waiting[0][0] <= f:
+            _, i = heapq.heappop(waiting)
+            woken.setdefault(self.tile[i], []).append(i)
+        for t, idx in woken.items():
+            idx = np.array(idx, np.int64)
+            new = self.estimate[idx]
+            if self.through is not None:
+                keys, fs = self.taken[t]
+                new = np.maximum(new, self.through(keys, fs, idx).min(axis=0))
+            self.bound[idx] = new
+            for b, i in zip(new.tolist(), idx.tolist()):
+                heapq.heappush(self.due, (b, i))
+            have = self.active.get(t)
+            self.active[t] = idx if have is None else np.concatenate((have, idx))
+
+    def _lower(self, tile, idx, key, f):
+        """Lower the bounds of the bounded copies ``idx`` of ``tile`` by node ``key``."""
         idx = idx[~self.done[idx]]
         if idx.size == 0:
-            del self.pending[tile]
+            del self.active[tile]
             return
-        self.pending[tile] = idx
-        if self.through is None:  # the estimate, once the search has entered the tile
-            new = self.estimate[idx]
-        else:
-            new = np.maximum(self.estimate[idx], self.through(key, f, idx))
+        self.active[tile] = idx
+        if self.through is None:  # the bound is the estimate
+            return
+        new = self.through([key], [f], idx, below=self.bound[idx])[0]
         lower = new < self.bound[idx]
         if lower.any():
             idx, new = idx[lower], new[lower]
@@ -1448,6 +1494,7 @@ class TraversalObserver:
         return edges, n
 
     def _backstop(self, f):
+        self._wake(f)
         edges, n = self._stitch(f)
         self.at_goal += n
         return edges

@@ -208,10 +208,10 @@ def per_tile_observer(hidden, estimates, h=None):
     if h is not None:
         src, dst, cost = (np.array(col) for col in zip(*hidden))
 
-        def through(key, f, idx):
-            node = int(node_of(key))
-            g = f - h[node]
-            return np.where(src[idx] == node, g + cost[idx] + h[dst[idx]], np.inf)
+        def through(keys, fs, idx, below=None):
+            nodes = node_of(keys)[:, None]
+            g = np.asarray(fs)[:, None] - h[nodes]
+            return np.where(src[idx] == nodes, g + cost[idx] + h[dst[idx]], np.inf)
 
     return TraversalObserver(
         copies, lambda _, e: hidden_edges(hidden, {e}), ACROSS, through=through

@@ -356,13 +356,91 @@ def test_bound_through_a_node_is_below_every_stitched_edge_from_it(walk_patch, h
                 continue
             ins, outs, from_keys, to_keys, clip_cost = table
             for a, from_key in zip(ins, from_keys):
-                bound = through(from_key, planner.heuristic_of(from_key), np.array([idx]))[0]
+                bound = through([from_key], [planner.heuristic_of(from_key)], np.array([idx]))[0, 0]
                 for b, to_key in zip(outs, to_keys):
                     cost = a.cost + clip_cost + b.cost + planner.heuristic_of(to_key)
                     gaps.append(cost - bound)
                     edges += 1
+        # With ``below`` (one node) the bounds under it are the full ones, the rest no
+        # higher than the full ones: the observer's cheap first pass loses nothing.
+        every, left_lower, kept = np.arange(len(copies)), 0, 0
+        for key in sorted(planner._entries(planner._block((0, 0)))[0].tolist())[:60]:
+            f = planner.heuristic_of(key) + 1.0
+            full = through([key], [f], every)[0]
+            below = full + np.random.default_rng(key).normal(0.0, 0.5, full.size)
+            cheap = through([key], [f], every, below=below)[0]
+            under = full < below
+            assert np.array_equal(cheap[under], full[under]) and np.all(cheap <= full)
+            left_lower += np.count_nonzero(cheap < full)
+            kept += np.count_nonzero(under)
+        assert left_lower > 0 and kept > 0, (left_lower, kept)
+        # Many nodes at once (the observer's first bound of a copy) as one by one.
+        keys = sorted(planner._entries(planner._block((0, 0)))[0].tolist())[:60]
+        fs = [planner.heuristic_of(k) + 1.0 for k in keys]
+        rows = np.stack([through([k], [f], every)[0] for k, f in zip(keys, fs)])
+        assert np.allclose(through(keys, fs, every), rows, rtol=0, atol=1e-12)
     gaps = np.array(gaps)
     print(f"{edges} edges, bound below cost by {gaps.min():.3f} .. {gaps.max():.3f}")
     assert edges > 100
     assert gaps.min() >= -1e-9
     assert gaps.min() < 0.25
+
+
+def test_stitch_candidates_are_each_segments_nearest_frame(walk_patch, hurdle_clip, monkeypatch):
+    """The entry and exit candidates of stitching (rows cached per cell, nearest frames
+    found for every segment at once) are, segment by segment over all its frames, the
+    frame nearest the keyframe (the first of equally near ones) of each segment through
+    the keyframe's cell, kept when within the tolerances and 2 frames of the segment's
+    ends; nothing else stands near (the chair itself is excluded), so every candidate
+    is kept (MAX_PER_END lifted)."""
+    from motion_patches import stitching
+
+    monkeypatch.setattr(stitching, "MAX_PER_END", 10**6)
+    ground, _, first = walk_patch.all_ground()
+    n, found = walk_patch.gait.frames, 0
+    for angle in np.radians(np.arange(0.0, 360.0, 45.0)):
+        env, props = chair_line(walk_patch, hurdle_clip, n=1, x=4.1 + angle / 7, half=0.0)
+        prop = props[0]
+        prop.pose = (prop.pose[0], 0.3 + angle / 11, float(angle))
+        for ci, clip in enumerate(prop.clips):
+            world = prop.world_clip(clip)
+            for at_entry, state, pose in (
+                (True, world.ground[0], 0),
+                (False, world.ground[-1], -1),
+            ):
+                d_pose = stitching.phase_pose_distance(
+                    walk_patch.gait, clip.motion.root_local[pose], clip.motion.rotations[pose]
+                )
+                phase_ok = d_pose <= stitching.POSE_TOLERANCE * d_pose.min()
+                got = stitching._candidates(
+                    walk_patch, env, state, phase_ok, prop.name, at_entry, 1.0, 0.5, 0.2
+                )
+                tile = env.tile_of(state[:2])
+                local = state[:2] - np.array(tile, float) * walk_patch.side
+                c = walk_patch.cell_size
+                cell = int(
+                    min(max(local[1] // c, 0), walk_patch.cells - 1) * walk_patch.cells
+                    + min(max(local[0] // c, 0), walk_patch.cells - 1)
+                )
+                want = []
+                for seg in range(walk_patch.segment_count):
+                    if not int(walk_patch.seg_mask[seg]) >> cell & 1:
+                        continue
+                    g = ground[first[seg] : first[seg + 1]]
+                    dist = np.hypot(g[:, 0] - local[0], g[:, 1] - local[1])
+                    f = int(np.argmin(dist))
+                    dh = abs((g[f, 2] - state[2] + np.pi) % (2 * np.pi) - np.pi)
+                    if (
+                        2 <= f <= len(g) - 3
+                        and dist[f] <= stitching.POSITION_TOLERANCE
+                        and dh <= stitching.HEADING_TOLERANCE
+                        and phase_ok[f % n]
+                    ):
+                        err = dist[f] / stitching.POSITION_TOLERANCE
+                        want.append((seg, f, err + dh / stitching.HEADING_TOLERANCE))
+                mine = sorted((k.segment, k.frame, k.error) for k in got)
+                assert [(s, f) for s, f, _ in mine] == [(s, f) for s, f, _ in sorted(want)]
+                assert np.allclose([e for *_, e in mine], [e for *_, e in sorted(want)])
+                found += len(mine)
+    print("candidates compared:", found)
+    assert found > 50
