@@ -97,16 +97,29 @@ def _cell_frames(patch):
 
 def _cell_rows(patch, cell):
     """The rows of :func:`_cell_frames` of segments through ``cell`` (its bit set in
-    their cell masks), their segments and their frames' x and y (cached per patch and
-    cell: every copy whose keyframe falls in the cell reads the same rows)."""
+    their cell masks), their segments, their frames' x and y, and the runs of rows of
+    one segment: where each starts, its segment and the segment's frame count (cached
+    per patch and cell: every copy whose keyframe falls in the cell reads the same);
+    per row, its run and its place."""
     memo = patch.__dict__.setdefault("_stitch_cell_rows", {})
     got = memo.get(cell)
     if got is None:
         rows, owner = _cell_frames(patch)[cell]
         keep = (patch.seg_mask[owner] & (np.uint64(1) << np.uint64(cell))) != 0
         rows, owner = rows[keep], owner[keep]
-        ground = patch.all_ground()[0]
-        got = memo[cell] = (rows, owner, ground[rows, 0].copy(), ground[rows, 1].copy())
+        ground, _, first = patch.all_ground()
+        offs = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]]) if rows.size else rows
+        segs = owner[offs]
+        got = memo[cell] = (
+            rows,
+            ground[rows, 0].copy(),
+            ground[rows, 1].copy(),
+            offs,
+            segs,
+            first[segs + 1] - first[segs],
+            np.repeat(np.arange(offs.size), np.diff(np.r_[offs, rows.size])),
+            np.arange(rows.size),
+        )
     return got
 
 
@@ -117,28 +130,21 @@ def _candidates(patch, env, state, phase_ok, exclude, at_entry, alpha, beta, gam
     tile = env.tile_of(state[:2])
     origin = np.array(tile, float) * patch.side
     local = state[:2] - origin
-    c = patch.cell_size
-    cell = int(
-        np.clip(local[1] // c, 0, patch.cells - 1) * patch.cells
-        + np.clip(local[0] // c, 0, patch.cells - 1)
-    )
+    c, n_cells = patch.cell_size, patch.cells
+    cx = min(max(int(local[0] // c), 0), n_cells - 1)
+    cy = min(max(int(local[1] // c), 0), n_cells - 1)
     ground, arc, first = patch.all_ground()
     # Only the frames near the cell can lie within the tolerance of the keyframe, so the
     # nearest frame of a segment crossing the cell is among them whenever it matters.
-    rows, owner, gx, gy = _cell_rows(patch, cell)
+    rows, gx, gy, offs, segs, lens, run, at = _cell_rows(patch, cy * n_cells + cx)
     if rows.size == 0:
         return []
-    d = np.hypot(gx - local[0], gy - local[1])
-    offs = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
-    segs = owner[offs]
-    lens = first[segs + 1] - first[segs]
-    best = np.minimum.reduceat(d, offs)
-    # first index of the minimum within each segment's run
-    idx = np.flatnonzero(d == np.repeat(best, np.diff(np.r_[offs, d.size])))
-    run = np.searchsorted(offs, idx, side="right") - 1
-    mine, at = np.unique(run, return_index=True)
-    firsts = np.full(segs.size, -1)
-    firsts[mine] = idx[at]
+    dx, dy = gx - local[0], gy - local[1]
+    d2 = dx * dx + dy * dy  # squared: the same nearest frames, without a root per row
+    near = np.minimum.reduceat(d2, offs)
+    # the first row of each segment's run where its minimum is
+    firsts = np.minimum.reduceat(np.where(d2 == near[run], at, d2.size), offs)
+    best = np.hypot(dx[firsts], dy[firsts])
     f = rows[firsts] - first[segs]  # frame within the segment
     gr = ground[rows[firsts]]
     dh = np.abs((gr[:, 2] - state[2] + np.pi) % (2 * np.pi) - np.pi)
