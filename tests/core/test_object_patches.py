@@ -85,6 +85,34 @@ def test_density_bins_sort_every_copy_by_its_ends(hurdle_clip):
         assert x0 - 1e-9 <= c.entry[0] <= x1 + 1e-9 and y0 - 1e-9 <= c.entry[1] <= y1 + 1e-9
 
 
+def test_occluded_bins_are_the_bins_each_footprint_overlaps(hurdle_clip):
+    """occluded_bins (bins tested only where their bounds meet a footprint's) marks the
+    bins whose world rectangle overlaps another prop's footprint, as testing every bin
+    against every footprint does; some bins are occluded, most are not."""
+    from motion_patches.environment import polygons_within
+
+    rng = np.random.default_rng(7)
+    marked = total = 0
+    for k in range(12):
+        chair = op.ObjectPatch("chair", CHAIR, pose=(0.0, 0.0, float(rng.uniform(-np.pi, np.pi))))
+        chair.add_traversal_copies(hurdle_clip)
+        others = []
+        for n in range(6):
+            x, y, h = rng.uniform(-1.5, 1.5), rng.uniform(-1.5, 1.5), rng.uniform(-np.pi, np.pi)
+            o = op.ObjectPatch(f"o{n}", CHAIR * rng.uniform(0.5, 2.0), pose=(x, y, h))
+            others.append(Obstacle(o.name, o.world_footprint()))
+        got = chair.occluded_bins(others)
+        rects, _ = chair.density_bins()
+        want = np.zeros(len(rects), bool)
+        for b, (x0, y0, x1, y1) in enumerate(rects):
+            poly = chair.to_world(np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]))
+            want[b] = any(polygons_within(poly, ob.polygon, 0.0) for ob in others)
+        assert np.array_equal(got, want), k
+        marked += int(want.sum())
+        total += want.size
+    assert 0 < marked < total / 2, (marked, total)
+
+
 def test_hurried_character_hurdles_the_chair_line_unhurried_walks_around(walk_patch, hurdle_clip):
     start, goal = (1.0, 0.3, 0.0), (9.0, 0.3, 0.0)
     env, props = chair_line(walk_patch, hurdle_clip)
