@@ -1319,6 +1319,8 @@ class SegmentPlanner:
         beta, h_of, slack = self.beta, self.heuristic_of, 1e-9
 
         def through(keys, fs, idx, below=None):
+            if below is not None:
+                return one(keys[0], fs[0], idx, below)
             keys = np.asarray(keys, np.int64)[:, None]
             t = keys // LOCAL
             local = keys - t * LOCAL
@@ -1329,14 +1331,27 @@ class SegmentPlanner:
             g = np.array([f - h_of(int(k)) for k, f in zip(keys[:, 0].tolist(), fs)])
             out = (g * (1.0 - slack) - slack)[:, None] + rest[idx]
             out += walk * d + effort * np.maximum(d - POSITION_TOLERANCE, 0.0)
-            if below is None:
-                return out + beta * _approach_turn(heading[local], eh[idx], cx, cy)
-            # one node: the turn only where the bound so far may still come under ``below``
-            need = np.flatnonzero(out[0] < below)
+            return out + beta * _approach_turn(heading[local], eh[idx], cx, cy)
+
+        def one(key, f, idx, below):
+            """One node: nothing when even g + the cheapest rest is not under ``below``
+            anywhere; else the turn only where the rest of the bound is under it."""
+            g = (f - h_of(key)) * (1.0 - slack) - slack
+            r = rest[idx]
+            if g + r.min() >= below.max():
+                return below[None]
+            t = key // LOCAL
+            local = key - t * LOCAL
+            cx = ex[idx] - (lx[local] + (t // (2 * BIAS) - BIAS) * side)
+            cy = ey[idx] - (ly[local] + (t % (2 * BIAS) - BIAS) * side)
+            d = np.hypot(cx, cy)
+            out = g + r
+            out += walk * d + effort * np.maximum(d - POSITION_TOLERANCE, 0.0)
+            need = np.flatnonzero(out < below)
             if need.size:
-                h0, h1 = heading[local[0, 0]], eh[idx[need]]
-                out[0, need] += beta * _approach_turn(h0, h1, cx[0, need], cy[0, need])
-            return out
+                h1 = eh[idx[need]]
+                out[need] += beta * _approach_turn(heading[local], h1, cx[need], cy[need])
+            return out[None]
 
         return through
 

@@ -401,6 +401,9 @@ def test_bound_through_a_node_is_below_every_stitched_edge_from_it(walk_patch, h
             assert np.array_equal(cheap[under], full[under]) and np.all(cheap <= full)
             left_lower += np.count_nonzero(cheap < full)
             kept += np.count_nonzero(under)
+            # Far under every bound: nothing to lower, the bounds given are answered.
+            far = full - 100.0
+            assert np.array_equal(through([key], [f], every, below=far)[0], far)
         assert left_lower > 0 and kept > 0, (left_lower, kept)
         # Many nodes at once (the observer's first bound of a copy) as one by one.
         keys = sorted(planner._entries(planner._block((0, 0)))[0].tolist())[:60]
