@@ -9,8 +9,8 @@ joined to the node graph by Dubins connectors (:mod:`.dubins`), known to the sea
 lower bound of their cost and sampled and tested only when it gets to them (the start
 ones played from the phase that makes them end on the node pose, the goal ones ending
 on the exact goal position and heading). Traversal clips of object patches join the
-graph as stitched edges, lazily, through a per-tile observer of the search
-(:class:`TraversalObserver`).
+graph as stitched edges, lazily, through an observer of the search that bounds each copy
+by the nodes it takes off in the copy's tile (:class:`TraversalObserver`).
 """
 
 import contextlib
@@ -1097,7 +1097,7 @@ class SegmentPlanner:
                 stitch_copy,
                 self.across,
                 up_front=self.mode == "static",
-                through=self._through(copies) if copies else None,
+                through=self._through(copies) if copies and self.mode == "dynamic" else None,
             )
             first = [] if start_key is None else [(int(start_key), 0.0, -1)]
             bound = (
@@ -1228,11 +1228,13 @@ class SegmentPlanner:
         )
 
     def _traversal_estimates(self, start):
-        """[(f lower bound, prop, clip copy, tile id)] of every traversal copy in the region.
+        """[(f lower bound, prop, clip copy, tile id, entry x, entry y, entry heading,
+        clip cost + heuristic from the exit)] of every traversal copy in the region.
 
         The bound is alpha |start - entry| (+ effort bound) + clip cost + heuristic from
         the exit: no path through the copy costs less. The tile id (node key // LOCAL) is
-        the tile of the copy's entry keyframe, where its stitched edges start."""
+        the tile of the copy's entry keyframe, where its stitched edges start; the rest
+        is what :meth:`_through` bounds the copy by from a node."""
         out = []
         self.bin_culled = 0
         per_metre = self._per_metre
