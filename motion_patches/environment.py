@@ -568,9 +568,19 @@ class Environment:
         """(N,) True where world points come within the radius (or ``radius``, at most a
         tile side more) of any obstacle but those named in ``exclude``. Many points
         (``RASTER_MIN_POINTS`` or more) go through the clearance raster first; the answer
-        is the exact test's either way."""
+        is the exact test's either way. With ``exclude`` (the raster holds every
+        footprint, so it can only clear points) the footprints near the points are looked
+        up first: with none but the excluded ones there, every point is clear."""
         points = np.atleast_2d(np.asarray(points, float))
         radius = self.radius if radius is None else float(radius)
+        if exclude and len(points):
+            x, y = points[:, 0], points[:, 1]  # 1-D reductions: far cheaper than axis=0 ones
+            lo = (float(x.min()) - radius, float(y.min()) - radius)
+            hi = (float(x.max()) + radius, float(y.max()) + radius)
+            if all(math.isfinite(v) for v in (*lo, *hi)) and all(
+                n in exclude for n in self.names_in_box(lo, hi)
+            ):
+                return np.zeros(len(points), bool)
         if (
             len(points) >= RASTER_MIN_POINTS
             and self.obstacles

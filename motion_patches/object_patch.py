@@ -195,16 +195,23 @@ class ObjectPatch:
             np.array([[lo[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]], [hi[0], lo[1]]])
         )
         wlo, whi = corners.min(axis=0), corners.max(axis=0)
+        polys = None
         for ob in obstacles:
             if ob.name == self.name:
                 continue
             olo, ohi = ob.bounds()
             if np.any(olo > whi) or np.any(ohi < wlo):
                 continue
-            for b, (x0, y0, x1, y1) in enumerate(rects):
-                if not out[b]:
-                    poly = self.to_world(np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]))
-                    out[b] = polygons_within(poly, ob.polygon, 0.0)
+            if polys is None:  # every bin in the world at once, and its bounds
+                x0, y0, x1, y1 = rects.T
+                polys = self.to_world(
+                    np.stack(((x0, y0), (x1, y0), (x1, y1), (x0, y1)), axis=1).transpose(2, 1, 0)
+                )
+                blo, bhi = polys.min(axis=1), polys.max(axis=1)
+            # Only bins whose bounds meet the footprint's can overlap it.
+            meet = ~out & np.all(blo <= ohi, axis=1) & np.all(bhi >= olo, axis=1)
+            for b in np.flatnonzero(meet).tolist():
+                out[b] = polygons_within(polys[b], ob.polygon, 0.0)
         return out
 
     def density_bins(self):

@@ -97,16 +97,29 @@ def _cell_frames(patch):
 
 def _cell_rows(patch, cell):
     """The rows of :func:`_cell_frames` of segments through ``cell`` (its bit set in
-    their cell masks), their segments and their frames' x and y (cached per patch and
-    cell: every copy whose keyframe falls in the cell reads the same rows)."""
+    their cell masks), their segments, their frames' x and y, and the runs of rows of
+    one segment: where each starts, its segment and the segment's frame count (cached
+    per patch and cell: every copy whose keyframe falls in the cell reads the same);
+    per row, its run and its place."""
     memo = patch.__dict__.setdefault("_stitch_cell_rows", {})
     got = memo.get(cell)
     if got is None:
         rows, owner = _cell_frames(patch)[cell]
         keep = (patch.seg_mask[owner] & (np.uint64(1) << np.uint64(cell))) != 0
         rows, owner = rows[keep], owner[keep]
-        ground = patch.all_ground()[0]
-        got = memo[cell] = (rows, owner, ground[rows, 0].copy(), ground[rows, 1].copy())
+        ground, _, first = patch.all_ground()
+        offs = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]]) if rows.size else rows
+        segs = owner[offs]
+        got = memo[cell] = (
+            rows,
+            ground[rows, 0].copy(),
+            ground[rows, 1].copy(),
+            offs,
+            segs,
+            first[segs + 1] - first[segs],
+            np.repeat(np.arange(offs.size), np.diff(np.r_[offs, rows.size])),
+            np.arange(rows.size),
+        )
     return got
 
 
@@ -117,28 +130,21 @@ def _candidates(patch, env, state, phase_ok, exclude, at_entry, alpha, beta, gam
     tile = env.tile_of(state[:2])
     origin = np.array(tile, float) * patch.side
     local = state[:2] - origin
-    c = patch.cell_size
-    cell = int(
-        np.clip(local[1] // c, 0, patch.cells - 1) * patch.cells
-        + np.clip(local[0] // c, 0, patch.cells - 1)
-    )
+    c, n_cells = patch.cell_size, patch.cells
+    cx = min(max(int(local[0] // c), 0), n_cells - 1)
+    cy = min(max(int(local[1] // c), 0), n_cells - 1)
     ground, arc, first = patch.all_ground()
     # Only the frames near the cell can lie within the tolerance of the keyframe, so the
     # nearest frame of a segment crossing the cell is among them whenever it matters.
-    rows, owner, gx, gy = _cell_rows(patch, cell)
+    rows, gx, gy, offs, segs, lens, run, at = _cell_rows(patch, cy * n_cells + cx)
     if rows.size == 0:
         return []
-    d = np.hypot(gx - local[0], gy - local[1])
-    offs = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
-    segs = owner[offs]
-    lens = first[segs + 1] - first[segs]
-    best = np.minimum.reduceat(d, offs)
-    # first index of the minimum within each segment's run
-    idx = np.flatnonzero(d == np.repeat(best, np.diff(np.r_[offs, d.size])))
-    run = np.searchsorted(offs, idx, side="right") - 1
-    mine, at = np.unique(run, return_index=True)
-    firsts = np.full(segs.size, -1)
-    firsts[mine] = idx[at]
+    dx, dy = gx - local[0], gy - local[1]
+    d2 = dx * dx + dy * dy  # squared: the same nearest frames, without a root per row
+    near = np.minimum.reduceat(d2, offs)
+    # the first row of each segment's run where its minimum is
+    firsts = np.minimum.reduceat(np.where(d2 == near[run], at, d2.size), offs)
+    best = np.hypot(dx[firsts], dy[firsts])
     f = rows[firsts] - first[segs]  # frame within the segment
     gr = ground[rows[firsts]]
     dh = np.abs((gr[:, 2] - state[2] + np.pi) % (2 * np.pi) - np.pi)
@@ -195,6 +201,30 @@ def _turned(patch):
         step[first[1:-1] - 1] = 0.0  # from one segment's last frame to the next's first
         total = np.concatenate(([0.0], np.cumsum(step)))
         got = patch.__dict__["_stitch_turned"] = total
+    return got
+
+
+def part_speed(patch):
+    """The fastest average speed (m/s) of any part a connection can use: a segment from
+    its first frame to a later one, or from a frame to its last, at least 2 frames apart
+    (cached on the patch). Parts of a cycle can walk faster than the gait's cycles on
+    average, so bounds of a part's effort divide its length by this."""
+    got = patch.__dict__.get("_stitch_part_speed")
+    if got is None:
+        _, arc, first = patch.all_ground()
+        owner = np.repeat(np.arange(first.size - 1), np.diff(first))
+        rows = np.arange(arc.size)
+        into = rows - first[owner]  # frames from the segment's first frame
+        out = first[owner + 1] - 1 - rows  # frames to its last
+        speed = 0.0
+        for frames, length in (
+            (into, arc - arc[first[owner]]),
+            (out, arc[first[owner + 1] - 1] - arc),
+        ):
+            ok = frames >= 2
+            if ok.any():
+                speed = max(speed, float((length[ok] / frames[ok]).max()))
+        got = patch.__dict__["_stitch_part_speed"] = speed * patch.gait.fps
     return got
 
 

@@ -95,3 +95,36 @@ def test_coarse_first_connector_test_answers_as_testing_every_sample(walk_patch)
     got = planner._samples_blocked(pos, first)
     assert np.array_equal(got, expected)
     assert 0.2 * n < expected.sum() < 0.9 * n  # both answers are common here
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_blocked_with_exclude_answers_as_each_footprint_tested(walk_patch, seed):
+    """Environment.blocked with ``exclude`` (stitching's tests, where a look-up of the
+    footprints near the points may answer before the raster) gives every footprint's own
+    distance test's answer, for the radius and a larger one; the points include groups
+    near only the excluded footprint (the look-up answers) and groups near others."""
+    env = pillar_field(walk_patch, seed, count=30)
+    rng = np.random.default_rng(seed)
+    names = sorted(env.obstacles)
+    looked_up = hits = 0
+    for k in range(60):
+        exclude = tuple(rng.choice(names, rng.integers(1, 3), replace=False).tolist())
+        if k % 2:  # round an excluded pillar
+            centre, spread = env.obstacles[exclude[0]].polygon.mean(axis=0), 0.3
+        else:
+            centre, spread = rng.uniform(0.0, 16.0, 2), rng.choice((0.3, 1.5))
+        pts = centre + rng.normal(0.0, spread, (rng.integers(1, 200), 2))
+        for radius in (None, 0.5):
+            r = env.radius if radius is None else radius
+            want = np.zeros(len(pts), bool)
+            for n, ob in env.obstacles.items():
+                if n not in exclude:
+                    want |= ob.within(pts, r)
+            got = env.blocked(pts, exclude=exclude, radius=radius)
+            assert np.array_equal(got, want)
+            hits += want.any()
+            near = env.names_in_box(pts.min(axis=0) - r, pts.max(axis=0) + r)
+            looked_up += all(n in exclude for n in near)
+    print("groups answered by the look-up:", looked_up, "of 120; with a point blocked:", hits)
+    assert looked_up >= 20  # the look-up's answer (nothing else near) is exercised
+    assert hits >= 20  # and so are points near other footprints
