@@ -418,7 +418,7 @@ def resolve(
     holdable=None,
     rounds=2,
     stages=6,
-    restarts=2,
+    restarts=4,
 ):
     """Schedules and the conflicts left for ``tracks`` [(frames, 2)] in priority order,
     all starting on frame 0: each character in turn is checked against the
