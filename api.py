@@ -44,7 +44,7 @@ from .motion_patches.environment import Obstacle
 from .motion_patches.gait import MIN_TURN, build_gait
 from .motion_patches.inplace import to_world
 from .motion_patches.locomotion_patch import bake
-from .motion_patches.motion import concatenate
+from .motion_patches.motion import Motion, concatenate
 from .motion_patches.planner import (
     PlanError,
     SegmentPlanner,
@@ -843,7 +843,15 @@ def _write(
     goal_state = _shrunk(plan.goal, 1.0 / scale)  # the facing reached when any would do
     skel = rig.target if rig is not None else patch.gait.skeleton
     motions, bounds, world = placed
-    locked = foot_lock.lock_feet(skel, world, fps=patch.gait.fps) if lock else None
+    # Feet moving fast while labelled planted (through a blend) are not planted: neither
+    # pinned nor measured as skating (foot_lock.still_contacts).
+    world = Motion(
+        world.ground,
+        world.root_local,
+        world.rotations,
+        foot_lock.still_contacts(skel, world, patch.gait.fps),
+    )
+    locked = foot_lock.lock_feet(skel, world) if lock else None
     strips, stashed = nla.write_plan(
         bpy,
         character,

@@ -97,9 +97,10 @@ def run_plans(patch, args):
             continue
         dt = time.perf_counter() - t0
         m = concatenate(plan_motions(patch, plan))
-        locked = Motion(
-            m.ground, m.root_local, foot_lock.lock_feet(skel, m, fps=patch.gait.fps), m.contacts
+        m = Motion(  # as the API writes a plan: feet moving fast are not planted
+            m.ground, m.root_local, m.rotations, foot_lock.still_contacts(skel, m, patch.gait.fps)
         )
+        locked = Motion(m.ground, m.root_local, foot_lock.lock_feet(skel, m), m.contacts)
         rec = {
             "layout": n,
             "seconds": dt,

@@ -18,7 +18,8 @@ from .contacts import CONTACT_SPEED, foot_joints, runs
 from .inplace import to_world
 
 BLEND_FRAMES = 4  # frames the correction takes to ease in before and out after a contact
-STILL_FACTOR = 2.0  # x contacts.CONTACT_SPEED: a planted joint moving faster is let go
+STILL_FACTOR = 2.0  # x contacts.CONTACT_SPEED: a planted joint moving faster is not planted,
+STILL_SHARE = 0.5  # nor one moving faster than this share of the body's pace, when that is more
 STRETCH = 0.985  # the straightest a locked leg gets, as a fraction of thigh + shin
 
 
@@ -46,23 +47,43 @@ def _segments(skel, lower, upper):
     return out
 
 
-def held_still(planted, xy, fps):
-    """Planted flags (F,) of a foot joint kept only on frames where the joint, as
-    synthesised, moves no faster than ``STILL_FACTOR`` x ``contacts.CONTACT_SPEED`` (the
-    speed above which the source's contacts call a joint moving), or all of them when
-    ``fps`` is None.
-    Flags carried through a blend (a walk eased out of a turn on the spot, a jump's
-    landing eased into a run) can outlast the foot's stillness: pinned there, a foot
-    sliding 5-8 cm a frame built a correction of 15-20 cm that the leg could not reach
-    and let go of within a few frames, and the knee snapped."""
-    planted = np.asarray(planted, bool)
-    if fps is None or len(xy) < 3:
-        return planted
+def _speeds(xy):
+    """(F,) distance a point moves per frame (central differences; one-sided at the ends)."""
     xy = np.asarray(xy, float)
     v = np.empty(len(xy))
     v[1:-1] = np.linalg.norm(xy[2:] - xy[:-2], axis=1) / 2.0
     v[0], v[-1] = np.linalg.norm(xy[1] - xy[0]), np.linalg.norm(xy[-1] - xy[-2])
-    return planted & (v * fps <= STILL_FACTOR * CONTACT_SPEED)
+    return v
+
+
+def still_contacts(skel, world, fps):
+    """(F, 4) planted flags of ``world`` (a Motion; left ankle, toe, right ankle, toe) kept
+    only on frames where that joint, as synthesised, moves no faster than ``STILL_FACTOR``
+    x ``contacts.CONTACT_SPEED`` (the speed above which the source clips' contacts call a
+    joint moving) or, where the body moves faster, ``STILL_SHARE`` of the body's pace (a
+    run's planted foot slides faster than a walker's and is still planted).
+
+    Flags carried through a blend (a walk eased out of a turn on the spot, a run eased into
+    a standing jump and out of its landing) outlast the foot's stillness: there the foot
+    moves 2-5 m/s while labelled planted. Pinned, it built a correction of 15-20 cm the leg
+    could not reach and had to let go of within a few frames (a knee turning 30 deg in one
+    frame); such a foot is not planted by the clips' own measure either, so the plan's
+    contacts (the lock, the plan record, Analyse) leave it out."""
+    planted = np.array(world.contacts, bool)
+    if world.frames < 3:
+        return planted
+    chains = leg_chains(skel)
+    sub, idx = _leg_skeleton(skel, chains)
+    pos, rot = to_world(sub, world.ground, world.root_local, world.rotations[:, idx])
+    _, p = _leg_world(sub, _rest_offsets(sub), pos, rot)
+    at = {int(j): i for i, j in enumerate(idx)}
+    limit = np.maximum(
+        STILL_FACTOR * CONTACT_SPEED / fps, STILL_SHARE * _speeds(world.ground[:, :2])
+    )
+    for s, (_, _, ankle, toe) in enumerate(chains):
+        for c, joint in ((2 * s, ankle), (2 * s + 1, toe)):
+            planted[:, c] &= _speeds(p[:, at[joint], :2]) <= limit
+    return planted
 
 
 def planted_offsets(ankle_xy, toe_xy, ankle_on, toe_on, blend=BLEND_FRAMES):
@@ -223,16 +244,15 @@ def _leg_world(sub, rest_offsets, root_pos, rotations):
     return g, p
 
 
-def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None, fps=None):
+def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None):
     """Rotation channels (F, J, 4) of ``world`` (a Motion) with planted feet pinned.
 
     Only the hip (thigh) and knee (shin) channels of each leg change, and the ankle's so
     that the foot keeps its world orientation. Both legs are solved at once over all
     frames, on the legs' bones alone (:func:`_leg_skeleton`). ``offsets`` is a function
     (side, ankle xy (F, 2), toe xy (F, 2)) -> (F, 2) horizontal ankle corrections
-    replacing :func:`planted_offsets` (a turn in place moves its feet its own way). With
-    ``fps`` a foot joint is pinned only on frames where it moves slower than a planted
-    joint does (:func:`held_still`)."""
+    replacing :func:`planted_offsets` (a turn in place moves its feet its own way). A plan
+    pins its feet on :func:`still_contacts`."""
     corrections = offsets
     chains = leg_chains(skel)
     sub, idx = _leg_skeleton(skel, chains)
@@ -248,8 +268,8 @@ def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None, fps=None):
             planted_offsets(
                 p[:, ankle[s], :2],
                 p[:, toe[s], :2],
-                held_still(world.contacts[:, 2 * s], p[:, ankle[s], :2], fps),
-                held_still(world.contacts[:, 2 * s + 1], p[:, toe[s], :2], fps),
+                world.contacts[:, 2 * s],
+                world.contacts[:, 2 * s + 1],
                 blend,
             )
             if corrections is None

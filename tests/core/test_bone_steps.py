@@ -11,7 +11,7 @@ import pytest
 
 from motion_patches import foot_lock, metrics
 from motion_patches.environment import Environment, Obstacle
-from motion_patches.motion import concatenate
+from motion_patches.motion import Motion, concatenate
 from motion_patches.planner import SegmentPlanner, plan_motions
 
 LIMIT = 1.6  # largest step of any bone, as a multiple of that bone's largest in the source
@@ -30,7 +30,7 @@ def test_planned_walks_step_no_faster_than_their_source(walk_patch, walk16, turn
     per-frame step exceeds ``LIMIT`` times its largest in 16_15 / 16_18 (sampled at the
     patch's 30 fps; a bone or its mirror image). Before the loop weights were averaged
     over frames (synthesis.held_weights) the neck stepped 3.7-5.9 times its largest here;
-    before the lock let go of feet the synthesis moves fast (foot_lock.held_still), a
+    before the feet the synthesis moves fast were left unplanted (foot_lock.still_contacts), a
     thigh 2.7 times at a turn on the spot's end."""
     rng = np.random.default_rng(seed)
     env = Environment(walk_patch.side, walk_patch.cells, radius=0.25)
@@ -42,7 +42,14 @@ def test_planned_walks_step_no_faster_than_their_source(walk_patch, walk16, turn
     m = concatenate(plan_motions(walk_patch, plan))
     skel = walk_patch.gait.skeleton
     reference = metrics.source_bone_steps((walk16, turn16), walk_patch.gait.fps, skel.mirror_map())
-    rot = foot_lock.lock_feet(skel, m, fps=walk_patch.gait.fps) if locked else m.rotations
+    if locked:
+        m = Motion(
+            m.ground,
+            m.root_local,
+            m.rotations,
+            foot_lock.still_contacts(skel, m, walk_patch.gait.fps),
+        )
+    rot = foot_lock.lock_feet(skel, m) if locked else m.rotations
     ratio, worst = metrics.step_ratio(rot, reference, floor_deg=1e-3)
     print(
         f"seed {seed}{' locked' if locked else ''}: {[p.kind for p in plan.pieces]}, largest "
@@ -85,7 +92,10 @@ def test_easing_onto_another_subjects_clip_keeps_every_bone_to_its_pace(
     reference = metrics.source_bone_steps(
         [walk16, turn16, *clips], walk_gait.fps, skel.mirror_map()
     )
-    locked = foot_lock.lock_feet(skel, m, fps=walk_gait.fps)
+    still = Motion(
+        m.ground, m.root_local, m.rotations, foot_lock.still_contacts(skel, m, walk_gait.fps)
+    )
+    locked = foot_lock.lock_feet(skel, still)
     ratio, worst = max(
         metrics.step_ratio(m.rotations, reference), metrics.step_ratio(locked, reference)
     )
