@@ -102,14 +102,70 @@ def _run_means(xy, starts, ends):
     return sums / (ends - starts)[:, None]
 
 
-def _rotation_between(u, v):
-    """(F, 3, 3) rotations taking unit vectors u to v along the shortest arc."""
-    axis = np.cross(u, v)
-    s = np.linalg.norm(axis, axis=-1)
-    c = np.clip(np.sum(u * v, axis=-1), -1.0, 1.0)
-    angle = np.arctan2(s, c)
-    axis = np.where(s[:, None] > 1e-9, axis / np.maximum(s, 1e-12)[:, None], [1.0, 0.0, 0.0])
-    return quat.to_matrix(quat.exp(axis * angle[:, None]))
+def _unit(v):
+    """(F, 3) vectors scaled to length one, and their lengths (F,)."""
+    n = np.sqrt(np.einsum("fi,fi->f", v, v))
+    return v / n[:, None], n
+
+
+def _rotate(axis, cos, sin, v):
+    """(F, 3) vectors ``v`` turned about unit ``axis`` (F, 3) by the angle whose cosine
+    and sine are given (Rodrigues' formula: no matrices built)."""
+    along = np.einsum("fi,fi->f", axis, v) * (1.0 - cos)
+    return v * cos[:, None] + np.cross(axis, v) * sin[:, None] + axis * along[:, None]
+
+
+def _axis_angle_quat(axis, angle):
+    """(F, 4) unit quaternions of turns by ``angle`` (F,) about unit ``axis`` (F, 3)."""
+    half = 0.5 * angle
+    return np.concatenate((np.cos(half)[:, None], axis * np.sin(half)[:, None]), axis=1)
+
+
+def _ik_turns(hip, knee, ankle, target, hinge, forward=None):
+    """The two-bone IK of :func:`two_bone_ik` as quaternions (F, 4): (swing, knee).
+
+    The thigh turns by ``swing``, the shin by ``swing * knee``; both are built from an
+    axis and an angle per frame, and the candidate legs are turned with Rodrigues'
+    formula, so no (F, 3, 3) matrix is made (the lock needs the turns, not matrices)."""
+    a, b = knee - hip, ankle - knee
+    l1 = np.sqrt(np.einsum("fi,fi->f", a, a))
+    l2 = np.sqrt(np.einsum("fi,fi->f", b, b))
+    ah = ankle - hip
+    d0 = np.clip(np.sqrt(np.einsum("fi,fi->f", ah, ah)), np.abs(l1 - l2) + 1e-4, l1 + l2 - 1e-4)
+    # Never snap the knee straight: the leg stretches at most to STRETCH of its length
+    # (or as far as the recorded pose already did); a farther target is left a little short.
+    reach = np.maximum(d0, STRETCH * (l1 + l2))
+    v, dist = _unit(target - hip)
+    d1 = np.clip(dist, np.abs(l1 - l2) + 1e-4, reach)
+    interior = np.arccos(np.clip((l1**2 + l2**2 - d1**2) / (2 * l1 * l2), -1.0, 1.0))
+    # The knee's angle now, from the bones themselves (exact even for a straight leg).
+    now = np.arccos(np.clip(np.einsum("fi,fi->f", -a, b) / (l1 * l2), -1.0, 1.0))
+    delta = interior - now
+    n = np.cross(a, b)
+    ns = np.sqrt(np.einsum("fi,fi->f", n, n))
+    n = np.where(ns[:, None] > 1e-6, n / np.maximum(ns, 1e-12)[:, None], hinge)
+    cd, sd = np.cos(delta), np.sin(delta)
+    options = []
+    for sense in (1.0, -1.0):  # the other sense: the inverse turn
+        u, ul = _unit(a + _rotate(n, cd, sense * sd, b))
+        err = np.abs(ul - d1)
+        # the swing: the shortest arc taking u onto v
+        axis = np.cross(u, v)
+        s = np.sqrt(np.einsum("fi,fi->f", axis, axis))
+        angle = np.arctan2(s, np.clip(np.einsum("fi,fi->f", u, v), -1.0, 1.0))
+        axis = np.where(s[:, None] > 1e-9, axis / np.maximum(s, 1e-12)[:, None], [1.0, 0.0, 0.0])
+        if forward is None:
+            ahead = np.zeros(len(a))
+        else:
+            knee_dir = _rotate(axis, np.cos(angle), np.sin(angle), a)
+            knee_dir -= np.einsum("fi,fi->f", knee_dir, v)[:, None] * v
+            ahead = np.einsum("fi,fi->f", knee_dir, forward)
+        options.append((err, ahead, axis, angle))
+    (e1, f1, x1, t1), (e2, f2, x2, t2) = options
+    second = np.where(np.abs(e1 - e2) > 1e-7, e2 < e1, f2 > f1)
+    swing = _axis_angle_quat(np.where(second[:, None], x2, x1), np.where(second, t2, t1))
+    bend = _axis_angle_quat(n, np.where(second, -delta, delta))
+    return swing, bend
 
 
 def two_bone_ik(hip, knee, ankle, target, hinge, forward=None):
@@ -121,39 +177,8 @@ def two_bone_ik(hip, knee, ankle, target, hinge, forward=None):
     of bending, the one that reaches the distance wins; where both do (a straight leg) the
     one that puts the knee towards ``forward`` (F, 3). Returns (R_thigh, R_shin):
     left-multiply the thigh's and the shin's world rotations by them."""
-    a, b = knee - hip, ankle - knee
-    l1, l2 = np.linalg.norm(a, axis=-1), np.linalg.norm(b, axis=-1)
-    d0 = np.clip(np.linalg.norm(ankle - hip, axis=-1), np.abs(l1 - l2) + 1e-4, l1 + l2 - 1e-4)
-    # Never snap the knee straight: the leg stretches at most to STRETCH of its length
-    # (or as far as the recorded pose already did); a farther target is left a little short.
-    reach = np.maximum(d0, STRETCH * (l1 + l2))
-    d1 = np.clip(np.linalg.norm(target - hip, axis=-1), np.abs(l1 - l2) + 1e-4, reach)
-
-    def interior(d):
-        return np.arccos(np.clip((l1**2 + l2**2 - d**2) / (2 * l1 * l2), -1.0, 1.0))
-
-    # The knee's angle now, from the bones themselves (exact even for a straight leg).
-    now = np.arccos(np.clip(np.sum(-a * b, axis=-1) / (l1 * l2), -1.0, 1.0))
-    delta = interior(d1) - now
-    n = np.cross(a, b)
-    ns = np.linalg.norm(n, axis=-1)
-    n = np.where(ns[:, None] > 1e-6, n / np.maximum(ns, 1e-12)[:, None], hinge)
-    v = target - hip
-    v = v / np.linalg.norm(v, axis=-1, keepdims=True)
-    bend = quat.to_matrix(quat.exp(n * delta[:, None]))
-    options = []
-    for r_knee in (bend, np.swapaxes(bend, -1, -2)):  # the other sense: the inverse turn
-        u = a + np.einsum("fij,fj->fi", r_knee, b)
-        err = np.abs(np.linalg.norm(u, axis=-1) - d1)
-        swing = _rotation_between(u / np.linalg.norm(u, axis=-1, keepdims=True), v)
-        knee_dir = np.einsum("fij,fj->fi", swing, a)
-        knee_dir -= np.sum(knee_dir * v, axis=-1, keepdims=True) * v
-        ahead = np.zeros(len(a)) if forward is None else np.sum(knee_dir * forward, axis=-1)
-        options.append((err, ahead, swing, r_knee))
-    (e1, f1, s1, k1), (e2, f2, s2, k2) = options
-    second = np.where(np.abs(e1 - e2) > 1e-7, e2 < e1, f2 > f1)[:, None, None]
-    swing = np.where(second, s2, s1)
-    return swing, swing @ np.where(second, k2, k1)
+    swing, bend = _ik_turns(hip, knee, ankle, target, hinge, forward)
+    return quat.to_matrix(swing), quat.to_matrix(quat.mul(swing, bend))
 
 
 def _leg_skeleton(skel, chains):
@@ -186,21 +211,59 @@ def _rest_offsets(sub):
 
 
 def _leg_world(sub, rest_offsets, root_pos, rotations):
-    """World rotations (F, K, 3, 3) and positions (F, K, 3) of the bones of ``sub``
-    (:func:`~motion_patches.skeleton.forward_kinematics` in rotations and positions)."""
+    """World rotations (K, F, 3, 3) and positions (K, F, 3) of the bones of ``sub`` from
+    its root position (F, 3) and rotation channels (K, F, 4) (root channel in the world;
+    :func:`~motion_patches.skeleton.forward_kinematics` in rotations and positions). Bone
+    first, so each bone's frames are one contiguous block for the products."""
     basis = quat.to_matrix(rotations)
-    nf, nk = basis.shape[:2]
-    g = np.empty((nf, nk, 3, 3))
-    p = np.empty((nf, nk, 3))
+    nk, nf = basis.shape[:2]
+    g = np.empty((nk, nf, 3, 3))
+    p = np.empty((nk, nf, 3))
     for j, parent in enumerate(sub.parents):
         if parent < 0:
-            g[:, j] = sub.rest[j, :3, :3] @ basis[:, j]
-            p[:, j] = root_pos
+            g[j] = sub.rest[j, :3, :3] @ basis[j]
+            p[j] = root_pos
             continue
         lr = rest_offsets[j]
-        g[:, j] = g[:, parent] @ (lr[:3, :3] @ basis[:, j])
-        p[:, j] = g[:, parent] @ lr[:3, 3] + p[:, parent]
+        g[j] = g[parent] @ (lr[:3, :3] @ basis[j])
+        p[j] = g[parent] @ lr[:3, 3] + p[parent]
     return g, p
+
+
+class _Legs:
+    """What :func:`lock_feet` needs of a skeleton that does not change with the motion:
+    the leg chains, the legs' sub-skeleton and its rest offsets, and per side the bones
+    whose channels the lock rewrites (made once per skeleton, :func:`_legs`)."""
+
+    def __init__(self, skel):
+        self.chains = leg_chains(skel)
+        self.sub, self.idx = _leg_skeleton(skel, self.chains)
+        self.at = {int(j): i for i, j in enumerate(self.idx)}
+        self.rest = _rest_offsets(self.sub)
+        self.root = self.sub.root
+        self.q_root_rest = quat.from_matrix(self.sub.rest[self.root, :3, :3])
+        self.legs = np.array([[self.at[j] for j in chain] for chain in self.chains])  # (2, 4)
+        # per side: [(bone in skel, its turn: "thigh", "shin", "ankle" or None for a limb
+        # segment that turns with its parent)], the bones in the order the lock wrote them
+        self.bones = []
+        for c_hip, c_knee, c_ankle, _ in self.chains:
+            thigh = [(c_hip, "thigh")] + [(j, None) for j in _segments(skel, c_knee, c_hip)]
+            shin = [(c_knee, "shin")] + [(j, None) for j in _segments(skel, c_ankle, c_knee)]
+            self.bones.append(thigh + shin + [(c_ankle, "ankle")])
+
+
+_LEGS = {}  # id(skeleton) -> (skeleton, _Legs)
+
+
+def _legs(skel):
+    """The :class:`_Legs` of ``skel``, made on its first lock (a crowd's characters share
+    one skeleton; the entry holds the skeleton, so its id is not reused while cached)."""
+    hit = _LEGS.get(id(skel))
+    if hit is None or hit[0] is not skel:
+        if len(_LEGS) >= 32:
+            _LEGS.clear()
+        hit = _LEGS[id(skel)] = (skel, _Legs(skel))
+    return hit[1]
 
 
 def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None):
@@ -210,69 +273,87 @@ def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None):
     that the foot keeps its world orientation. Both legs are solved at once over all
     frames, on the legs' bones alone (:func:`_leg_skeleton`). ``offsets`` is a function
     (side, ankle xy (F, 2), toe xy (F, 2)) -> (F, 2) horizontal ankle corrections
-    replacing :func:`planted_offsets` (a turn in place moves its feet its own way)."""
+    replacing :func:`planted_offsets` (a turn in place moves its feet its own way).
+
+    The new channels are the old ones turned: a bone whose world rotation is left-
+    multiplied by a turn T, under a parent turned by P, gets the channel
+    ``(M^-1 P^-1 T M) * channel`` (M: its parent's world rotation times its rest offset,
+    both before the lock), so the IK's turns are applied as quaternions, frames at once,
+    with no matrix converted back."""
     corrections = offsets
-    chains = leg_chains(skel)
-    sub, idx = _leg_skeleton(skel, chains)
-    at = {int(j): i for i, j in enumerate(idx)}
-    rest = _rest_offsets(sub)
-    pos, rot = to_world(sub, world.ground, world.root_local, world.rotations[:, idx])
-    g, p = _leg_world(sub, rest, pos, rot)
+    legs = _legs(skel)
+    sub, idx, rest = legs.sub, legs.idx, legs.rest
     n = world.frames
-    legs = np.array([[at[j] for j in chain] for chain in chains])  # (2, 4) in ``sub``
-    hip, knee, ankle, toe = legs.T  # (2,) each: left, right
+    ground = np.asarray(world.ground, float)
+    c, s = np.cos(ground[:, 2]), np.sin(ground[:, 2])
+    rl = world.root_local
+    pos = np.stack(
+        (
+            ground[:, 0] + c * rl[:, 0] - s * rl[:, 1],
+            ground[:, 1] + s * rl[:, 0] + c * rl[:, 1],
+            rl[:, 2],
+        ),
+        1,
+    )  # inplace.to_world's root positions
+    rot = np.ascontiguousarray(np.swapaxes(world.rotations[:, idx], 0, 1), dtype=float)
+    # the root channel into the world (inplace.root_channel_to_ground by -heading)
+    q_rest = np.broadcast_to(legs.q_root_rest, rot[legs.root].shape)
+    yaw = quat.about_z(ground[:, 2])
+    rot[legs.root] = quat.mul(quat.mul(quat.mul(quat.conj(q_rest), yaw), q_rest), rot[legs.root])
+    g, p = _leg_world(sub, rest, pos, rot)
+    hip, knee, ankle, toe = legs.legs.T  # (2,) each: left, right
     d = np.stack(
         [
             planted_offsets(
-                p[:, ankle[s], :2],
-                p[:, toe[s], :2],
+                p[ankle[s], :, :2],
+                p[toe[s], :, :2],
                 world.contacts[:, 2 * s],
                 world.contacts[:, 2 * s + 1],
                 blend,
             )
             if corrections is None
-            else corrections(s, p[:, ankle[s], :2], p[:, toe[s], :2])
+            else corrections(s, p[ankle[s], :, :2], p[toe[s], :, :2])
             for s in range(2)
         ]
     )  # (2, F, 2)
-    moving = np.linalg.norm(d, axis=-1) > 1e-7  # (2, F)
+    moving = np.sqrt(np.einsum("sfi,sfi->sf", d, d)) > 1e-7  # (2, F)
     if not moving.any():
         return quat.make_continuous(world.rotations.copy(), axis=0)
 
-    def both(a):  # (F, 2, ...) -> (2F, ...): the legs one after the other
-        return np.swapaxes(a, 0, 1).reshape((2 * n,) + a.shape[2:])
+    def both(a):  # (2, F, ...) -> (2F, ...): the legs one after the other
+        return a.reshape((2 * n,) + a.shape[2:])
 
-    target = both(p[:, ankle]).copy()
+    target = both(p[ankle]).copy()
     target[:, :2] += d.reshape(2 * n, 2)
-    hinge = both(g[:, hip, :, 0])  # the thigh's X axis: the knee's hinge in a rest-like leg
-    h = world.ground[:, 2]
+    hinge = both(g[hip, :, :, 0])  # the thigh's X axis: the knee's hinge in a rest-like leg
+    h = ground[:, 2]
     forward = np.tile(np.column_stack((np.cos(h), np.sin(h), np.zeros_like(h))), (2, 1))
-    r_thigh, r_shin = two_bone_ik(
-        both(p[:, hip]), both(p[:, knee]), both(p[:, ankle]), target, hinge, forward
-    )
+    swing, bend = _ik_turns(both(p[hip]), both(p[knee]), both(p[ankle]), target, hinge, forward)
     still = ~moving.reshape(2 * n)
-    r_thigh[still] = np.eye(3)
-    r_shin[still] = np.eye(3)
-    r_thigh, r_shin = r_thigh.reshape(2, n, 3, 3), r_shin.reshape(2, n, 3, 3)
-    changed = []
-    for s, (c_hip, c_knee, c_ankle, _) in enumerate(chains):
-        if not moving[s].any():
+    swing[still] = bend[still] = (1.0, 0.0, 0.0, 0.0)
+    swing, bend = swing.reshape(2, n, 4), bend.reshape(2, n, 4)
+    changed, turns, frames = [], [], []
+    for side in range(2):
+        if not moving[side].any():
             continue
-        thigh_bones = [c_hip, *_segments(skel, c_knee, c_hip)]  # limb segments turn with it
-        shin_bones = [c_knee, *_segments(skel, c_ankle, c_knee)]
-        for bones, r in ((thigh_bones, r_thigh[s]), (shin_bones, r_shin[s])):
-            k = [at[j] for j in bones]
-            g[:, k] = r[:, None] @ g[:, k]
-        # the foot keeps its world rotation (g at the ankle unchanged); its children follow
-        changed += thigh_bones + shin_bones + [c_ankle]
-    # Pose channels of the changed bones only (local_rotations_from_global, per bone).
-    k = np.array([at[j] for j in changed])
-    parent_rest = g[:, sub.parents[k]] @ rest[k, :3, :3]  # (F, K, 3, 3)
-    local = quat.make_continuous(
-        quat.from_matrix(np.swapaxes(parent_rest, -1, -2) @ g[:, k]), axis=0
-    )
+        # the turn of each bone relative to its parent's (thigh: the swing; shin: the bend
+        # under the swung thigh; ankle: back to its world rotation; segments: none)
+        rel = {"thigh": swing[side], "shin": bend[side]}
+        rel["ankle"] = quat.conj(quat.mul(swing[side], bend[side]))
+        for j, turn in legs.bones[side]:
+            k = legs.at[j]
+            changed.append(j)
+            turns.append(rel.get(turn))
+            frames.append(g[sub.parents[k]] @ rest[k, :3, :3])  # M (F, 3, 3)
     out = world.rotations.copy()
-    out[:, changed] = local
+    local = np.swapaxes(out[:, changed], 0, 1).astype(float)  # (K, F, 4)
+    for i, (turn, m) in enumerate(zip(turns, frames)):
+        if turn is not None:  # M^-1 T M: the turn's axis into the bone's parent-rest frame
+            axis = np.einsum("fji,fj->fi", m, turn[:, 1:])
+            local[i] = quat.mul(np.concatenate((turn[:, :1], axis), axis=1), local[i])
+    local = quat.make_continuous(quat.normalize(local), axis=1)
+    local[local[:, 0, 0] < 0] *= -1  # the first frame's w >= 0, as quat.from_matrix gives
+    out[:, changed] = np.swapaxes(local, 0, 1)
     # the whole pose made continuous, as the channels were; the changed bones are already,
     # and of the others only those that flip somewhere need the pass
     flips = np.any(np.einsum("fjc,fjc->fj", out[1:], out[:-1]) < 0, axis=0)

@@ -136,8 +136,8 @@ def test_the_legs_world_matrices_are_the_whole_skeletons(walk_patch, walk):
     sub, idx = foot_lock._leg_skeleton(skel, chains)
     assert len(idx) < len(skel.names)
     pos, rot = to_world(sub, walk.ground, walk.root_local, walk.rotations[:, idx])
-    g, p = foot_lock._leg_world(sub, foot_lock._rest_offsets(sub), pos, rot)
-    m = walk.world_matrices(skel)[:, idx]
+    g, p = foot_lock._leg_world(sub, foot_lock._rest_offsets(sub), pos, np.swapaxes(rot, 0, 1))
+    m = np.swapaxes(walk.world_matrices(skel)[:, idx], 0, 1)  # bone first, as _leg_world
     assert np.allclose(g, m[..., :3, :3], atol=1e-12)
     assert np.allclose(p, m[..., :3, 3], atol=1e-12)
 
