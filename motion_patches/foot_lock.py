@@ -15,7 +15,8 @@ import numpy as np
 
 from . import quat
 from .contacts import foot_joints, runs
-from .inplace import to_world
+from .inplace import root_channel_to_ground, root_positions
+from .skeleton import per_skeleton
 
 BLEND_FRAMES = 4  # frames the correction takes to ease in before and out after a contact
 STRETCH = 0.985  # the straightest a locked leg gets, as a fraction of thigh + shin
@@ -241,7 +242,6 @@ class _Legs:
         self.at = {int(j): i for i, j in enumerate(self.idx)}
         self.rest = _rest_offsets(self.sub)
         self.root = self.sub.root
-        self.q_root_rest = quat.from_matrix(self.sub.rest[self.root, :3, :3])
         self.legs = np.array([[self.at[j] for j in chain] for chain in self.chains])  # (2, 4)
         # per side: [(bone in skel, its turn: "thigh", "shin", "ankle" or None for a limb
         # segment that turns with its parent)], the bones in the order the lock wrote them
@@ -252,18 +252,17 @@ class _Legs:
             self.bones.append(thigh + shin + [(c_ankle, "ankle")])
 
 
-_LEGS = {}  # id(skeleton) -> (skeleton, _Legs)
-
-
+@per_skeleton
 def _legs(skel):
     """The :class:`_Legs` of ``skel``, made on its first lock (a crowd's characters share
-    one skeleton; the entry holds the skeleton, so its id is not reused while cached)."""
-    hit = _LEGS.get(id(skel))
-    if hit is None or hit[0] is not skel:
-        if len(_LEGS) >= 32:
-            _LEGS.clear()
-        hit = _LEGS[id(skel)] = (skel, _Legs(skel))
-    return hit[1]
+    one skeleton)."""
+    return _Legs(skel)
+
+
+def locked_bones(skel):
+    """Indices of the bones whose channels :func:`lock_feet` may change beyond a sign:
+    each leg's thigh, shin and ankle and the limb segments between them."""
+    return np.array(sorted(j for side in _legs(skel).bones for j, _ in side))
 
 
 def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None):
@@ -285,21 +284,9 @@ def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None):
     sub, idx, rest = legs.sub, legs.idx, legs.rest
     n = world.frames
     ground = np.asarray(world.ground, float)
-    c, s = np.cos(ground[:, 2]), np.sin(ground[:, 2])
-    rl = world.root_local
-    pos = np.stack(
-        (
-            ground[:, 0] + c * rl[:, 0] - s * rl[:, 1],
-            ground[:, 1] + s * rl[:, 0] + c * rl[:, 1],
-            rl[:, 2],
-        ),
-        1,
-    )  # inplace.to_world's root positions
+    pos = root_positions(ground, world.root_local)
     rot = np.ascontiguousarray(np.swapaxes(world.rotations[:, idx], 0, 1), dtype=float)
-    # the root channel into the world (inplace.root_channel_to_ground by -heading)
-    q_rest = np.broadcast_to(legs.q_root_rest, rot[legs.root].shape)
-    yaw = quat.about_z(ground[:, 2])
-    rot[legs.root] = quat.mul(quat.mul(quat.mul(quat.conj(q_rest), yaw), q_rest), rot[legs.root])
+    rot[legs.root] = root_channel_to_ground(sub, rot[legs.root], -ground[:, 2])  # to_world's
     g, p = _leg_world(sub, rest, pos, rot)
     hip, knee, ankle, toe = legs.legs.T  # (2,) each: left, right
     d = np.stack(
@@ -332,7 +319,10 @@ def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None):
     still = ~moving.reshape(2 * n)
     swing[still] = bend[still] = (1.0, 0.0, 0.0, 0.0)
     swing, bend = swing.reshape(2, n, 4), bend.reshape(2, n, 4)
-    changed, turns, frames = [], [], []
+    changed = [j for side in range(2) if moving[side].any() for j, _ in legs.bones[side]]
+    out = world.rotations.copy()
+    local = out[:, changed].astype(float)  # (F, K, 4)
+    i = 0
     for side in range(2):
         if not moving[side].any():
             continue
@@ -341,19 +331,19 @@ def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None):
         rel = {"thigh": swing[side], "shin": bend[side]}
         rel["ankle"] = quat.conj(quat.mul(swing[side], bend[side]))
         for j, turn in legs.bones[side]:
-            k = legs.at[j]
-            changed.append(j)
-            turns.append(rel.get(turn))
-            frames.append(g[sub.parents[k]] @ rest[k, :3, :3])  # M (F, 3, 3)
-    out = world.rotations.copy()
-    local = np.swapaxes(out[:, changed], 0, 1).astype(float)  # (K, F, 4)
-    for i, (turn, m) in enumerate(zip(turns, frames)):
-        if turn is not None:  # M^-1 T M: the turn's axis into the bone's parent-rest frame
-            axis = np.einsum("fji,fj->fi", m, turn[:, 1:])
-            local[i] = quat.mul(np.concatenate((turn[:, :1], axis), axis=1), local[i])
-    local = quat.make_continuous(quat.normalize(local), axis=1)
-    local[local[:, 0, 0] < 0] *= -1  # the first frame's w >= 0, as quat.from_matrix gives
-    out[:, changed] = np.swapaxes(local, 0, 1)
+            if turn is not None:
+                # M^-1 T M (M = the parent's world rotation times the bone's rest offset):
+                # the turn's axis taken into the bone's parent-rest frame, rest^T g^T axis
+                k = legs.at[j]
+                axis = np.einsum("fji,fj->fi", g[sub.parents[k]], rel[turn][:, 1:])
+                axis = axis @ rest[k, :3, :3]
+                turned = np.concatenate((rel[turn][:, :1], axis), axis=1)
+                local[:, i] = quat.mul(turned, local[:, i])
+            i += 1
+    local /= np.sqrt(np.einsum("fkc,fkc->fk", local, local))[..., None]
+    local = quat.make_continuous(local, axis=0)
+    local[:, local[0, :, 0] < 0] *= -1  # the first frame's w >= 0, as quat.from_matrix gives
+    out[:, changed] = local
     # the whole pose made continuous, as the channels were; the changed bones are already,
     # and of the others only those that flip somewhere need the pass
     flips = np.any(np.einsum("fjc,fjc->fj", out[1:], out[:-1]) < 0, axis=0)
