@@ -807,10 +807,7 @@ def _fit_frame_range(scene):
     """Apply :func:`fitted_frame_range` to ``scene`` when its Fit Frame Range is on."""
     if not getattr(scene.motion_patches, "fit_frame_range", True):
         return
-    plans = [
-        (m["frame_start"], m["frame_end"])
-        for m in (storage.plan_meta(ob) for ob in scene.objects if storage.has_plan(ob))
-    ]
+    plans = [storage.plan_range(ob) for ob in scene.objects if storage.has_plan(ob)]
     if plans:
         ours = scene.get(FRAME_RANGE_KEY)
         start, end = fitted_frame_range(

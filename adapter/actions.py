@@ -448,19 +448,44 @@ def read_channels(action, slot, bone, mode, frames, cache=None):
     linear between keys (or samples), the rest value where the channel is not keyed.
     Only that channel's curves are read. ``cache``: a dict kept by the caller, so each
     curve is read once."""
-    path = f'pose.bones["{bone}"].{rotation_path(mode)}'
+    return read_bones(action, slot, [bone], mode, frames, cache)[:, 0]
+
+
+def read_bones(action, slot, bones, mode, frames, cache=None):
+    """:func:`read_channels` of several bones in one ``mode``: values (F, K, 3 or 4).
+
+    Where a curve holds a point on every whole frame (samples, or keys on every frame) and
+    ``frames`` are whole, the values are taken, not interpolated (what interpolating at
+    the points gives, exactly)."""
     rest = rest_channels(mode)
-    out = np.tile(rest, (len(frames), 1))
+    frames = np.asarray(frames, float)
+    out = np.empty((len(frames), len(bones), rest.size))
+    out[:] = rest
+    whole = bool(frames.size) and np.array_equal(frames, np.round(frames))
+    for k, bone in enumerate(bones):
+        for i, co in enumerate(_channel_points(action, slot, bone, mode, rest.size, cache)):
+            if co is None:
+                continue
+            if whole and co[-1, 0] - co[0, 0] == len(co) - 1 and np.array_equal(
+                co[:, 0], co[0, 0] + np.arange(len(co))
+            ):
+                at = np.clip(frames - co[0, 0], 0, len(co) - 1).astype(int)
+                out[:, k, i] = co[at, 1]
+            else:
+                out[:, k, i] = np.interp(frames, co[:, 0], co[:, 1])
+    return out
+
+
+def _channel_points(action, slot, bone, mode, size, cache=None):
+    """[(N, 2) points or None] of the curves of a bone's ``mode`` channel in an action."""
+    path = f'pose.bones["{bone}"].{rotation_path(mode)}'
     key = (action.name, slot.handle if slot is not None else None, path)
     points = cache.get(key) if cache is not None else None
     if points is None:
         slot = slot or compat.action_slot(action)
         bag = compat.channelbag(action, slot) if slot is not None else None
-        found = [bag.fcurves.find(path, index=i) if bag else None for i in range(rest.size)]
+        found = [bag.fcurves.find(path, index=i) if bag else None for i in range(size)]
         points = [None if fc is None else curve_points(fc) for fc in found]
         if cache is not None:
             cache[key] = points
-    for i, co in enumerate(points):
-        if co is not None:
-            out[:, i] = np.interp(frames, co[:, 0], co[:, 1])
-    return out
+    return points

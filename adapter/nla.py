@@ -323,23 +323,25 @@ def _played_frames(played, n_frames):
         idx = idx[owner[idx] < 0]
         owner[idx] = s
         at[idx] = (idx - start) / scale
-    by_action = {}
-    for s, (action, slot, *_) in enumerate(played):
-        by_action.setdefault((action, slot), []).append(s)
+    keys = {}  # (action, slot) -> its number, in the order strips first play them
+    which = np.array([keys.setdefault((a, sl), len(keys)) for a, sl, *_ in played] + [-1])
+    playing = which[owner]  # the action on each frame (-1: none; owner -1 picks the last)
     out = {}
-    for key, strips in by_action.items():
-        idx = np.flatnonzero(np.isin(owner, strips))
+    for key, n in keys.items():
+        idx = np.flatnonzero(playing == n)
         out[key] = (idx, at[idx])
     return out
 
 
-def _lower_channels(frames_of, bone, mode, n_frames, cache=None):
-    """What the motion track gives a bone's ``mode`` channel on each plan frame, read from
-    the keys of its strips' actions (``frames_of``: :func:`_played_frames`), between keys
-    linearly; the rest value on frames no strip plays."""
-    out = np.tile(act_io.rest_channels(mode), (n_frames, 1))
+def _lower_channels(frames_of, bones, mode, n_frames, cache=None):
+    """What the motion track gives the ``mode`` channels of ``bones`` on each plan frame
+    (F, K, C), read from the keys of its strips' actions (``frames_of``:
+    :func:`_played_frames`), between keys linearly; the rest value on frames no strip
+    plays."""
+    out = np.empty((n_frames, len(bones), act_io.rest_channels(mode).size))
+    out[:] = act_io.rest_channels(mode)
     for (action, slot), (idx, at) in frames_of.items():
-        out[idx] = act_io.read_channels(action, slot, bone, mode, at, cache)
+        out[idx] = act_io.read_bones(action, slot, bones, mode, at, cache)
     return out
 
 
@@ -375,9 +377,7 @@ def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=(
         by_mode.setdefault(modes.get(skel.names[j], "QUATERNION"), []).append(k)
     for mode, ks in by_mode.items():  # the bones of one rotation mode at once
         names = [skel.names[changed[k]] for k in ks]
-        lower = np.stack(
-            [_lower_channels(frames_of, name, mode, world.frames, cache) for name in names], 1
-        )  # (F, K, C)
+        lower = _lower_channels(frames_of, names, mode, world.frames, cache)  # (F, K, C)
         delta = act_io.closest_channels(locked[:, changed[ks]], mode, lower) - lower
         delta[~moved[:, ks]] = 0.0
         path = act_io.rotation_path(mode)
