@@ -370,7 +370,7 @@ def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=(
     action, slot = compat.new_action(f"MP {obj.name} foot lock")
     action[CHARACTER_KEY] = obj.name
     frames = np.arange(world.frames, dtype=float)
-    cache, curves = {}, []
+    cache, curves, columns = {}, [], []
     frames_of = _played_frames(played, world.frames)
     by_mode = {}
     for k, j in enumerate(changed):
@@ -381,12 +381,14 @@ def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=(
         delta = act_io.closest_channels(locked[:, changed[ks]], mode, lower) - lower
         delta[~moved[:, ks]] = 0.0
         path = act_io.rotation_path(mode)
-        for i, name in enumerate(names):
-            curves += [
-                (f'pose.bones["{name}"].{path}', c, name, delta[:, i, c])
-                for c in range(delta.shape[-1])
-            ]
-    act_io.key_curves(action, slot, frames, curves, act_io.COMPACT)
+        columns.append(delta.reshape(world.frames, -1))  # bone by bone, channels in order
+        curves += [
+            (f'pose.bones["{name}"].{path}', c, name, None)
+            for name in names
+            for c in range(delta.shape[-1])
+        ]
+    values = np.concatenate(columns, axis=1) if columns else None
+    act_io.key_curves(action, slot, frames, curves, act_io.COMPACT, values=values)
     track = obj.animation_data.nla_tracks.new()
     track.name = TRACK_FOOT
     strip = track.strips.new(f"{obj.name} foot lock", int(frame_start), action)
