@@ -211,23 +211,35 @@ def _rest_offsets(sub):
     return out
 
 
+def _depths(parents):
+    """Bone indices grouped by depth below the root, shallowest first (both legs' bones
+    of one depth are posed together)."""
+    depth = np.zeros(len(parents), int)
+    for j, parent in enumerate(parents):  # parents come before children
+        depth[j] = depth[parent] + 1 if parent >= 0 else 0
+    return [np.flatnonzero(depth == d) for d in range(depth.max() + 1)]
+
+
 def _leg_world(sub, rest_offsets, root_pos, rotations):
     """World rotations (K, F, 3, 3) and positions (K, F, 3) of the bones of ``sub`` from
     its root position (F, 3) and rotation channels (K, F, 4) (root channel in the world;
     :func:`~motion_patches.skeleton.forward_kinematics` in rotations and positions). Bone
-    first, so each bone's frames are one contiguous block for the products."""
+    first, so each bone's frames are one contiguous block for the products; the bones of
+    one depth (the left and the right leg's) in one product."""
     basis = quat.to_matrix(rotations)
     nk, nf = basis.shape[:2]
     g = np.empty((nk, nf, 3, 3))
     p = np.empty((nk, nf, 3))
-    for j, parent in enumerate(sub.parents):
-        if parent < 0:
-            g[j] = sub.rest[j, :3, :3] @ basis[j]
-            p[j] = root_pos
-            continue
-        lr = rest_offsets[j]
-        g[j] = g[parent] @ (lr[:3, :3] @ basis[j])
-        p[j] = g[parent] @ lr[:3, 3] + p[parent]
+    roots, *levels = _depths(sub.parents)
+    for j in roots:
+        g[j] = sub.rest[j, :3, :3] @ basis[j]
+        p[j] = root_pos
+    for js in levels:
+        parent = sub.parents[js]
+        lr = rest_offsets[js]  # (n, 4, 4)
+        gp = g[parent]
+        g[js] = gp @ (lr[:, None, :3, :3] @ basis[js])
+        p[js] = np.einsum("nfij,nj->nfi", gp, lr[:, :3, 3]) + p[parent]
     return g, p
 
 
