@@ -103,17 +103,22 @@ def _run_means(xy, starts, ends):
     return sums / (ends - starts)[:, None]
 
 
+def _dot(u, v):
+    """(...,) dot products of (..., 3) vectors."""
+    return np.einsum("...i,...i->...", u, v)
+
+
 def _unit(v):
-    """(F, 3) vectors scaled to length one, and their lengths (F,)."""
-    n = np.sqrt(np.einsum("fi,fi->f", v, v))
-    return v / n[:, None], n
+    """(..., 3) vectors scaled to length one, and their lengths (...,)."""
+    n = np.sqrt(_dot(v, v))
+    return v / n[..., None], n
 
 
 def _rotate(axis, cos, sin, v):
-    """(F, 3) vectors ``v`` turned about unit ``axis`` (F, 3) by the angle whose cosine
+    """(..., 3) vectors ``v`` turned about unit ``axis`` (..., 3) by the angle whose cosine
     and sine are given (Rodrigues' formula: no matrices built)."""
-    along = np.einsum("fi,fi->f", axis, v) * (1.0 - cos)
-    return v * cos[:, None] + np.cross(axis, v) * sin[:, None] + axis * along[:, None]
+    along = _dot(axis, v) * (1.0 - cos)
+    return v * cos[..., None] + np.cross(axis, v) * sin[..., None] + axis * along[..., None]
 
 
 def _axis_angle_quat(axis, angle):
@@ -127,12 +132,12 @@ def _ik_turns(hip, knee, ankle, target, hinge, forward=None):
 
     The thigh turns by ``swing``, the shin by ``swing * knee``; both are built from an
     axis and an angle per frame, and the candidate legs are turned with Rodrigues'
-    formula, so no (F, 3, 3) matrix is made (the lock needs the turns, not matrices)."""
+    formula, so no (F, 3, 3) matrix is made (the lock needs the turns, not matrices).
+    Both senses of bending are tried at once (a leading axis of two)."""
     a, b = knee - hip, ankle - knee
-    l1 = np.sqrt(np.einsum("fi,fi->f", a, a))
-    l2 = np.sqrt(np.einsum("fi,fi->f", b, b))
+    l1, l2 = np.sqrt(_dot(a, a)), np.sqrt(_dot(b, b))
     ah = ankle - hip
-    d0 = np.clip(np.sqrt(np.einsum("fi,fi->f", ah, ah)), np.abs(l1 - l2) + 1e-4, l1 + l2 - 1e-4)
+    d0 = np.clip(np.sqrt(_dot(ah, ah)), np.abs(l1 - l2) + 1e-4, l1 + l2 - 1e-4)
     # Never snap the knee straight: the leg stretches at most to STRETCH of its length
     # (or as far as the recorded pose already did); a farther target is left a little short.
     reach = np.maximum(d0, STRETCH * (l1 + l2))
@@ -140,31 +145,30 @@ def _ik_turns(hip, knee, ankle, target, hinge, forward=None):
     d1 = np.clip(dist, np.abs(l1 - l2) + 1e-4, reach)
     interior = np.arccos(np.clip((l1**2 + l2**2 - d1**2) / (2 * l1 * l2), -1.0, 1.0))
     # The knee's angle now, from the bones themselves (exact even for a straight leg).
-    now = np.arccos(np.clip(np.einsum("fi,fi->f", -a, b) / (l1 * l2), -1.0, 1.0))
+    now = np.arccos(np.clip(_dot(-a, b) / (l1 * l2), -1.0, 1.0))
     delta = interior - now
     n = np.cross(a, b)
-    ns = np.sqrt(np.einsum("fi,fi->f", n, n))
+    ns = np.sqrt(_dot(n, n))
     n = np.where(ns[:, None] > 1e-6, n / np.maximum(ns, 1e-12)[:, None], hinge)
     cd, sd = np.cos(delta), np.sin(delta)
-    options = []
-    for sense in (1.0, -1.0):  # the other sense: the inverse turn
-        u, ul = _unit(a + _rotate(n, cd, sense * sd, b))
-        err = np.abs(ul - d1)
-        # the swing: the shortest arc taking u onto v
-        axis = np.cross(u, v)
-        s = np.sqrt(np.einsum("fi,fi->f", axis, axis))
-        angle = np.arctan2(s, np.clip(np.einsum("fi,fi->f", u, v), -1.0, 1.0))
-        axis = np.where(s[:, None] > 1e-9, axis / np.maximum(s, 1e-12)[:, None], [1.0, 0.0, 0.0])
-        if forward is None:
-            ahead = np.zeros(len(a))
-        else:
-            knee_dir = _rotate(axis, np.cos(angle), np.sin(angle), a)
-            knee_dir -= np.einsum("fi,fi->f", knee_dir, v)[:, None] * v
-            ahead = np.einsum("fi,fi->f", knee_dir, forward)
-        options.append((err, ahead, axis, angle))
-    (e1, f1, x1, t1), (e2, f2, x2, t2) = options
-    second = np.where(np.abs(e1 - e2) > 1e-7, e2 < e1, f2 > f1)
-    swing = _axis_angle_quat(np.where(second[:, None], x2, x1), np.where(second, t2, t1))
+    sense = np.array([1.0, -1.0])[:, None]  # the other sense: the inverse turn
+    u, ul = _unit(a + _rotate(n, cd, sense * sd, b))  # (2, F, 3), (2, F)
+    err = np.abs(ul - d1)
+    # the swing: the shortest arc taking u onto v
+    axis = np.cross(u, v)
+    s = np.sqrt(_dot(axis, axis))
+    angle = np.arctan2(s, np.clip(_dot(u, v), -1.0, 1.0))
+    axis = np.where(s[..., None] > 1e-9, axis / np.maximum(s, 1e-12)[..., None], [1.0, 0.0, 0.0])
+    if forward is None:
+        ahead = np.zeros_like(err)
+    else:
+        knee_dir = _rotate(axis, np.cos(angle), np.sin(angle), a)
+        knee_dir -= _dot(knee_dir, v)[..., None] * v
+        ahead = _dot(knee_dir, forward)
+    second = np.where(np.abs(err[0] - err[1]) > 1e-7, err[1] < err[0], ahead[1] > ahead[0])
+    swing = _axis_angle_quat(
+        np.where(second[:, None], axis[1], axis[0]), np.where(second, angle[1], angle[0])
+    )
     bend = _axis_angle_quat(n, np.where(second, -delta, delta))
     return swing, bend
 
@@ -322,14 +326,18 @@ def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None):
     def both(a):  # (2, F, ...) -> (2F, ...): the legs one after the other
         return a.reshape((2 * n,) + a.shape[2:])
 
-    target = both(p[ankle]).copy()
-    target[:, :2] += d.reshape(2 * n, 2)
-    hinge = both(g[hip, :, :, 0])  # the thigh's X axis: the knee's hinge in a rest-like leg
+    rows = np.flatnonzero(moving.reshape(2 * n))  # the IK where a correction applies
+    target = both(p[ankle])[rows]
+    target[:, :2] += d.reshape(2 * n, 2)[rows]
+    hinge = both(g[hip, :, :, 0])[rows]  # the thigh's X axis: the knee's hinge in a rest-like leg
     h = ground[:, 2]
-    forward = np.tile(np.column_stack((np.cos(h), np.sin(h), np.zeros_like(h))), (2, 1))
-    swing, bend = _ik_turns(both(p[hip]), both(p[knee]), both(p[ankle]), target, hinge, forward)
-    still = ~moving.reshape(2 * n)
-    swing[still] = bend[still] = (1.0, 0.0, 0.0, 0.0)
+    forward = np.column_stack((np.cos(h), np.sin(h), np.zeros_like(h)))[rows % n]
+    swing = np.zeros((2 * n, 4))
+    swing[:, 0] = 1.0
+    bend = swing.copy()
+    swing[rows], bend[rows] = _ik_turns(
+        both(p[hip])[rows], both(p[knee])[rows], both(p[ankle])[rows], target, hinge, forward
+    )
     swing, bend = swing.reshape(2, n, 4), bend.reshape(2, n, 4)
     changed = [j for side in range(2) if moving[side].any() for j, _ in legs.bones[side]]
     out = world.rotations.copy()
