@@ -342,24 +342,24 @@ def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None):
     changed = [j for side in range(2) if moving[side].any() for j, _ in legs.bones[side]]
     out = world.rotations.copy()
     local = out[:, changed].astype(float)  # (F, K, 4)
-    i = 0
-    for side in range(2):
-        if not moving[side].any():
-            continue
-        # the turn of each bone relative to its parent's (thigh: the swing; shin: the bend
-        # under the swung thigh; ankle: back to its world rotation; segments: none)
-        rel = {"thigh": swing[side], "shin": bend[side]}
-        rel["ankle"] = quat.conj(quat.mul(swing[side], bend[side]))
-        for j, turn in legs.bones[side]:
-            if turn is not None:
-                # M^-1 T M (M = the parent's world rotation times the bone's rest offset):
-                # the turn's axis taken into the bone's parent-rest frame, rest^T g^T axis
-                k = legs.at[j]
-                axis = np.einsum("fji,fj->fi", g[sub.parents[k]], rel[turn][:, 1:])
-                axis = axis @ rest[k, :3, :3]
-                turned = np.concatenate((rel[turn][:, :1], axis), axis=1)
-                local[:, i] = quat.mul(turned, local[:, i])
-            i += 1
+    # the turn of each bone relative to its parent's (thigh: the swing; shin: the bend under
+    # the swung thigh; ankle: back to its world rotation; limb segments: none)
+    rel = {"thigh": swing, "shin": bend, "ankle": quat.conj(quat.mul(swing, bend))}
+    at, turns, sides, kinds = [], [], [], []  # the turned bones: place in local, bone in sub
+    for i, (side, (j, turn)) in enumerate(
+        (side, b) for side in range(2) if moving[side].any() for b in legs.bones[side]
+    ):
+        if turn is not None:
+            at.append(i)
+            turns.append(legs.at[j])
+            sides.append(side)
+            kinds.append(turn)
+    t = np.stack([rel[kind][side] for kind, side in zip(kinds, sides)])  # (T, F, 4)
+    # M^-1 T M (M = the parent's world rotation times the bone's rest offset): the turn's
+    # axis taken into the bone's parent-rest frame, rest^T g^T axis; all turned bones at once
+    axis = np.einsum("tfji,tfj->tfi", g[sub.parents[turns]], t[..., 1:]) @ rest[turns, :3, :3]
+    t[..., 1:] = axis
+    local[:, at] = quat.mul(np.swapaxes(t, 0, 1), local[:, at])
     local /= np.sqrt(np.einsum("fkc,fkc->fk", local, local))[..., None]
     local = quat.make_continuous(local, axis=0)
     local[:, local[0, :, 0] < 0] *= -1  # the first frame's w >= 0, as quat.from_matrix gives
