@@ -96,6 +96,29 @@ def planted_offsets(ankle_xy, toe_xy, ankle_on, toe_on, blend=BLEND_FRAMES):
     return out
 
 
+def _both_planted_offsets(ankle_xy, toe_xy, contacts, blend=BLEND_FRAMES):
+    """(2, F, 2) :func:`planted_offsets` of both feet (ankle and toe xy (2, F, 2), the
+    motion's contacts (F, 4)) in one call: the feet one after the other, ``blend`` + 1
+    unplanted frames between them, so no run, anchor or fade reaches from one to the
+    other (a fade ends ``blend`` + 1 frames from its contact) and each foot gets what it
+    gets alone."""
+    n, gap = ankle_xy.shape[1], blend + 1
+
+    def joined(a, fill):  # (2, F, ...) -> (2F + gap, ...)
+        pad = np.full((gap,) + a.shape[2:], fill, dtype=a.dtype)
+        return np.concatenate((a[0], pad, a[1]))
+
+    on = np.asarray(contacts, bool).T.reshape(2, 2, n)  # (side, ankle/toe, F)
+    d = planted_offsets(
+        joined(ankle_xy, 0.0),
+        joined(toe_xy, 0.0),
+        joined(on[:, 0], False),
+        joined(on[:, 1], False),
+        blend,
+    )
+    return np.stack((d[:n], d[n + gap :]))
+
+
 def _run_means(xy, starts, ends):
     """(R, 2) mean of ``xy`` (F, 2) over each run [start, end), in one reduction."""
     padded = np.vstack((xy, np.zeros((1, xy.shape[1]))))  # an end may be F
@@ -305,20 +328,10 @@ def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None):
     rot[legs.root] = root_channel_to_ground(sub, rot[legs.root], -ground[:, 2])  # to_world's
     g, p = _leg_world(sub, rest, pos, rot)
     hip, knee, ankle, toe = legs.legs.T  # (2,) each: left, right
-    d = np.stack(
-        [
-            planted_offsets(
-                p[ankle[s], :, :2],
-                p[toe[s], :, :2],
-                world.contacts[:, 2 * s],
-                world.contacts[:, 2 * s + 1],
-                blend,
-            )
-            if corrections is None
-            else corrections(s, p[ankle[s], :, :2], p[toe[s], :, :2])
-            for s in range(2)
-        ]
-    )  # (2, F, 2)
+    if corrections is None:
+        d = _both_planted_offsets(p[ankle, :, :2], p[toe, :, :2], world.contacts, blend)
+    else:
+        d = np.stack([corrections(s, p[ankle[s], :, :2], p[toe[s], :, :2]) for s in range(2)])
     moving = np.sqrt(np.einsum("sfi,sfi->sf", d, d)) > 1e-7  # (2, F)
     if not moving.any():
         return quat.make_continuous(world.rotations.copy(), axis=0)

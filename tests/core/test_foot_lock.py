@@ -253,3 +253,30 @@ def test_the_vectorised_lock_is_the_frame_by_frame_one(walk_patch, walk, blend):
     assert np.all(np.abs(dots - 1.0) < 1e-9)
     others = [j for j in range(len(skel.names)) if j not in changed]
     assert np.array_equal(np.abs(got[:, others]), np.abs(walk.rotations[:, others]))
+
+
+@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("blend", [1, 4])
+def test_both_feet_at_once_are_each_foot_alone(walk_patch, walk, seed, blend):
+    """The feet's planted offsets found in one call (one foot after the other, a gap of
+    unplanted frames between) are, to the bit, each foot's own: on the planned walk's feet
+    and contacts and on random contacts running into the ends of the motion."""
+    skel = walk_patch.gait.skeleton
+    p = walk.world_matrices(skel)[..., :3, 3]
+    feet = foot_lock.leg_chains(skel)
+    ankle = np.stack([p[:, c[2], :2] for c in feet])
+    toe = np.stack([p[:, c[3], :2] for c in feet])
+    contacts = walk.contacts.copy()
+    if seed:
+        rng = np.random.default_rng(seed)
+        contacts = np.repeat(rng.random((walk.frames // 6 + 1, 4)) < 0.5, 6, axis=0)
+        contacts = contacts[: walk.frames]
+        contacts[:, 1::2] |= contacts[:, ::2]
+        contacts[-3:, 0] = contacts[:2, 3] = True  # planted at the ends
+    got = foot_lock._both_planted_offsets(ankle, toe, contacts, blend)
+    for s in range(2):
+        want = foot_lock.planted_offsets(
+            ankle[s], toe[s], contacts[:, 2 * s], contacts[:, 2 * s + 1], blend
+        )
+        assert np.array_equal(got[s], want)
+        assert np.any(want != 0)
