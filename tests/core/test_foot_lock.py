@@ -273,6 +273,12 @@ def test_both_feet_at_once_are_each_foot_alone(walk_patch, walk, seed, blend):
         contacts = contacts[: walk.frames]
         contacts[:, 1::2] |= contacts[:, ::2]
         contacts[-3:, 0] = contacts[:2, 3] = True  # planted at the ends
+    # the left foot lifted just before the end, the right put down just after the start:
+    # each fades within ``blend`` frames of where the other's frames begin when joined
+    contacts[-8:-2, :2] = [[True, True]] * 5 + [[False, True]]
+    contacts[-2:, :2] = False
+    contacts[:2, 2:] = False
+    contacts[2:8, 2:] = True
     got = foot_lock._both_planted_offsets(ankle, toe, contacts, blend)
     for s in range(2):
         want = foot_lock.planted_offsets(
