@@ -308,8 +308,9 @@ def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None):
     """Rotation channels (F, J, 4) of ``world`` (a Motion) with planted feet pinned.
 
     Only the hip (thigh) and knee (shin) channels of each leg change, and the ankle's so
-    that the foot keeps its world orientation. Both legs are solved at once over all
-    frames, on the legs' bones alone (:func:`_leg_skeleton`). ``offsets`` is a function
+    that the foot keeps its world orientation. Both legs are solved at once, on every
+    frame a correction applies to, on the legs' bones alone (:func:`_leg_skeleton`).
+    ``offsets`` is a function
     (side, ankle xy (F, 2), toe xy (F, 2)) -> (F, 2) horizontal ankle corrections
     replacing :func:`planted_offsets` (a turn in place moves its feet its own way).
 
