@@ -42,7 +42,7 @@ from .motion_patches.defaults import GOAL_FACING, STITCHING
 from .motion_patches.defaults import PLANNING as DEFAULTS
 from .motion_patches.environment import Obstacle
 from .motion_patches.gait import MIN_TURN, build_gait
-from .motion_patches.inplace import to_world
+from .motion_patches.inplace import root_positions
 from .motion_patches.locomotion_patch import bake
 from .motion_patches.motion import Motion, concatenate
 from .motion_patches.planner import (
@@ -807,10 +807,7 @@ def _fit_frame_range(scene):
     """Apply :func:`fitted_frame_range` to ``scene`` when its Fit Frame Range is on."""
     if not getattr(scene.motion_patches, "fit_frame_range", True):
         return
-    plans = [
-        (m["frame_start"], m["frame_end"])
-        for m in (storage.plan_meta(ob) for ob in scene.objects if storage.has_plan(ob))
-    ]
+    plans = [storage.plan_range(ob) for ob in scene.objects if storage.has_plan(ob)]
     if plans:
         ours = scene.get(FRAME_RANGE_KEY)
         start, end = fitted_frame_range(
@@ -866,7 +863,7 @@ def _write(
         bounds,
         layer_keys,
     )
-    root = to_world(skel, world.ground, world.root_local, world.rotations)[0]  # the hips
+    root = root_positions(world.ground, world.root_local)  # the hips
     foot = contacts.foot_joints(skel)
     frame_end = frame_start + world.frames - 1
     if rig is not None:
@@ -1502,12 +1499,12 @@ def plan_crowd(
         except PathNotFound:
             return None
         versions[k].append([n, plan, *synthesised(n, plan)])
-        return _root_track(patch, rigs[n], versions[k][-1][3]), versions[k][-1][4]
+        return _root_track(versions[k][-1][3]), versions[k][-1][4]
 
     # Resolved a little wider than reported: a hold is laid into the written motion by a time
     # warp, which may bring a pair a few millimetres nearer than the track the table saw.
     schedules, _ = crowd.resolve(
-        [_root_track(patch, rigs[p[0]], p[3]) for p in planned],
+        [_root_track(p[3]) for p in planned],
         replan,
         spacing + CROWD_RESOLVE_SLACK,
         radius,
@@ -1531,7 +1528,7 @@ def plan_crowd(
     # what is reported is checked on the motion written, whatever resolved it
     ranked = sorted(range(len(planned)), key=lambda k: schedules[k].rank)  # order kept
     conflicts = crowd.conflicts_of(
-        [_root_track(patch, rigs[planned[k][0]], planned[k][3]) for k in ranked],
+        [_root_track(planned[k][3]) for k in ranked],
         [schedules[k].delay for k in ranked],
         spacing,
     )
@@ -1933,12 +1930,11 @@ def _with_hold(plan, raw, bounds, at, hold, ramp):
     return dataclasses.replace(plan, pieces=pieces), raw
 
 
-def _root_track(patch, rig, placed):
+def _root_track(placed):
     """(frames, 2) ground position of the root joint of a placed motion (:func:`_placed`):
     what a crowd keeps apart (the hips sway a few centimetres about the ground track)."""
-    skel = rig.target if rig is not None else patch.gait.skeleton
     world = placed[2]
-    return to_world(skel, world.ground, world.root_local, world.rotations)[0][:, :2]
+    return root_positions(world.ground, world.root_local)[:, :2]
 
 
 # --- crowds: duplicating a source armature ---------------------------------------------------

@@ -349,7 +349,7 @@ LINEAR = 1  # Keyframe.interpolation enum value of 'LINEAR' (4.5 and 5.0)
 COMPACT = 1e-5  # tolerance of compact keys (metres, radians, quaternion components)
 
 
-def key_curves(action, slot, frames, curves, tol=None, stored=None):
+def key_curves(action, slot, frames, curves, tol=None, stored=None, values=None):
     """Create the F-curves ``curves`` = [(data_path, index, group, values (F,))], all keyed
     at ``frames``, each in one bulk write (``keyframe_points.add`` + ``foreach_set`` of
     float32 arrays, the type Blender stores, so nothing is converted value by value).
@@ -360,9 +360,12 @@ def key_curves(action, slot, frames, curves, tol=None, stored=None):
     (``convert_to_samples``: 16 bytes a frame in the .blend instead of a keyframe's 72; it
     plays the same values, linear between frames). ``stored``: those choices made already
     (:func:`motion_patches.keys.plan_columns`). Curves to be sampled get no interpolation
-    or handles: sampling reads a key's own value on its frame, and the keys are dropped."""
+    or handles: sampling reads a key's own value on its frame, and the keys are dropped.
+    ``values``: the curves' values as one (F, C) array already (their ``curves`` entries
+    are then not read)."""
     frames = np.asarray(frames, float)
-    values = np.column_stack([np.asarray(c[3], float) for c in curves]) if curves else None
+    if values is None and curves:
+        values = np.column_stack([np.asarray(c[3], float) for c in curves])
     if stored is None:
         stored = (
             key_plan.plan_columns(values, tol)
@@ -423,7 +426,8 @@ def key_pose(action, slot, skel, frames, root_location, rotations, modes=None, t
     ``tol``: store the curves compactly (:func:`key_curves`)."""
     modes = modes or {}
     root = skel.names[skel.root]
-    curves = [(f'pose.bones["{root}"].location', i, root, root_location[:, i]) for i in range(3)]
+    curves = [(f'pose.bones["{root}"].location', i, root, None) for i in range(3)]
+    columns = [np.asarray(root_location, float)]  # every curve's values, in curve order
     by_mode = {}
     for j, name in enumerate(skel.names):
         by_mode.setdefault(modes.get(name, "QUATERNION"), []).append(j)
@@ -434,13 +438,13 @@ def key_pose(action, slot, skel, frames, root_location, rotations, modes=None, t
             if mode == "QUATERNION"
             else rotation_channels(rotations[:, joints], mode)
         )
-        for c, j in enumerate(joints):
+        columns.append(values.reshape(len(values), -1))  # bone by bone, channels in order
+        for j in joints:
             name = skel.names[j]
             curves += [
-                (f'pose.bones["{name}"].{path}', i, name, values[:, c, i])
-                for i in range(values.shape[-1])
+                (f'pose.bones["{name}"].{path}', i, name, None) for i in range(values.shape[-1])
             ]
-    key_curves(action, slot, frames, curves, tol)
+    key_curves(action, slot, frames, curves, tol, values=np.concatenate(columns, axis=1))
 
 
 def read_channels(action, slot, bone, mode, frames, cache=None):
@@ -448,19 +452,50 @@ def read_channels(action, slot, bone, mode, frames, cache=None):
     linear between keys (or samples), the rest value where the channel is not keyed.
     Only that channel's curves are read. ``cache``: a dict kept by the caller, so each
     curve is read once."""
-    path = f'pose.bones["{bone}"].{rotation_path(mode)}'
+    return read_bones(action, slot, [bone], mode, frames, cache)[:, 0]
+
+
+def read_bones(action, slot, bones, mode, frames, cache=None):
+    """:func:`read_channels` of several bones in one ``mode``: values (F, K, 3 or 4).
+
+    Curves with a point on every whole frame of one span (samples, or keys on every
+    frame: most curves of an action), read at whole ``frames``, are taken at once, not
+    interpolated (what interpolating at the points gives, exactly); the others are
+    interpolated one by one."""
     rest = rest_channels(mode)
-    out = np.tile(rest, (len(frames), 1))
+    frames = np.asarray(frames, float)
+    out = np.empty((len(frames), len(bones), rest.size))
+    out[:] = rest
+    whole = bool(frames.size) and np.array_equal(frames, np.round(frames))
+    by_length = {}  # number of points -> [(bone, component, points)]
+    for k, bone in enumerate(bones):
+        for i, co in enumerate(_channel_points(action, slot, bone, mode, rest.size, cache)):
+            if co is not None:
+                by_length.setdefault(len(co), []).append((k, i, co))
+    for n, curves in by_length.items():
+        at = np.stack([co[:, 0] for _, _, co in curves])  # (M, n) the points' frames
+        dense = whole and np.array_equal(at, np.broadcast_to(at[0, 0] + np.arange(n), at.shape))
+        if dense:
+            ks, cs = [k for k, _, _ in curves], [i for _, i, _ in curves]
+            pick = np.clip(frames - at[0, 0], 0, n - 1).astype(int)
+            values = np.stack([co[:, 1] for _, _, co in curves])  # (M, n)
+            out[:, ks, cs] = values[:, pick].T
+            continue
+        for k, i, co in curves:
+            out[:, k, i] = np.interp(frames, co[:, 0], co[:, 1])
+    return out
+
+
+def _channel_points(action, slot, bone, mode, size, cache=None):
+    """[(N, 2) points or None] of the curves of a bone's ``mode`` channel in an action."""
+    path = f'pose.bones["{bone}"].{rotation_path(mode)}'
     key = (action.name, slot.handle if slot is not None else None, path)
     points = cache.get(key) if cache is not None else None
     if points is None:
         slot = slot or compat.action_slot(action)
         bag = compat.channelbag(action, slot) if slot is not None else None
-        found = [bag.fcurves.find(path, index=i) if bag else None for i in range(rest.size)]
+        found = [bag.fcurves.find(path, index=i) if bag else None for i in range(size)]
         points = [None if fc is None else curve_points(fc) for fc in found]
         if cache is not None:
             cache[key] = points
-    for i, co in enumerate(points):
-        if co is not None:
-            out[:, i] = np.interp(frames, co[:, 0], co[:, 1])
-    return out
+    return points

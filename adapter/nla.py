@@ -15,9 +15,9 @@ import json
 
 import numpy as np
 
-from ..motion_patches import quat
+from ..motion_patches import foot_lock, quat
 from ..motion_patches.inplace import rest_facing, root_channel_to_ground
-from ..motion_patches.skeleton import root_position_to_location
+from ..motion_patches.skeleton import per_skeleton, root_position_to_location
 from . import actions as act_io
 from . import compat
 from . import rig as rig_io
@@ -32,7 +32,10 @@ CHARACTER_KEY = "motion_patches_character"
 STASH_PREFIX = TRACK_PREFIX + "stash: "
 
 
+@per_skeleton
 def facing_angle(skel):
+    """The rig's rest facing as an angle from +X (every action and root track of a write
+    turns by it)."""
     f = rest_facing(skel)
     return float(np.arctan2(f[1], f[0]))
 
@@ -183,16 +186,7 @@ def _inplace_action(name, skel, motion, tags, modes=None):
     for k, v in tags.items():
         action[k] = v
     frames = np.arange(motion.frames, dtype=float)
-    act_io.key_pose(
-        action,
-        slot,
-        skel,
-        frames,
-        loc,
-        quat.make_continuous(rot, axis=0),
-        modes,
-        tol=act_io.COMPACT,
-    )
+    act_io.key_pose(action, slot, skel, frames, loc, rot, modes, tol=act_io.COMPACT)
     return action, slot
 
 
@@ -329,23 +323,25 @@ def _played_frames(played, n_frames):
         idx = idx[owner[idx] < 0]
         owner[idx] = s
         at[idx] = (idx - start) / scale
-    by_action = {}
-    for s, (action, slot, *_) in enumerate(played):
-        by_action.setdefault((action, slot), []).append(s)
+    keys = {}  # (action, slot) -> its number, in the order strips first play them
+    which = np.array([keys.setdefault((a, sl), len(keys)) for a, sl, *_ in played] + [-1])
+    playing = which[owner]  # the action on each frame (-1: none; owner -1 picks the last)
     out = {}
-    for key, strips in by_action.items():
-        idx = np.flatnonzero(np.isin(owner, strips))
+    for key, n in keys.items():
+        idx = np.flatnonzero(playing == n)
         out[key] = (idx, at[idx])
     return out
 
 
-def _lower_channels(frames_of, bone, mode, n_frames, cache=None):
-    """What the motion track gives a bone's ``mode`` channel on each plan frame, read from
-    the keys of its strips' actions (``frames_of``: :func:`_played_frames`), between keys
-    linearly; the rest value on frames no strip plays."""
-    out = np.tile(act_io.rest_channels(mode), (n_frames, 1))
+def _lower_channels(frames_of, bones, mode, n_frames, cache=None):
+    """What the motion track gives the ``mode`` channels of ``bones`` on each plan frame
+    (F, K, C), read from the keys of its strips' actions (``frames_of``:
+    :func:`_played_frames`), between keys linearly; the rest value on frames no strip
+    plays."""
+    out = np.empty((n_frames, len(bones), act_io.rest_channels(mode).size))
+    out[:] = act_io.rest_channels(mode)
     for (action, slot), (idx, at) in frames_of.items():
-        out[idx] = act_io.read_channels(action, slot, bone, mode, at, cache)
+        out[idx] = act_io.read_bones(action, slot, bones, mode, at, cache)
     return out
 
 
@@ -365,23 +361,34 @@ def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=(
     tests/blender/test_rotation_modes.py.) On the frames where the lock leaves a bone alone
     its delta is exactly zero (the motion plays unchanged; the curve stays compact)."""
     modes = modes or {}
-    base = world.rotations
-    moved = np.abs(np.abs(np.sum(base * locked, axis=-1)) - 1.0) > 1e-9  # (F, J)
-    changed = np.flatnonzero(moved.any(axis=0))
+    # of the bones the lock may turn (the legs), those it turned, and on which frames
+    legs = foot_lock.locked_bones(skel)
+    dots = np.einsum("fjc,fjc->fj", world.rotations[:, legs], locked[:, legs])
+    moved = np.abs(np.abs(dots) - 1.0) > 1e-9  # (F, legs)
+    turned = moved.any(axis=0)
+    changed, moved = legs[turned], moved[:, turned]
     action, slot = compat.new_action(f"MP {obj.name} foot lock")
     action[CHARACTER_KEY] = obj.name
     frames = np.arange(world.frames, dtype=float)
-    cache, curves = {}, []
+    cache, curves, columns = {}, [], []
     frames_of = _played_frames(played, world.frames)
-    for j in changed:
-        name = skel.names[j]
-        mode = modes.get(name, "QUATERNION")
-        lower = _lower_channels(frames_of, name, mode, world.frames, cache)
-        delta = act_io.closest_channels(locked[:, j], mode, lower) - lower
-        delta[~moved[:, j]] = 0.0
-        path = f'pose.bones["{name}"].{act_io.rotation_path(mode)}'
-        curves += [(path, i, name, delta[:, i]) for i in range(delta.shape[1])]
-    act_io.key_curves(action, slot, frames, curves, act_io.COMPACT)
+    by_mode = {}
+    for k, j in enumerate(changed):
+        by_mode.setdefault(modes.get(skel.names[j], "QUATERNION"), []).append(k)
+    for mode, ks in by_mode.items():  # the bones of one rotation mode at once
+        names = [skel.names[changed[k]] for k in ks]
+        lower = _lower_channels(frames_of, names, mode, world.frames, cache)  # (F, K, C)
+        delta = act_io.closest_channels(locked[:, changed[ks]], mode, lower) - lower
+        delta[~moved[:, ks]] = 0.0
+        path = act_io.rotation_path(mode)
+        columns.append(delta.reshape(world.frames, -1))  # bone by bone, channels in order
+        curves += [
+            (f'pose.bones["{name}"].{path}', c, name, None)
+            for name in names
+            for c in range(delta.shape[-1])
+        ]
+    values = np.concatenate(columns, axis=1) if columns else None
+    act_io.key_curves(action, slot, frames, curves, act_io.COMPACT, values=values)
     track = obj.animation_data.nla_tracks.new()
     track.name = TRACK_FOOT
     strip = track.strips.new(f"{obj.name} foot lock", int(frame_start), action)

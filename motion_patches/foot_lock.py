@@ -15,7 +15,8 @@ import numpy as np
 
 from . import quat
 from .contacts import CONTACT_SPEED, foot_joints, runs
-from .inplace import to_world
+from .inplace import root_channel_to_ground, root_positions
+from .skeleton import per_skeleton
 
 BLEND_FRAMES = 4  # frames the correction takes to ease in before and out after a contact
 STILL_FACTOR = 2.0  # x contacts.CONTACT_SPEED: a planted joint moving faster is not planted,
@@ -72,17 +73,14 @@ def still_contacts(skel, world, fps):
     planted = np.array(world.contacts, bool)
     if world.frames < 3:
         return planted
-    chains = leg_chains(skel)
-    sub, idx = _leg_skeleton(skel, chains)
-    pos, rot = to_world(sub, world.ground, world.root_local, world.rotations[:, idx])
-    _, p = _leg_world(sub, _rest_offsets(sub), pos, rot)
-    at = {int(j): i for i, j in enumerate(idx)}
+    p = _leg_positions(_legs(skel), world)
     limit = np.maximum(
         STILL_FACTOR * CONTACT_SPEED / fps, STILL_SHARE * _speeds(world.ground[:, :2])
     )
-    for s, (_, _, ankle, toe) in enumerate(chains):
-        for c, joint in ((2 * s, ankle), (2 * s + 1, toe)):
-            planted[:, c] &= _speeds(p[:, at[joint], :2]) <= limit
+    _, _, ankle, toe = _legs(skel).legs.T  # (2,) each: left, right
+    for s in range(2):
+        for c, joint in ((2 * s, ankle[s]), (2 * s + 1, toe[s])):
+            planted[:, c] &= _speeds(p[joint, :, :2]) <= limit
     return planted
 
 
@@ -136,6 +134,29 @@ def planted_offsets(ankle_xy, toe_xy, ankle_on, toe_on, blend=BLEND_FRAMES):
     return out
 
 
+def _both_planted_offsets(ankle_xy, toe_xy, contacts, blend=BLEND_FRAMES):
+    """(2, F, 2) :func:`planted_offsets` of both feet (ankle and toe xy (2, F, 2), the
+    motion's contacts (F, 4)) in one call: the feet one after the other, ``blend`` + 1
+    unplanted frames between them, so no run, anchor or fade reaches from one to the
+    other (a fade ends ``blend`` + 1 frames from its contact) and each foot gets what it
+    gets alone."""
+    n, gap = ankle_xy.shape[1], blend + 1
+
+    def joined(a, fill):  # (2, F, ...) -> (2F + gap, ...)
+        pad = np.full((gap,) + a.shape[2:], fill, dtype=a.dtype)
+        return np.concatenate((a[0], pad, a[1]))
+
+    on = np.asarray(contacts, bool).T.reshape(2, 2, n)  # (side, ankle/toe, F)
+    d = planted_offsets(
+        joined(ankle_xy, 0.0),
+        joined(toe_xy, 0.0),
+        joined(on[:, 0], False),
+        joined(on[:, 1], False),
+        blend,
+    )
+    return np.stack((d[:n], d[n + gap :]))
+
+
 def _run_means(xy, starts, ends):
     """(R, 2) mean of ``xy`` (F, 2) over each run [start, end), in one reduction."""
     padded = np.vstack((xy, np.zeros((1, xy.shape[1]))))  # an end may be F
@@ -143,14 +164,74 @@ def _run_means(xy, starts, ends):
     return sums / (ends - starts)[:, None]
 
 
-def _rotation_between(u, v):
-    """(F, 3, 3) rotations taking unit vectors u to v along the shortest arc."""
+def _dot(u, v):
+    """(...,) dot products of (..., 3) vectors."""
+    return np.einsum("...i,...i->...", u, v)
+
+
+def _unit(v):
+    """(..., 3) vectors scaled to length one, and their lengths (...,)."""
+    n = np.sqrt(_dot(v, v))
+    return v / n[..., None], n
+
+
+def _rotate(axis, cos, sin, v):
+    """(..., 3) vectors ``v`` turned about unit ``axis`` (..., 3) by the angle whose cosine
+    and sine are given (Rodrigues' formula: no matrices built)."""
+    along = _dot(axis, v) * (1.0 - cos)
+    return v * cos[..., None] + np.cross(axis, v) * sin[..., None] + axis * along[..., None]
+
+
+def _axis_angle_quat(axis, angle):
+    """(F, 4) unit quaternions of turns by ``angle`` (F,) about unit ``axis`` (F, 3)."""
+    half = 0.5 * angle
+    return np.concatenate((np.cos(half)[:, None], axis * np.sin(half)[:, None]), axis=1)
+
+
+def _ik_turns(hip, knee, ankle, target, hinge, forward=None):
+    """The two-bone IK of :func:`two_bone_ik` as quaternions (F, 4): (swing, knee).
+
+    The thigh turns by ``swing``, the shin by ``swing * knee``; both are built from an
+    axis and an angle per frame, and the candidate legs are turned with Rodrigues'
+    formula, so no (F, 3, 3) matrix is made (the lock needs the turns, not matrices).
+    Both senses of bending are tried at once (a leading axis of two)."""
+    a, b = knee - hip, ankle - knee
+    l1, l2 = np.sqrt(_dot(a, a)), np.sqrt(_dot(b, b))
+    ah = ankle - hip
+    d0 = np.clip(np.sqrt(_dot(ah, ah)), np.abs(l1 - l2) + 1e-4, l1 + l2 - 1e-4)
+    # Never snap the knee straight: the leg stretches at most to STRETCH of its length
+    # (or as far as the recorded pose already did); a farther target is left a little short.
+    reach = np.maximum(d0, STRETCH * (l1 + l2))
+    v, dist = _unit(target - hip)
+    d1 = np.clip(dist, np.abs(l1 - l2) + 1e-4, reach)
+    interior = np.arccos(np.clip((l1**2 + l2**2 - d1**2) / (2 * l1 * l2), -1.0, 1.0))
+    # The knee's angle now, from the bones themselves (exact even for a straight leg).
+    now = np.arccos(np.clip(_dot(-a, b) / (l1 * l2), -1.0, 1.0))
+    delta = interior - now
+    n = np.cross(a, b)
+    ns = np.sqrt(_dot(n, n))
+    n = np.where(ns[:, None] > 1e-6, n / np.maximum(ns, 1e-12)[:, None], hinge)
+    cd, sd = np.cos(delta), np.sin(delta)
+    sense = np.array([1.0, -1.0])[:, None]  # the other sense: the inverse turn
+    u, ul = _unit(a + _rotate(n, cd, sense * sd, b))  # (2, F, 3), (2, F)
+    err = np.abs(ul - d1)
+    # the swing: the shortest arc taking u onto v
     axis = np.cross(u, v)
-    s = np.linalg.norm(axis, axis=-1)
-    c = np.clip(np.sum(u * v, axis=-1), -1.0, 1.0)
-    angle = np.arctan2(s, c)
-    axis = np.where(s[:, None] > 1e-9, axis / np.maximum(s, 1e-12)[:, None], [1.0, 0.0, 0.0])
-    return quat.to_matrix(quat.exp(axis * angle[:, None]))
+    s = np.sqrt(_dot(axis, axis))
+    angle = np.arctan2(s, np.clip(_dot(u, v), -1.0, 1.0))
+    axis = np.where(s[..., None] > 1e-9, axis / np.maximum(s, 1e-12)[..., None], [1.0, 0.0, 0.0])
+    if forward is None:
+        ahead = np.zeros_like(err)
+    else:
+        knee_dir = _rotate(axis, np.cos(angle), np.sin(angle), a)
+        knee_dir -= _dot(knee_dir, v)[..., None] * v
+        ahead = _dot(knee_dir, forward)
+    second = np.where(np.abs(err[0] - err[1]) > 1e-7, err[1] < err[0], ahead[1] > ahead[0])
+    swing = _axis_angle_quat(
+        np.where(second[:, None], axis[1], axis[0]), np.where(second, angle[1], angle[0])
+    )
+    bend = _axis_angle_quat(n, np.where(second, -delta, delta))
+    return swing, bend
 
 
 def two_bone_ik(hip, knee, ankle, target, hinge, forward=None):
@@ -162,39 +243,8 @@ def two_bone_ik(hip, knee, ankle, target, hinge, forward=None):
     of bending, the one that reaches the distance wins; where both do (a straight leg) the
     one that puts the knee towards ``forward`` (F, 3). Returns (R_thigh, R_shin):
     left-multiply the thigh's and the shin's world rotations by them."""
-    a, b = knee - hip, ankle - knee
-    l1, l2 = np.linalg.norm(a, axis=-1), np.linalg.norm(b, axis=-1)
-    d0 = np.clip(np.linalg.norm(ankle - hip, axis=-1), np.abs(l1 - l2) + 1e-4, l1 + l2 - 1e-4)
-    # Never snap the knee straight: the leg stretches at most to STRETCH of its length
-    # (or as far as the recorded pose already did); a farther target is left a little short.
-    reach = np.maximum(d0, STRETCH * (l1 + l2))
-    d1 = np.clip(np.linalg.norm(target - hip, axis=-1), np.abs(l1 - l2) + 1e-4, reach)
-
-    def interior(d):
-        return np.arccos(np.clip((l1**2 + l2**2 - d**2) / (2 * l1 * l2), -1.0, 1.0))
-
-    # The knee's angle now, from the bones themselves (exact even for a straight leg).
-    now = np.arccos(np.clip(np.sum(-a * b, axis=-1) / (l1 * l2), -1.0, 1.0))
-    delta = interior(d1) - now
-    n = np.cross(a, b)
-    ns = np.linalg.norm(n, axis=-1)
-    n = np.where(ns[:, None] > 1e-6, n / np.maximum(ns, 1e-12)[:, None], hinge)
-    v = target - hip
-    v = v / np.linalg.norm(v, axis=-1, keepdims=True)
-    bend = quat.to_matrix(quat.exp(n * delta[:, None]))
-    options = []
-    for r_knee in (bend, np.swapaxes(bend, -1, -2)):  # the other sense: the inverse turn
-        u = a + np.einsum("fij,fj->fi", r_knee, b)
-        err = np.abs(np.linalg.norm(u, axis=-1) - d1)
-        swing = _rotation_between(u / np.linalg.norm(u, axis=-1, keepdims=True), v)
-        knee_dir = np.einsum("fij,fj->fi", swing, a)
-        knee_dir -= np.sum(knee_dir * v, axis=-1, keepdims=True) * v
-        ahead = np.zeros(len(a)) if forward is None else np.sum(knee_dir * forward, axis=-1)
-        options.append((err, ahead, swing, r_knee))
-    (e1, f1, s1, k1), (e2, f2, s2, k2) = options
-    second = np.where(np.abs(e1 - e2) > 1e-7, e2 < e1, f2 > f1)[:, None, None]
-    swing = np.where(second, s2, s1)
-    return swing, swing @ np.where(second, k2, k1)
+    swing, bend = _ik_turns(hip, knee, ankle, target, hinge, forward)
+    return quat.to_matrix(swing), quat.to_matrix(quat.mul(swing, bend))
 
 
 def _leg_skeleton(skel, chains):
@@ -226,94 +276,155 @@ def _rest_offsets(sub):
     return out
 
 
+def _depths(parents):
+    """Bone indices grouped by depth below the root, shallowest first (both legs' bones
+    of one depth are posed together)."""
+    depth = np.zeros(len(parents), int)
+    for j, parent in enumerate(parents):  # parents come before children
+        depth[j] = depth[parent] + 1 if parent >= 0 else 0
+    return [np.flatnonzero(depth == d) for d in range(depth.max() + 1)]
+
+
 def _leg_world(sub, rest_offsets, root_pos, rotations):
-    """World rotations (F, K, 3, 3) and positions (F, K, 3) of the bones of ``sub``
-    (:func:`~motion_patches.skeleton.forward_kinematics` in rotations and positions)."""
+    """World rotations (K, F, 3, 3) and positions (K, F, 3) of the bones of ``sub`` from
+    its root position (F, 3) and rotation channels (K, F, 4) (root channel in the world;
+    :func:`~motion_patches.skeleton.forward_kinematics` in rotations and positions). Bone
+    first, so each bone's frames are one contiguous block for the products; the bones of
+    one depth (the left and the right leg's) in one product."""
     basis = quat.to_matrix(rotations)
-    nf, nk = basis.shape[:2]
-    g = np.empty((nf, nk, 3, 3))
-    p = np.empty((nf, nk, 3))
-    for j, parent in enumerate(sub.parents):
-        if parent < 0:
-            g[:, j] = sub.rest[j, :3, :3] @ basis[:, j]
-            p[:, j] = root_pos
-            continue
-        lr = rest_offsets[j]
-        g[:, j] = g[:, parent] @ (lr[:3, :3] @ basis[:, j])
-        p[:, j] = g[:, parent] @ lr[:3, 3] + p[:, parent]
+    nk, nf = basis.shape[:2]
+    g = np.empty((nk, nf, 3, 3))
+    p = np.empty((nk, nf, 3))
+    roots, *levels = _depths(sub.parents)
+    for j in roots:
+        g[j] = sub.rest[j, :3, :3] @ basis[j]
+        p[j] = root_pos
+    for js in levels:
+        parent = sub.parents[js]
+        lr = rest_offsets[js]  # (n, 4, 4)
+        gp = g[parent]
+        g[js] = gp @ (lr[:, None, :3, :3] @ basis[js])
+        p[js] = np.einsum("nfij,nj->nfi", gp, lr[:, :3, 3]) + p[parent]
     return g, p
+
+
+class _Legs:
+    """What :func:`lock_feet` needs of a skeleton that does not change with the motion:
+    the leg chains, the legs' sub-skeleton and its rest offsets, and per side the bones
+    whose channels the lock rewrites (made once per skeleton, :func:`_legs`)."""
+
+    def __init__(self, skel):
+        self.chains = leg_chains(skel)
+        self.sub, self.idx = _leg_skeleton(skel, self.chains)
+        self.at = {int(j): i for i, j in enumerate(self.idx)}
+        self.rest = _rest_offsets(self.sub)
+        self.root = self.sub.root
+        self.legs = np.array([[self.at[j] for j in chain] for chain in self.chains])  # (2, 4)
+        # per side: [(bone in skel, its turn: "thigh", "shin", "ankle" or None for a limb
+        # segment that turns with its parent)], the bones in the order the lock wrote them
+        self.bones = []
+        for c_hip, c_knee, c_ankle, _ in self.chains:
+            thigh = [(c_hip, "thigh")] + [(j, None) for j in _segments(skel, c_knee, c_hip)]
+            shin = [(c_knee, "shin")] + [(j, None) for j in _segments(skel, c_ankle, c_knee)]
+            self.bones.append(thigh + shin + [(c_ankle, "ankle")])
+
+
+def _leg_positions(legs, world, with_frames=False):
+    """World positions (B, F, 3) of the legs' bones (``legs``: :func:`_legs`) posed as in
+    ``world``; with ``with_frames`` (world rotations (B, F, 3, 3), positions)."""
+    sub, idx, rest = legs.sub, legs.idx, legs.rest
+    ground = np.asarray(world.ground, float)
+    pos = root_positions(ground, world.root_local)
+    rot = np.ascontiguousarray(np.swapaxes(world.rotations[:, idx], 0, 1), dtype=float)
+    rot[legs.root] = root_channel_to_ground(sub, rot[legs.root], -ground[:, 2])  # to_world's
+    g, p = _leg_world(sub, rest, pos, rot)
+    return (g, p) if with_frames else p
+
+
+@per_skeleton
+def _legs(skel):
+    """The :class:`_Legs` of ``skel``, made on its first lock (a crowd's characters share
+    one skeleton)."""
+    return _Legs(skel)
+
+
+def locked_bones(skel):
+    """Indices of the bones whose channels :func:`lock_feet` may change beyond a sign:
+    each leg's thigh, shin and ankle and the limb segments between them."""
+    return np.array(sorted(j for side in _legs(skel).bones for j, _ in side))
 
 
 def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None):
     """Rotation channels (F, J, 4) of ``world`` (a Motion) with planted feet pinned.
 
     Only the hip (thigh) and knee (shin) channels of each leg change, and the ankle's so
-    that the foot keeps its world orientation. Both legs are solved at once over all
-    frames, on the legs' bones alone (:func:`_leg_skeleton`). ``offsets`` is a function
+    that the foot keeps its world orientation. Both legs are solved at once, on every
+    frame a correction applies to, on the legs' bones alone (:func:`_leg_skeleton`).
+    ``offsets`` is a function
     (side, ankle xy (F, 2), toe xy (F, 2)) -> (F, 2) horizontal ankle corrections
     replacing :func:`planted_offsets` (a turn in place moves its feet its own way). A plan
-    pins its feet on :func:`still_contacts`."""
+    pins its feet on :func:`still_contacts`.
+
+    The new channels are the old ones turned: a bone whose world rotation is left-
+    multiplied by a turn T, under a parent turned by P, gets the channel
+    ``(M^-1 P^-1 T M) * channel`` (M: its parent's world rotation times its rest offset,
+    both before the lock), so the IK's turns are applied as quaternions, frames at once,
+    with no matrix converted back."""
     corrections = offsets
-    chains = leg_chains(skel)
-    sub, idx = _leg_skeleton(skel, chains)
-    at = {int(j): i for i, j in enumerate(idx)}
-    rest = _rest_offsets(sub)
-    pos, rot = to_world(sub, world.ground, world.root_local, world.rotations[:, idx])
-    g, p = _leg_world(sub, rest, pos, rot)
+    legs = _legs(skel)
+    sub, rest = legs.sub, legs.rest
     n = world.frames
-    legs = np.array([[at[j] for j in chain] for chain in chains])  # (2, 4) in ``sub``
-    hip, knee, ankle, toe = legs.T  # (2,) each: left, right
-    d = np.stack(
-        [
-            planted_offsets(
-                p[:, ankle[s], :2],
-                p[:, toe[s], :2],
-                world.contacts[:, 2 * s],
-                world.contacts[:, 2 * s + 1],
-                blend,
-            )
-            if corrections is None
-            else corrections(s, p[:, ankle[s], :2], p[:, toe[s], :2])
-            for s in range(2)
-        ]
-    )  # (2, F, 2)
-    moving = np.linalg.norm(d, axis=-1) > 1e-7  # (2, F)
+    ground = np.asarray(world.ground, float)
+    g, p = _leg_positions(legs, world, with_frames=True)
+    hip, knee, ankle, toe = legs.legs.T  # (2,) each: left, right
+    if corrections is None:
+        d = _both_planted_offsets(p[ankle, :, :2], p[toe, :, :2], world.contacts, blend)
+    else:
+        d = np.stack([corrections(s, p[ankle[s], :, :2], p[toe[s], :, :2]) for s in range(2)])
+    moving = np.sqrt(np.einsum("sfi,sfi->sf", d, d)) > 1e-7  # (2, F)
     if not moving.any():
         return quat.make_continuous(world.rotations.copy(), axis=0)
 
-    def both(a):  # (F, 2, ...) -> (2F, ...): the legs one after the other
-        return np.swapaxes(a, 0, 1).reshape((2 * n,) + a.shape[2:])
+    def both(a):  # (2, F, ...) -> (2F, ...): the legs one after the other
+        return a.reshape((2 * n,) + a.shape[2:])
 
-    target = both(p[:, ankle]).copy()
-    target[:, :2] += d.reshape(2 * n, 2)
-    hinge = both(g[:, hip, :, 0])  # the thigh's X axis: the knee's hinge in a rest-like leg
-    h = world.ground[:, 2]
-    forward = np.tile(np.column_stack((np.cos(h), np.sin(h), np.zeros_like(h))), (2, 1))
-    r_thigh, r_shin = two_bone_ik(
-        both(p[:, hip]), both(p[:, knee]), both(p[:, ankle]), target, hinge, forward
+    rows = np.flatnonzero(moving.reshape(2 * n))  # the IK where a correction applies
+    target = both(p[ankle])[rows]
+    target[:, :2] += d.reshape(2 * n, 2)[rows]
+    hinge = both(g[hip, :, :, 0])[rows]  # the thigh's X axis: the knee's hinge in a rest-like leg
+    h = ground[:, 2]
+    forward = np.column_stack((np.cos(h), np.sin(h), np.zeros_like(h)))[rows % n]
+    swing = np.zeros((2 * n, 4))
+    swing[:, 0] = 1.0
+    bend = swing.copy()
+    swing[rows], bend[rows] = _ik_turns(
+        both(p[hip])[rows], both(p[knee])[rows], both(p[ankle])[rows], target, hinge, forward
     )
-    still = ~moving.reshape(2 * n)
-    r_thigh[still] = np.eye(3)
-    r_shin[still] = np.eye(3)
-    r_thigh, r_shin = r_thigh.reshape(2, n, 3, 3), r_shin.reshape(2, n, 3, 3)
-    changed = []
-    for s, (c_hip, c_knee, c_ankle, _) in enumerate(chains):
-        if not moving[s].any():
-            continue
-        thigh_bones = [c_hip, *_segments(skel, c_knee, c_hip)]  # limb segments turn with it
-        shin_bones = [c_knee, *_segments(skel, c_ankle, c_knee)]
-        for bones, r in ((thigh_bones, r_thigh[s]), (shin_bones, r_shin[s])):
-            k = [at[j] for j in bones]
-            g[:, k] = r[:, None] @ g[:, k]
-        # the foot keeps its world rotation (g at the ankle unchanged); its children follow
-        changed += thigh_bones + shin_bones + [c_ankle]
-    # Pose channels of the changed bones only (local_rotations_from_global, per bone).
-    k = np.array([at[j] for j in changed])
-    parent_rest = g[:, sub.parents[k]] @ rest[k, :3, :3]  # (F, K, 3, 3)
-    local = quat.make_continuous(
-        quat.from_matrix(np.swapaxes(parent_rest, -1, -2) @ g[:, k]), axis=0
-    )
+    swing, bend = swing.reshape(2, n, 4), bend.reshape(2, n, 4)
+    changed = [j for side in range(2) if moving[side].any() for j, _ in legs.bones[side]]
     out = world.rotations.copy()
+    local = out[:, changed].astype(float)  # (F, K, 4)
+    # the turn of each bone relative to its parent's (thigh: the swing; shin: the bend under
+    # the swung thigh; ankle: back to its world rotation; limb segments: none)
+    rel = {"thigh": swing, "shin": bend, "ankle": quat.conj(quat.mul(swing, bend))}
+    at, turns, sides, kinds = [], [], [], []  # the turned bones: place in local, bone in sub
+    for i, (side, (j, turn)) in enumerate(
+        (side, b) for side in range(2) if moving[side].any() for b in legs.bones[side]
+    ):
+        if turn is not None:
+            at.append(i)
+            turns.append(legs.at[j])
+            sides.append(side)
+            kinds.append(turn)
+    t = np.stack([rel[kind][side] for kind, side in zip(kinds, sides)])  # (T, F, 4)
+    # M^-1 T M (M = the parent's world rotation times the bone's rest offset): the turn's
+    # axis taken into the bone's parent-rest frame, rest^T g^T axis; all turned bones at once
+    axis = np.einsum("tfji,tfj->tfi", g[sub.parents[turns]], t[..., 1:]) @ rest[turns, :3, :3]
+    t[..., 1:] = axis
+    local[:, at] = quat.mul(np.swapaxes(t, 0, 1), local[:, at])
+    local /= np.sqrt(np.einsum("fkc,fkc->fk", local, local))[..., None]
+    local = quat.make_continuous(local, axis=0)
+    local[:, local[0, :, 0] < 0] *= -1  # the first frame's w >= 0, as quat.from_matrix gives
     out[:, changed] = local
     # the whole pose made continuous, as the channels were; the changed bones are already,
     # and of the others only those that flip somewhere need the pass

@@ -12,6 +12,7 @@ import numpy as np
 
 from . import quat
 from .clip import lateral_axis
+from .skeleton import per_skeleton
 
 
 def rest_facing(skel):
@@ -33,13 +34,19 @@ def facing_yaw(clip):
     return np.unwrap(np.arctan2(f[:, 1], f[:, 0]))
 
 
+@per_skeleton
+def _root_rest(skel):
+    """The root bone's rest rotation as a quaternion."""
+    return quat.from_matrix(skel.rest[skel.root, :3, :3])
+
+
 def root_channel_to_ground(skel, root_rot, heading):
     """Root rotation channels relative to a ground frame turned by ``heading``."""
-    r = skel.root
-    q_rest = quat.from_matrix(skel.rest[r, :3, :3])
-    q_rest = np.broadcast_to(q_rest, np.shape(root_rot))
-    # basis' = rest^-1 * Rz(-heading) * rest * basis
+    q_rest = _root_rest(skel)
+    # basis' = rest^-1 * Rz(-heading) * rest * basis; the turn before the basis is made
+    # once per heading (a single one for a constant heading), not once per frame
     yaw = quat.about_z(-np.asarray(heading))
+    q_rest = np.broadcast_to(q_rest, np.shape(yaw))
     return quat.mul(quat.mul(quat.mul(quat.conj(q_rest), yaw), q_rest), root_rot)
 
 
@@ -57,13 +64,20 @@ def to_inplace(clip, ground):
     return local, quat.make_continuous(rot, axis=0)
 
 
-def to_world(skel, ground, root_local, rotations):
-    """Armature-space (world, for an identity object) root positions and rotation channels."""
+def root_positions(ground, root_local):
+    """Armature-space root positions (F, 3): ``root_local`` carried by the ground frame
+    (the first half of :func:`to_world`, for callers that need no rotation)."""
     ground = np.asarray(ground, float)
     c, s = np.cos(ground[:, 2]), np.sin(ground[:, 2])
     x = ground[:, 0] + c * root_local[:, 0] - s * root_local[:, 1]
     y = ground[:, 1] + s * root_local[:, 0] + c * root_local[:, 1]
-    pos = np.stack((x, y, root_local[:, 2]), 1)
+    return np.stack((x, y, root_local[:, 2]), 1)
+
+
+def to_world(skel, ground, root_local, rotations):
+    """Armature-space (world, for an identity object) root positions and rotation channels."""
+    ground = np.asarray(ground, float)
+    pos = root_positions(ground, root_local)
     rot = np.array(rotations, float)
     r = skel.root
     rot[:, r] = root_channel_to_ground(skel, rot[:, r], -ground[:, 2])

@@ -79,19 +79,44 @@ def plan(values, tol):
     return plan_columns(np.asarray(values, float)[:, None], tol)[0]
 
 
+def must_keep(values, tol):
+    """(C,) a lower bound on the frames any linear keying of each column of ``values``
+    (F, C) within ``tol`` keeps: the first and last, and every frame whose second
+    difference exceeds 4 ``tol``. (Within one linear piece the three frames round an inner
+    frame are each within ``tol`` of a line, whose second difference is zero, so theirs is
+    at most 4 ``tol``: a frame bending more is a key of every keying, the dyadic one of
+    :func:`linear_keys` too.)"""
+    v = np.asarray(values, float)
+    n = v.shape[0]
+    if n < 3:
+        return np.full(v.shape[1], n)
+    bend = np.abs(v[:-2] - 2.0 * v[1:-1] + v[2:])
+    # a hair over 4 tol, so rounding in the difference never counts a frame that fits
+    return np.count_nonzero(bend > 4.0 * tol * (1.0 + 1e-9) + 1e-15, axis=0) + 2
+
+
 def plan_columns(values, tol):
     """:func:`plan` of every column of ``values`` (F, C), the kept keys of all the
-    channels that vary found in one vectorised :func:`linear_keys` (a pose has ~100)."""
+    channels that vary found in one vectorised :func:`linear_keys` (a pose has ~100).
+
+    A column that keeps at least as many frames as samples cost whatever the keys
+    (:func:`must_keep`: one pass of second differences) is stored as samples without
+    refining its keys: most channels of captured motion bend on most frames."""
     v = np.asarray(values, float)
     if v.size == 0:
         return [("constant", None)] * v.shape[1]
     varies = np.ptp(v, axis=0) > tol
     out = [("constant", None)] * v.shape[1]
+    n = v.shape[0]
+    # keys cost more than samples from this many on: stop refining such a column
+    limit = -(-n * SAMPLE_BYTES // KEY_BYTES)
     cols = np.flatnonzero(varies)
     if cols.size:
-        n = v.shape[0]
-        # keys cost more than samples from this many on: stop refining such a column
-        limit = -(-n * SAMPLE_BYTES // KEY_BYTES)
+        sampled = must_keep(v[:, cols], tol) >= limit
+        for c in cols[sampled]:
+            out[c] = ("samples", None)
+        cols = cols[~sampled]
+    if cols.size:
         keep, gave_up = linear_keys(v[:, cols], tol, give_up_at=limit)
         keyed = ~gave_up & (keep.sum(axis=0) * KEY_BYTES < n * SAMPLE_BYTES)
         for c, k, as_keys in zip(cols, keep.T, keyed):

@@ -89,6 +89,28 @@ class Skeleton:
         )
 
 
+def per_skeleton(fn):
+    """``fn(skel)`` made once per skeleton object: what a write derives from the rig alone
+    (its legs, its facing) is shared by every character of a crowd on that rig. A
+    skeleton is never changed once made, so the entry is keyed by the object; it holds
+    the skeleton, so the id is not reused while cached. Arrays come back read-only."""
+    cache = {}
+
+    def once(skel):
+        hit = cache.get(id(skel))
+        if hit is None or hit[0] is not skel:
+            if len(cache) >= 32:  # rigs made per write (retargeting) must not pile up
+                cache.clear()
+            value = fn(skel)
+            if isinstance(value, np.ndarray):
+                value.setflags(write=False)
+            hit = cache[id(skel)] = (skel, value)
+        return hit[1]
+
+    once.__doc__, once.__name__, once.__wrapped__ = fn.__doc__, fn.__name__, fn
+    return once
+
+
 def compose(rot, pos):
     """4x4 matrices from rotation quaternions (..., 4) and positions (..., 3)."""
     m = np.zeros(np.shape(pos)[:-1] + (4, 4))

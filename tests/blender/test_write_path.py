@@ -124,7 +124,7 @@ def test_the_foot_lock_reads_the_strip_that_plays_each_frame(addon_module, clean
     n = 35
     frames_of = nla._played_frames(played, n)
     assert set(frames_of) == {a, b}
-    out = nla._lower_channels(frames_of, "Bone", "QUATERNION", n, {})
+    out = nla._lower_channels(frames_of, ["Bone"], "QUATERNION", n, {})[:, 0]
     want = np.tile([1.0, 0.0, 0.0, 0.0], (n, 1))
     f = np.arange(n)
     on_a = f <= 10
@@ -167,3 +167,36 @@ def test_inplace_channels_are_the_round_trip_through_the_world(addon_module, moc
     assert abs(nla.facing_angle(skel)) > 0.1  # the turn matters for this rig
     assert np.allclose(loc, skeleton.root_position_to_location(skel, local), atol=1e-9)
     assert np.allclose(rot, want_rot, atol=1e-9)
+
+
+def test_the_plan_range_is_read_from_the_records_head(addon_module, clean_scene):
+    """plan_range (what fitting the frame range reads of every character) gives the
+    record's own frame range, from a record as store_plan writes it (range first, the
+    arrays stored uncompressed) and from one written before (meta and compressed arrays
+    only); the rest of the record loads as it was stored."""
+    import base64
+    import io
+    import json
+
+    import bpy
+
+    storage = addon_module.adapter.storage
+    ob = bpy.data.objects.new("Walker", None)
+    clean_scene.collection.objects.link(ob)
+    with pytest.raises(ValueError, match="no planned motion"):
+        storage.plan_range(ob)
+    ground = np.arange(12.0).reshape(4, 3)
+    meta = {"frame_start": 7, "frame_end": 10, "obstacles": {"Box": [[0.0, 0.0], [1.0, 0.5]]}}
+    storage.store_plan(ob, dict(meta, ground=ground))
+    assert ob[storage.PLAN_KEY].startswith('{"range": [7, 10]')
+    assert storage.plan_range(ob) == (7, 10)
+    got_meta, arrays = storage.load_plan(ob)
+    assert got_meta == meta and np.array_equal(arrays["ground"], ground)
+    buf = io.BytesIO()
+    np.savez_compressed(buf, ground=ground)
+    old = {"frame_start": 3, "frame_end": 90, "obstacles": {}}
+    ob[storage.PLAN_KEY] = json.dumps(
+        {"meta": old, "arrays": base64.b64encode(buf.getvalue()).decode()}
+    )
+    assert storage.plan_range(ob) == (3, 90)
+    assert np.array_equal(storage.load_plan(ob)[1]["ground"], ground)

@@ -136,8 +136,8 @@ def test_the_legs_world_matrices_are_the_whole_skeletons(walk_patch, walk):
     sub, idx = foot_lock._leg_skeleton(skel, chains)
     assert len(idx) < len(skel.names)
     pos, rot = to_world(sub, walk.ground, walk.root_local, walk.rotations[:, idx])
-    g, p = foot_lock._leg_world(sub, foot_lock._rest_offsets(sub), pos, rot)
-    m = walk.world_matrices(skel)[:, idx]
+    g, p = foot_lock._leg_world(sub, foot_lock._rest_offsets(sub), pos, np.swapaxes(rot, 0, 1))
+    m = np.swapaxes(walk.world_matrices(skel)[:, idx], 0, 1)  # bone first, as _leg_world
     assert np.allclose(g, m[..., :3, :3], atol=1e-12)
     assert np.allclose(p, m[..., :3, 3], atol=1e-12)
 
@@ -154,3 +154,135 @@ def test_locked_channels_are_continuous_where_the_input_flips(walk_patch, walk):
     assert np.all(np.sum(rot[1:] * rot[:-1], axis=-1) >= 0)
     assert np.allclose(rot[:, other], quat.make_continuous(flipped[:, other], axis=0))
     assert np.allclose(rot, foot_lock.lock_feet(skel, walk))
+
+
+def _turn(axis, angle):
+    """3x3 rotation by ``angle`` about unit ``axis`` (one frame, Rodrigues)."""
+    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    return np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k)
+
+
+def ik_one_frame(hip, knee, ankle, target, hinge, forward):
+    """two_bone_ik's rule for one frame, written with scalars and 3x3 matrices."""
+    a, b = knee - hip, ankle - knee
+    l1, l2 = np.linalg.norm(a), np.linalg.norm(b)
+    d0 = min(max(np.linalg.norm(ankle - hip), abs(l1 - l2) + 1e-4), l1 + l2 - 1e-4)
+    reach = max(d0, foot_lock.STRETCH * (l1 + l2))
+    d1 = min(max(np.linalg.norm(target - hip), abs(l1 - l2) + 1e-4), reach)
+    interior = np.arccos(np.clip((l1 * l1 + l2 * l2 - d1 * d1) / (2 * l1 * l2), -1.0, 1.0))
+    now = np.arccos(np.clip(np.dot(-a, b) / (l1 * l2), -1.0, 1.0))
+    n = np.cross(a, b)
+    n = n / np.linalg.norm(n) if np.linalg.norm(n) > 1e-6 else hinge
+    v = (target - hip) / np.linalg.norm(target - hip)
+    best = None
+    for sense in (1.0, -1.0):
+        r_knee = _turn(n, sense * (interior - now))
+        u = a + r_knee @ b
+        err = abs(np.linalg.norm(u) - d1)
+        u = u / np.linalg.norm(u)
+        axis, c = np.cross(u, v), np.clip(np.dot(u, v), -1.0, 1.0)
+        s = np.linalg.norm(axis)
+        swing = _turn(axis / s if s > 1e-9 else np.array([1.0, 0.0, 0.0]), np.arctan2(s, c))
+        knee_dir = swing @ a
+        knee_dir = knee_dir - np.dot(knee_dir, v) * v
+        option = (err, np.dot(knee_dir, forward), swing, swing @ r_knee)
+        if best is None or (
+            option[1] > best[1] if abs(option[0] - best[0]) <= 1e-7 else option[0] < best[0]
+        ):
+            best = option
+    return best[2], best[3]
+
+
+def lock_feet_frame_by_frame(skel, world, blend=foot_lock.BLEND_FRAMES):
+    """lock_feet as a loop over frames and legs: the whole skeleton's world matrices, the
+    IK of each frame on its own, the turned bones' channels from their new world
+    rotations (skeleton.local_rotations_from_global)."""
+    from motion_patches.skeleton import local_rotations_from_global
+
+    m = world.world_matrices(skel)
+    g, p = m[..., :3, :3].copy(), m[..., :3, 3]
+    chains = foot_lock.leg_chains(skel)
+    changed = []
+    for s, (hip, knee, ankle, toe) in enumerate(chains):
+        d = foot_lock.planted_offsets(
+            p[:, ankle, :2],
+            p[:, toe, :2],
+            world.contacts[:, 2 * s],
+            world.contacts[:, 2 * s + 1],
+            blend,
+        )
+        thigh = [hip] + foot_lock._segments(skel, knee, hip)
+        shin = [knee] + foot_lock._segments(skel, ankle, knee)
+        moved = False
+        for f in range(world.frames):
+            if np.linalg.norm(d[f]) <= 1e-7:
+                continue
+            moved = True
+            target = p[f, ankle] + np.array([d[f, 0], d[f, 1], 0.0])
+            h = world.ground[f, 2]
+            r_thigh, r_shin = ik_one_frame(
+                p[f, hip],
+                p[f, knee],
+                p[f, ankle],
+                target,
+                g[f, hip, :, 0],
+                np.array([np.cos(h), np.sin(h), 0.0]),
+            )
+            for j in thigh:
+                g[f, j] = r_thigh @ g[f, j]
+            for j in shin:
+                g[f, j] = r_shin @ g[f, j]
+        if moved:
+            changed += thigh + shin + [ankle]
+    local = local_rotations_from_global(skel, g)
+    return local, changed
+
+
+@pytest.mark.parametrize("blend", [foot_lock.BLEND_FRAMES, 1])
+def test_the_vectorised_lock_is_the_frame_by_frame_one(walk_patch, walk, blend):
+    """On a planned walk of real capture (CMU 16_15 + 16_18, turning), lock_feet (both
+    legs and all frames at once, the turns applied to the channels as quaternions) gives
+    the rotations of the lock written frame by frame on the whole skeleton: the changed
+    bones' channels to 1e-9, every other channel untouched (bar its sign)."""
+    skel = walk_patch.gait.skeleton
+    got = foot_lock.lock_feet(skel, walk, blend)
+    want, changed = lock_feet_frame_by_frame(skel, walk, blend)
+    assert len(changed) == 6  # thigh, shin and ankle of both legs
+    assert not np.allclose(np.abs(np.sum(want * walk.rotations, axis=-1))[:, changed], 1.0)
+    dots = np.abs(np.sum(got[:, changed] * want[:, changed], axis=-1))
+    assert np.all(np.abs(dots - 1.0) < 1e-9)
+    others = [j for j in range(len(skel.names)) if j not in changed]
+    assert np.array_equal(np.abs(got[:, others]), np.abs(walk.rotations[:, others]))
+
+
+@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("blend", [1, 4])
+def test_both_feet_at_once_are_each_foot_alone(walk_patch, walk, seed, blend):
+    """The feet's planted offsets found in one call (one foot after the other, a gap of
+    unplanted frames between) are, to the bit, each foot's own: on the planned walk's feet
+    and contacts and on random contacts running into the ends of the motion."""
+    skel = walk_patch.gait.skeleton
+    p = walk.world_matrices(skel)[..., :3, 3]
+    feet = foot_lock.leg_chains(skel)
+    ankle = np.stack([p[:, c[2], :2] for c in feet])
+    toe = np.stack([p[:, c[3], :2] for c in feet])
+    contacts = walk.contacts.copy()
+    if seed:
+        rng = np.random.default_rng(seed)
+        contacts = np.repeat(rng.random((walk.frames // 6 + 1, 4)) < 0.5, 6, axis=0)
+        contacts = contacts[: walk.frames]
+        contacts[:, 1::2] |= contacts[:, ::2]
+        contacts[-3:, 0] = contacts[:2, 3] = True  # planted at the ends
+    # the left foot lifted just before the end, the right put down just after the start:
+    # each fades within ``blend`` frames of where the other's frames begin when joined
+    contacts[-8:-2, :2] = [[True, True]] * 5 + [[False, True]]
+    contacts[-2:, :2] = False
+    contacts[:2, 2:] = False
+    contacts[2:8, 2:] = True
+    got = foot_lock._both_planted_offsets(ankle, toe, contacts, blend)
+    for s in range(2):
+        want = foot_lock.planted_offsets(
+            ankle[s], toe[s], contacts[:, 2 * s], contacts[:, 2 * s + 1], blend
+        )
+        assert np.array_equal(got[s], want)
+        assert np.any(want != 0)

@@ -87,3 +87,42 @@ def test_columns_just_under_and_over_the_cost_of_samples():
     assert np.any((counts >= limit) & (counts <= limit + 3))
     for c, (how, kept) in enumerate(keys.plan_columns(v, 1e-5)):
         assert how == ("keys" if counts[c] < limit else "samples"), (c, counts[c])
+
+
+@pytest.mark.parametrize("n", [3, 54, 109, 1002])
+def test_the_frames_every_keying_keeps_are_a_lower_bound(n):
+    """must_keep never counts more frames than the plain halving keeps (synthetic columns,
+    among them noise just above the tolerance and waves just around it)."""
+    v = columns(np.random.default_rng(n + 2), n)
+    t = np.arange(n)
+    v = np.column_stack([v] + [a * np.sin(t * 0.2) for a in np.logspace(-5, -3, 40)])
+    full = np.array([halving(v[:, c], 1e-5).sum() for c in range(v.shape[1])])
+    bound = keys.must_keep(v, 1e-5)
+    assert np.all(bound <= full)
+    assert np.any((bound > 2) & (bound >= 0.9 * full))  # close where the column is noisy
+
+
+@pytest.mark.parametrize("start, n", [(0, 53), (200, 109), (0, None)])
+def test_mocap_channels_are_stored_as_the_plain_halving_says(walk16, start, n):
+    """On captured channels (CMU 16_15: every bone's quaternion, the root's position)
+    plan_columns, which skips the search for the columns must_keep settles, makes the
+    choice and keeps the keys of the full search, column by column."""
+    n = n or walk16.frames  # None: the whole clip
+    rot = walk16.rotations[start : start + n].reshape(n, -1)
+    v = np.column_stack((walk16.root_pos[start : start + n], rot))
+    limit = -(-n * keys.SAMPLE_BYTES // keys.KEY_BYTES)
+    settled = keys.must_keep(v, 1e-5) >= limit
+    assert settled.sum() > v.shape[1] // 2  # the shortcut is taken for most channels
+    kinds = set()
+    for c, (how, kept) in enumerate(keys.plan_columns(v, 1e-5)):
+        full = halving(v[:, c], 1e-5)
+        if np.ptp(v[:, c]) <= 1e-5:
+            want = "constant"
+        elif full.sum() < limit:
+            want = "keys"
+            assert np.array_equal(kept, np.flatnonzero(full)), c
+        else:
+            want = "samples"
+        assert how == want, c
+        kinds.add(how)
+    assert "samples" in kinds and "constant" in kinds
