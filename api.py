@@ -842,13 +842,14 @@ def _write(
     motions, bounds, world = placed
     # Feet moving fast while labelled planted (through a blend) are not planted: neither
     # pinned nor measured as skating (foot_lock.still_contacts).
+    posed = foot_lock.pose_legs(skel, world)
     world = Motion(
         world.ground,
         world.root_local,
         world.rotations,
-        foot_lock.still_contacts(skel, world, patch.gait.fps),
+        foot_lock.still_contacts(skel, world, patch.gait.fps, posed),
     )
-    locked = foot_lock.lock_feet(skel, world) if lock else None
+    locked = foot_lock.lock_feet(skel, world, posed=posed) if lock else None
     strips, stashed = nla.write_plan(
         bpy,
         character,

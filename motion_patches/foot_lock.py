@@ -57,7 +57,7 @@ def _speeds(xy):
     return v
 
 
-def still_contacts(skel, world, fps):
+def still_contacts(skel, world, fps, posed=None):
     """(F, 4) planted flags of ``world`` (a Motion; left ankle, toe, right ankle, toe) kept
     only on frames where that joint, as synthesised, moves no faster than ``STILL_FACTOR``
     x ``contacts.CONTACT_SPEED`` (the speed above which the source clips' contacts call a
@@ -69,11 +69,12 @@ def still_contacts(skel, world, fps):
     moves 2-5 m/s while labelled planted. Pinned, it built a correction of 15-20 cm the leg
     could not reach and had to let go of within a few frames (a knee turning 30 deg in one
     frame); such a foot is not planted by the clips' own measure either, so the plan's
-    contacts (the lock, the plan record, Analyse) leave it out."""
+    contacts (the lock, the plan record, Analyse) leave it out. ``posed``: the legs
+    already posed (:func:`pose_legs`), shared with :func:`lock_feet`."""
     planted = np.array(world.contacts, bool)
     if world.frames < 3:
         return planted
-    p = _leg_positions(_legs(skel), world)
+    p = (posed or pose_legs(skel, world))[1]
     limit = np.maximum(
         STILL_FACTOR * CONTACT_SPEED / fps, STILL_SHARE * _speeds(world.ground[:, :2])
     )
@@ -329,6 +330,12 @@ class _Legs:
             self.bones.append(thigh + shin + [(c_ankle, "ankle")])
 
 
+def pose_legs(skel, world):
+    """The legs' bones posed as in ``world`` (a Motion): world rotations (B, F, 3, 3) and
+    positions (B, F, 3), for :func:`still_contacts` and :func:`lock_feet` to share."""
+    return _leg_positions(_legs(skel), world, with_frames=True)
+
+
 def _leg_positions(legs, world, with_frames=False):
     """World positions (B, F, 3) of the legs' bones (``legs``: :func:`_legs`) posed as in
     ``world``; with ``with_frames`` (world rotations (B, F, 3, 3), positions)."""
@@ -354,7 +361,7 @@ def locked_bones(skel):
     return np.array(sorted(j for side in _legs(skel).bones for j, _ in side))
 
 
-def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None):
+def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None, posed=None):
     """Rotation channels (F, J, 4) of ``world`` (a Motion) with planted feet pinned.
 
     Only the hip (thigh) and knee (shin) channels of each leg change, and the ankle's so
@@ -363,7 +370,7 @@ def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None):
     ``offsets`` is a function
     (side, ankle xy (F, 2), toe xy (F, 2)) -> (F, 2) horizontal ankle corrections
     replacing :func:`planted_offsets` (a turn in place moves its feet its own way). A plan
-    pins its feet on :func:`still_contacts`.
+    pins its feet on :func:`still_contacts`; ``posed``: the legs posed (:func:`pose_legs`).
 
     The new channels are the old ones turned: a bone whose world rotation is left-
     multiplied by a turn T, under a parent turned by P, gets the channel
@@ -375,7 +382,7 @@ def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None):
     sub, rest = legs.sub, legs.rest
     n = world.frames
     ground = np.asarray(world.ground, float)
-    g, p = _leg_positions(legs, world, with_frames=True)
+    g, p = posed or _leg_positions(legs, world, with_frames=True)
     hip, knee, ankle, toe = legs.legs.T  # (2,) each: left, right
     if corrections is None:
         d = _both_planted_offsets(p[ankle, :, :2], p[toe, :, :2], world.contacts, blend)
