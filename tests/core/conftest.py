@@ -42,3 +42,32 @@ def walk_gait(walk16, turn16):
 @pytest.fixture(scope="session")
 def walk_patch(walk_gait):
     return locomotion_patch.bake(walk_gait)
+
+
+@pytest.fixture(scope="session")
+def stand_walk_sit(walk_patch, walk_gait, walk16):
+    """Standing up from chair A, walking and sitting down on chair B: CMU subject 13's
+    stand-up and sit-down (13_05_standup, 13_05) retargeted onto subject 16 and put down on
+    its floor. Returns (plan, environment, [sit source, stand source] retargeted)."""
+    import numpy as np
+
+    from motion_patches import object_patch as op
+    from motion_patches.clip import retarget
+    from motion_patches.environment import Environment, Obstacle
+    from motion_patches.planner import SegmentPlanner, interaction_states, with_interactions
+
+    floor = op.floor_level(walk16)
+    sources = [retarget(cmu(n), walk16.skeleton) for n in ("13_05", "13_05_standup")]
+    sit, stand = (
+        op.patch_clip_from(c, op.INTERACTION, walk_gait.fps, effort=2.0, floor=floor)
+        for c in sources
+    )
+    chair = np.array([[-0.2, -0.22], [0.2, -0.22], [0.2, 0.22], [-0.2, 0.22]])
+    env = Environment(walk_patch.side, walk_patch.cells, 0.25)
+    a = op.ObjectPatch("chair A", chair, [stand], pose=(1.0, 1.0, 0.0))
+    b = op.ObjectPatch("chair B", chair, [sit], pose=(8.0, 3.0, 2.0))
+    for o in (a, b):
+        env.place(Obstacle(o.name, o.world_footprint()))
+    s, g = interaction_states((a, 0), (b, 0))
+    plan = with_interactions(SegmentPlanner(walk_patch, env).plan(s, g), (a, 0), (b, 0))
+    return plan, env, sources

@@ -60,7 +60,7 @@ def test_planned_walks_step_no_faster_than_their_source(walk_patch, walk16, turn
 
 
 def test_easing_onto_another_subjects_clip_keeps_every_bone_to_its_pace(
-    walk_patch, walk_gait, walk16, turn16
+    walk_patch, walk_gait, walk16, turn16, stand_walk_sit
 ):
     """Standing up from one chair (CMU 13_05, another subject, retargeted), walking and
     sitting down on another: easing the walk onto a clip of another take turns bones
@@ -68,25 +68,7 @@ def test_easing_onto_another_subjects_clip_keeps_every_bone_to_its_pace(
     the clips' pace; eased over the stitch's 4 frames the hips stepped 2.8 times their
     largest in any of the four clips. As synthesised and foot-locked; steps under 1 degree
     count as 1 (bones the takes barely move)."""
-    from motion_patches import object_patch as op
-    from motion_patches.clip import retarget
-    from motion_patches.planner import interaction_states, with_interactions
-
-    from conftest import cmu
-
-    floor = op.floor_level(walk16)
-    clips = [retarget(cmu(n), walk16.skeleton) for n in ("13_05", "13_05_standup")]
-    sit, stand = (
-        op.patch_clip_from(c, op.INTERACTION, walk_gait.fps, effort=2.0, floor=floor) for c in clips
-    )
-    chair = np.array([[-0.2, -0.22], [0.2, -0.22], [0.2, 0.22], [-0.2, 0.22]])
-    env = Environment(walk_patch.side, walk_patch.cells, 0.25)
-    a = op.ObjectPatch("chair A", chair, [stand], pose=(1.0, 1.0, 0.0))
-    b = op.ObjectPatch("chair B", chair, [sit], pose=(8.0, 3.0, 2.0))
-    for o in (a, b):
-        env.place(Obstacle(o.name, o.world_footprint()))
-    s, g = interaction_states((a, 0), (b, 0))
-    plan = with_interactions(SegmentPlanner(walk_patch, env).plan(s, g), (a, 0), (b, 0))
+    plan, _, clips = stand_walk_sit
     m = concatenate(plan_motions(walk_patch, plan))
     skel = walk_gait.skeleton
     reference = metrics.source_bone_steps(

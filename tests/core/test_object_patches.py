@@ -253,34 +253,9 @@ def test_corridor_planning_with_traversals_matches_the_full_search(walk_patch, h
     assert corr.cost <= 1.1 * full.cost
 
 
-def test_stand_up_walk_and_sit_down_on_retargeted_real_clips(walk_patch, walk_gait, walk16):
-    from motion_patches.clip import retarget
-    from motion_patches.object_patch import floor_level
-    from motion_patches.planner import interaction_states, with_interactions
-
-    floor = floor_level(walk16)
-    sit = op.patch_clip_from(
-        retarget(cmu("13_05"), walk16.skeleton),
-        op.INTERACTION,
-        walk_gait.fps,
-        effort=2.0,
-        floor=floor,
-    )
-    stand = op.patch_clip_from(
-        retarget(cmu("13_05_standup"), walk16.skeleton),
-        op.INTERACTION,
-        walk_gait.fps,
-        effort=2.0,
-        floor=floor,
-    )
+def test_stand_up_walk_and_sit_down_on_retargeted_real_clips(walk_patch, walk_gait, stand_walk_sit):
     assert op.ends_lower(cmu("13_05")) and not op.ends_lower(cmu("13_05_standup"))
-    env = Environment(walk_patch.side, walk_patch.cells, 0.25)
-    a = op.ObjectPatch("chair A", CHAIR, [stand], pose=(1.0, 1.0, 0.0))
-    b = op.ObjectPatch("chair B", CHAIR, [sit], pose=(8.0, 3.0, 2.0))
-    for o in (a, b):
-        env.place(Obstacle(o.name, o.world_footprint()))
-    s, g = interaction_states((a, 0), (b, 0))
-    plan = with_interactions(SegmentPlanner(walk_patch, env).plan(s, g), (a, 0), (b, 0))
+    plan = stand_walk_sit[0]
     kinds = [p.kind for p in plan.pieces]
     assert kinds[0] == "interaction" and kinds[-1] == "interaction"
     m = concatenate(plan_motions(walk_patch, plan))
