@@ -910,54 +910,43 @@ def _planning_options(p):
         help="stitch traversal clips lazily (dynamic, the paper's method) or all "
         "before the search (static, Lee 2006); default: the scene's setting",
     )
+    _either(
+        p,
+        "foot_lock",
+        ("--foot-lock", True, "pin planted feet with leg IK (default: the scene's setting)"),
+        ("--no-foot-lock", False, "leave planted feet as synthesised (no leg IK track)"),
+    )
+    _either(
+        p,
+        "goal_facing",
+        (
+            "--any-facing",
+            "any",
+            "end facing whichever way is cheapest (the goal's own facing is "
+            "ignored); default: the scene's Goal Facing",
+        ),
+        ("--exact-facing", "exact", "end facing the goal's facing"),
+    )
+    _either(
+        p,
+        "turn_in_place",
+        (
+            "--turn-in-place",
+            True,
+            "turn on the spot where a walk would loop to leave the start or reach the "
+            "goal facing its way (a turn derived from the walk's sharpest turn loop); "
+            "default: the scene's Turn on the Spot",
+        ),
+        ("--no-turn-in-place", False, "walk the loops instead of turning on the spot"),
+    )
+
+
+def _either(p, dest, *flags):
+    """Mutually exclusive flags [(flag, value, help)] setting ``dest`` (None when none is
+    given: the scene's setting)."""
     g = p.add_mutually_exclusive_group()
-    g.add_argument(
-        "--foot-lock",
-        dest="foot_lock",
-        action="store_const",
-        const=True,
-        help="pin planted feet with leg IK (default: the scene's setting)",
-    )
-    g.add_argument(
-        "--no-foot-lock",
-        dest="foot_lock",
-        action="store_const",
-        const=False,
-        help="leave planted feet as synthesised (no leg IK track)",
-    )
-    g = p.add_mutually_exclusive_group()
-    g.add_argument(
-        "--any-facing",
-        dest="goal_facing",
-        action="store_const",
-        const="any",
-        help="end facing whichever way is cheapest (the goal's own facing is "
-        "ignored); default: the scene's Goal Facing",
-    )
-    g.add_argument(
-        "--exact-facing",
-        dest="goal_facing",
-        action="store_const",
-        const="exact",
-        help="end facing the goal's facing",
-    )
-    g = p.add_mutually_exclusive_group()
-    g.add_argument(
-        "--turn-in-place",
-        dest="turn_in_place",
-        action="store_const",
-        const=True,
-        help="turn on the spot where a walk would loop to leave the start or reach the "
-        "goal facing its way (a turn derived from the walk's sharpest turn loop); default: "
-        "the scene's Turn on the Spot",
-    )
-    g.add_argument(
-        "--no-turn-in-place",
-        dest="turn_in_place",
-        action="store_const",
-        const=False,
-        help="walk the loops instead of turning on the spot",
-    )
+    for flag, value, text in flags:
+        g.add_argument(flag, dest=dest, action="store_const", const=value, help=text)
 
 
 def _save_options(p):
