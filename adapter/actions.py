@@ -238,12 +238,7 @@ def closest_channels(q, mode, reference):
     if mode == "QUATERNION":
         return np.where(np.sum(q * ref, axis=-1, keepdims=True) < 0, -q, q)
     if mode == "AXIS_ANGLE":
-        v = q[..., 1:]
-        s = np.linalg.norm(v, axis=-1, keepdims=True)
-        angle = 2.0 * np.arctan2(s[..., 0], q[..., 0])
-        ref_axis = ref[..., 1:]
-        rn = np.linalg.norm(ref_axis, axis=-1, keepdims=True)
-        ref_axis = np.where(rn > 1e-12, ref_axis / np.maximum(rn, 1e-12), [0.0, 1.0, 0.0])
+        angle, v, s, ref_axis = _axis_angle(q, ref)
         axis = np.where(s > 1e-12, v / np.maximum(s, 1e-12), ref_axis)  # no rotation: any axis
         flip = np.sum(axis * ref_axis, axis=-1) < 0
         axis = np.where(flip[..., None], -axis, axis)
@@ -319,17 +314,23 @@ def _continuous_turns(values, first):
     return values + _TWO_PI * np.cumsum(np.concatenate((turns, steps)), axis=0)
 
 
+def _axis_angle(q, reference):
+    """Angle (...), vector part (..., 3) and its length (..., 1) of unit quaternions ``q``,
+    and the unit axis of the axis-angle channels ``reference`` (+Y where it has none)."""
+    v = q[..., 1:]
+    s = np.linalg.norm(v, axis=-1, keepdims=True)
+    angle = 2.0 * np.arctan2(s[..., 0], q[..., 0])
+    ref = reference[..., 1:]
+    rn = np.linalg.norm(ref, axis=-1, keepdims=True)
+    return angle, v, s, np.where(rn > 1e-12, ref / np.maximum(rn, 1e-12), [0.0, 1.0, 0.0])
+
+
 def _continuous_axis_angle(q, first):
     """Axis-angle channels (F, ..., 4) of unit quaternions ``q``, continuous from
     ``first``: each axis takes the sign nearest the last frame's (a frame with no
     rotation keeps the last axis), each angle follows its axis's sign and the turns
     nearest the last angle."""
-    v = q[..., 1:]
-    s = np.linalg.norm(v, axis=-1, keepdims=True)
-    angle = 2.0 * np.arctan2(s[..., 0], q[..., 0])
-    ref = first[..., 1:]
-    rn = np.linalg.norm(ref, axis=-1, keepdims=True)
-    ref = np.where(rn > 1e-12, ref / np.maximum(rn, 1e-12), [0.0, 1.0, 0.0])
+    angle, v, s, ref = _axis_angle(q, first)
     has = s[..., 0] > 1e-12
     axis = np.where(has[..., None], v / np.maximum(s, 1e-12), 0.0)
     # a frame without an axis carries the last one on (or ``first``'s, before any)
