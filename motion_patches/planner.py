@@ -1364,19 +1364,28 @@ class SegmentPlanner:
         effort = self.gamma * self.patch.effort_rate / part_speed(self.patch)
         beta, h_of, slack = self.beta, self.heuristic_of, 1e-9
 
-        def through(keys, fs, idx, below=None):
-            if below is not None:
-                return one(keys[0], fs[0], idx, below)
-            keys = np.asarray(keys, np.int64)[:, None]
+        def to_entry(keys, idx):
+            """Local ids of nodes ``keys`` and the way (x, y, length) from each to the
+            entry keyframes of copies ``idx``."""
             t = keys // LOCAL
             local = keys - t * LOCAL
             cx = ex[idx] - (lx[local] + (t // (2 * BIAS) - BIAS) * side)
             cy = ey[idx] - (ly[local] + (t % (2 * BIAS) - BIAS) * side)
-            d = np.hypot(cx, cy)
+            return local, cx, cy, np.hypot(cx, cy)
+
+        def walk_in(d):
+            """The entry part's distance and effort terms over a way ``d`` long."""
+            return walk * d + effort * np.maximum(d - POSITION_TOLERANCE, 0.0)
+
+        def through(keys, fs, idx, below=None):
+            if below is not None:
+                return one(keys[0], fs[0], idx, below)
+            keys = np.asarray(keys, np.int64)[:, None]
+            local, cx, cy, d = to_entry(keys, idx)
             # f - h is g up to rounding: the slack keeps the bound below the true one
             g = np.array([f - h_of(int(k)) for k, f in zip(keys[:, 0].tolist(), fs)])
             out = (g * (1.0 - slack) - slack)[:, None] + rest[idx]
-            out += walk * d + effort * np.maximum(d - POSITION_TOLERANCE, 0.0)
+            out += walk_in(d)
             return out + beta * _approach_turn(heading[local], eh[idx], cx, cy)
 
         def one(key, f, idx, below):
@@ -1386,13 +1395,9 @@ class SegmentPlanner:
             r = rest[idx]
             if g + r.min() >= below.max():
                 return below[None]
-            t = key // LOCAL
-            local = key - t * LOCAL
-            cx = ex[idx] - (lx[local] + (t // (2 * BIAS) - BIAS) * side)
-            cy = ey[idx] - (ly[local] + (t % (2 * BIAS) - BIAS) * side)
-            d = np.hypot(cx, cy)
+            local, cx, cy, d = to_entry(key, idx)
             out = g + r
-            out += walk * d + effort * np.maximum(d - POSITION_TOLERANCE, 0.0)
+            out += walk_in(d)
             need = np.flatnonzero(out < below)
             if need.size:
                 h1 = eh[idx[need]]
