@@ -66,6 +66,16 @@ class SearchLimit(PlanError):
     """The search stopped at its node limit before finding a way (not proof there is none)."""
 
 
+class Unreachable(PlanError):
+    """The search ran out of nodes: no way within the plan region (a walk that turns on the
+    spot at an end may still find one)."""
+
+
+class FacingRefused(PlanError):
+    """No walk can leave the start (reach the goal) facing its way: the props around leave
+    no room to turn (a turn on the spot there may help)."""
+
+
 STITCH_PAYLOAD = -10  # payloads at or below this are stitched edges: -10 - index
 _NONE = (np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int64))  # no successors
 
@@ -579,13 +589,19 @@ class SegmentPlanner:
                 hit.update(self.env.near(p))
         names = ", ".join(repr(n) for n in sorted(hit)[:4]) or "an obstacle"
         way = "leave the start facing" if what == "start" else "arrive at the goal facing"
-        raise PlanError(
+        raise FacingRefused(
             f"no {self._gait_name} can {way} {np.degrees(state[2] + self._frame_angle):.0f} "
             f"degrees: {names} stand(s) in the way within {APPROACH:.2f} m and the "
             f"{self._gait_name} cannot turn tighter than {1 / max(self.kmax, -self.kmin):.2f} m; "
             f"turn the {what} or move {'it' if len(hit) <= 1 else 'them'}"
             + (" (or plan with goal facing 'any')" if what == "goal" else "")
         )
+
+    def _refused(self, what, state, said):
+        """The error for no connector out of the start (into the goal): ``said`` and why
+        (:meth:`_boxed_in`); a :class:`FacingRefused` when the state has a heading to face."""
+        cls = PlanError if np.isnan(state[2]) else FacingRefused
+        return cls(said + self._boxed_in(what, state))
 
     def _boxed_in(self, what, state):
         """Why no connector leaves the start (enters the goal), naming the props around."""
@@ -811,7 +827,7 @@ class SegmentPlanner:
             exact, error = once(start, goal), None
         except PlanError as e:
             exact, error = None, e
-            if isinstance(e, SearchLimit) or not ("facing" in str(e) or "unreachable" in str(e)):
+            if not isinstance(e, (FacingRefused, Unreachable)):
                 raise  # a search limit, a goal inside a prop: no turn on the spot helps
         # A walk that still loops near an end (props in the way): the turn on the spot
         # there is tried too and the cheaper by Eq. 5 kept.
@@ -1081,9 +1097,7 @@ class SegmentPlanner:
 
         if not goals:
             if no_start():
-                raise PlanError(
-                    f"no {self._way} out of the start: " + self._boxed_in("start", start)
-                )
+                raise self._refused("start", start, f"no {self._way} out of the start: ")
             raise PlanError(f"no {self._way} into the goal: every node around it is too close")
         payloads = {}
         self.corridor = None
@@ -1169,15 +1183,15 @@ class SegmentPlanner:
             self.corridor, corridor_fallback = None, True
             result, observer = search()
         if not result.found and no_start():
-            raise PlanError(f"no {self._way} out of the start: " + self._boxed_in("start", start))
+            raise self._refused("start", start, f"no {self._way} out of the start: ")
         if (
             not result.found
             and goal_key is None
             and not any(self.goal_link(k) is not None for k in goals)
         ):
-            raise PlanError(f"no {self._way} into the goal: " + self._boxed_in("goal", goal))
+            raise self._refused("goal", goal, f"no {self._way} into the goal: ")
         if not result.found:
-            raise (SearchLimit if result.expansions >= max_expansions else PlanError)(
+            raise (SearchLimit if result.expansions >= max_expansions else Unreachable)(
                 f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is unreachable: obstacles "
                 f"close every path within {margin_tiles} tiles of start and goal "
                 f"({result.expansions} nodes searched)"
