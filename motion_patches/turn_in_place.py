@@ -22,7 +22,6 @@ from .layers import has_flight
 from .motion import Motion
 from .poses import pose_features
 
-LABEL = "turn in place (derived from the sharpest turn loop)"
 MIN_SHARE = 0.75  # the turn may end on a double-support frame from this share of the angle
 SWAY = 0.5  # share of the stride's horizontal hip sway kept when stepping on the spot
 
