@@ -22,36 +22,26 @@ from .adapter import compat, evaluate, mocap, nla, props_io, storage, transactio
 from .adapter import moving as moving_io
 from .adapter import rig as rig_io
 from .adapter import scene as scene_io
-from .motion_patches import (
-    blocking,
-    body_clearance,
-    causes,
-    contacts,
-    crowd,
-    foot_lock,
-    layers,
-    layout_spec,
-    metrics,
-    moving_props,
-    object_patch,
-    scene_rate,
-    transitions,
-    validate,
-)
-from .motion_patches.defaults import GOAL_FACING, STITCHING
-from .motion_patches.defaults import PLANNING as DEFAULTS
-from .motion_patches.environment import Obstacle
-from .motion_patches.gait import MIN_TURN, build_gait
-from .motion_patches.inplace import root_positions
-from .motion_patches.locomotion_patch import bake
-from .motion_patches.motion import Motion, concatenate
-from .motion_patches.planner import (
+from .motion_patches.crowd import crowd
+from .motion_patches.kinematics import contacts, foot_lock, scene_rate
+from .motion_patches.kinematics.inplace import root_positions
+from .motion_patches.kinematics.motion import Motion, concatenate
+from .motion_patches.patch import layers
+from .motion_patches.patch.gait import MIN_TURN, build_gait
+from .motion_patches.patch.locomotion_patch import bake
+from .motion_patches.planning import body_clearance, causes, moving_props, transitions
+from .motion_patches.planning.defaults import GOAL_FACING, STITCHING
+from .motion_patches.planning.defaults import PLANNING as DEFAULTS
+from .motion_patches.planning.planner import (
     PlanError,
     SegmentPlanner,
     interaction_states,
     plan_motions,
     with_interactions,
 )
+from .motion_patches.props import blocking, object_patch
+from .motion_patches.props.environment import Obstacle
+from .motion_patches.quality import layout_spec, metrics, validate
 
 PLAN_KEY = storage.PLAN_KEY  # the custom property holding a character's plan record
 CROWD_RESOLVE_SLACK = 0.05  # metres the crowd is resolved wider than its spacing (see plan_crowd)
@@ -146,7 +136,7 @@ def bake_locomotion_patch(
     Locomotion Patches panel shows). A patch too sparse to connect is refused, saying what
     to add. Its tile side is two straight cycles, so a run's tiles are larger than a
     walk's; ``effort_rate`` (effort T per second) defaults to the gait's
-    (:func:`motion_patches.layers.effort_rate`: 1 for a walk, more for a run) so the costs
+    (:func:`motion_patches.patch.layers.effort_rate`: 1 for a walk, more for a run) so the costs
     of two layers compare.
 
     ``bvh_files``: BVH files imported first, onto ``armature`` (an armature object, or the
@@ -419,7 +409,8 @@ def path_length(ground):
 
 def _patch_for_planning(scene, patch_name):
     """The stored patch to plan with. A scene at another frame rate than the patch's is
-    fine: strips play the patch's keys scaled in time (:mod:`motion_patches.scene_rate`)."""
+    fine: strips play the patch's keys scaled in time
+    (:mod:`motion_patches.kinematics.scene_rate`)."""
     try:
         return storage.load_patch(scene, patch_name)
     except ValueError as exc:
@@ -427,7 +418,7 @@ def _patch_for_planning(scene, patch_name):
 
 
 def _check_character(character, patch):
-    """The :class:`~motion_patches.retarget.RigMap` that puts the patch on the character
+    """The :class:`~motion_patches.kinematics.retarget.RigMap` that puts the patch on the character
     (None: it is the patch's own skeleton); :class:`MotionPatchesError` naming the patch
     bones its armature cannot play."""
     try:
@@ -686,7 +677,8 @@ def _check_weights(alpha, beta, gamma, radius, where=""):
 
 
 def planning_settings(scene: "bpy.types.Scene", **given) -> dict:
-    """The planning settings of a request (the keys of :data:`motion_patches.defaults.PLANNING`):
+    """The planning settings of a request (the keys of
+    :data:`motion_patches.planning.defaults.PLANNING`):
     each one given (not None) as given, the others the scene's (its Planning panel, which
     starts from those defaults). All are checked: :class:`MotionPatchesError` names a bad one."""
     s = scene.motion_patches
@@ -777,7 +769,7 @@ def _placed(scene, patch, rig, motions):
     """A plan's piece motions (:func:`plan_motions`) put on the character: (its pieces'
     motions on its skeleton, at the patch's rate; the scene frames where the pieces start
     and the last ends, from 0; the whole motion on the scene's frames). ``rig``: the
-    character's :class:`~motion_patches.retarget.RigMap` (None: the patch skeleton)."""
+    character's :class:`~motion_patches.kinematics.retarget.RigMap` (None: the patch skeleton)."""
     if rig is not None:
         motions = [rig.motion(m) for m in motions]
     patch_bounds, bounds = scene_rate.piece_bounds(
@@ -1079,7 +1071,7 @@ def plan_path(
 
 def _gait_change(tried):
     """((plan, piece motions), None) of the cheapest plan that walks, runs through the run
-    layer's traversals and walks again (:func:`motion_patches.transitions.compose`), from
+    layer's traversals and walks again (:func:`motion_patches.planning.transitions.compose`), from
     the layers' plans ``tried`` (:func:`_plan_in_layer`: the layer of least effort walks,
     that of most runs), or (None, why not). Not offered with props that move, with a start
     or goal on a prop's clip (sitting), nor when the plan's hips would come within the
@@ -1172,7 +1164,7 @@ def _plan_in_layer(
     """(patch, rig map, planner world, plan, piece motions, first frame, {planner, ends,
     moving: whether props move}) of one character planned in the layer of ``patch``; its
     props offer only the traversal clips that serve that layer
-    (:func:`motion_patches.layers.serves`)."""
+    (:func:`motion_patches.patch.layers.serves`)."""
     rig = _check_character(character, patch)
     scale = _size(rig)
     depsgraph = context.evaluated_depsgraph_get()
@@ -1293,12 +1285,12 @@ def plan_crowd(
     Characters are taken in priority order (the given priority, then the longer distance
     from start to goal first). Each path is planned against the props and the spots where
     the others stand still while it walks: the goals of those before it and the starts of
-    those after it (:func:`motion_patches.crowd.standing_spots`; dropped when they box it
+    those after it (:func:`motion_patches.crowd.crowd.standing_spots`; dropped when they box it
     in). Then each character in turn is checked against a space-time reservation of
     everyone before it and kept ``spacing`` metres (default: two radii) from them by an
     idle hold mid-walk on a double-support frame, else a wait at its start (whole 0.2 s
     steps, each at most ``max_wait_seconds``), else a re-route round where the other walks
-    then (:func:`motion_patches.crowd.resolve`). Closer approaches left are returned as
+    then (:func:`motion_patches.crowd.crowd.resolve`). Closer approaches left are returned as
     ``conflicts`` by pair and frame, checked on the motion as written. Bad input (a
     character twice, two characters sent to one goal, goals closer than ``spacing``: one
     could never be free) raises :class:`MotionPatchesError` before anything is written."""
@@ -1915,11 +1907,11 @@ def _holdable(plan, placed, ramp):
 def _with_hold(plan, raw, bounds, at, hold, ramp):
     """(plan, raw piece motions) with an idle hold of ``hold`` frames on scene frame ``at``
     (the scene at the patch's rate): the piece it falls in is time-warped
-    (:func:`motion_patches.retime.held`) and becomes a piece of kind "hold", so it is
+    (:func:`motion_patches.kinematics.retime.held`) and becomes a piece of kind "hold", so it is
     written as its own action, not the shared segment action."""
     import dataclasses
 
-    from .motion_patches import retime
+    from .motion_patches.kinematics import retime
 
     i = _piece_holding(plan, bounds, at, ramp)
     if i is None:

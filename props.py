@@ -19,7 +19,7 @@ from bpy.props import (
     StringProperty,
 )
 
-from .motion_patches.defaults import PLANNING as DEFAULTS
+from .motion_patches.planning.defaults import PLANNING as DEFAULTS
 
 # Called with the new value when Show Planner Overlay changes; the overlay (panels/overlay.py)
 # sets it while registered, so the properties need not know the UI.

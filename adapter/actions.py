@@ -16,10 +16,10 @@ import re
 
 import numpy as np
 
-from ..motion_patches import keys as key_plan
-from ..motion_patches import quat
-from ..motion_patches.clip import Clip
-from ..motion_patches.skeleton import Skeleton, root_location_to_position
+from ..motion_patches.kinematics import keys as key_plan
+from ..motion_patches.kinematics import quat
+from ..motion_patches.kinematics.clip import Clip
+from ..motion_patches.kinematics.skeleton import Skeleton, root_location_to_position
 from . import compat
 
 _PATH = re.compile(
@@ -355,12 +355,13 @@ def key_curves(action, slot, frames, curves, tol=None, stored=None, values=None)
     at ``frames``, each in one bulk write (``keyframe_points.add`` + ``foreach_set`` of
     float32 arrays, the type Blender stores, so nothing is converted value by value).
 
-    With ``tol`` each curve is stored compactly (:mod:`motion_patches.keys`, the choices of
+    With ``tol`` each curve is stored compactly (:mod:`motion_patches.kinematics.keys`, the
+    choices of
     all curves made in one vectorised pass): one key when constant, linear keys on the
     frames that need them, or, when those would cost more, one sample per frame
     (``convert_to_samples``: 16 bytes a frame in the .blend instead of a keyframe's 72; it
     plays the same values, linear between frames). ``stored``: those choices made already
-    (:func:`motion_patches.keys.plan_columns`). Curves to be sampled get no interpolation
+    (:func:`motion_patches.kinematics.keys.plan_columns`). Curves to be sampled get no interpolation
     or handles: sampling reads a key's own value on its frame, and the keys are dropped.
     ``values``: the curves' values as one (F, C) array already (their ``curves`` entries
     are then not read)."""

@@ -6,7 +6,7 @@ in metres, with keys scaled to the scene frame rate. The importer makes an armat
 file; the extra ones are ours and are removed once their action is moved across. A file
 whose skeleton is not the armature's (another subject: other bone lengths; another naming
 convention: 3ds Max, Mixamo, Rigify...) is retargeted onto it by
-:mod:`motion_patches.retarget`, the rule planning uses too.
+:mod:`motion_patches.kinematics.retarget`, the rule planning uses too.
 """
 
 from pathlib import Path
@@ -98,13 +98,13 @@ def _same_rest(a, b, tol=1e-3):
 
 def _retargeted(action, source_obj, target_obj, path):
     """Another skeleton's clip (another subject, or other joint names) moved onto the
-    target rig by :func:`motion_patches.retarget.rig_map` (the target's stored bone map
+    target rig by :func:`motion_patches.kinematics.retarget.rig_map` (the target's stored bone map
     applies): rotations kept relative to each bone's rest, root motion scaled by hip
     height. ValueError naming the joints that cannot be mapped."""
     import numpy as np
 
-    from ..motion_patches.retarget import rig_map
-    from ..motion_patches.skeleton import root_position_to_location
+    from ..motion_patches.kinematics.retarget import rig_map
+    from ..motion_patches.kinematics.skeleton import root_position_to_location
     from . import actions as act_io
     from . import compat
     from . import rig as rig_io

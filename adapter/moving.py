@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from ..motion_patches.moving_props import PropTrack
+from ..motion_patches.planning.moving_props import PropTrack
 from . import scene as scene_io
 
 LONGEST_S = 600.0  # seconds of a prop's motion read at most (then it is held still)

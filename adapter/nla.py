@@ -15,9 +15,9 @@ import json
 
 import numpy as np
 
-from ..motion_patches import foot_lock, quat
-from ..motion_patches.inplace import rest_facing, root_channel_to_ground
-from ..motion_patches.skeleton import per_skeleton, root_position_to_location
+from ..motion_patches.kinematics import foot_lock, quat
+from ..motion_patches.kinematics.inplace import rest_facing, root_channel_to_ground
+from ..motion_patches.kinematics.skeleton import per_skeleton, root_position_to_location
 from . import actions as act_io
 from . import compat
 from . import rig as rig_io
@@ -60,7 +60,7 @@ def inplace_channels(skel, motion):
 
 
 def check_rig(obj, skel, floor=0.0):
-    """The :class:`~motion_patches.retarget.RigMap` that puts the patch skeleton ``skel``
+    """The :class:`~motion_patches.kinematics.retarget.RigMap` that puts the patch skeleton ``skel``
     on the armature ``obj`` (None: the armature holds that skeleton itself). Raises
     ValueError for an object that is no armature, is scaled or tilted, or whose bones
     cannot play the patch's hips, legs, feet and toes (naming those patch bones)."""
@@ -133,7 +133,7 @@ def rotation_signature(skel, modes):
 def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None, index=None):
     """The shared in-place action of a patch segment for a rig whose bones have rotation
     ``modes`` ({bone: rotation_mode}; default all quaternion), created on first use;
-    ``rig`` (a :class:`~motion_patches.retarget.RigMap`) when the rig is another skeleton
+    ``rig`` (a :class:`~motion_patches.kinematics.retarget.RigMap`) when the rig is another skeleton
     than the patch's, ``skel`` then being the rig's.
 
     Shared actions are keyed by patch, segment, the rig's skeleton (:meth:`RigMap.signature
@@ -207,18 +207,18 @@ def write_plan(
     """Write a plan's strips and root trajectory on ``obj``; returns strip records.
 
     ``motions``: each piece's motion at the patch's frame rate, on the rig's skeleton (put
-    there by ``rig``, a :class:`~motion_patches.retarget.RigMap`, when the rig is another
+    there by ``rig``, a :class:`~motion_patches.kinematics.retarget.RigMap`, when the rig is another
     skeleton; None: the patch's). ``bounds``: the scene frames (offsets from
     ``frame_start``, P + 1 integers) where the pieces start and the last one ends; default
     the patch's own frames. When the scene runs at another rate than the patch, piece ``i``
     plays its patch-rate keys with strip scale ``(bounds[i+1] - bounds[i]) / (frames - 1)``
-    (:mod:`motion_patches.scene_rate`). ``world``: the whole motion on the scene's frames
+    (:mod:`motion_patches.kinematics.scene_rate`). ``world``: the whole motion on the scene's frames
     (``bounds[-1] + 1`` of them), which the per-character root trajectory is keyed from.
     ``locked``: rotation channels (F, J, 4) of ``world`` with the feet pinned
-    (:func:`motion_patches.foot_lock.lock_feet`); the difference is written as a
+    (:func:`motion_patches.kinematics.foot_lock.lock_feet`); the difference is written as a
     per-character correction on its own track, added over the shared segment actions.
     ``layer_keys``: {layer: patch key} of a plan that changes layer, whose segment pieces
-    name their own patch (:class:`motion_patches.transitions.LayerPiece`): their strips
+    name their own patch (:class:`motion_patches.planning.transitions.LayerPiece`): their strips
     play that patch's shared segment actions, on the one motion track."""
     skel = rig.target if rig is not None else patch.gait.skeleton
     modes = rig_rotation_modes(obj, skel)

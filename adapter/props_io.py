@@ -3,14 +3,14 @@
 
 A tagged mesh object's footprint is the convex hull of its evaluated vertices in its own
 ground coordinates (scale applied, Z rotation factored out; a flat prop grown to the least
-thickness, :func:`motion_patches.footprint.outline`); its clips are read from their
+thickness, :func:`motion_patches.props.footprint.outline`); its clips are read from their
 actions on the patch's skeleton and placed relative to the prop.
 """
 
 import numpy as np
 
-from ..motion_patches import footprint as fp
-from ..motion_patches import object_patch as op
+from ..motion_patches.props import footprint as fp
+from ..motion_patches.props import object_patch as op
 from . import actions as act_io
 from . import scene as scene_io
 
@@ -24,7 +24,7 @@ def prop_pose(obj):
 
 def footprint(obj, depsgraph):
     """Convex footprint in the prop's ground coordinates (the hull of its evaluated
-    vertices, at least ``footprint.MIN_THICKNESS`` wide: :func:`motion_patches.footprint.
+    vertices, at least ``footprint.MIN_THICKNESS`` wide: :func:`motion_patches.props.footprint.
     outline`, the rule every footprint follows); ValueError if it has no vertices."""
     if obj.type != "MESH":
         raise ValueError(

@@ -1,11 +1,11 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """Characters on another skeleton than the patch's: the bone map stored on the armature and
-the :class:`~motion_patches.retarget.RigMap` of a character, the glue every writer uses.
+the :class:`~motion_patches.kinematics.retarget.RigMap` of a character, the glue every writer uses.
 
 The bone map is a property group on the armature *data*, ``Armature.motion_patches_rig``
 (``bone_map``: rows of ``patch_bone`` -> ``rig_bone``), so every character made from one rig
 shares it. It only overrides: patch bones it does not list are paired by their names
-(:func:`motion_patches.retarget.rig_map`). A row with an empty ``rig_bone`` leaves that
+(:func:`motion_patches.kinematics.retarget.rig_map`). A row with an empty ``rig_bone`` leaves that
 patch bone out. Users edit it in the sidebar (Motion Patches > Planning > Bone Map: *Fill
 From Names* lists every patch bone with the rig bone the names give, then any row can be
 changed), or from Python with :func:`set_bone_map`.
@@ -13,7 +13,7 @@ changed), or from Python with :func:`set_bone_map`.
 
 import numpy as np
 
-from ..motion_patches.retarget import rig_map, same_skeleton
+from ..motion_patches.kinematics.retarget import rig_map, same_skeleton
 from . import actions as act_io
 
 
@@ -51,7 +51,7 @@ def _plays_itself(skel, rig_skel):
 def rig_for(obj, skel, floor=0.0):
     """The RigMap that puts motion of skeleton ``skel`` on armature ``obj``, or None when
     the armature holds that skeleton itself (and its bone map changes nothing). Raises
-    ValueError (a :class:`~motion_patches.retarget.RetargetError`) naming the patch bones
+    ValueError (a :class:`~motion_patches.kinematics.retarget.RetargetError`) naming the patch bones
     that cannot be mapped."""
     own = act_io.skeleton_of(obj)
     stored = {p: r for p, r in bone_map(obj).items() if p in skel.names}
@@ -73,7 +73,7 @@ def guessed_map(obj, skel):
     try:
         mapping = rig_map(skel, own).mapping
     except ValueError:
-        from ..motion_patches.retarget import roles
+        from ..motion_patches.kinematics.retarget import roles
 
         s_roles, t_roles = roles(skel)[1], roles(own)[1]
         mapping = {skel.names[i]: own.names[t_roles[r]] for r, i in s_roles.items() if r in t_roles}

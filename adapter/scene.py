@@ -3,7 +3,7 @@
 
 A mesh object blocks walking where its evaluated geometry overlaps the body's height band
 (0.05 m to 1.8 m above the ground): floors and ceilings do not. Its footprint is made of
-convex parts by :func:`motion_patches.footprint.parts` (thin walls grown to a board, open
+convex parts by :func:`motion_patches.props.footprint.parts` (thin walls grown to a board, open
 rooms kept open); an object of several parts gives one obstacle per part, named
 :func:`part_name`.
 """
@@ -12,8 +12,8 @@ import re
 
 import numpy as np
 
-from ..motion_patches import footprint as fp
-from ..motion_patches.environment import Environment, Obstacle
+from ..motion_patches.props import footprint as fp
+from ..motion_patches.props.environment import Environment, Obstacle
 
 BODY_BAND = fp.BODY_BAND
 _PART = re.compile(r" \(part \d+\)$")
@@ -21,7 +21,7 @@ _PART = re.compile(r" \(part \d+\)$")
 
 def mesh_arrays(obj, depsgraph):
     """(world vertices (N, 3), triangle vertex indices (3T,), edges (E, 2)) of a mesh
-    object's evaluated geometry (modifiers applied): what :mod:`motion_patches.footprint`
+    object's evaluated geometry (modifiers applied): what :mod:`motion_patches.props.footprint`
     reads. Triangles, not polygons: every face part is then convex in plan."""
     ev = obj.evaluated_get(depsgraph)
     mesh = ev.to_mesh()
@@ -98,7 +98,7 @@ def ground_state(obj):
 def character_state(obj, skel):
     """(x, y, heading) of a character: its root's ground position and its rest facing
     turned by the object's rotation."""
-    from ..motion_patches.inplace import rest_facing
+    from ..motion_patches.kinematics.inplace import rest_facing
 
     m = np.array(obj.matrix_world)
     f = m[:3, :3] @ rest_facing(skel)

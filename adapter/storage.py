@@ -13,8 +13,8 @@ import json
 
 import numpy as np
 
-from ..motion_patches import serialize
-from ..motion_patches.environment import Environment, Obstacle
+from ..motion_patches.patch import serialize
+from ..motion_patches.props.environment import Environment, Obstacle
 
 PLAN_KEY = "motion_patches_plan"  # custom property: the last plan written
 ANALYSIS_KEY = "motion_patches_analysis"  # custom property: the last analysis figures

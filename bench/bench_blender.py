@@ -186,7 +186,7 @@ def section_strips(bpy, addon, args):
         captured["args"], captured["kw"] = a, kw
         return write(*a, **kw)
 
-    planner = addon.motion_patches.planner.SegmentPlanner
+    planner = addon.motion_patches.planning.planner.SegmentPlanner
     plan = planner.plan
 
     def unshortened(self, *a, **kw):  # the search's own chain of segments, one strip each
@@ -236,9 +236,9 @@ def section_strips(bpy, addon, args):
 
         spent = {}
         parts = [
-            (addon.motion_patches.foot_lock, "lock_feet"),
+            (addon.motion_patches.kinematics.foot_lock, "lock_feet"),
             (addon.adapter.nla, "write_plan"),
-            (addon.motion_patches.motion.Motion, "world_matrices"),
+            (addon.motion_patches.kinematics.motion.Motion, "world_matrices"),
             (addon.adapter.storage, "store_plan"),
         ]
         kept = [getattr(owner, name) for owner, name in parts]

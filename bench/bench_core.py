@@ -34,13 +34,15 @@ REPO = Path(__file__).resolve().parents[1]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
-from motion_patches import bvh, contacts, foot_lock, locomotion_patch, metrics  # noqa: E402  # noqa: E402
-from motion_patches import clip as clip_mod
-from motion_patches import gait as gait_mod
-from motion_patches.defaults import PLANNING as DEFAULTS  # noqa: E402
-from motion_patches.environment import Environment, Obstacle  # noqa: E402
-from motion_patches.motion import Motion, concatenate  # noqa: E402
-from motion_patches.planner import PlanError, SegmentPlanner, plan_motions  # noqa: E402
+from motion_patches.kinematics import bvh, contacts, foot_lock
+from motion_patches.kinematics import clip as clip_mod
+from motion_patches.kinematics.motion import Motion, concatenate
+from motion_patches.patch import gait as gait_mod
+from motion_patches.patch import locomotion_patch
+from motion_patches.planning.defaults import PLANNING as DEFAULTS
+from motion_patches.planning.planner import PlanError, SegmentPlanner, plan_motions
+from motion_patches.props.environment import Environment, Obstacle
+from motion_patches.quality import metrics
 
 WEIGHTS = tuple(DEFAULTS[k] for k in ("alpha", "beta", "gamma"))
 

@@ -9,9 +9,9 @@ Each size is a plaza of pillars and benches (boxes), its area growing with the c
 (``--area`` m² per character), where two groups cross: half walk east, half west, each
 10-14 m, starts and goals at least a metre from every other. The crowd is planned the way
 ``api.plan_crowd`` does it, on the core alone: priority by distance, each path planned
-round the props and the others' standing spots (:func:`motion_patches.crowd.standing_spots`),
-its motion synthesised, then :func:`motion_patches.crowd.resolve` (idle holds, waits,
-re-routes) and the final check :func:`motion_patches.crowd.conflicts_of`. Times are split
+round the props and the others' standing spots (:func:`motion_patches.crowd.crowd.standing_spots`),
+its motion synthesised, then :func:`motion_patches.crowd.crowd.resolve` (idle holds, waits,
+re-routes) and the final check :func:`motion_patches.crowd.crowd.conflicts_of`. Times are split
 into path planning, motion synthesis, resolution and the final check. Memory: the peak
 traced by ``tracemalloc`` over the resolution and check (run a second time, traced), and the
 process's peak resident size after each size (``resource``; it only grows, sizes run in
@@ -39,10 +39,10 @@ for p in (str(REPO), str(HERE)):
 
 import bench_core as core  # noqa: E402
 
-from motion_patches import crowd  # noqa: E402
-from motion_patches.environment import Environment, Obstacle  # noqa: E402
-from motion_patches.motion import concatenate  # noqa: E402
-from motion_patches.planner import PlanError, SegmentPlanner, plan_motions  # noqa: E402
+from motion_patches.crowd import crowd
+from motion_patches.kinematics.motion import concatenate
+from motion_patches.planning.planner import PlanError, SegmentPlanner, plan_motions
+from motion_patches.props.environment import Environment, Obstacle
 
 RADIUS = 0.25
 SPACING = 2 * RADIUS

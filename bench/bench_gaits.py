@@ -14,7 +14,7 @@ Prints numbers, asserts nothing about timing. Run from the repository root:
 3. Gait changes: ``--lines`` random chair lines across the way (chairs 0.5 m apart, 4 to
    16 m long, turned up to 30 degrees, the 16_06 jump a run-layer clip only), the start 5
    to 10 m before the line and the goal 5 to 10 m after it; each planned in the walk, in
-   the run, and composed (:func:`motion_patches.transitions.compose`); which is cheapest,
+   the run, and composed (:func:`motion_patches.planning.transitions.compose`); which is cheapest,
    and the time of each.
 """
 
@@ -33,21 +33,16 @@ for p in (REPO, REPO / "bench"):
 
 import bench_core as core  # noqa: E402
 
-from motion_patches import (  # noqa: E402
-    bvh,
-    contacts,
-    foot_lock,
-    layers,
-    locomotion_patch,
-    metrics,
-    transitions,
-)
-from motion_patches import gait as gait_mod  # noqa: E402
-from motion_patches import object_patch as op  # noqa: E402
-from motion_patches.environment import Environment, Obstacle  # noqa: E402
-from motion_patches.motion import Motion, concatenate  # noqa: E402
-from motion_patches.planner import PlanError, SegmentPlanner, plan_motions  # noqa: E402
-from motion_patches.retarget import rig_map  # noqa: E402
+from motion_patches.kinematics import bvh, contacts, foot_lock
+from motion_patches.kinematics.motion import Motion, concatenate
+from motion_patches.kinematics.retarget import rig_map
+from motion_patches.patch import gait as gait_mod
+from motion_patches.patch import layers, locomotion_patch
+from motion_patches.planning import transitions
+from motion_patches.planning.planner import PlanError, SegmentPlanner, plan_motions
+from motion_patches.props import object_patch as op
+from motion_patches.props.environment import Environment, Obstacle
+from motion_patches.quality import metrics
 
 CHAIR = np.array([[-0.2, -0.22], [0.2, -0.22], [0.2, 0.22], [-0.2, 0.22]])
 CHAIR_SPACING = 0.5  # metres between chair centres along a line

@@ -42,12 +42,12 @@ for p in (str(REPO), str(HERE)):
 
 import bench_core as core  # noqa: E402
 
-from motion_patches import planner as planner_mod  # noqa: E402
-from motion_patches import validate
-from motion_patches.defaults import PLANNING as DEFAULTS  # noqa: E402
-from motion_patches.environment import Environment, Obstacle, distance_to_polygon  # noqa: E402
-from motion_patches.inplace import to_world  # noqa: E402
-from motion_patches.motion import concatenate  # noqa: E402
+from motion_patches.kinematics.inplace import to_world
+from motion_patches.kinematics.motion import concatenate
+from motion_patches.planning import planner as planner_mod
+from motion_patches.planning.defaults import PLANNING as DEFAULTS
+from motion_patches.props.environment import Environment, Obstacle, distance_to_polygon
+from motion_patches.quality import validate
 
 WEIGHTS = tuple(DEFAULTS[k] for k in ("alpha", "beta", "gamma"))
 

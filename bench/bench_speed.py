@@ -17,7 +17,7 @@ Sections (all by default, in this order; each prints its own lines while it runs
   up from one chair and sitting down on another; dynamic (lazy) against static (every
   copy stitched before the search) stitching: search times, stitches per path, ms per
   stitch, equal costs.
-* ``astar``: the segment A* (:mod:`motion_patches.astar`) against ``networkx.astar_path``
+* ``astar``: the segment A* (:mod:`motion_patches.planning.astar`) against ``networkx.astar_path``
   on the same unrolled graph (every node of the plan region expanded up front), both timed
   in this run, same heuristic, same costs; and the lazy plan against unrolling.
 * ``corridor``: the two-level plan (high-level tile corridor, ``use_corridor=True``)
@@ -57,19 +57,19 @@ for p in (str(REPO), str(HERE)):
 
 import bench_core as core  # noqa: E402
 
-from motion_patches import astar  # noqa: E402
-from motion_patches import object_patch as op
-from motion_patches.defaults import PLANNING as DEFAULTS  # noqa: E402
-from motion_patches.environment import Environment, Obstacle  # noqa: E402
-from motion_patches.motion import concatenate  # noqa: E402
-from motion_patches.node_keys import pack  # noqa: E402
-from motion_patches.planner import (  # noqa: E402
+from motion_patches.kinematics.motion import concatenate
+from motion_patches.patch.node_keys import pack
+from motion_patches.planning import astar
+from motion_patches.planning.defaults import PLANNING as DEFAULTS
+from motion_patches.planning.planner import (
     PlanError,
     SegmentPlanner,
     interaction_states,
     plan_motions,
     with_interactions,
 )
+from motion_patches.props import object_patch as op
+from motion_patches.props.environment import Environment, Obstacle
 
 WEIGHTS = tuple(DEFAULTS[k] for k in ("alpha", "beta", "gamma"))
 
@@ -321,12 +321,12 @@ def table1_scene(patch, args, rng, clips):
 
 
 def table1_clips(patch, args):
-    from motion_patches import bvh
-    from motion_patches.clip import retarget
+    from motion_patches.kinematics import bvh, contacts
+    from motion_patches.kinematics.retarget import retarget
 
     mocap = Path(args.mocap) / "cmu"
     walk = bvh.read(mocap / "16_15.bvh")
-    fps, floor = patch.gait.fps, op.floor_level(walk)
+    fps, floor = patch.gait.fps, contacts.floor_level(walk)
     hurdle = op.patch_clip_from(bvh.read(mocap / "16_06.bvh"), op.TRAVERSAL, fps, effort=8.0)
     sit = op.patch_clip_from(
         retarget(bvh.read(mocap / "13_05.bvh"), walk.skeleton),

@@ -5,7 +5,7 @@ its clip list, its footprint and the tag / untag buttons."""
 import bpy
 import numpy as np
 
-from ..motion_patches import footprint as fp
+from ..motion_patches.props import footprint as fp
 from .sidebar import SidebarPanel, list_with_buttons
 
 MAX_FOOTPRINT_VERTICES = 20000  # above this the panel does not compute the footprint area
@@ -13,7 +13,7 @@ MAX_FOOTPRINT_VERTICES = 20000  # above this the panel does not compute the foot
 
 def footprint_info(ob):
     """(vertex count, plan-view area in m² of the mesh's footprint as a tagged prop's
-    (:func:`motion_patches.footprint.outline`), or None when the mesh is too large to
+    (:func:`motion_patches.props.footprint.outline`), or None when the mesh is too large to
     measure while drawing). Modifiers are not applied here."""
     me = ob.data
     n = len(me.vertices)

@@ -17,7 +17,12 @@ import numpy as np
 
 from .. import api, props
 from ..adapter import storage
-from ..motion_patches.plan_frame import lattice_frame, local_environment, to_local, to_world
+from ..motion_patches.planning.plan_frame import (
+    lattice_frame,
+    local_environment,
+    to_local,
+    to_world,
+)
 from .sidebar import SidebarPanel, wrapped_label
 
 COLOURS = {

@@ -219,10 +219,10 @@ def main(argv):
 
     # The floor: the source clip's own skate, measured the same way.
     src = addon.adapter.actions.clip_from_action(acts[0], arm, 30.0)
-    src30 = from_core.clip.resample(src, 30.0)
-    con, _, _ = from_core.contacts.foot_contacts(src30)
-    fj = from_core.contacts.foot_joints(src30.skeleton)
-    floor = from_core.metrics.foot_skate(src30.joint_positions()[:, fj], 30.0, con)
+    src30 = from_core.kinematics.clip.resample(src, 30.0)
+    con, _, _ = from_core.kinematics.contacts.foot_contacts(src30)
+    fj = from_core.kinematics.contacts.foot_joints(src30.skeleton)
+    floor = from_core.quality.metrics.foot_skate(src30.joint_positions()[:, fj], 30.0, con)
 
     out = Path(args.output)
     out.parent.mkdir(parents=True, exist_ok=True)

@@ -319,7 +319,7 @@ def plot_layout(
 ):
     """Write a top-down PNG of ``env`` and a plan on it; returns the image (H, W, 3) floats.
 
-    ``plan`` is a :class:`~motion_patches.planner.Plan` (or None to draw only the scene and
+    ``plan`` is a :class:`~motion_patches.planning.planner.Plan` (or None to draw only the scene and
     ``start`` / ``goal``), ``motions`` its per-piece world motions (``planner.plan_motions``;
     computed when None). The view is the box around the path, start and goal grown by
     ``margin_m``; ``size_px`` is its longer side. A legend strip is added below the map,
@@ -331,7 +331,8 @@ def plot_layout(
 
     * white ground; faint lines of the patch's cells and grey lines of the tile grid
       (tile (i, j) has its corner at (i * side, j * side)); a plan is drawn in its plan
-      frame (:mod:`motion_patches.plan_frame`: the start on the left, the goal to its right),
+      frame (:mod:`motion_patches.planning.plan_frame`: the start on the left, the goal to its
+      right),
       so the grid is the lattice the planner searched;
     * occluded cells in light coral: cells whose bit is clear in ``env.free_cells(tile)``
       (bit c is cell (c % cells, c // cells)), i.e. cells within the character's radius of
@@ -346,7 +347,7 @@ def plot_layout(
     * the start (green) and the goal (red) as discs with a dark arrow along their heading.
     """
     if plan is not None and motions is None:
-        from motion_patches.planner import plan_motions
+        from motion_patches.planning.planner import plan_motions
 
         motions = plan_motions(patch, plan)
     motions = motions or []
@@ -357,7 +358,7 @@ def plot_layout(
     if frame is not None:
         # Drawn in the plan frame, where the planner laid its tile lattice (anchored at
         # the start, +x towards the goal): the grid is then the one it searched.
-        from motion_patches import plan_frame
+        from motion_patches.planning import plan_frame
 
         c, s_ = np.cos(frame[2]), np.sin(frame[2])
         shift = -np.array([c * frame[0] + s_ * frame[1], -s_ * frame[0] + c * frame[1]])
@@ -538,7 +539,7 @@ def demo_pillars(seed=7, sides=32):
     """The pillars of tools/demo.py as footprints (Blender's default cylinder has 32 sides)."""
     import demo_layout
 
-    from motion_patches.environment import Obstacle
+    from motion_patches.props.environment import Obstacle
 
     a = np.linspace(0.0, 2.0 * np.pi, sides + 1)[:-1]
     return [
@@ -559,9 +560,10 @@ def main(argv=None):
     p.add_argument("--radius", type=float, default=0.25, help="character radius in metres")
     p.add_argument("--margin", type=float, default=1.5, help="metres shown around the path")
     args = p.parse_args(argv)
-    from motion_patches import bvh, gait, locomotion_patch
-    from motion_patches.environment import Environment
-    from motion_patches.planner import SegmentPlanner, plan_motions
+    from motion_patches.kinematics import bvh
+    from motion_patches.patch import gait, locomotion_patch
+    from motion_patches.planning.planner import SegmentPlanner, plan_motions
+    from motion_patches.props.environment import Environment
 
     mocap = Path(args.mocap) / "cmu"
     g = gait.build_gait("walk", bvh.read(mocap / "16_15.bvh"), (bvh.read(mocap / "16_18.bvh"),))

@@ -92,8 +92,13 @@ def source_skate(addon_module, mocap_dir, layer):
 
     mp = SimpleNamespace(
         **{
-            n: import_module(f"{addon_module.__name__}.motion_patches.{n}")
-            for n in ("bvh", "contacts", "metrics", "retarget")
+            n: import_module(f"{addon_module.__name__}.motion_patches.{sub}.{n}")
+            for n, sub in (
+                ("bvh", "kinematics"),
+                ("contacts", "kinematics"),
+                ("metrics", "quality"),
+                ("retarget", "kinematics"),
+            )
         }
     )
     walk = mp.bvh.read(mocap_dir / "cmu" / "16_15.bvh")

@@ -102,7 +102,7 @@ def test_copy_step_says_its_unit(addon_module):
 
 def test_blocked_area_is_the_footprint_grown_by_the_radius(addon_module):
     overlay = addon_module.panels.overlay
-    from_env = addon_module.motion_patches.environment
+    from_env = addon_module.motion_patches.props.environment
     chair = np.array([[-0.2, -0.22], [0.2, -0.22], [0.2, 0.22], [-0.2, 0.22]])
     for poly in (chair, chair[::-1]):
         outline = overlay.grown(poly, 0.25)

@@ -153,8 +153,8 @@ def test_a_search_limit_hit_is_reported_as_such_not_as_props(walk, addon_module,
     """The node limit lowered to 20 (a 60 m walk past pillars needs more): plan and check
     name the search limit with its node count, and blame no prop."""
     scene, char, api = walk
-    causes = addon_module.motion_patches.causes
-    planner_cls = addon_module.motion_patches.planner.SegmentPlanner
+    causes = addon_module.motion_patches.planning.causes
+    planner_cls = addon_module.motion_patches.planning.planner.SegmentPlanner
     limit = 20
     plan = planner_cls.plan
 

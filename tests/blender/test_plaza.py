@@ -154,11 +154,11 @@ def test_a_plaza_of_fifty_crosses_without_meeting(plaza, addon_module):
     for c in res.conflicts:  # on the frames reported
         a, b = ([o.name for o in planned].index(n) for n in (c["a"], c["b"]))
         assert d[a, b, c["frame"] - 1] < 2 * RADIUS + 0.01
-    from bl_ext.motion_patches_tests.motion_patches.motion_patches import metrics  # noqa
-    from bl_ext.motion_patches_tests.motion_patches.motion_patches.environment import (
+    from bl_ext.motion_patches_tests.motion_patches.motion_patches.props.environment import (
         Environment,
         Obstacle,
     )
+    from bl_ext.motion_patches_tests.motion_patches.motion_patches.quality import metrics
 
     skates = []
     for c, (ob, p) in enumerate(zip(planned, res.plans)):

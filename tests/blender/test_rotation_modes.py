@@ -118,7 +118,7 @@ def test_channels_are_continuous_over_frames(addon_module):
     """A bone spinning three turns about a wandering axis (through the identity and past
     90 degrees on every Euler middle axis): the keys follow it without a jump, in every mode."""
     act_io = addon_module.adapter.actions
-    quat = addon_module.motion_patches.quat
+    quat = addon_module.motion_patches.kinematics.quat
     t = np.linspace(0.0, 1.0, 720)
     axis = np.column_stack((np.cos(5 * t), np.sin(3 * t), 0.6 * np.cos(2 * t)))
     axis /= np.linalg.norm(axis, axis=1, keepdims=True)
@@ -218,7 +218,7 @@ def test_clips_read_the_same_in_every_rotation_mode(addon_module, mocap_dir, cle
 
     skel = ref.skeleton
     frames = np.arange(ref.frames, dtype=float)
-    loc = addon_module.motion_patches.skeleton.root_position_to_location(skel, ref.root_pos)
+    loc = addon_module.motion_patches.kinematics.skeleton.root_position_to_location(skel, ref.root_pos)
     for mode in MODES:
         set_modes(rig_n, lambda _: mode)
         act, slot = addon_module.adapter.compat.new_action(f"keyed {mode}")
@@ -303,7 +303,7 @@ def planned(request, baked, addon_module, mocap_dir):
             for r in rigs
         }
     skel, world, locked = written["Quat"]
-    motion = addon_module.motion_patches.motion.Motion
+    motion = addon_module.motion_patches.kinematics.motion.Motion
     expected = motion(
         world.ground,
         world.root_local,

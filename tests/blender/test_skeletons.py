@@ -297,7 +297,7 @@ def test_a_3ds_max_clip_imports_onto_a_cmu_armature(addon_module, mocap_dir, cle
     run = acts[1]
     assert "3ds Max naming onto CMU naming" in run["motion_patches_retargeted"]
     clip = addon_module.adapter.actions.clip_from_action(run, arm, 30.0)
-    bvh = import_module(addon_module.__name__ + ".motion_patches.bvh")
+    bvh = import_module(addon_module.__name__ + ".motion_patches.kinematics.bvh")
     src = bvh.read(mocap_dir / "cmu16max" / "16_35.bvh")
     # same subject: the retargeted run has the recorded run's stride, on CMU bone names
     travelled = np.linalg.norm(clip.root_pos[-1, :2] - clip.root_pos[0, :2])

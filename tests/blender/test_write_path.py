@@ -38,7 +38,7 @@ def walks(quat, rng):
 @pytest.mark.parametrize("mode", ["XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX", "AXIS_ANGLE"])
 def test_channels_match_the_frame_by_frame_choice(addon_module, mode):
     act_io = addon_module.adapter.actions
-    quat = addon_module.motion_patches.quat
+    quat = addon_module.motion_patches.kinematics.quat
     rng = np.random.default_rng(sum(map(ord, mode)))
     for q in walks(quat, rng):
         for first in (None, "random"):
@@ -72,7 +72,7 @@ def test_curves_keyed_in_bulk_play_their_values(addon_module, clean_scene):
     compact tolerance; curves of one bone share its group."""
     act_io = addon_module.adapter.actions
     compat = addon_module.adapter.compat
-    keys = addon_module.motion_patches.keys
+    keys = addon_module.motion_patches.kinematics.keys
     t = np.arange(120.0)
     rng = np.random.default_rng(3)
     values = {
@@ -143,7 +143,7 @@ def test_inplace_channels_are_the_round_trip_through_the_world(addon_module, moc
     (to_inplace), as they were computed before."""
     import importlib
 
-    name = addon_module.__name__ + ".motion_patches."
+    name = addon_module.__name__ + ".motion_patches.kinematics."
     mp = {m: importlib.import_module(name + m) for m in ("bvh", "motion", "inplace", "clip")}
     skeleton = importlib.import_module(name + "skeleton")
     nla = addon_module.adapter.nla

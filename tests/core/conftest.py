@@ -10,8 +10,9 @@ import pytest
 REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO))
 
-from motion_patches import bvh, locomotion_patch  # noqa: E402
-from motion_patches import gait as gait_mod
+from motion_patches.kinematics import bvh
+from motion_patches.patch import gait as gait_mod
+from motion_patches.patch import locomotion_patch
 
 MOCAP = Path(os.environ.get("MOTION_PATCHES_MOCAP", REPO.parent / "shared" / "mocap"))
 
@@ -51,12 +52,17 @@ def stand_walk_sit(walk_patch, walk_gait, walk16):
     its floor. Returns (plan, environment, [sit source, stand source] retargeted)."""
     import numpy as np
 
-    from motion_patches import object_patch as op
-    from motion_patches.clip import retarget
-    from motion_patches.environment import Environment, Obstacle
-    from motion_patches.planner import SegmentPlanner, interaction_states, with_interactions
+    from motion_patches.kinematics import contacts
+    from motion_patches.kinematics.retarget import retarget
+    from motion_patches.planning.planner import (
+        SegmentPlanner,
+        interaction_states,
+        with_interactions,
+    )
+    from motion_patches.props import object_patch as op
+    from motion_patches.props.environment import Environment, Obstacle
 
-    floor = op.floor_level(walk16)
+    floor = contacts.floor_level(walk16)
     sources = [retarget(cmu(n), walk16.skeleton) for n in ("13_05", "13_05_standup")]
     sit, stand = (
         op.patch_clip_from(c, op.INTERACTION, walk_gait.fps, effort=2.0, floor=floor)

@@ -5,7 +5,7 @@ import itertools
 import numpy as np
 import pytest
 
-from motion_patches import astar
+from motion_patches.planning import astar
 
 
 def random_graph(rng, n, p):
@@ -108,8 +108,8 @@ def test_astar_reports_no_path_when_goal_is_disconnected():
 # Nodes are packed like the planner's: key = tile * LOCAL + local, three nodes per tile;
 # a node with local 0 also lies in the next tile (like a node on a tile edge).
 
-from motion_patches.node_keys import LOCAL  # noqa: E402
-from motion_patches.planner import TraversalObserver  # noqa: E402
+from motion_patches.patch.node_keys import LOCAL
+from motion_patches.planning.planner import TraversalObserver
 
 ACROSS = [1] + [0] * (LOCAL - 1)
 

@@ -4,11 +4,11 @@ from every footprint (issue: nothing lost, nothing crossed, item 6)."""
 
 import numpy as np
 
-from motion_patches import body_clearance
-from motion_patches.environment import Environment, Obstacle
-from motion_patches.inplace import to_world
-from motion_patches.motion import concatenate
-from motion_patches.planner import PlanError, SegmentPlanner, plan_motions
+from motion_patches.kinematics.inplace import to_world
+from motion_patches.kinematics.motion import concatenate
+from motion_patches.planning import body_clearance
+from motion_patches.planning.planner import PlanError, SegmentPlanner, plan_motions
+from motion_patches.props.environment import Environment, Obstacle
 
 
 def pillar(name, x, y, r):

@@ -9,10 +9,11 @@ or two, a hand or the head held differently in each would snap round."""
 import numpy as np
 import pytest
 
-from motion_patches import foot_lock, metrics
-from motion_patches.environment import Environment, Obstacle
-from motion_patches.motion import Motion, concatenate
-from motion_patches.planner import SegmentPlanner, plan_motions
+from motion_patches.kinematics import foot_lock
+from motion_patches.kinematics.motion import Motion, concatenate
+from motion_patches.planning.planner import SegmentPlanner, plan_motions
+from motion_patches.props.environment import Environment, Obstacle
+from motion_patches.quality import metrics
 
 LIMIT = 1.6  # largest step of any bone, as a multiple of that bone's largest in the source
 

@@ -4,10 +4,11 @@
 import numpy as np
 import pytest
 
-from motion_patches import contacts, crowd, retime
-from motion_patches.environment import Environment
-from motion_patches.motion import concatenate
-from motion_patches.planner import SegmentPlanner, plan_motions
+from motion_patches.crowd import crowd
+from motion_patches.kinematics import contacts, retime
+from motion_patches.kinematics.motion import concatenate
+from motion_patches.planning.planner import SegmentPlanner, plan_motions
+from motion_patches.props.environment import Environment
 
 
 def line(p0, p1, frames):

@@ -1,9 +1,9 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 import numpy as np
 
-from motion_patches import curves
-from motion_patches.environment import FULL, Environment, Obstacle, convex_hull
-from motion_patches.locomotion_patch import cell_mask
+from motion_patches.patch import curves
+from motion_patches.patch.locomotion_patch import cell_mask
+from motion_patches.props.environment import FULL, Environment, Obstacle, convex_hull
 
 
 def test_hermite_starts_and_ends_on_its_nodes_along_their_headings():
@@ -94,7 +94,7 @@ def test_a_thin_fence_across_a_cell_occludes_it_even_with_a_tiny_radius():
 
 
 def test_vectorised_cell_occlusion_matches_the_pairwise_polygon_test():
-    from motion_patches.environment import cells_within, polygons_within
+    from motion_patches.props.environment import cells_within, polygons_within
 
     rng = np.random.default_rng(5)
     c = 0.3

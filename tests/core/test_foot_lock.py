@@ -4,11 +4,12 @@
 import numpy as np
 import pytest
 
-from motion_patches import foot_lock, metrics, quat
-from motion_patches.contacts import foot_joints
-from motion_patches.environment import Environment
-from motion_patches.motion import Motion, concatenate
-from motion_patches.planner import SegmentPlanner, plan_motions
+from motion_patches.kinematics import foot_lock, quat
+from motion_patches.kinematics.contacts import foot_joints
+from motion_patches.kinematics.motion import Motion, concatenate
+from motion_patches.planning.planner import SegmentPlanner, plan_motions
+from motion_patches.props.environment import Environment
+from motion_patches.quality import metrics
 
 
 @pytest.fixture(scope="module")
@@ -91,7 +92,7 @@ def test_a_straight_leg_bends_its_knee_forward():
 
 def planted_offsets_by_run(ankle_xy, toe_xy, ankle_on, toe_on, blend):
     """planted_offsets' first step written run by run (what the vectorised one replaced)."""
-    from motion_patches.contacts import runs
+    from motion_patches.kinematics.contacts import runs
 
     n = len(ankle_xy)
     toe_only = toe_on & ~ankle_on
@@ -129,7 +130,7 @@ def test_planted_offsets_hold_each_run_as_run_by_run(seed):
 
 def test_the_legs_world_matrices_are_the_whole_skeletons(walk_patch, walk):
     """lock_feet's forward kinematics on the legs alone gives the armature's matrices."""
-    from motion_patches.inplace import to_world
+    from motion_patches.kinematics.inplace import to_world
 
     skel = walk_patch.gait.skeleton
     chains = foot_lock.leg_chains(skel)
@@ -197,7 +198,7 @@ def lock_feet_frame_by_frame(skel, world, blend=foot_lock.BLEND_FRAMES):
     """lock_feet as a loop over frames and legs: the whole skeleton's world matrices, the
     IK of each frame on its own, the turned bones' channels from their new world
     rotations (skeleton.local_rotations_from_global)."""
-    from motion_patches.skeleton import local_rotations_from_global
+    from motion_patches.kinematics.skeleton import local_rotations_from_global
 
     m = world.world_matrices(skel)
     g, p = m[..., :3, :3].copy(), m[..., :3, 3]

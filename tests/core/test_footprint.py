@@ -3,8 +3,8 @@
 
 import numpy as np
 
-from motion_patches import footprint as fp
-from motion_patches.environment import Environment, Obstacle
+from motion_patches.props import footprint as fp
+from motion_patches.props.environment import Environment, Obstacle
 
 
 def prism(outline, z0, z1, cap_tris, caps=True):

@@ -1,9 +1,9 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 import numpy as np
 
-from motion_patches.environment import Environment, Obstacle
-from motion_patches.high_level import TilePlanner
-from motion_patches.planner import SegmentPlanner
+from motion_patches.planning.high_level import TilePlanner
+from motion_patches.planning.planner import SegmentPlanner
+from motion_patches.props.environment import Environment, Obstacle
 
 
 def box(name, x0, y0, x1, y1):

@@ -4,7 +4,7 @@
 import numpy as np
 import pytest
 
-from motion_patches import keys
+from motion_patches.kinematics import keys
 
 
 def halving(v, tol, base=keys.BASE):

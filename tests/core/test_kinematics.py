@@ -1,10 +1,10 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 import numpy as np
 
-from motion_patches import clip as clipmod
-from motion_patches import quat
-from motion_patches.cycle import cycle_turns, detect_cycles
-from motion_patches.inplace import facing_yaw, to_inplace, to_world
+from motion_patches.kinematics import clip as clipmod
+from motion_patches.kinematics import quat
+from motion_patches.kinematics.inplace import facing_yaw, to_inplace, to_world
+from motion_patches.patch.cycle import cycle_turns, detect_cycles
 
 
 def test_quaternion_matrix_round_trip():

@@ -5,13 +5,15 @@ of layer by Eq. 5 cost, and traversal clips used only in the layers they declare
 import numpy as np
 import pytest
 
-from motion_patches import contacts, layers, locomotion_patch, metrics
-from motion_patches import gait as gait_mod
-from motion_patches.environment import Environment, Obstacle
-from motion_patches.motion import concatenate
-from motion_patches.object_patch import ObjectPatch, PatchClip
-from motion_patches.planner import PlanError, SegmentPlanner, plan_motions
-from motion_patches.retarget import rig_map
+from motion_patches.kinematics import contacts
+from motion_patches.kinematics.motion import concatenate
+from motion_patches.kinematics.retarget import rig_map
+from motion_patches.patch import gait as gait_mod
+from motion_patches.patch import layers, locomotion_patch
+from motion_patches.planning.planner import PlanError, SegmentPlanner, plan_motions
+from motion_patches.props.environment import Environment, Obstacle
+from motion_patches.props.object_patch import ObjectPatch, PatchClip
+from motion_patches.quality import metrics
 
 from conftest import cmu
 
@@ -193,8 +195,9 @@ def test_blend_table_walk_to_run_ends_on_the_run_node_pose_without_a_pop(walk_pa
     first frame is zero within the stitch's tolerance, root continuous); the ground goes
     on at the blended pace; no joint turns more per frame at the joins than inside the
     walk and run cycles (99th percentile)."""
-    from motion_patches import blend_table, poses, quat
-    from motion_patches.stitching import POSITION_TOLERANCE
+    from motion_patches.kinematics import poses, quat
+    from motion_patches.patch import blend_table
+    from motion_patches.planning.stitching import POSITION_TOLERANCE
 
     entries = blend_table.table(walk_patch, run_patch)
     assert len(entries) == walk_patch.pose_centres.shape[0]
@@ -260,7 +263,7 @@ LINE_X = 5.0
 def run_hurdle(walk_gait):
     """CMU 16_06, a standing forward jump (subject 16's only jump), declared here as a
     run-layer clip only: the walk cannot take it and must go round the chairs."""
-    from motion_patches import object_patch as op
+    from motion_patches.props import object_patch as op
 
     c = op.patch_clip_from(cmu("16_06"), op.TRAVERSAL, walk_gait.fps, effort=8.0)
     c.layer_in = c.layer_out = "run"
@@ -270,7 +273,7 @@ def run_hurdle(walk_gait):
 def chair_world(patch, clip, half=5.0, pillars=()):
     """A line of chairs 0.5 m apart across the way at x = 5 (from -half to +half), each
     with the jump's copies every 10 degrees, and pillars; the props of ``patch``'s layer."""
-    from motion_patches import object_patch as op
+    from motion_patches.props import object_patch as op
 
     env = Environment(patch.side, patch.cells, radius=0.25)
     props = []
@@ -297,7 +300,7 @@ START, GOAL = (-4.0, 0.3, 0.0), (14.0, 0.3, 0.0)
 @pytest.fixture(scope="module")
 def gait_change(walk_patch, run_patch, run_hurdle):
     """Walk-only, run-only and walk -> run -> walk plans across a 10 m line of chairs."""
-    from motion_patches import transitions
+    from motion_patches.planning import transitions
 
     walk, run = planners(walk_patch, run_patch, run_hurdle)
     w, r = walk.plan(START, GOAL), run.plan(START, GOAL)
@@ -343,8 +346,9 @@ def test_a_transition_lands_on_a_node_of_the_target_layer_within_the_stitch_thre
     plan frame (on a tile edge, in a node slot, at a 45-degree heading), and the blend's
     last pose is the target's node pose: the pose distance to the target loop's phase 0 is
     within the stitch's pose tolerance of the best phase's."""
-    from motion_patches import poses, shortcut, stitching, transitions
-    from motion_patches.plan_frame import state_to_local
+    from motion_patches.kinematics import poses
+    from motion_patches.planning import shortcut, stitching, transitions
+    from motion_patches.planning.plan_frame import state_to_local
 
     walk, run, _, _, mixed, ms = gait_change
     by_layer = {"walk": walk, "run": run}
@@ -385,7 +389,7 @@ def test_a_transition_lands_on_a_node_of_the_target_layer_within_the_stitch_thre
 
 
 def joint_steps(rot):
-    from motion_patches import quat
+    from motion_patches.kinematics import quat
 
     d = quat.mul(quat.conj(rot[:-1]), rot[1:])
     return 2 * np.arccos(np.clip(np.abs(d[..., 0]), 0, 1)).max(axis=1)
@@ -395,7 +399,7 @@ def test_the_gait_change_has_no_pop_and_no_root_jump(gait_change):
     """At every join of the walk -> run -> walk plan the largest joint step is below the
     99th percentile of the steps inside its pieces; the hips never move farther in a frame
     than 1.5 x the per-frame speed of the faster layer a piece plays in."""
-    from motion_patches import transitions
+    from motion_patches.planning import transitions
 
     walk, run, _, _, mixed, ms = gait_change
     m = concatenate(ms)
@@ -430,8 +434,8 @@ def test_where_walking_round_is_short_auto_walks(walk_patch, run_patch, run_hurd
     """Five chairs (a 2 m line): the run plan hurdles them and a walk -> run -> walk plan is
     found, but walking round is cheaper than either; on open ground there is nothing to
     run for (no composition is offered)."""
-    from motion_patches import transitions
-    from motion_patches.planner import PlanError
+    from motion_patches.planning import transitions
+    from motion_patches.planning.planner import PlanError
 
     walk, run = planners(walk_patch, run_patch, run_hurdle, half=1.0)
     w, r = walk.plan(START, GOAL), run.plan(START, GOAL)
@@ -452,7 +456,7 @@ def test_a_gait_change_avoids_pillars_in_every_layer(walk_patch, run_patch, run_
     """Pillars before and after the chair line, on the straight way: the walk, blend and
     run pieces of the plan that changes gait keep the radius from every footprint (the
     hurdle clip alone crosses its chair)."""
-    from motion_patches import transitions
+    from motion_patches.planning import transitions
 
     field = [(0.5, 0.2), (2.8, 0.6), (7.5, 0.0), (10.5, 0.5)]
     walk, run = planners(walk_patch, run_patch, run_hurdle, pillars=field)
@@ -475,7 +479,7 @@ def test_a_gait_change_avoids_pillars_in_every_layer(walk_patch, run_patch, run_
 def test_a_run_does_not_turn_on_the_spot(run_gait, walk_gait):
     """The turn in place is derived from a walk's turn loop; a runner slows to a walk to
     turn round, so a run layer (flight phase) loops as before."""
-    from motion_patches import turn_in_place
+    from motion_patches.planning import turn_in_place
 
     assert turn_in_place.can_turn(walk_gait, *walk_gait.kappa_limits)
     assert not turn_in_place.can_turn(run_gait, *run_gait.kappa_limits)

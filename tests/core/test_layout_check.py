@@ -4,9 +4,9 @@
 import numpy as np
 import pytest
 
-from motion_patches import layout_spec
-from motion_patches.blocking import blocking_props
-from motion_patches.environment import Environment, Obstacle
+from motion_patches.props.blocking import blocking_props
+from motion_patches.props.environment import Environment, Obstacle
+from motion_patches.quality import layout_spec
 
 
 def test_blocking_props_are_read_from_the_occluded_cells():

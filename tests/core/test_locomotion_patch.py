@@ -2,9 +2,11 @@
 import numpy as np
 import pytest
 
-from motion_patches import clip as clipmod
-from motion_patches import contacts, metrics, quat, serialize
-from motion_patches.locomotion_patch import DIRECTIONS, split_node_id
+from motion_patches.kinematics import clip as clipmod
+from motion_patches.kinematics import contacts, quat
+from motion_patches.patch import serialize
+from motion_patches.patch.locomotion_patch import DIRECTIONS, split_node_id
+from motion_patches.quality import metrics
 
 
 def test_bake_reports_kept_and_culled_segments(walk_patch):
@@ -107,7 +109,7 @@ def test_garbage_bytes_are_rejected_with_a_message():
 
 
 def test_gait_rejects_a_clip_without_locomotion(walk16):
-    from motion_patches.gait import build_gait
+    from motion_patches.patch.gait import build_gait
 
     still = clipmod.Clip(
         "still",

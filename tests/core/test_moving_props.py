@@ -4,10 +4,10 @@
 import numpy as np
 import pytest
 
-from motion_patches import moving_props as mp
-from motion_patches.environment import Environment
-from motion_patches.motion import concatenate
-from motion_patches.planner import SegmentPlanner, plan_motions
+from motion_patches.kinematics.motion import concatenate
+from motion_patches.planning import moving_props as mp
+from motion_patches.planning.planner import SegmentPlanner, plan_motions
+from motion_patches.props.environment import Environment
 
 CART = np.array([[-0.6, -0.4], [0.6, -0.4], [0.6, 0.4], [-0.6, 0.4]])  # 1.2 x 0.8 m
 

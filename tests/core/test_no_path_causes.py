@@ -5,9 +5,9 @@ the search limit (motion_patches.causes)."""
 import numpy as np
 import pytest
 
-from motion_patches import causes
-from motion_patches.environment import Environment, Obstacle
-from motion_patches.planner import SegmentPlanner
+from motion_patches.planning import causes
+from motion_patches.planning.planner import SegmentPlanner
+from motion_patches.props.environment import Environment, Obstacle
 
 
 def box(name, x0, y0, x1, y1):

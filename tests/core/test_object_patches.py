@@ -2,10 +2,10 @@
 import numpy as np
 import pytest
 
-from motion_patches import object_patch as op
-from motion_patches.environment import Environment, Obstacle
-from motion_patches.motion import concatenate
-from motion_patches.planner import SegmentPlanner, plan_motions
+from motion_patches.kinematics.motion import concatenate
+from motion_patches.planning.planner import SegmentPlanner, plan_motions
+from motion_patches.props import object_patch as op
+from motion_patches.props.environment import Environment, Obstacle
 
 from conftest import cmu
 
@@ -49,7 +49,7 @@ def test_jump_clip_is_anchored_at_its_apex_and_faces_along_x(hurdle_clip):
 
 
 def test_a_clip_without_root_motion_is_refused(walk16):
-    from motion_patches.clip import Clip
+    from motion_patches.kinematics.clip import Clip
 
     still = Clip(
         "still",
@@ -89,7 +89,7 @@ def test_occluded_bins_are_the_bins_each_footprint_overlaps(hurdle_clip):
     """occluded_bins (bins tested only where their bounds meet a footprint's) marks the
     bins whose world rectangle overlaps another prop's footprint, as testing every bin
     against every footprint does; some bins are occluded, most are not."""
-    from motion_patches.environment import polygons_within
+    from motion_patches.props.environment import polygons_within
 
     rng = np.random.default_rng(7)
     marked = total = 0
@@ -223,8 +223,8 @@ def test_moving_a_prop_changes_the_path(walk_patch, hurdle_clip):
 
 
 def test_traversal_probability_keeps_a_chair_line_tile_passable(walk_patch, hurdle_clip):
-    from motion_patches import traversal_probability as tp
-    from motion_patches.high_level import TilePlanner
+    from motion_patches.planning import traversal_probability as tp
+    from motion_patches.planning.high_level import TilePlanner
 
     env, props = chair_line(walk_patch, hurdle_clip)
     planner = SegmentPlanner(walk_patch, env, 4.0, 0.5, 0.1, props=props)
@@ -274,7 +274,7 @@ def test_stitching_keeps_the_cheapest_clear_connections_and_lists_every_pair(
     lifted) cut to the cheapest MAX_PER_END; stitch() lists every entry x exit pair of
     the table with its summed cost. On these chairs some ends have more clear
     candidates than are kept (the early stop is exercised)."""
-    from motion_patches import stitching
+    from motion_patches.planning import stitching
 
     env, props = scattered_chairs(walk_patch, hurdle_clip, 3, 14)
     weights = (1.0, 0.5, 0.2)
@@ -322,7 +322,7 @@ def test_part_speed_is_the_fastest_part_of_any_segment(walk_patch):
     speed of a segment's first frame to a later one or a frame to its last (2 frames
     apart or more) found segment by segment; it is above the gait's fastest cycle
     average, which is why the bounds of a part's effort use it."""
-    from motion_patches import stitching
+    from motion_patches.planning import stitching
 
     fps, best = walk_patch.gait.fps, 0.0
     for seg in range(walk_patch.segment_count):
@@ -343,7 +343,7 @@ def test_bound_through_a_node_is_below_every_stitched_edge_from_it(walk_patch, h
     it leads to: the cost + heuristic of paths through the copy from that node; and it
     comes within a quarter metre's walk (alpha = 1) of that for some edge (it is not a
     trivial bound)."""
-    from motion_patches import stitching
+    from motion_patches.planning import stitching
 
     env, props = scattered_chairs(walk_patch, hurdle_clip, seed, 14)
     weights = (1.0, 0.5, 0.2)
@@ -399,7 +399,7 @@ def test_stitch_candidates_are_each_segments_nearest_frame(walk_patch, hurdle_cl
     the keyframe's cell, kept when within the tolerances and 2 frames of the segment's
     ends; nothing else stands near (the chair itself is excluded), so every candidate
     is kept (MAX_PER_END lifted)."""
-    from motion_patches import stitching
+    from motion_patches.planning import stitching
 
     monkeypatch.setattr(stitching, "MAX_PER_END", 10**6)
     ground, _, first = walk_patch.all_ground()

@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from motion_patches import serialize
+from motion_patches.patch import serialize
 
 
 @pytest.fixture(scope="module")

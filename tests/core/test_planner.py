@@ -2,11 +2,12 @@
 import numpy as np
 import pytest
 
-from motion_patches import contacts, metrics
-from motion_patches.environment import Environment, Obstacle
-from motion_patches.inplace import to_world
-from motion_patches.motion import concatenate
-from motion_patches.planner import PlanError, SegmentPlanner, piece_motion, plan_motions
+from motion_patches.kinematics import contacts
+from motion_patches.kinematics.inplace import to_world
+from motion_patches.kinematics.motion import concatenate
+from motion_patches.planning.planner import PlanError, SegmentPlanner, piece_motion, plan_motions
+from motion_patches.props.environment import Environment, Obstacle
+from motion_patches.quality import metrics
 
 
 def pillar(name, x, y, r=0.25):
@@ -117,7 +118,7 @@ def test_a_goal_facing_out_of_a_dead_end_is_reached_by_turning_on_the_spot(walk_
     round in there, so without turning on the spot the exact facing is refused; with any
     facing the walk ends facing in; by default it walks in and turns round where it
     stands (the derived turn in place), ending on the goal facing the mouth."""
-    from motion_patches.planner import plan_motions
+    from motion_patches.planning.planner import plan_motions
 
     def box(name, x0, y0, x1, y1):
         return Obstacle(name, np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]], float))

@@ -15,11 +15,11 @@ import os
 import numpy as np
 import pytest
 
-from motion_patches import validate
-from motion_patches.environment import Environment, Obstacle
-from motion_patches.inplace import to_world
-from motion_patches.motion import concatenate
-from motion_patches.planner import PlanError, SegmentPlanner, plan_motions
+from motion_patches.kinematics.inplace import to_world
+from motion_patches.kinematics.motion import concatenate
+from motion_patches.planning.planner import PlanError, SegmentPlanner, plan_motions
+from motion_patches.props.environment import Environment, Obstacle
+from motion_patches.quality import validate
 
 LAYOUTS = int(os.environ.get("MOTION_PATCHES_PROPERTY_LAYOUTS", "2000"))
 KINDS = ("pillars", "fences", "tiny", "close", "gap")

@@ -5,9 +5,9 @@
 import numpy as np
 import pytest
 
-from motion_patches import bvh, keys, retarget, scene_rate
-from motion_patches.retarget import RetargetError, rig_map
-from motion_patches.skeleton import Skeleton
+from motion_patches.kinematics import bvh, keys, retarget, scene_rate
+from motion_patches.kinematics.retarget import RetargetError, rig_map
+from motion_patches.kinematics.skeleton import Skeleton
 
 from conftest import MOCAP, cmu
 from rig_names import MIXAMO, RIGIFY

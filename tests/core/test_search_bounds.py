@@ -5,10 +5,10 @@
 import numpy as np
 import pytest
 
-from motion_patches import dubins
-from motion_patches.environment import PATH_MARGIN, Environment, Obstacle
-from motion_patches.node_keys import LOCAL, pack
-from motion_patches.planner import PlanError, SegmentPlanner
+from motion_patches.patch.node_keys import LOCAL, pack
+from motion_patches.planning import dubins
+from motion_patches.planning.planner import PlanError, SegmentPlanner
+from motion_patches.props.environment import PATH_MARGIN, Environment, Obstacle
 
 
 def pillar(name, x, y, r=0.3):

@@ -6,12 +6,13 @@ curve following bends the straight stride into turns, up to the documented defau
 import numpy as np
 import pytest
 
-from motion_patches import contacts, curves, locomotion_patch, synthesis
-from motion_patches import gait as gait_mod
-from motion_patches.environment import Environment, Obstacle
-from motion_patches.locomotion_patch import SparsePatch
-from motion_patches.motion import concatenate
-from motion_patches.planner import SegmentPlanner, plan_motions
+from motion_patches.kinematics import contacts
+from motion_patches.kinematics.motion import concatenate
+from motion_patches.patch import curves, locomotion_patch, synthesis
+from motion_patches.patch import gait as gait_mod
+from motion_patches.patch.locomotion_patch import SparsePatch
+from motion_patches.planning.planner import SegmentPlanner, plan_motions
+from motion_patches.props.environment import Environment, Obstacle
 
 from conftest import cmu
 

@@ -4,12 +4,14 @@
 import numpy as np
 import pytest
 
-from motion_patches import contacts, metrics, retime, turn_in_place, validate
-from motion_patches import gait as gait_mod
-from motion_patches.environment import Environment
-from motion_patches.foot_lock import leg_chains
-from motion_patches.motion import concatenate
-from motion_patches.planner import SegmentPlanner, plan_motions
+from motion_patches.kinematics import contacts, retime
+from motion_patches.kinematics.foot_lock import leg_chains
+from motion_patches.kinematics.motion import concatenate
+from motion_patches.patch import gait as gait_mod
+from motion_patches.planning import turn_in_place
+from motion_patches.planning.planner import SegmentPlanner, plan_motions
+from motion_patches.props.environment import Environment
+from motion_patches.quality import metrics, validate
 
 
 def _skate(gait, m):
@@ -47,8 +49,8 @@ def test_a_turn_in_place_turns_exactly_and_keeps_its_feet(walk_gait, degrees):
 
 
 def planned_walk(gait):
-    from motion_patches.curves import Curve
-    from motion_patches.synthesis import follow
+    from motion_patches.patch.curves import Curve
+    from motion_patches.patch.synthesis import follow
 
     s = np.linspace(0.0, 4.0, 200)
     curve = Curve(s, np.column_stack((s, np.zeros_like(s))), np.zeros_like(s), np.zeros_like(s))

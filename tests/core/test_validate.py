@@ -4,8 +4,8 @@
 import numpy as np
 import pytest
 
-from motion_patches import validate
-from motion_patches.motion import Motion
+from motion_patches.kinematics.motion import Motion
+from motion_patches.quality import validate
 
 
 @pytest.fixture(scope="module")

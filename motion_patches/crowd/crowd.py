@@ -1,0 +1,501 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Crowds of independently planned characters kept apart in space and time.
+
+Each character's path is planned on its own against the props (the paper plans one
+character), with the spots where the others stand still while it walks as extra
+obstacles: the goals of the characters before it in priority and the starts of those
+after it. The crowd is then resolved in priority order against a space-time reservation
+table (:class:`Reservations`): a character that would come too close to one placed
+before it first tries an idle hold mid-walk (a time warp to a stop on a double-support
+frame, feet planted), then a later start, then a re-route round where the other walks
+then. What none of these clears is reported by pair and frame, not hidden.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..kinematics import retime
+
+
+def disc(centre, radius, sides=12):
+    """(sides, 2) convex polygon round a disc of ``radius`` about a point (its sides touch
+    the circle, so nothing inside the polygon's inner circle is missed), counter-clockwise."""
+    a = np.linspace(0.0, 2 * np.pi, sides, endpoint=False)
+    r = radius / np.cos(np.pi / sides)
+    return np.column_stack((centre[0] + r * np.cos(a), centre[1] + r * np.sin(a)))
+
+
+def standing_spots(ends, n, spacing, radius):
+    """[(index, polygon)] of the spots character ``n`` walks around: the goals of the
+    characters before it and the starts of those after it, as discs that keep ``spacing``
+    between roots once grown by the planner's ``radius``. ``ends`` [(start, goal)] are
+    (x, y, heading) states; a spot within that distance of ``n``'s own start or goal is
+    left out (it could not start or arrive at all)."""
+    if spacing <= 0:
+        return []
+    grow = max(spacing - radius, 0.05)
+    mine = np.array([ends[n][0][:2], ends[n][1][:2]], float)
+    out = []
+    for m, (start, goal) in enumerate(ends):
+        if m == n:
+            continue
+        where = np.asarray(goal if m < n else start, float)[:2]
+        if np.linalg.norm(mine - where, axis=1).min() < grow + radius:
+            continue
+        out.append((m, disc(where, grow)))
+    return out
+
+
+def timeline(track, delay, horizon):
+    """(horizon, 2) positions of a ground ``track`` started ``delay`` frames late: it
+    stands at its first point before and at its last point after."""
+    t = np.clip(np.arange(horizon) - delay, 0, len(track) - 1)
+    return track[t]
+
+
+def ghosts(line, frame, spacing, radius, fps, window_seconds=1.5, step_m=0.3):
+    """Discs [(polygon)] where a character walks around ``frame``: its positions on
+    ``line`` (its timeline, :func:`timeline`) over ``window_seconds`` either side, every
+    ``step_m`` metres, as obstacles that keep ``spacing`` between two roots once the planner
+    grows them by ``radius``. Re-planning another character round them routes it round
+    where this one is at that time (a space-time reservation of those frames, made static)."""
+    w = int(round(window_seconds * fps))
+    pts = line[max(frame - w, 0) : frame + w + 1]
+    keep = [pts[0]]
+    for p in pts[1:]:
+        if np.linalg.norm(p - keep[-1]) >= step_m:
+            keep.append(p)
+    grow = max(spacing - radius, 0.05)
+    return [disc(p, grow) for p in keep]
+
+
+# --- space-time reservations ------------------------------------------------------------
+
+_OFF = 1 << 20  # cell indices are shifted by this into a key's 21-bit fields
+
+
+class Reservations:
+    """A space-time reservation table (prioritised planning: Silver's cooperative
+    pathfinding, with frames as time steps): every reserved character holds the cells its
+    root passes through on each frame of its walk, and two standing spots, its start until
+    it leaves and its goal from its arrival on. A character placed later is checked against
+    them all: its walk against the others' walks and spots, its own spots against both.
+
+    Cells are ``spacing / sqrt(2)`` wide, so two roots closer than ``spacing`` are at most
+    two cells apart; a sparse table (sorted int64 keys of frame and cell) keeps memory to
+    the frames walked, whatever the size of the plaza. Lookups are vectorised over frames."""
+
+    def __init__(self, spacing):
+        self.spacing = float(spacing)
+        self.cell = max(self.spacing, 1e-6) / np.sqrt(2.0)
+        self.keys = np.empty(0, np.int64)  # moving: sorted (frame, cell) keys
+        self.owner = np.empty(0, np.int32)
+        self.xy = np.empty((0, 2), float)
+        self.spot_keys = np.empty(0, np.int64)  # standing spots: sorted cell keys
+        self.spots = np.empty((0, 5), float)  # x, y, first frame, end frame (inf), owner
+        self.placed = {}  # index -> (delay, track)
+        self.horizon = 0
+
+    def _cells(self, xy):
+        return np.floor(np.asarray(xy, float) / self.cell).astype(np.int64) + _OFF
+
+    @staticmethod
+    def _key(t, c):
+        return (np.asarray(t, np.int64) << 42) | (c[..., 0] << 21) | c[..., 1]
+
+    _RING = np.array([(i, j) for i in range(-2, 3) for j in range(-2, 3)], np.int64)
+
+    def _moving_near(self, t, xy):
+        """(query row, table entry) pairs of moving entries on frame ``t[row]`` within two
+        cells of ``xy[row]``."""
+        if not self.keys.size or not len(t):
+            return np.empty(0, int), np.empty(0, int)
+        c = self._cells(xy)[:, None, :] + self._RING[None]
+        q = self._key(np.repeat(np.asarray(t)[:, None], len(self._RING), 1), c).ravel()
+        lo = np.searchsorted(self.keys, q, "left")
+        hi = np.searchsorted(self.keys, q, "right")
+        n = hi - lo
+        hit = np.nonzero(n)[0]
+        if not hit.size:
+            return np.empty(0, int), np.empty(0, int)
+        n = n[hit]
+        entries = np.repeat(lo[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
+        rows = np.repeat(hit // len(self._RING), n)
+        return rows, entries
+
+    def _spots_near(self, xy):
+        """Indices of standing spots within two cells of any of the points ``xy``."""
+        if not self.spot_keys.size:
+            return np.empty(0, int)
+        c = np.unique(self._cells(xy), axis=0)[:, None, :] + self._RING[None]
+        q = np.unique((c[..., 0] << 21 | c[..., 1]).ravel())
+        lo = np.searchsorted(self.spot_keys, q, "left")
+        hi = np.searchsorted(self.spot_keys, q, "right")
+        return np.unique(
+            np.concatenate([np.arange(a, b) for a, b in zip(lo, hi) if b > a] or [np.empty(0, int)])
+        )
+
+    def check(self, track, delay=0):
+        """Conflicts of a character walking ``track`` (frames, 2) from frame ``delay`` on,
+        standing at its first point before and at its last point after: {other index:
+        (frames too close (sorted array), closest frame, distance there)}."""
+        track = np.asarray(track, float)
+        d, n, s = int(delay), len(track), self.spacing
+        found = []  # (other, frame, distance) arrays
+        # walk against walks
+        t = np.arange(d, d + n)
+        rows, ent = self._moving_near(t, track)
+        if rows.size:
+            dist = np.linalg.norm(self.xy[ent] - track[rows], axis=1)
+            close = dist < s
+            found.append((self.owner[ent[close]], t[rows[close]], dist[close]))
+        # my start (before I leave) and goal (after I arrive) against the others' walks
+        end = max(self.horizon, d + n)
+        for frames, xy in ((np.arange(0, d), track[0]), (np.arange(d + n, end), track[-1])):
+            if frames.size:
+                rows, ent = self._moving_near(frames, np.broadcast_to(xy, (frames.size, 2)))
+                if rows.size:
+                    dist = np.linalg.norm(self.xy[ent] - xy, axis=1)
+                    close = dist < s
+                    found.append((self.owner[ent[close]], frames[rows[close]], dist[close]))
+        # everything of mine against the others' standing spots
+        near = self._spots_near(track)
+        if near.size:
+            sp = self.spots[near]
+            dist = np.linalg.norm(track[:, None, :] - sp[None, :, :2], axis=2)  # (n, S)
+            when = t[:, None]
+            close = (dist < s) & (when >= sp[None, :, 2]) & (when < sp[None, :, 3])
+            r, k = np.nonzero(close)
+            found.append((sp[k, 4].astype(int), t[r], dist[r, k]))
+            for (a, b), xy in (((0, d), track[0]), ((d + n, np.inf), track[-1])):
+                dist = np.linalg.norm(sp[:, :2] - xy, axis=1)
+                lo, hi = np.maximum(sp[:, 2], a), np.minimum(sp[:, 3], b)
+                for k in np.nonzero((dist < s) & (lo < hi))[0]:  # both standing: every frame
+                    frames = np.arange(int(lo[k]), int(min(hi[k], max(end, lo[k] + 1))))
+                    found.append(
+                        (np.full(frames.size, int(sp[k, 4])), frames, np.full(frames.size, dist[k]))
+                    )
+        out = {}
+        if not found:
+            return out
+        who = np.concatenate([f[0] for f in found]).astype(int)
+        when = np.concatenate([f[1] for f in found]).astype(np.int64)
+        dist = np.concatenate([f[2] for f in found])
+        for j in np.unique(who):
+            m = who == j
+            k = int(np.argmin(dist[m]))
+            out[int(j)] = (np.unique(when[m]), int(when[m][k]), float(dist[m][k]))
+        return out
+
+    def reserve(self, index, track, delay=0):
+        """Hold ``track``'s cells over its frames and its two standing spots for ``index``."""
+        track = np.asarray(track, float)
+        d, n = int(delay), len(track)
+        t = np.arange(d, d + n)
+        keys = self._key(t, self._cells(track))
+        at = np.searchsorted(self.keys, keys)
+        self.keys = np.insert(self.keys, at, keys)
+        self.owner = np.insert(self.owner, at, np.int32(index))
+        self.xy = np.insert(self.xy, at, track, axis=0)
+        spots = np.array([[*track[0], 0, d, index], [*track[-1], d + n, np.inf, index]], float)
+        spots = spots[spots[:, 2] < spots[:, 3]]
+        c = self._cells(spots[:, :2])
+        skeys = c[:, 0] << 21 | c[:, 1]
+        order = np.argsort(skeys)  # np.insert keeps the given order at one position
+        skeys, spots = skeys[order], spots[order]
+        at = np.searchsorted(self.spot_keys, skeys)
+        self.spot_keys = np.insert(self.spot_keys, at, skeys)
+        self.spots = np.insert(self.spots, at, spots, axis=0)
+        self.placed[index] = (d, track)
+        self.horizon = max(self.horizon, d + n)
+
+    def line(self, index, horizon):
+        """(horizon, 2) positions of a reserved character (as :func:`timeline`)."""
+        d, track = self.placed[index]
+        return timeline(track, d, horizon)
+
+
+def held_track(track, at, hold, ramp, holdable=None):
+    """``track`` (frames, 2) with an idle hold (:func:`motion_patches.retime.hold_phases`),
+    and ``holdable`` (bool per frame) carried along: true on the frames of the held track
+    that replay a holdable frame whole (so a later hold may be put there too)."""
+    track = np.asarray(track, float)
+    u = retime.hold_phases(len(track), at, hold, ramp)
+    lo = np.minimum(np.floor(u).astype(int), len(track) - 2)
+    w = (u - lo)[:, None]
+    out = track[lo] * (1 - w) + track[lo + 1] * w
+    if holdable is None:
+        return out, None
+    near = np.rint(u).astype(int)
+    return out, np.asarray(holdable, bool)[near] & (np.abs(u - near) < 1e-9)
+
+
+def hold_frames(holdable, before, ramp, count=3):
+    """Up to ``count`` frames to hold on, latest first: frames where ``holdable`` (bool per
+    track frame; double support on a walking piece) whose slow-down ends before frame
+    ``before`` and whose ramps fit in the track, at least a ramp apart."""
+    if holdable is None:
+        return []
+    n, half = len(holdable), ramp // 2
+    ok = np.nonzero(holdable)[0]
+    ok = ok[(ok - half >= 0) & (ok + half <= n - 1) & (ok + half < before)]
+    out = []
+    for k in ok[::-1]:
+        if not out or out[-1] - k >= ramp:
+            out.append(int(k))
+        if len(out) == count:
+            break
+    return out
+
+
+@dataclass
+class Schedule:
+    """How a character walks its track in the crowd: ``delay`` frames standing at its start,
+    idle ``holds`` [(frame, frames)] applied in turn (each frame on the track as the holds
+    before it left it), on the track of re-plan ``version`` (0: its first plan, n: the
+    n-th re-plan round others); ``track`` is what it then walks."""
+
+    delay: int = 0
+    holds: tuple = ()
+    version: int = 0
+    track: np.ndarray = None
+    holdable: np.ndarray = None
+    rank: int = 0
+
+    @property
+    def rerouted(self):
+        return self.version > 0
+
+
+def _too_close(conflicts):
+    return sum(len(v[0]) for v in conflicts.values())
+
+
+def _lengths(step, most):
+    """Hold or wait lengths to try, shortest first: ``step`` doubling up to ``most``."""
+    out, n = [], step
+    while n < most:
+        out.append(n)
+        n *= 2
+    return out + [int(most) // step * step] if most >= step else out
+
+
+def _shortest(clears, longest, step):
+    """Shorten a length that clears (``clears(n) -> conflicts or None``, ``longest`` known
+    to clear) by halving the gap to the longest length below it that does not: the
+    shortest clearing length to within ``step`` where clearing grows with the length."""
+    lo, hi = longest // 2 // step * step, longest
+    while hi - lo > step:
+        mid = (lo + hi) // 2 // step * step
+        if mid > lo and clears(mid):
+            hi = mid
+        else:
+            lo = mid if mid > lo else hi - step
+    return hi
+
+
+def _improve(table, s, found, max_delay, max_hold, step, ramp):
+    """The next schedule from ``s`` (which meets ``found``): a short idle hold before the
+    first frame too close that clears everything, else a short further wait that does,
+    else whichever tried leaves the fewest frames too close (None: none is better). Lengths
+    are tried doubling from ``step`` and a clearing one is then shortened by halving."""
+    first = min(int(v[0][0]) for v in found.values()) - s.delay
+    held = sum(h for _, h in s.holds)
+    options = []
+
+    def hold(k, h):
+        track, mask = held_track(s.track, k, h, ramp, s.holdable)
+        c = table.check(track, s.delay)
+        option = Schedule(s.delay, s.holds + ((k, h),), s.version, track, mask)
+        options.append((_too_close(c), h, option, c))
+        return not c
+
+    def wait(d):
+        c = table.check(s.track, s.delay + d)
+        option = Schedule(s.delay + d, s.holds, s.version, s.track, s.holdable)
+        options.append((_too_close(c), d, option, c))
+        return not c
+
+    for h in _lengths(step, max_hold - held):
+        for k in hold_frames(s.holdable, first, ramp):
+            if hold(k, h):
+                h = _shortest(lambda n: hold(k, n), h, step)
+                return next(
+                    o[2:] for o in options if o[1] == h and o[2].holds[-1][0] == k and not o[3]
+                )
+    for d in _lengths(step, max_delay - s.delay):
+        if wait(d):
+            d = _shortest(wait, d, step)
+            return next(
+                o[2:]
+                for o in options
+                if o[1] == d
+                and o[2].delay == s.delay + d
+                and not o[2].holds[len(s.holds) :]
+                and not o[3]
+            )
+    if not options:
+        return None, found
+    best = min(options, key=lambda o: o[:2])
+    if best[0] >= _too_close(found):
+        return None, found
+    return best[2], best[3]
+
+
+def _resolve_once(
+    order,
+    tracks,
+    replan,
+    spacing,
+    radius,
+    fps,
+    max_delay,
+    step,
+    ramp,
+    max_hold,
+    holdable,
+    rounds,
+    stages,
+    versions,
+):
+    """One pass of :func:`resolve` placing the characters in ``order``; ``versions``
+    counts each character's re-plans over all passes (its next one's number)."""
+    table = Reservations(spacing)
+    schedules, conflicts = [None] * len(tracks), []
+    for i in order:
+        track = tracks[i]
+        s = Schedule(0, (), 0, np.asarray(track, float)[:, :2], holdable[i])
+        best, reserved = None, []
+        for attempt in range(rounds + 1):
+            found = table.check(s.track)
+            for _ in range(stages):
+                if not found:
+                    break
+                better, c = _improve(table, s, found, max_delay, max_hold, step, ramp)
+                if better is None:
+                    break
+                s, found = better, c
+            if best is None or _too_close(found) < _too_close(best[1]):
+                best = (s, found)
+            if not best[1] or attempt == rounds or replan is None:
+                break
+            horizon = max(table.horizon, len(s.track) + s.delay) + 1
+            for j, (_, frame, _) in found.items():
+                reserved += ghosts(table.line(j, horizon), frame, spacing, radius, fps)
+            new = replan(i, list(reserved))
+            if new is None:
+                break
+            versions[i] += 1
+            s = Schedule(0, (), versions[i], np.asarray(new[0], float)[:, :2], new[1])
+        s, found = best
+        table.reserve(i, s.track, s.delay)
+        schedules[i] = s
+        for j, (frames, frame, dist) in sorted(found.items()):
+            conflicts.append(
+                {
+                    "a": j,
+                    "b": i,
+                    "frame": frame,
+                    "first_frame": int(frames[0]),
+                    "frames": int(len(frames)),
+                    "distance_m": dist,
+                }
+            )
+    return schedules, conflicts
+
+
+def resolve(
+    tracks,
+    replan,
+    spacing,
+    radius,
+    fps,
+    max_delay,
+    step,
+    ramp=None,
+    max_hold=None,
+    holdable=None,
+    rounds=2,
+    stages=6,
+    restarts=4,
+):
+    """Schedules and the conflicts left for ``tracks`` [(frames, 2)] in priority order,
+    all starting on frame 0: each character in turn is checked against the
+    :class:`Reservations` of those before it and, while it comes closer than ``spacing``,
+    changed by (at most ``stages`` changes, the first that clears everything, in this
+    order of preference):
+
+    1. an idle hold (whole ``step`` frames, all its holds at most ``max_hold``, see
+       :func:`_improve` for which lengths are tried) on a
+       double-support frame of its walk (``holdable[i]``: bool per frame of ``tracks[i]``,
+       None: no holds) before the first frame too close, slowing down and speeding up
+       over ``ramp`` frames;
+    2. waiting longer at its start (``step`` frames, at most ``max_delay`` in all);
+    3. else the change leaving the fewest frames too close, and again from there.
+
+    Still too close, it is re-planned (``replan(i, discs) -> (track, holdable) or None``,
+    each call a new version of its plan, :attr:`Schedule.version`; None: never) round the
+    discs where the others it meets walk around those frames (:func:`ghosts`), and the
+    above is done again, at most ``rounds`` times.
+
+    When conflicts are left, the crowd is resolved again from the start with the
+    characters that met them placed first (prioritised planning's restart with raised
+    priorities), at most ``restarts`` times, and the pass with the fewest frames too close
+    is kept. What is left is reported: [{"a", "b" (indices, ``a`` placed first), "frame"
+    (closest), "first_frame", "frames", "distance_m"}]. :attr:`Schedule.rank` is each
+    character's place in the order of the pass kept."""
+    ramp = int(ramp if ramp is not None else round(fps)) // 2 * 2
+    max_hold = max_delay if max_hold is None else max_hold
+    step = max(int(step), 1)
+    holdable = list(holdable) if holdable is not None else [None] * len(tracks)
+    order, versions, best = list(range(len(tracks))), [0] * len(tracks), None
+    for _ in range(restarts + 1):
+        schedules, conflicts = _resolve_once(
+            order,
+            tracks,
+            replan,
+            spacing,
+            radius,
+            fps,
+            max_delay,
+            step,
+            ramp,
+            max_hold,
+            holdable,
+            rounds,
+            stages,
+            versions,
+        )
+        for rank, i in enumerate(order):
+            schedules[i].rank = rank
+        left = sum(c["frames"] for c in conflicts)
+        if best is None or left < best[0]:
+            best = (left, schedules, conflicts)
+        if not conflicts:
+            break
+        first = list(dict.fromkeys(c["b"] for c in conflicts))
+        order = first + [i for i in order if i not in first]
+    return best[1], best[2]
+
+
+def conflicts_of(tracks, delays, spacing):
+    """Every pair of ``tracks`` (in order, started ``delays`` frames late) closer than
+    ``spacing`` on some frame, as :func:`resolve` reports them: the check of what is
+    finally written, independent of how it was resolved."""
+    table, out = Reservations(spacing), []
+    for i, (track, d) in enumerate(zip(tracks, delays)):
+        track = np.asarray(track, float)[:, :2]
+        for j, (frames, frame, dist) in sorted(table.check(track, d).items()):
+            out.append(
+                {
+                    "a": j,
+                    "b": i,
+                    "frame": frame,
+                    "first_frame": int(frames[0]),
+                    "frames": int(len(frames)),
+                    "distance_m": dist,
+                }
+            )
+        table.reserve(i, track, d)
+    return out

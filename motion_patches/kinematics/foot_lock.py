@@ -1,0 +1,439 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Foot locking: keep a planted foot where it was put down.
+
+Space-curve following turns and bends the recorded walk, so a foot that was planted in the
+source slides a little on the ground (skate). This pass pins each planted foot: during a
+run of frames where a foot is planted, its ankle is held at the mean position of that run
+and, once the heel is up, its toe where the held foot put it, and the leg reaches it by
+two-bone IK (the knee bends or opens, then the thigh swings). The hips, the body above them
+and the foot's own world orientation are kept, so only the thigh and shin channels change
+and bone lengths cannot.
+The correction eases in and out over a few frames around each run, so nothing pops.
+"""
+
+import numpy as np
+
+from . import quat
+from .contacts import CONTACT_SPEED, foot_joints, runs
+from .inplace import root_channel_to_ground, root_positions
+from .retarget import segment_parent
+from .skeleton import Skeleton, per_skeleton
+
+BLEND_FRAMES = 4  # frames the correction takes to ease in before and out after a contact
+STILL_FACTOR = 2.0  # x contacts.CONTACT_SPEED: a planted joint moving faster is not planted,
+STILL_SHARE = 0.5  # nor one moving faster than this share of the body's pace, when that is more
+STRETCH = 0.985  # the straightest a locked leg gets, as a fraction of thigh + shin
+
+
+def leg_chains(skel):
+    """[(hip, knee, ankle, toe) joint indices] per side, left then right. The knee is the
+    joint above the ankle and the hip the joint above the knee, skipping limb segments
+    (Rigify's ``DEF-shin.L.001`` under ``DEF-shin.L``)."""
+    feet = foot_joints(skel)
+    out = []
+    for ankle, toe in ((feet[0], feet[1]), (feet[2], feet[3])):
+        knee = segment_parent(skel, int(ankle))
+        hip = segment_parent(skel, knee)
+        out.append((hip, knee, int(ankle), int(toe)))
+    return out
+
+
+def _segments(skel, lower, upper):
+    """Bones strictly between joint ``lower`` and its ancestor ``upper`` (limb segments)."""
+    out, j = [], int(skel.parents[lower])
+    while j >= 0 and j != upper:
+        out.append(j)
+        j = int(skel.parents[j])
+    return out
+
+
+def _speeds(xy):
+    """(F,) distance a point moves per frame (central differences; one-sided at the ends)."""
+    xy = np.asarray(xy, float)
+    v = np.empty(len(xy))
+    v[1:-1] = np.linalg.norm(xy[2:] - xy[:-2], axis=1) / 2.0
+    v[0], v[-1] = np.linalg.norm(xy[1] - xy[0]), np.linalg.norm(xy[-1] - xy[-2])
+    return v
+
+
+def still_contacts(skel, world, fps, posed=None):
+    """(F, 4) planted flags of ``world`` (a Motion; left ankle, toe, right ankle, toe) kept
+    only on frames where that joint, as synthesised, moves no faster than ``STILL_FACTOR``
+    x ``contacts.CONTACT_SPEED`` (the speed above which the source clips' contacts call a
+    joint moving) or, where the body moves faster, ``STILL_SHARE`` of the body's pace (a
+    run's planted foot slides faster than a walker's and is still planted).
+
+    Flags carried through a blend (a walk eased out of a turn on the spot, a run eased into
+    a standing jump and out of its landing) outlast the foot's stillness: there the foot
+    moves 2-5 m/s while labelled planted. Pinned, it built a correction of 15-20 cm the leg
+    could not reach and had to let go of within a few frames (a knee turning 30 deg in one
+    frame); such a foot is not planted by the clips' own measure either, so the plan's
+    contacts (the lock, the plan record, Analyse) leave it out. ``posed``: the legs
+    already posed (:func:`pose_legs`), shared with :func:`lock_feet`."""
+    planted = np.array(world.contacts, bool)
+    if world.frames < 3:
+        return planted
+    p = (posed or pose_legs(skel, world))[1]
+    limit = np.maximum(
+        STILL_FACTOR * CONTACT_SPEED / fps, STILL_SHARE * _speeds(world.ground[:, :2])
+    )
+    _, _, ankle, toe = _legs(skel).legs.T  # (2,) each: left, right
+    for s in range(2):
+        for c, joint in ((2 * s, ankle[s]), (2 * s + 1, toe[s])):
+            planted[:, c] &= _speeds(p[joint, :, :2]) <= limit
+    return planted
+
+
+def planted_offsets(ankle_xy, toe_xy, ankle_on, toe_on, blend=BLEND_FRAMES):
+    """(F, 2) horizontal corrections of the ankle that pin a foot while it is planted.
+
+    On frames where the ankle is planted it is moved to the mean position of its run. On
+    frames where only the toe is (heel up, or a toe landing), the foot is moved so the toe
+    stays where the corrected foot had it on the neighbouring ankle-planted frame (or at
+    the mean of its run when there is none), so the correction is continuous within a
+    contact. Outside contacts the correction of the nearest contact frame fades out with a
+    smoothstep over ``blend`` frames."""
+    n = len(ankle_xy)
+    ankle_on = np.asarray(ankle_on, bool)
+    toe_only = np.asarray(toe_on, bool) & ~ankle_on
+    d = np.zeros((n, 2))
+    a, b = runs(ankle_on)
+    if a.size:
+        held = _run_means(ankle_xy, a, b)
+        d[ankle_on] = np.repeat(held, b - a, axis=0) - ankle_xy[ankle_on]
+    a, b = runs(toe_only)
+    if a.size:
+        heel_off = (a > 0) & ankle_on[np.maximum(a - 1, 0)]  # the toe stays where it was
+        toe_first = ~heel_off & (b < n) & ankle_on[np.minimum(b, n - 1)]  # lands at the heel
+        near = np.where(heel_off, a - 1, np.minimum(b, n - 1))
+        anchor = np.where(
+            (heel_off | toe_first)[:, None], toe_xy[near] + d[near], _run_means(toe_xy, a, b)
+        )
+        d[toe_only] = np.repeat(anchor, b - a, axis=0) - toe_xy[toe_only]
+    on = ankle_on | toe_only
+    if not on.any():
+        return d
+    idx = np.arange(n)
+    planted = idx[on]
+    k = np.searchsorted(planted, idx)
+    after = planted[np.clip(k, 0, planted.size - 1)]
+    before = planted[np.clip(k - 1, 0, planted.size - 1)]
+
+    def fade(gap):
+        t = np.clip(1.0 - gap / float(blend + 1), 0.0, 1.0)
+        return t * t * (3 - 2 * t)
+
+    wb = np.where(before <= idx, fade(np.abs(idx - before)), 0.0)
+    wa = np.where(after >= idx, fade(np.abs(after - idx)), 0.0)
+    total = wb + wa
+    # Between two contacts close together the corrections of both blend (never a jump
+    # from one to the other); a single one fades out alone.
+    scale = np.where(total > 1.0, 1.0 / np.maximum(total, 1e-12), 1.0)
+    out = d[before] * (wb * scale)[:, None] + d[after] * (wa * scale)[:, None]
+    out[on] = d[on]
+    return out
+
+
+def _both_planted_offsets(ankle_xy, toe_xy, contacts, blend=BLEND_FRAMES):
+    """(2, F, 2) :func:`planted_offsets` of both feet (ankle and toe xy (2, F, 2), the
+    motion's contacts (F, 4)) in one call: the feet one after the other, ``blend`` + 1
+    unplanted frames between them, so no run, anchor or fade reaches from one to the
+    other (a fade ends ``blend`` + 1 frames from its contact) and each foot gets what it
+    gets alone."""
+    n, gap = ankle_xy.shape[1], blend + 1
+
+    def joined(a, fill):  # (2, F, ...) -> (2F + gap, ...)
+        pad = np.full((gap,) + a.shape[2:], fill, dtype=a.dtype)
+        return np.concatenate((a[0], pad, a[1]))
+
+    on = np.asarray(contacts, bool).T.reshape(2, 2, n)  # (side, ankle/toe, F)
+    d = planted_offsets(
+        joined(ankle_xy, 0.0),
+        joined(toe_xy, 0.0),
+        joined(on[:, 0], False),
+        joined(on[:, 1], False),
+        blend,
+    )
+    return np.stack((d[:n], d[n + gap :]))
+
+
+def _run_means(xy, starts, ends):
+    """(R, 2) mean of ``xy`` (F, 2) over each run [start, end), in one reduction."""
+    padded = np.vstack((xy, np.zeros((1, xy.shape[1]))))  # an end may be F
+    sums = np.add.reduceat(padded, np.stack((starts, ends), 1).ravel(), axis=0)[::2]
+    return sums / (ends - starts)[:, None]
+
+
+def _dot(u, v):
+    """(...,) dot products of (..., 3) vectors."""
+    return np.einsum("...i,...i->...", u, v)
+
+
+def _unit(v):
+    """(..., 3) vectors scaled to length one, and their lengths (...,)."""
+    n = np.sqrt(_dot(v, v))
+    return v / n[..., None], n
+
+
+def _rotate(axis, cos, sin, v):
+    """(..., 3) vectors ``v`` turned about unit ``axis`` (..., 3) by the angle whose cosine
+    and sine are given (Rodrigues' formula: no matrices built)."""
+    along = _dot(axis, v) * (1.0 - cos)
+    return v * cos[..., None] + np.cross(axis, v) * sin[..., None] + axis * along[..., None]
+
+
+def _axis_angle_quat(axis, angle):
+    """(F, 4) unit quaternions of turns by ``angle`` (F,) about unit ``axis`` (F, 3)."""
+    half = 0.5 * angle
+    return np.concatenate((np.cos(half)[:, None], axis * np.sin(half)[:, None]), axis=1)
+
+
+def _ik_turns(hip, knee, ankle, target, hinge, forward=None):
+    """The two-bone IK of :func:`two_bone_ik` as quaternions (F, 4): (swing, knee).
+
+    The thigh turns by ``swing``, the shin by ``swing * knee``; both are built from an
+    axis and an angle per frame, and the candidate legs are turned with Rodrigues'
+    formula, so no (F, 3, 3) matrix is made (the lock needs the turns, not matrices).
+    Both senses of bending are tried at once (a leading axis of two)."""
+    a, b = knee - hip, ankle - knee
+    l1, l2 = np.sqrt(_dot(a, a)), np.sqrt(_dot(b, b))
+    ah = ankle - hip
+    d0 = np.clip(np.sqrt(_dot(ah, ah)), np.abs(l1 - l2) + 1e-4, l1 + l2 - 1e-4)
+    # Never snap the knee straight: the leg stretches at most to STRETCH of its length
+    # (or as far as the recorded pose already did); a farther target is left a little short.
+    reach = np.maximum(d0, STRETCH * (l1 + l2))
+    v, dist = _unit(target - hip)
+    d1 = np.clip(dist, np.abs(l1 - l2) + 1e-4, reach)
+    interior = np.arccos(np.clip((l1**2 + l2**2 - d1**2) / (2 * l1 * l2), -1.0, 1.0))
+    # The knee's angle now, from the bones themselves (exact even for a straight leg).
+    now = np.arccos(np.clip(_dot(-a, b) / (l1 * l2), -1.0, 1.0))
+    delta = interior - now
+    n = np.cross(a, b)
+    ns = np.sqrt(_dot(n, n))
+    n = np.where(ns[:, None] > 1e-6, n / np.maximum(ns, 1e-12)[:, None], hinge)
+    cd, sd = np.cos(delta), np.sin(delta)
+    sense = np.array([1.0, -1.0])[:, None]  # the other sense: the inverse turn
+    u, ul = _unit(a + _rotate(n, cd, sense * sd, b))  # (2, F, 3), (2, F)
+    err = np.abs(ul - d1)
+    # the swing: the shortest arc taking u onto v
+    axis = np.cross(u, v)
+    s = np.sqrt(_dot(axis, axis))
+    angle = np.arctan2(s, np.clip(_dot(u, v), -1.0, 1.0))
+    axis = np.where(s[..., None] > 1e-9, axis / np.maximum(s, 1e-12)[..., None], [1.0, 0.0, 0.0])
+    if forward is None:
+        ahead = np.zeros_like(err)
+    else:
+        knee_dir = _rotate(axis, np.cos(angle), np.sin(angle), a)
+        knee_dir -= _dot(knee_dir, v)[..., None] * v
+        ahead = _dot(knee_dir, forward)
+    second = np.where(np.abs(err[0] - err[1]) > 1e-7, err[1] < err[0], ahead[1] > ahead[0])
+    swing = _axis_angle_quat(
+        np.where(second[:, None], axis[1], axis[0]), np.where(second, angle[1], angle[0])
+    )
+    bend = _axis_angle_quat(n, np.where(second, -delta, delta))
+    return swing, bend
+
+
+def two_bone_ik(hip, knee, ankle, target, hinge, forward=None):
+    """(F, 3, 3) world rotations (thigh, shin) that move ``ankle`` to ``target``.
+
+    The knee angle is set for the hip-target distance (clamped to what the leg reaches
+    without locking straight), bending about the leg's plane (``hinge`` where the leg is
+    straight), then the whole leg swings about the hip onto the target. Of the two senses
+    of bending, the one that reaches the distance wins; where both do (a straight leg) the
+    one that puts the knee towards ``forward`` (F, 3). Returns (R_thigh, R_shin):
+    left-multiply the thigh's and the shin's world rotations by them."""
+    swing, bend = _ik_turns(hip, knee, ankle, target, hinge, forward)
+    return quat.to_matrix(swing), quat.to_matrix(quat.mul(swing, bend))
+
+
+def _leg_skeleton(skel, chains):
+    """(sub-skeleton, its joint indices in ``skel``): the leg chains' joints, their limb
+    segments and every ancestor of them, parents before children. Forward kinematics on it
+    gives the same matrices for those joints as on the whole skeleton (a third of the
+    bones of a CMU rig: the arms, spine and head never reach the legs)."""
+    keep = set()
+    for chain in chains:
+        for j in chain:
+            while j >= 0 and j not in keep:
+                keep.add(int(j))
+                j = int(skel.parents[j])
+    idx = np.array(sorted(keep))  # parents come before children in a Skeleton
+    where = {int(j): i for i, j in enumerate(idx)}
+    parents = np.array([where.get(int(skel.parents[j]), -1) for j in idx])
+    return Skeleton([skel.names[j] for j in idx], parents, skel.rest[idx]), idx
+
+
+def _rest_offsets(sub):
+    """(K, 4, 4) rest matrix of each bone of ``sub`` relative to its parent's
+    (:meth:`Skeleton.local_rest <motion_patches.skeleton.Skeleton.local_rest>`, the
+    inverses taken in one call)."""
+    out = sub.rest.copy()
+    child = np.flatnonzero(sub.parents >= 0)
+    out[child] = np.linalg.inv(sub.rest[sub.parents[child]]) @ sub.rest[child]
+    return out
+
+
+def _depths(parents):
+    """Bone indices grouped by depth below the root, shallowest first (both legs' bones
+    of one depth are posed together)."""
+    depth = np.zeros(len(parents), int)
+    for j, parent in enumerate(parents):  # parents come before children
+        depth[j] = depth[parent] + 1 if parent >= 0 else 0
+    return [np.flatnonzero(depth == d) for d in range(depth.max() + 1)]
+
+
+def _leg_world(sub, rest_offsets, root_pos, rotations):
+    """World rotations (K, F, 3, 3) and positions (K, F, 3) of the bones of ``sub`` from
+    its root position (F, 3) and rotation channels (K, F, 4) (root channel in the world;
+    :func:`~motion_patches.kinematics.skeleton.forward_kinematics` in rotations and positions). Bone
+    first, so each bone's frames are one contiguous block for the products; the bones of
+    one depth (the left and the right leg's) in one product."""
+    basis = quat.to_matrix(rotations)
+    nk, nf = basis.shape[:2]
+    g = np.empty((nk, nf, 3, 3))
+    p = np.empty((nk, nf, 3))
+    roots, *levels = _depths(sub.parents)
+    for j in roots:
+        g[j] = sub.rest[j, :3, :3] @ basis[j]
+        p[j] = root_pos
+    for js in levels:
+        parent = sub.parents[js]
+        lr = rest_offsets[js]  # (n, 4, 4)
+        gp = g[parent]
+        g[js] = gp @ (lr[:, None, :3, :3] @ basis[js])
+        p[js] = np.einsum("nfij,nj->nfi", gp, lr[:, :3, 3]) + p[parent]
+    return g, p
+
+
+class _Legs:
+    """What :func:`lock_feet` needs of a skeleton that does not change with the motion:
+    the leg chains, the legs' sub-skeleton and its rest offsets, and per side the bones
+    whose channels the lock rewrites (made once per skeleton, :func:`_legs`)."""
+
+    def __init__(self, skel):
+        self.chains = leg_chains(skel)
+        self.sub, self.idx = _leg_skeleton(skel, self.chains)
+        self.at = {int(j): i for i, j in enumerate(self.idx)}
+        self.rest = _rest_offsets(self.sub)
+        self.root = self.sub.root
+        self.legs = np.array([[self.at[j] for j in chain] for chain in self.chains])  # (2, 4)
+        # per side: [(bone in skel, its turn: "thigh", "shin", "ankle" or None for a limb
+        # segment that turns with its parent)], the bones in the order the lock wrote them
+        self.bones = []
+        for c_hip, c_knee, c_ankle, _ in self.chains:
+            thigh = [(c_hip, "thigh")] + [(j, None) for j in _segments(skel, c_knee, c_hip)]
+            shin = [(c_knee, "shin")] + [(j, None) for j in _segments(skel, c_ankle, c_knee)]
+            self.bones.append(thigh + shin + [(c_ankle, "ankle")])
+
+
+def pose_legs(skel, world):
+    """The legs' bones posed as in ``world`` (a Motion): world rotations (B, F, 3, 3) and
+    positions (B, F, 3), for :func:`still_contacts` and :func:`lock_feet` to share."""
+    return _leg_positions(_legs(skel), world, with_frames=True)
+
+
+def _leg_positions(legs, world, with_frames=False):
+    """World positions (B, F, 3) of the legs' bones (``legs``: :func:`_legs`) posed as in
+    ``world``; with ``with_frames`` (world rotations (B, F, 3, 3), positions)."""
+    sub, idx, rest = legs.sub, legs.idx, legs.rest
+    ground = np.asarray(world.ground, float)
+    pos = root_positions(ground, world.root_local)
+    rot = np.ascontiguousarray(np.swapaxes(world.rotations[:, idx], 0, 1), dtype=float)
+    rot[legs.root] = root_channel_to_ground(sub, rot[legs.root], -ground[:, 2])  # to_world's
+    g, p = _leg_world(sub, rest, pos, rot)
+    return (g, p) if with_frames else p
+
+
+@per_skeleton
+def _legs(skel):
+    """The :class:`_Legs` of ``skel``, made on its first lock (a crowd's characters share
+    one skeleton)."""
+    return _Legs(skel)
+
+
+def locked_bones(skel):
+    """Indices of the bones whose channels :func:`lock_feet` may change beyond a sign:
+    each leg's thigh, shin and ankle and the limb segments between them."""
+    return np.array(sorted(j for side in _legs(skel).bones for j, _ in side))
+
+
+def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None, posed=None):
+    """Rotation channels (F, J, 4) of ``world`` (a Motion) with planted feet pinned.
+
+    Only the hip (thigh) and knee (shin) channels of each leg change, and the ankle's so
+    that the foot keeps its world orientation. Both legs are solved at once, on every
+    frame a correction applies to, on the legs' bones alone (:func:`_leg_skeleton`).
+    ``offsets`` is a function
+    (side, ankle xy (F, 2), toe xy (F, 2)) -> (F, 2) horizontal ankle corrections
+    replacing :func:`planted_offsets` (a turn in place moves its feet its own way). A plan
+    pins its feet on :func:`still_contacts`; ``posed``: the legs posed (:func:`pose_legs`).
+
+    The new channels are the old ones turned: a bone whose world rotation is left-
+    multiplied by a turn T, under a parent turned by P, gets the channel
+    ``(M^-1 P^-1 T M) * channel`` (M: its parent's world rotation times its rest offset,
+    both before the lock), so the IK's turns are applied as quaternions, frames at once,
+    with no matrix converted back."""
+    corrections = offsets
+    legs = _legs(skel)
+    sub, rest = legs.sub, legs.rest
+    n = world.frames
+    ground = np.asarray(world.ground, float)
+    g, p = posed or _leg_positions(legs, world, with_frames=True)
+    hip, knee, ankle, toe = legs.legs.T  # (2,) each: left, right
+    if corrections is None:
+        d = _both_planted_offsets(p[ankle, :, :2], p[toe, :, :2], world.contacts, blend)
+    else:
+        d = np.stack([corrections(s, p[ankle[s], :, :2], p[toe[s], :, :2]) for s in range(2)])
+    moving = np.sqrt(np.einsum("sfi,sfi->sf", d, d)) > 1e-7  # (2, F)
+    if not moving.any():
+        return quat.make_continuous(world.rotations.copy(), axis=0)
+
+    def both(a):  # (2, F, ...) -> (2F, ...): the legs one after the other
+        return a.reshape((2 * n,) + a.shape[2:])
+
+    rows = np.flatnonzero(moving.reshape(2 * n))  # the IK where a correction applies
+    target = both(p[ankle])[rows]
+    target[:, :2] += d.reshape(2 * n, 2)[rows]
+    hinge = both(g[hip, :, :, 0])[rows]  # the thigh's X axis: the knee's hinge in a rest-like leg
+    h = ground[:, 2]
+    forward = np.column_stack((np.cos(h), np.sin(h), np.zeros_like(h)))[rows % n]
+    swing = np.zeros((2 * n, 4))
+    swing[:, 0] = 1.0
+    bend = swing.copy()
+    swing[rows], bend[rows] = _ik_turns(
+        both(p[hip])[rows], both(p[knee])[rows], both(p[ankle])[rows], target, hinge, forward
+    )
+    swing, bend = swing.reshape(2, n, 4), bend.reshape(2, n, 4)
+    changed = [j for side in range(2) if moving[side].any() for j, _ in legs.bones[side]]
+    out = world.rotations.copy()
+    local = out[:, changed].astype(float)  # (F, K, 4)
+    # the turn of each bone relative to its parent's (thigh: the swing; shin: the bend under
+    # the swung thigh; ankle: back to its world rotation; limb segments: none)
+    rel = {"thigh": swing, "shin": bend, "ankle": quat.conj(quat.mul(swing, bend))}
+    at, turns, sides, kinds = [], [], [], []  # the turned bones: place in local, bone in sub
+    for i, (side, (j, turn)) in enumerate(
+        (side, b) for side in range(2) if moving[side].any() for b in legs.bones[side]
+    ):
+        if turn is not None:
+            at.append(i)
+            turns.append(legs.at[j])
+            sides.append(side)
+            kinds.append(turn)
+    t = np.stack([rel[kind][side] for kind, side in zip(kinds, sides)])  # (T, F, 4)
+    # M^-1 T M (M = the parent's world rotation times the bone's rest offset): the turn's
+    # axis taken into the bone's parent-rest frame, rest^T g^T axis; all turned bones at once
+    axis = np.einsum("tfji,tfj->tfi", g[sub.parents[turns]], t[..., 1:]) @ rest[turns, :3, :3]
+    t[..., 1:] = axis
+    local[:, at] = quat.mul(np.swapaxes(t, 0, 1), local[:, at])
+    local /= np.sqrt(np.einsum("fkc,fkc->fk", local, local))[..., None]
+    local = quat.make_continuous(local, axis=0)
+    local[:, local[0, :, 0] < 0] *= -1  # the first frame's w >= 0, as quat.from_matrix gives
+    out[:, changed] = local
+    # the whole pose made continuous, as the channels were; the changed bones are already,
+    # and of the others only those that flip somewhere need the pass
+    flips = np.any(np.einsum("fjc,fjc->fj", out[1:], out[:-1]) < 0, axis=0)
+    flips[changed] = False
+    if flips.any():
+        out[:, flips] = quat.make_continuous(out[:, flips], axis=0)
+    return out

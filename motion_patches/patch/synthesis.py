@@ -1,0 +1,137 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Space-curve following: a gait's loops played along a curve, turns blended by curvature.
+
+The root is bound to the curve by the loops' own travelled distance and faces the curve's
+tangent (paper Sec. 6). Near both ends of a segment the blend eases back to the straight
+loop, so every node carries the same pose and segments join without a pop.
+"""
+
+import numpy as np
+
+from ..kinematics.motion import Motion
+from .curves import arc_lengths, curvature
+
+RAMP = 0.25  # of a straight cycle's distance: blend easing length at segment ends
+WEIGHT_WINDOW = 0.125  # of a gait cycle's frames: loop weights averaged this far either side
+
+
+def cycles_along(gait, pos, vel, acc, eased=(True, True), kappa=None):
+    """Gait cycles needed to follow sampled curves (..., M, 2) -> (...).
+
+    The phase advances by ds / D(w(s)) with D the blended cycle distance at the eased
+    curvature, so a curve's "whole number of cycles" accounts for shorter turning strides.
+    ``kappa``: the curves' curvature, when the caller has it already (it is not changed).
+    """
+    s = arc_lengths(pos)
+    kap = curvature(vel, acc) if kappa is None else kappa.copy()
+    length = s[..., -1:]
+    kap *= _ease(s, length, gait.cycle_distance * RAMP, eased)
+    d = gait.blended_distance(kap)
+    dmid = d[..., 1:] + d[..., :-1]
+    dmid *= 0.5
+    return np.sum(np.diff(s, axis=-1) / dmid, axis=-1)
+
+
+def cycles_along_many(gait, pos, first, eased=(True, True)):
+    """:func:`cycles_along` of many sampled curves at once, each with the derivatives
+    ``np.gradient`` takes of its samples: ``pos`` (N, 2) holds the curves one after the
+    other, curve c from row ``first[c]`` to ``first[c + 1]`` (at least 3 rows each)."""
+    first = np.asarray(first)
+    start, end = first[:-1], first[1:] - 1
+    counts = first[1:] - first[:-1]
+
+    def gradient(a):
+        g = np.empty_like(a)
+        g[1:-1] = (a[2:] - a[:-2]) / 2.0
+        g[start] = a[start + 1] - a[start]
+        g[end] = a[end] - a[end - 1]
+        return g
+
+    vel = gradient(pos)
+    acc = gradient(vel)
+    d = np.diff(pos, axis=0)
+    step = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])
+    step[end[:-1]] = 0.0  # from one curve to the next
+    total = np.concatenate(([0.0], np.cumsum(step)))
+    s = total - np.repeat(total[start], counts)
+    ease = _ease(s, np.repeat(s[end], counts), gait.cycle_distance * RAMP, eased)
+    dist = gait.blended_distance(curvature(vel, acc) * ease)
+    ds = np.diff(s)
+    ds[end[:-1]] = 0.0
+    terms = ds / (0.5 * (dist[1:] + dist[:-1]))
+    return np.add.reduceat(np.append(terms, 0.0), start)
+
+
+def _ease(s, length, ramp_len, eased):
+    """Easing weights (smoothsteps over ``ramp_len`` from each eased end) at arc lengths."""
+    e = np.ones_like(s)
+    ramp = max(ramp_len, 1e-9)
+    for on, d in ((eased[0], s / ramp), (eased[1], (length - s) / ramp)):
+        if on:
+            np.clip(d, 0.0, 1.0, out=d)
+            e *= d * d * (3.0 - 2.0 * d)  # 1 where d = 1
+    return e
+
+
+def frame_arclengths(gait, curve, cycles=None, start_phase=0, eased=(True, True)):
+    """Frame phases (K,), arc length of the root on the curve per frame (K,), and the
+    curve's easing weights: the timing of :func:`follow` without building any pose."""
+    n = gait.frames
+    ease = _ease(curve.s, curve.length, gait.cycle_distance * RAMP, eased)
+    dist = gait.blended_distance(curve.kappa * ease)
+    dmid = 0.5 * (dist[1:] + dist[:-1])
+    phase_at = np.concatenate(([0.0], np.cumsum(np.diff(curve.s) / dmid)))  # cycles along curve
+    straight = gait.straight
+    profile = straight.distance / straight.cycle_distance  # (n + 1,) within-cycle fraction
+    if cycles == "to node":
+        # Any length, ending on the node pose: start at the phase that leaves a whole
+        # number of cycles to the end (the stride stretched by under one frame's travel).
+        whole = max(int(np.ceil(phase_at[-1] - 0.5 / n)), 1)
+        start_phase = int(np.argmin(np.abs(profile[:n] - (whole - phase_at[-1]))))
+        if whole - profile[start_phase] <= 0:
+            start_phase = 0
+        phase_at *= (whole - profile[start_phase]) / phase_at[-1]
+        total = whole * n - start_phase
+    elif cycles is not None:
+        phase_at *= cycles / phase_at[-1]
+        total = cycles * n
+    else:
+        total = int(np.ceil(phase_at[-1] * n - 1e-9))
+    k = np.arange(total + 1) + start_phase
+    c = k // n
+    target = c + profile[k % n] - (start_phase // n + profile[start_phase % n])
+    target = np.clip(target, 0.0, phase_at[-1])
+    target[-1] = phase_at[-1]
+    return k, np.interp(target, phase_at, curve.s), ease
+
+
+def held_weights(weights, half):
+    """Loop weights (K, L) averaged over ``half`` frames either side, the window shrinking
+    towards both ends so the first and last frames keep their own weights (a segment still
+    starts and ends on the node pose). Loops of neighbouring curvatures can be different
+    takes (16_15's straight walk beside 16_18's gentle turns): however gently the
+    curvature changes, the weights swap those loops within a frame or two where their
+    curvatures are close, and bones the takes hold differently (a thumb, the head) would
+    step several times faster than in either clip."""
+    n = weights.shape[0]
+    if half < 1 or n < 3:
+        return weights
+    f = np.arange(n)
+    h = np.minimum(np.minimum(f, n - 1 - f), half)
+    c = np.concatenate((np.zeros((1, weights.shape[1])), np.cumsum(weights, axis=0)))
+    return (c[f + h + 1] - c[f - h]) / (2 * h + 1)[:, None]
+
+
+def follow(gait, curve, cycles=None, start_phase=0, eased=(True, True)):
+    """Motion of the gait along ``curve``.
+
+    With ``cycles`` the motion lasts exactly ``cycles`` loops (the curve was fitted to it)
+    and ends on the node pose; without, it stops where the curve ends, mid-cycle if need be;
+    with ``cycles="to node"`` it starts at the phase that makes it end on the node pose.
+    """
+    k, s, ease = frame_arclengths(gait, curve, cycles, start_phase, eased)
+    x, y, h, _ = curve.at(s)
+    weights = gait.weights(np.interp(s, curve.s, curve.kappa * ease))
+    weights = held_weights(weights, max(int(round(gait.frames * WEIGHT_WINDOW)), 0))
+    root, rot, contacts = gait.pose(k, weights)
+    return Motion(np.column_stack((x, y, h)), root, rot, contacts)

@@ -1,0 +1,69 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Plans and their pieces, and why a plan is refused: the vocabulary the search, the
+connectors, shortening and turning on the spot share (kept apart from the search so each
+of them can name a piece without importing the others)."""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .plan_frame import IDENTITY
+
+CONNECTOR_SCALES = np.linspace(0.25, 4.0, 40)  # coarser than the bake: fitted at plan time
+
+
+class PlanError(ValueError):
+    """The goal cannot be reached, or the request is malformed; the message says why."""
+
+
+class SearchLimit(PlanError):
+    """The search stopped at its node limit before finding a way (not proof there is none)."""
+
+
+class Unreachable(PlanError):
+    """The search ran out of nodes: no way within the plan region (a walk that turns on the
+    spot at an end may still find one)."""
+
+
+class FacingRefused(PlanError):
+    """No walk can leave the start (reach the goal) facing its way: the props around leave
+    no room to turn (a turn on the spot there may help)."""
+
+
+@dataclass
+class Piece:
+    kind: str  # "segment", "part", "traversal", "start" or "goal"
+    segment: int = -1  # patch segment index (kinds "segment" and "part")
+    tile: tuple = (0, 0)
+    curve: object = None  # curves.Curve in world coordinates (connectors)
+    cycles: int = 0  # whole cycles (segments and start connectors)
+    cost: float = 0.0
+    frames: tuple = None  # (first, last) frame of a segment used in part ("part")
+    prop: object = None  # ObjectPatch of a traversal
+    clip_index: int = -1
+    frame: tuple = IDENTITY  # plan frame (x, y, angle) taking the piece to the world
+    turn: tuple = None  # (x, y, heading, angle) of a turn on the spot (kind "turn"), world
+
+    @property
+    def label(self):
+        if self.kind == "turn":
+            return f"turn {np.degrees(self.turn[3]):+.0f}deg in place (derived)"
+        if self.kind == "segment":
+            return f"seg{self.segment:04d}"
+        if self.kind == "part":
+            return f"seg{self.segment:04d}[{self.frames[0]}-{self.frames[1]}]"
+        if self.kind in ("traversal", "interaction"):
+            c = self.prop.clips[self.clip_index]
+            return f"{self.prop.name} {c.name} {np.degrees(c.angle):.0f}deg"
+        return self.kind
+
+
+@dataclass
+class Plan:
+    pieces: list
+    cost: float
+    expansions: int
+    seconds: float
+    start: tuple
+    goal: tuple
+    stats: dict = field(default_factory=dict)

@@ -1,0 +1,84 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""The plan frame: the tile lattice of one plan, anchored at the start and turned to the goal.
+
+Tiles own no precomputed data (occlusion is lazy, Sec. 4.2), so nothing ties the lattice
+to the world's origin. Each plan lays it so that the start sits in the middle of a tile on
+a row of nodes and the lattice's +x axis points at the goal: walking straight to the goal
+is then a line of straight segments through node slots, not a zig-zag between 45-degree
+lattice headings, and the lattice no longer depends on where the scene's origin happens
+to be. The planner works in these local coordinates (obstacles and props are moved into
+them); every planned piece carries the frame that takes it back to the world.
+"""
+
+import numpy as np
+
+from ..props.environment import Environment, Obstacle
+
+IDENTITY = (0.0, 0.0, 0.0)  # (x, y, angle): local -> world is rotate by angle, then shift
+
+
+def lattice_frame(start, goal, side, nodes):
+    """(x, y, angle) of the plan frame: +x along start -> goal (the start heading when the
+    two coincide), the start at the middle of tile (0, 0) on the middle row of nodes."""
+    d = np.asarray(goal[:2], float) - np.asarray(start[:2], float)
+    angle = float(np.arctan2(d[1], d[0])) if np.hypot(*d) > 1e-6 else float(start[2])
+    anchor = np.array([0.5 * side, (nodes // 2 + 0.5) * side / nodes])
+    c, s = np.cos(angle), np.sin(angle)
+    origin = np.asarray(start[:2], float) - np.array(
+        [c * anchor[0] - s * anchor[1], s * anchor[0] + c * anchor[1]]
+    )
+    return (float(origin[0]), float(origin[1]), angle)
+
+
+def to_local(frame, xy):
+    """World points (..., 2) in the plan frame."""
+    x, y, a = frame
+    p = np.asarray(xy, float) - np.array([x, y])
+    c, s = np.cos(a), np.sin(a)
+    return np.stack((c * p[..., 0] + s * p[..., 1], -s * p[..., 0] + c * p[..., 1]), axis=-1)
+
+
+def to_world(frame, xy):
+    """Plan-frame points (..., 2) in the world."""
+    x, y, a = frame
+    p = np.asarray(xy, float)
+    c, s = np.cos(a), np.sin(a)
+    return np.stack((c * p[..., 0] - s * p[..., 1] + x, s * p[..., 0] + c * p[..., 1] + y), axis=-1)
+
+
+def state_to_local(frame, state):
+    """(x, y, heading) in the plan frame (a NaN heading, "any facing", stays NaN)."""
+    p = to_local(frame, np.asarray(state[:2], float))
+    return np.array([p[0], p[1], state[2] - frame[2]])
+
+
+def local_environment(env, frame, lo, hi):
+    """An environment in the plan frame holding the obstacles of ``env`` that come within
+    its radius of the local box ``lo``-``hi`` (found through ``env``'s tile membership, so a
+    scene of many props costs only the ones near the plan)."""
+    corners = to_world(
+        frame, np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]]], float)
+    )
+    wlo, whi = corners.min(axis=0) - env.radius, corners.max(axis=0) + env.radius
+    out = Environment(env.side, env.cells, env.radius)
+    names = list(env.names_in_box(wlo, whi))
+    if not names:
+        return out
+    # Every footprint moved in one transform, then split back obstacle by obstacle.
+    polygons = [env.obstacles[name].polygon for name in names]
+    ends = np.cumsum([p.shape[0] for p in polygons])[:-1]
+    for name, polygon in zip(names, np.split(to_local(frame, np.concatenate(polygons)), ends)):
+        out.place(Obstacle(name, polygon))
+    return out
+
+
+def local_prop(prop, frame):
+    """An object patch moved into the plan frame (its own clips and footprint unchanged)."""
+    from dataclasses import replace
+
+    x, y, h = prop.pose
+    p = to_local(frame, np.array([x, y]))
+    out = replace(prop, pose=(float(p[0]), float(p[1]), float(h - frame[2])))
+    prop.density_bins()  # in prop coordinates: computed once, on the prop itself, and shared
+    out.__dict__["_bins"] = prop.__dict__["_bins"]
+    return out
