@@ -30,8 +30,6 @@ from .motion_patches.patch import layers
 from .motion_patches.patch.gait import MIN_TURN, build_gait
 from .motion_patches.patch.locomotion_patch import bake
 from .motion_patches.planning import body_clearance, causes, moving_props, transitions
-from .motion_patches.planning.defaults import GOAL_FACING, STITCHING
-from .motion_patches.planning.defaults import PLANNING as DEFAULTS
 from .motion_patches.planning.planner import (
     PlanError,
     SegmentPlanner,
@@ -39,6 +37,8 @@ from .motion_patches.planning.planner import (
     plan_motions,
     with_interactions,
 )
+from .motion_patches.planning.settings import PLANNING as DEFAULTS
+from .motion_patches.planning.settings import PlanSettings
 from .motion_patches.props import blocking, object_patch
 from .motion_patches.props.environment import Obstacle
 from .motion_patches.quality import layout_spec, metrics, validate
@@ -645,67 +645,39 @@ def _frame_start(scene, frame_start):
     return int(round(f))
 
 
-MAX_WEIGHT = 1e6  # alpha, beta, gamma above this overflow the search's costs
-MAX_RADIUS = 10.0  # metres: a character's radius
 MAX_COORDINATE = 1e5  # metres from the origin a start or goal may lie
 MAX_DISTANCE = 2000.0  # metres between start and goal of one plan (plan longer walks in legs)
 SAME_PLACE = 0.05  # metres: a goal this near the start, facing the same way, is the start
 SAME_FACING = np.radians(2.0)
 
 
-def _check_weights(alpha, beta, gamma, radius, where=""):
+def _check_weights(alpha, beta, gamma, radius):
     """Refuse weights the search cannot sum (NaN, negative, huge) and a radius that is not
-    a body's, naming the value."""
-    for name, v in (("alpha", alpha), ("beta", beta), ("gamma", gamma)):
-        try:
-            ok = math.isfinite(float(v)) and 0.0 <= float(v) <= MAX_WEIGHT
-        except (TypeError, ValueError):
-            ok = False
-        if not ok:
-            raise MotionPatchesError(
-                f"{where}{name} must be a number from 0 to {MAX_WEIGHT:g}, not {v!r}"
-            )
+    a body's, naming the value (the ranges of :data:`SETTINGS`)."""
+    planning_checked(alpha=alpha, beta=beta, gamma=gamma, radius=radius)
+
+
+def planning_checked(**values) -> PlanSettings:
+    """:meth:`PlanSettings.checked` with :class:`MotionPatchesError` naming a bad value."""
     try:
-        ok = math.isfinite(float(radius)) and 0.0 < float(radius) <= MAX_RADIUS
-    except (TypeError, ValueError):
-        ok = False
-    if not ok:
-        raise MotionPatchesError(
-            f"{where}radius must be a number of metres above 0 and at most "
-            f"{MAX_RADIUS:g}, not {radius!r}"
-        )
+        return PlanSettings.checked(**values)
+    except ValueError as e:
+        raise MotionPatchesError(str(e)) from None
 
 
 def planning_settings(scene: "bpy.types.Scene", **given) -> dict:
-    """The planning settings of a request (the keys of
-    :data:`motion_patches.planning.defaults.PLANNING`):
+    """The planning settings of a request (the names of
+    :data:`motion_patches.planning.settings.SETTINGS`):
     each one given (not None) as given, the others the scene's (its Planning panel, which
     starts from those defaults). All are checked: :class:`MotionPatchesError` names a bad one."""
     s = scene.motion_patches
-    out = {}
+    values = {}
     for key in DEFAULTS:
         v = given.pop(key, None)
-        if v is None:
-            v = getattr(s, key)
-        out[key] = v.lower() if key in ("stitching", "goal_facing") and isinstance(v, str) else v
+        values[key] = getattr(s, key) if v is None else v
     if given:
         raise TypeError(f"not planning settings: {', '.join(sorted(given))}")
-    _check_weights(out["alpha"], out["beta"], out["gamma"], out["radius"])
-    for key in ("alpha", "beta", "gamma", "radius"):
-        out[key] = float(out[key])
-    for key, allowed in (("stitching", STITCHING), ("goal_facing", GOAL_FACING)):
-        if out[key] not in allowed:
-            raise MotionPatchesError(
-                f"{key.replace('_', ' ')} must be "
-                f"{' or '.join(repr(a) for a in allowed)}, not {out[key]!r}"
-            )
-    for key in ("foot_lock", "turn_in_place"):
-        if out[key] not in (True, False):
-            raise MotionPatchesError(
-                f"{key.replace('_', ' ')} must be True or False, not {out[key]!r}"
-            )
-        out[key] = bool(out[key])
-    return out
+    return planning_checked(**values).as_dict()
 
 
 def _fills_planning_settings(fn):

@@ -19,7 +19,7 @@ from bpy.props import (
     StringProperty,
 )
 
-from .motion_patches.planning.defaults import PLANNING as DEFAULTS
+from .motion_patches.planning.settings import SETTINGS
 
 # Called with the new value when Show Planner Overlay changes; the overlay (panels/overlay.py)
 # sets it while registered, so the properties need not know the UI.
@@ -31,60 +31,25 @@ def _overlay_toggle(on):
         overlay_switch(on)
 
 
+def _planning_property(setting):
+    """The bpy property of a planning setting (:data:`SETTINGS`): its label, help, default
+    and range, so the panel holds what the API and the CLI accept."""
+    common = dict(name=setting.label, description=setting.help)
+    if setting.kind is float:
+        extra = dict(unit="LENGTH") if setting.unit == "m" else {}
+        if setting.soft_maximum is not None:
+            extra["soft_max"] = setting.soft_maximum
+        return FloatProperty(
+            default=setting.default, min=setting.minimum, max=setting.maximum, **common, **extra
+        )
+    if setting.kind is bool:
+        return BoolProperty(default=setting.default, **common)
+    items = tuple((v.upper(), label, tip) for v, label, tip in setting.choices)
+    return EnumProperty(default=setting.default.upper(), items=items, **common)
+
+
 PLANNING = {  # name -> factory of the bpy property (one fresh definition per class)
-    "alpha": lambda: FloatProperty(
-        name="Distance (α)", default=DEFAULTS["alpha"], min=0.0, description="Cost per metre walked"
-    ),
-    "beta": lambda: FloatProperty(
-        name="Turning (β)", default=DEFAULTS["beta"], min=0.0, description="Cost per radian turned"
-    ),
-    "gamma": lambda: FloatProperty(
-        name="Effort (γ)",
-        default=DEFAULTS["gamma"],
-        min=0.0,
-        description="Cost per unit of effort (jumping a prop costs its clip's effort)",
-    ),
-    "radius": lambda: FloatProperty(
-        name="Character Radius",
-        default=DEFAULTS["radius"],
-        min=0.05,
-        max=2.0,
-        unit="LENGTH",
-        description="Clearance kept between the root and props",
-    ),
-    "stitching": lambda: EnumProperty(
-        name="Stitching",
-        default=DEFAULTS["stitching"].upper(),
-        items=(
-            ("DYNAMIC", "Dynamic", "Stitch traversal clips lazily, when the search needs them"),
-            (
-                "STATIC",
-                "Static",
-                "Stitch every traversal clip before searching (Lee 2006 baseline)",
-            ),
-        ),
-    ),
-    "goal_facing": lambda: EnumProperty(
-        name="Goal Facing",
-        default=DEFAULTS["goal_facing"].upper(),
-        items=(
-            ("EXACT", "Exact", "Arrive facing the goal object's facing (its -Y axis)"),
-            ("ANY", "Any", "Arrive facing whichever way is cheapest (e.g. a goal in a dead end)"),
-        ),
-    ),
-    "turn_in_place": lambda: BoolProperty(
-        name="Turn on the Spot",
-        default=DEFAULTS["turn_in_place"],
-        description="Where a walk would loop to leave the start or reach the goal facing its "
-        "way, stop and turn on the spot (a turn derived from the walk's sharpest turn loop; "
-        "the mocap has no turn-in-place clip)",
-    ),
-    "foot_lock": lambda: BoolProperty(
-        name="Lock Planted Feet",
-        default=DEFAULTS["foot_lock"],
-        description="Pin each planted foot with leg IK (a Combine "
-        "track over the walk) so it does not slide",
-    ),
+    **{s.name: (lambda s=s: _planning_property(s)) for s in SETTINGS},
     "fit_frame_range": lambda: BoolProperty(
         name="Fit Frame Range",
         default=True,

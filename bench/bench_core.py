@@ -39,8 +39,8 @@ from motion_patches.kinematics import clip as clip_mod
 from motion_patches.kinematics.motion import Motion, concatenate
 from motion_patches.patch import gait as gait_mod
 from motion_patches.patch import locomotion_patch
-from motion_patches.planning.defaults import PLANNING as DEFAULTS
 from motion_patches.planning.planner import PlanError, SegmentPlanner, plan_motions
+from motion_patches.planning.settings import PLANNING as DEFAULTS
 from motion_patches.props.environment import Environment, Obstacle
 from motion_patches.quality import metrics
 

@@ -45,7 +45,7 @@ import bench_core as core  # noqa: E402
 from motion_patches.kinematics.inplace import to_world
 from motion_patches.kinematics.motion import concatenate
 from motion_patches.planning import planner as planner_mod
-from motion_patches.planning.defaults import PLANNING as DEFAULTS
+from motion_patches.planning.settings import PLANNING as DEFAULTS
 from motion_patches.props.environment import Environment, Obstacle, distance_to_polygon
 from motion_patches.quality import validate
 

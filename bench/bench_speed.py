@@ -60,7 +60,6 @@ import bench_core as core  # noqa: E402
 from motion_patches.kinematics.motion import concatenate
 from motion_patches.patch.node_keys import pack
 from motion_patches.planning import astar
-from motion_patches.planning.defaults import PLANNING as DEFAULTS
 from motion_patches.planning.planner import (
     PlanError,
     SegmentPlanner,
@@ -68,6 +67,7 @@ from motion_patches.planning.planner import (
     plan_motions,
     with_interactions,
 )
+from motion_patches.planning.settings import PLANNING as DEFAULTS
 from motion_patches.props import object_patch as op
 from motion_patches.props.environment import Environment, Obstacle
 

@@ -34,7 +34,6 @@ from ..patch.node_keys import BIAS, LOCAL, NEXT_EDGE, TILE_STEP, pack, unpack
 from ..patch.synthesis import cycles_along, cycles_along_many, follow
 from ..props.environment import PATH_MARGIN, SUB, Obstacle
 from . import astar, dubins, shortcut, turn_in_place
-from .defaults import PLANNING as DEFAULTS
 from .high_level import TilePlanner
 from .pieces import (
     FacingRefused,
@@ -52,6 +51,7 @@ from .plan_frame import (
     state_to_local,
     to_local,
 )
+from .settings import PLANNING as DEFAULTS
 from .stitching import BLEND_FRAMES, POSITION_TOLERANCE, Stitch, part_speed, stitch_table
 from .traversal_probability import accessibility, tile_traversal
 

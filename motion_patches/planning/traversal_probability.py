@@ -16,7 +16,7 @@ import numpy as np
 
 from ..props.environment import Environment, Obstacle
 from ..props.object_patch import ObjectPatch
-from .defaults import PLANNING as DEFAULTS
+from .settings import PLANNING as DEFAULTS
 from .stitching import stitch
 
 _PSI = {}  # signature of a kind of prop -> psi

@@ -359,7 +359,7 @@ def test_plan_to_coordinates_prints_a_summary(cli, capsys, layout):
         ),
         (
             ["--character", "Walker", "--goal", "Goal", "--radius", "-1"],
-            "radius must be a number of metres above 0",
+            "radius must be a number of metres from 0.05 to 2",
         ),
         (
             ["--character", "Walker", "--goal-xyh", "3", "1", "0"],

@@ -94,7 +94,7 @@ def test_a_goal_where_the_character_stands_is_refused(walk):
         (dict(alpha=1e308), "alpha must be a number from 0"),
         (dict(beta=-1.0), "beta must be a number"),
         (dict(gamma=float("nan")), "gamma must be a number"),
-        (dict(radius=0.0), "radius must be a number of metres above 0"),
+        (dict(radius=0.0), "radius must be a number of metres from 0.05 to 2"),
         (dict(radius=float("inf")), "radius must be"),
     ],
 )

@@ -159,7 +159,7 @@ def test_bad_settings_are_refused_alike_by_the_api_and_the_cli(scene, mp, cli, c
     api = mp.api
     pairs = api.crowd_members(scene, [bpy.data.objects["A"]])
     for flag, value, needle in (
-        ("radius", -1.0, "radius must be a number of metres above 0"),
+        ("radius", -1.0, "radius must be a number of metres from 0.05 to 2"),
         ("alpha", -0.5, "alpha must be a number from 0 to"),
         ("gamma", float("nan"), "gamma must be a number from 0 to"),
     ):

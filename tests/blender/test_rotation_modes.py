@@ -218,7 +218,9 @@ def test_clips_read_the_same_in_every_rotation_mode(addon_module, mocap_dir, cle
 
     skel = ref.skeleton
     frames = np.arange(ref.frames, dtype=float)
-    loc = addon_module.motion_patches.kinematics.skeleton.root_position_to_location(skel, ref.root_pos)
+    loc = addon_module.motion_patches.kinematics.skeleton.root_position_to_location(
+        skel, ref.root_pos
+    )
     for mode in MODES:
         set_modes(rig_n, lambda _: mode)
         act, slot = addon_module.adapter.compat.new_action(f"keyed {mode}")
