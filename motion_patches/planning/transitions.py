@@ -39,8 +39,9 @@ from ..patch.blend_table import from_node
 from ..patch.node_keys import unpack
 from ..quality import validate
 from . import shortcut
+from .motions import hips_to, plan_motions
+from .pieces import Piece, Plan, PlanError
 from .plan_frame import state_to_local, to_world
-from .planner import Piece, Plan, PlanError, hips_to, plan_motions
 
 SWITCH_CANDIDATES = 3  # run nodes tried on each side of the run plan's traversals
 WALK_NODES_PER_SWITCH = 2  # walk nodes tried for each run node the blend must reach
@@ -143,7 +144,7 @@ def on_node(planner, state, goal, margin_tiles=3):
     with planner.framed(np.r_[s2, h], np.r_[g2, h], margin_tiles + extra) as (_, _, frame):
         local = state_to_local(frame, state)
         local[2] = float(_wrap(local[2]))
-        key = planner._node_key(local[:2], local[2])
+        key = planner.node_key(local[:2], local[2])
         yield local, key, state_to_local(frame, goal), frame
 
 
@@ -178,7 +179,7 @@ def _stops(planner, pieces):
         elif p.kind == "part" and p.frames[0] > 0:
             if p.frames[1] - p.frames[0] >= planner.patch.gait.frames:
                 out.append(list(pieces[: i + 1]))
-            key = planner._node_key(*shortcut.exit_state(planner, p))
+            key = planner.node_key(*shortcut.exit_state(planner, p))
             nxt, costs, segs = planner.expand(key)
             rank = np.argsort(costs + planner.heuristic(nxt), kind="stable")[:SWITCH_CANDIDATES]
             ti, tj, _ = unpack(key)
@@ -198,7 +199,7 @@ def _stops(planner, pieces):
 def _nearest_nodes(planner, local, count):
     """[(key, position, heading)] of the ``count`` nodes of the planner's (framed) lattice
     nearest the local state ``local`` with its heading."""
-    keys, pos, head = planner._entries(planner._block(planner.env.tile_of(local[:2])))
+    keys, pos, head = planner.entries(planner.block(planner.env.tile_of(local[:2])))
     d = np.linalg.norm(pos - local[:2], axis=1)
     d[np.abs(_wrap(head - local[2])) > 1e-6] = np.inf
     order = [m for m in np.argsort(d, kind="stable")[:count] if np.isfinite(d[m])]
@@ -268,7 +269,7 @@ def compose(walk, run, start, goal, margin_tiles=3, max_expansions=400_000):
     #    Best first: run legs and ways back are searched in the order of a lower bound of
     #    the total they can give (the legs known so far, both blends, and a heuristic cost
     #    per metre for the rest of the way), until the next bound reaches the best total.
-    per_metre = min(walk._per_metre, run._per_metre)
+    per_metre = min(walk.per_metre, run.per_metre)
     queue = [
         (cost1 + c_wr + c_rw + per_metre * _distance(after(a_world, wr.offset), goal), n, None)
         for n, (cost1, _, _) in enumerate(firsts)
@@ -329,7 +330,7 @@ def compose(walk, run, start, goal, margin_tiles=3, max_expansions=400_000):
             expansions += back.expansions
             tail = shortcut.shorten(walk, back.pieces, dl, gl2)
             tail = shortcut.pull_tail(walk, tail, gl2)
-            tail = walk._long_last_piece(tail)
+            tail = shortcut.long_last_piece(walk, tail)
             last = tail[-1]
             end_heading = last.curve.heading[-1] if last.curve is not None else back.goal[2]
         tried_count += 1
@@ -392,7 +393,7 @@ def _search(planner, start, goal, margin_tiles, max_expansions, **node):
     """The planner's search (framed) from ``start`` to ``goal`` (local states), beginning
     or ending on a node (``start_key`` / ``goal_key``); None when there is no way."""
     try:
-        return planner._plan_local(start, goal, margin_tiles, max_expansions, False, **node)
+        return planner.plan_local(start, goal, margin_tiles, max_expansions, False, **node)
     except PlanError:
         return None
 
