@@ -9,11 +9,15 @@ them end on the node pose, the goal ones ending on the exact goal position and h
 The same words, measures and tests serve shortening (:mod:`.shortcut`).
 """
 
+from collections.abc import Callable, Iterable
+
 import numpy as np
 
 from ..patch import curves
+from ..patch.locomotion_patch import LocomotionPatch
 from ..patch.synthesis import cycles_along, cycles_along_many
-from ..props.environment import PATH_MARGIN
+from ..props.environment import PATH_MARGIN, Environment
+from ..props.object_patch import ObjectPatch
 from . import dubins
 from .pieces import FacingRefused, Piece, PlanError
 from .segment_search import SegmentGraph
@@ -35,7 +39,15 @@ class ConnectedGraph(SegmentGraph):
     """The segment graph with the start and goal joined to it by connectors, and the
     measures and tests of the curves walked off the lattice (connectors, shortcuts)."""
 
-    def __init__(self, patch, env, alpha, beta, gamma, props=()):
+    def __init__(
+        self,
+        patch: LocomotionPatch,
+        env: Environment,
+        alpha: float,
+        beta: float,
+        gamma: float,
+        props: Iterable[ObjectPatch] = (),
+    ) -> None:
         super().__init__(patch, env, alpha, beta, gamma, props)
         self._start_table = {"valid": 0, "done": 0}
         self._goal_table = None
@@ -43,12 +55,13 @@ class ConnectedGraph(SegmentGraph):
         self._goal_asked = []
 
     # -- curves ------------------------------------------------------------------------
-    def curve_cost(self, curve, cycles_count):
+    def curve_cost(self, curve: curves.Curve, cycles_count: float) -> float:
+        """Eq. 5 cost of following ``curve`` in ``cycles_count`` gait cycles."""
         frames = cycles_count * self.patch.gait.frames
         effort = self.patch.effort_rate * frames / self.patch.gait.fps
         return self.alpha * curve.length + self.beta * curve.total_turn() + self.gamma * effort
 
-    def bends_within(self, curve):
+    def bends_within(self, curve: curves.Curve) -> bool:
         """The curve bends within the gait's curvature limits, between samples too."""
         # A curve turning at exactly the sharpest limit (a Dubins arc of that radius) reads
         # a hair over it in floating point: allow for rounding, not for more.
@@ -59,53 +72,54 @@ class ConnectedGraph(SegmentGraph):
             curves.follows_turn_limits(curve.pos, curves.unit(curve.heading), self.kmin, self.kmax)
         )
 
-    def valid(self, curve):
+    def valid(self, curve: curves.Curve) -> bool:
         """The curve bends within the gait's limits and keeps the radius from every
         footprint (every sample tested)."""
         return self.bends_within(curve) and not self.env.path_blocked(curve.pos[None])[0]
 
-    def segment_curve(self, piece):
+    def segment_curve(self, piece: Piece) -> curves.Curve:
         """A segment piece's curve in plan-frame coordinates."""
         c = self.patch.curve(piece.segment)
         return curves.Curve(
             c.s, c.pos + np.array(piece.tile, float) * self.patch.side, c.heading, c.kappa
         )
 
-    def cycles(self, curve):
+    def cycles(self, curve: curves.Curve) -> float:
         """Gait cycles (fractional) that following ``curve`` takes."""
         return float(cycles_along(self.patch.gait, curve.pos[None], *_derivs(curve))[0])
 
-    def measure(self, pos, vel, acc):
+    def measure(self, pos: np.ndarray, vel: np.ndarray, acc: np.ndarray) -> np.ndarray:
+        """Gait cycles along sampled curves (the measure :func:`.curves.tabulate` fits)."""
         return cycles_along(self.patch.gait, pos, vel, acc)
 
     # -- connectors ----------------------------------------------------------------------
-    def reset_start_links(self):
+    def reset_start_links(self) -> None:
         """Forget the start links of the search before (a search beginning on a node asks
         for none)."""
         self._start_table = {"valid": 0, "done": 0}
 
-    def goal_on_node(self, key):
+    def goal_on_node(self, key: int) -> dict[int, int]:
         """The goal links of a search ending on node ``key`` instead of a goal connector:
         that node alone, with nothing more to walk."""
         self._goal_links = {}
         return {int(key): 0}
 
     @property
-    def start_links_valid(self):
+    def start_links_valid(self) -> int:
         """Valid start connectors the last search found."""
         return self._start_table["valid"]
 
     @property
-    def start_nodes_tested(self):
+    def start_nodes_tested(self) -> int:
         """Start nodes whose connectors the last search tested."""
         return self._start_table["done"]
 
     @property
-    def goal_links_tested(self):
+    def goal_links_tested(self) -> int:
         """Nodes whose goal links the last search tested."""
         return len(self._goal_links)
 
-    def start_connectors(self, start):
+    def start_connectors(self, start: np.ndarray) -> list[tuple[int, float]]:
         """[(key, bound)]: the entry nodes of the 3 x 3 tiles around the start a start
         connector may join, in the order the search takes them (bound + heuristic), each
         with a lower bound of its connector's Eq. 5 cost (its cheapest Dubins word's,
@@ -132,7 +146,7 @@ class ConnectedGraph(SegmentGraph):
         }
         return list(zip(keys[ranked].tolist(), bound[ranked].tolist()))
 
-    def start_link(self, key):
+    def start_link(self, key: int) -> tuple[float, Callable[[], Piece]] | None:
         """(cost, Piece maker) of the start connector joining node ``key``: the Dubins path
         from the start, its cheapest valid word, the motion along it starting at the gait
         phase that makes it end on the node pose; None when no word is valid or the node
@@ -173,7 +187,7 @@ class ConnectedGraph(SegmentGraph):
             t["done"] += n
         return t["links"].get(key)
 
-    def goal_connectors(self, goal):
+    def goal_connectors(self, goal: np.ndarray) -> dict[int, int]:
         """Goal links of the entry nodes of the 3 x 3 tiles around the goal: for each node
         the Dubins words into the goal, cheapest first (over ``ANY_FACING`` goal headings
         when the goal heading is NaN). Nothing is computed here: the words of a tile's
@@ -237,7 +251,7 @@ class ConnectedGraph(SegmentGraph):
             table[4][:, cols] = np.argsort(rank, axis=0, kind="stable")
             t["bound"][cols] = cost.min(axis=0)
 
-    def goal_bound(self, key):
+    def goal_bound(self, key: int) -> float | None:
         """A lower bound of the cost of node ``key``'s goal link (its cheapest Dubins word's
         Eq. 5 cost, :meth:`dubins_table`), or None for a node with no link."""
         m = self._goal_table["index"].get(key)
@@ -248,7 +262,7 @@ class ConnectedGraph(SegmentGraph):
         self._goal_asked.append(key)
         return float(self._goal_table["bound"][m])
 
-    def goal_link(self, key):
+    def goal_link(self, key: int) -> tuple[float, Callable[[], Piece]] | None:
         """(cost, Piece maker) of the cheapest valid connector from node ``key`` into the
         goal, or None (tested once per node and cached). The links of up to
         ``GOAL_BATCH - 1`` other nodes the search has expanded are tested with it (they
@@ -276,7 +290,7 @@ class ConnectedGraph(SegmentGraph):
             self._goal_links[k] = link
         return self._goal_links[key]
 
-    def check_turning_room(self, what, state):
+    def check_turning_room(self, what: str, state: np.ndarray) -> None:
         """Refuse at once a start (goal) where no walk can leave (arrive) facing the given
         way: every way out of the start (into the goal) runs, over its first (last)
         ``APPROACH`` metres, between the sharpest left and right arcs the gait can turn;
@@ -304,7 +318,7 @@ class ConnectedGraph(SegmentGraph):
             + (" (or plan with goal facing 'any')" if what == "goal" else "")
         )
 
-    def refused(self, what, state, said):
+    def refused(self, what: str, state: np.ndarray, said: str) -> PlanError:
         """The error for no connector out of the start (into the goal): ``said`` and why
         (:meth:`_boxed_in`); a :class:`FacingRefused` when the state has a heading to face."""
         cls = PlanError if np.isnan(state[2]) else FacingRefused
@@ -334,14 +348,21 @@ class ConnectedGraph(SegmentGraph):
         )
 
     @property
-    def turn_radii(self):
+    def turn_radii(self) -> tuple[float, float]:
         """Radii of the Dubins arcs, in the order they are tried: a share of the sharpest
         turn the gait follows, then that sharpest turn itself (only where nothing wider
         fits: the tighter the turn, the more the planted feet slide)."""
         tight = 1.0 / min(-self.kmin, self.kmax)
         return (tight / DUBINS_CURVATURE_SHARE, tight)
 
-    def dubins_table(self, p0, h0, p1, h1, max_length=None):
+    def dubins_table(
+        self,
+        p0: np.ndarray,
+        h0: np.ndarray,
+        p1: np.ndarray,
+        h1: np.ndarray,
+        max_length: float | None = None,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Approximate Eq. 5 cost (R*6, M), lengths (R*6, M, 3), radius (R*6,), word (R*6,)
         and the order to try them (R*6, M) of the Dubins words between state pairs at each
         radius; too-long and missing words cost inf. Wider turns are tried first."""
@@ -375,7 +396,9 @@ class ConnectedGraph(SegmentGraph):
             np.argsort(key, axis=0, kind="stable"),
         )
 
-    def first_valid(self, p0, h0, table, m, min_length=0.0):
+    def first_valid(
+        self, p0: np.ndarray, h0: float, table: tuple, m: int, min_length: float = 0.0
+    ) -> tuple[curves.Curve, float, float] | None:
         """(curve, Eq. 5 cost, gait cycles) of the first valid Dubins word of column ``m``
         of a :meth:`dubins_table` from state (p0, h0), or None."""
         found = self.first_valids(
@@ -383,7 +406,16 @@ class ConnectedGraph(SegmentGraph):
         )[0]
         return None if found is None else (found[2](), found[0], found[1])
 
-    def first_valids(self, p0, h0, table, columns, min_length=0.0, tries=DUBINS_TRIES, limit=None):
+    def first_valids(
+        self,
+        p0: np.ndarray,
+        h0: np.ndarray,
+        table: tuple,
+        columns: np.ndarray,
+        min_length: float = 0.0,
+        tries: int = DUBINS_TRIES,
+        limit: int | None = None,
+    ) -> list[tuple[float, float, Callable[[], curves.Curve]] | None]:
         """:meth:`first_valid` of many columns at once (start states ``p0`` (n, 2),
         ``h0`` (n,)): per column (Eq. 5 cost, gait cycles, a function making its curve) or
         None. The words of every column are tried in their order, ``tries`` per column at
@@ -455,7 +487,7 @@ class ConnectedGraph(SegmentGraph):
                 found[i] = (c, n, lambda part=part: _dubins_curve(part))
         return found
 
-    def samples_blocked(self, pos, first):
+    def samples_blocked(self, pos: np.ndarray, first: np.ndarray) -> np.ndarray:
         """(C,) True where path c (samples ``pos[first[c]:first[c + 1]]``) has a sample
         within the radius (+ ``PATH_MARGIN``) of a footprint. Every ``COARSE``-th sample
         is tested first: a path hit there is blocked, and only the other samples of the

@@ -7,14 +7,16 @@ import numpy as np
 
 from ..kinematics import retime
 from ..kinematics.motion import Motion, ease_to, sliced
+from ..patch.locomotion_patch import LocomotionPatch
 from ..patch.synthesis import follow
+from ..props.object_patch import ObjectPatch
 from . import turn_in_place
 from .pieces import Piece, Plan
 from .plan_frame import IDENTITY
 from .stitching import BLEND_FRAMES
 
 
-def plan_motions(patch, plan, standing=True):
+def plan_motions(patch: LocomotionPatch, plan: Plan, standing: bool = True) -> list[Motion]:
     """World-space motion of every piece, eased across stitches into and out of clips;
     with ``standing`` a plan that starts (ends) walking starts from (ends in) standing:
     its first (last) piece is time-warped (:mod:`.retime`), ramps one gait cycle long. A
@@ -48,13 +50,13 @@ def plan_motions(patch, plan, standing=True):
     return ms
 
 
-def turn_motion(patch, piece, previous=None):
+def turn_motion(patch: LocomotionPatch, piece: Piece, previous: Motion | None = None) -> Motion:
     """World-space motion of a turn on the spot (kind "turn"), continuing ``previous``."""
     x, y, heading, delta = piece.turn
     return turn_in_place.turn_motion(patch.gait, (x, y), heading, delta, previous)
 
 
-def hips_to(motion, xy, window):
+def hips_to(motion: Motion, xy: np.ndarray, window: int) -> Motion:
     """The motion with its root (the hips) brought onto the ground point ``xy`` on its last
     frame: a walk stops wherever its stride ends, so the hips would stand a few centimetres
     beside the ground path's end. Over the last ``window`` frames (a smoothstep) the root's
@@ -79,7 +81,11 @@ def hips_to(motion, xy, window):
     return Motion(g, root, motion.rotations, motion.contacts)
 
 
-def with_interactions(plan, start=None, goal=None):
+def with_interactions(
+    plan: Plan,
+    start: tuple[ObjectPatch, int] | None = None,
+    goal: tuple[ObjectPatch, int] | None = None,
+) -> Plan:
     """The plan with an interaction clip before it (stand up) and/or after it (sit down):
     ``start`` / ``goal`` are (ObjectPatch, clip index); the plan must run from the start
     clip's last frame to the goal clip's first frame (see :func:`interaction_states`)."""
@@ -104,7 +110,9 @@ def with_interactions(plan, start=None, goal=None):
     )
 
 
-def interaction_states(start=None, goal=None):
+def interaction_states(
+    start: tuple[ObjectPatch, int] | None = None, goal: tuple[ObjectPatch, int] | None = None
+) -> tuple[np.ndarray | None, np.ndarray | None]:
     """World (x, y, heading) where walking must start after a stand-up clip and end before
     a sit-down clip: the clips' last and first ground frames."""
     s = g = None
@@ -117,7 +125,7 @@ def interaction_states(start=None, goal=None):
     return s, g
 
 
-def piece_motion(patch, piece):
+def piece_motion(patch: LocomotionPatch, piece: Piece) -> Motion:
     """World-space motion of one planned piece (not eased; see :func:`plan_motions`)."""
     if piece.kind == "turn":
         return turn_motion(patch, piece)

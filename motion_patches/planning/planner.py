@@ -13,11 +13,14 @@ from here.
 
 import contextlib
 import time
+from collections.abc import Iterable, Iterator
 
 import numpy as np
 
+from ..patch.locomotion_patch import LocomotionPatch
 from ..patch.node_keys import unpack
-from ..props.environment import Obstacle
+from ..props.environment import Environment, Obstacle
+from ..props.object_patch import ObjectPatch
 from . import astar, shortcut
 from .connectors import ConnectedGraph
 from .high_level import TilePlanner
@@ -75,15 +78,15 @@ class SegmentPlanner(ConnectedGraph):
 
     def __init__(
         self,
-        patch,
-        env,
-        alpha=DEFAULTS["alpha"],
-        beta=DEFAULTS["beta"],
-        gamma=DEFAULTS["gamma"],
-        props=(),
-        mode=DEFAULTS["stitching"],
-        turn_in_place=DEFAULTS["turn_in_place"],
-    ):
+        patch: LocomotionPatch,
+        env: Environment,
+        alpha: float = DEFAULTS["alpha"],
+        beta: float = DEFAULTS["beta"],
+        gamma: float = DEFAULTS["gamma"],
+        props: Iterable[ObjectPatch] = (),
+        mode: str = DEFAULTS["stitching"],
+        turn_in_place: bool = DEFAULTS["turn_in_place"],
+    ) -> None:
         self.turn_in_place = bool(turn_in_place)  # plan() turns on the spot where it helps
         if mode not in ("dynamic", "static"):
             raise PlanError(f"unknown stitching mode '{mode}' (dynamic or static)")
@@ -92,14 +95,14 @@ class SegmentPlanner(ConnectedGraph):
 
     def plan(
         self,
-        start,
-        goal,
-        margin_tiles=3,
-        max_expansions=400_000,
-        use_corridor=False,
-        shorten=True,
-        turn_in_place=None,
-    ):
+        start: np.ndarray,
+        goal: np.ndarray,
+        margin_tiles: int = 3,
+        max_expansions: int = 400_000,
+        use_corridor: bool = False,
+        shorten: bool = True,
+        turn_in_place: bool | None = None,
+    ) -> Plan:
         """Cheapest path from ``start`` to ``goal`` (x, y, heading); raises PlanError.
 
         The search runs in the plan frame (:mod:`.plan_frame`): the lattice anchored at the
@@ -134,7 +137,7 @@ class SegmentPlanner(ConnectedGraph):
         return best
 
     @property
-    def can_turn_in_place(self):
+    def can_turn_in_place(self) -> bool:
         """The gait can turn on the spot within the patch's curvature range."""
         got = self.__dict__.get("_can_turn_in_place")
         if got is None:
@@ -173,7 +176,15 @@ class SegmentPlanner(ConnectedGraph):
         plan.stats["frame"] = frame
         return plan
 
-    def replan_run(self, plan, first, last, extra=(), margin_tiles=3, max_expansions=400_000):
+    def replan_run(
+        self,
+        plan: Plan,
+        first: int,
+        last: int,
+        extra: Iterable[Obstacle] = (),
+        margin_tiles: int = 3,
+        max_expansions: int = 400_000,
+    ) -> Plan:
         """``plan`` with its pieces ``first`` to ``last`` (inclusive, locomotion only)
         searched again with the obstacles ``extra`` (world footprints) added: from the node
         where piece ``first`` begins (the plan's start when it is the first piece) to the
@@ -227,7 +238,9 @@ class SegmentPlanner(ConnectedGraph):
         )
 
     @contextlib.contextmanager
-    def framed(self, start, goal, margin_tiles=3):
+    def framed(
+        self, start: np.ndarray, goal: np.ndarray, margin_tiles: int = 3
+    ) -> Iterator[tuple[np.ndarray, np.ndarray, tuple[float, float, float]]]:
         """Within the block the planner's ``env``, ``props`` and ``goal`` are those of the
         plan frame of ``start`` -> ``goal``; yields (local start, local goal, frame)."""
         side = self.patch.side
@@ -255,8 +268,15 @@ class SegmentPlanner(ConnectedGraph):
             self.env, self.props = self.world_env, self.world_props
 
     def plan_local(
-        self, start, goal, margin_tiles, max_expansions, use_corridor, start_key=None, goal_key=None
-    ):
+        self,
+        start: np.ndarray,
+        goal: np.ndarray,
+        margin_tiles: int,
+        max_expansions: int,
+        use_corridor: bool,
+        start_key: int | None = None,
+        goal_key: int | None = None,
+    ) -> Plan:
         """The search of :meth:`plan`, in plan-frame coordinates.
 
         With ``start_key`` (``goal_key``) the search begins (ends) on that node instead of

@@ -11,6 +11,7 @@ nodes it takes off in the copy's tile (:class:`TraversalObserver`).
 """
 
 import heapq
+from collections.abc import Callable, Iterable
 
 import numpy as np
 
@@ -18,12 +19,14 @@ from ..patch.locomotion_patch import (
     DIRECTIONS,
     EDGES,
     INWARD,
+    LocomotionPatch,
     node_id,
     node_position,
     split_node_id,
 )
 from ..patch.node_keys import BIAS, LOCAL, NEXT_EDGE, TILE_STEP, pack, unpack
-from ..props.environment import PATH_MARGIN, SUB
+from ..props.environment import PATH_MARGIN, SUB, Environment
+from ..props.object_patch import ObjectPatch
 from . import astar
 from .pieces import PlanError
 from .stitching import POSITION_TOLERANCE, part_speed
@@ -38,7 +41,15 @@ class SegmentGraph:
     their poses, successors (Eq. 8) and heuristic (Eq. 7), in the environment, region and
     goal the planner sets for each search (plan frame coordinates)."""
 
-    def __init__(self, patch, env, alpha, beta, gamma, props=()):
+    def __init__(
+        self,
+        patch: LocomotionPatch,
+        env: Environment,
+        alpha: float,
+        beta: float,
+        gamma: float,
+        props: Iterable[ObjectPatch] = (),
+    ) -> None:
         if patch.nodes * DIRECTIONS * EDGES > LOCAL:
             raise PlanError("the patch has more nodes per edge than the planner packs (8)")
         self.props = self.world_props = list(props)
@@ -84,23 +95,24 @@ class SegmentGraph:
         self.bin_culled = 0  # traversal copies the last search culled by density bins
 
     @property
-    def goal(self):
+    def goal(self) -> np.ndarray | None:
         """The goal (x, y, heading; NaN heading: any facing) the heuristic aims at; setting
         it drops the heuristic's tables of the goal before."""
         return self._goal
 
     @goal.setter
-    def goal(self, goal):
+    def goal(self, goal: np.ndarray) -> None:
         self._goal = goal
         self._h_tiles = {}
 
     # -- graph -------------------------------------------------------------------------
-    def node_pose(self, keys):
+    def node_pose(self, keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Positions (n, 2) and headings (n,) of nodes ``keys`` (plan frame)."""
         i, j, local = unpack(np.asarray(keys, np.int64))
         p = self.local_pos[local] + np.stack((i, j), -1) * self.patch.side
         return p, self.local_heading[local]
 
-    def heuristic(self, keys):
+    def heuristic(self, keys: np.ndarray) -> np.ndarray:
         """Eq. 7 plus an effort bound: alpha |G| + beta angle-to-goal + gamma T_min."""
         keys = np.asarray(keys, np.int64)
         local = keys % LOCAL
@@ -137,7 +149,7 @@ class SegmentGraph:
             ang = np.maximum(ang, arrive - slack)
         return np.maximum(np.where(on, ang, 0.0), to_heading)
 
-    def heuristic_of(self, key):
+    def heuristic_of(self, key: int) -> float:
         """:meth:`heuristic` of one key, looked up in a table of its tile's entry states
         (each tile's table computed once per search, all 256 at once)."""
         t = key // LOCAL
@@ -161,7 +173,7 @@ class SegmentGraph:
             got = self._goal_turn_table = (hg, table)
         return got[1]
 
-    def state_heuristic(self, p, h, gap=0.0):
+    def state_heuristic(self, p: np.ndarray, h: np.ndarray, gap: float = 0.0) -> np.ndarray:
         """:meth:`heuristic` of states: positions (n, 2), headings (n,); ``gap``: the walk
         on may start that far from the state (see :meth:`_turn_to_goal`)."""
         d = self.goal[:2] - p
@@ -172,12 +184,14 @@ class SegmentGraph:
         return self.per_metre * dist + self.beta * turn
 
     @property
-    def per_metre(self):
+    def per_metre(self) -> float:
         """Heuristic cost per metre to the goal: alpha, and gamma x the effort of walking
         that metre at the gait's fastest (the effort bound)."""
         return self.alpha + self.gamma * self.patch.effort_rate / self.max_speed
 
-    def expand(self, key):
+    def expand(self, key: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(keys, costs, segments) of the successors of node ``key``: its segments whose
+        cells are free in its tile (Eq. 8), or whose own paths keep the radius."""
         local = key % LOCAL
         out = self._out[local]
         if out is None:
@@ -235,7 +249,8 @@ class SegmentGraph:
 
         return _patch_cache(self.patch, ("raster", g, h), make)
 
-    def in_region(self, i, j):
+    def in_region(self, i: int, j: int) -> bool:
+        """Tile (i, j) is one the search may enter (the corridor's, else the region's)."""
         if self.corridor is not None:
             return (int(i), int(j)) in self.corridor
         r = self.region
@@ -243,18 +258,20 @@ class SegmentGraph:
 
     # -- connectors ----------------------------------------------------------------------
     @property
-    def gait_name(self):
+    def gait_name(self) -> str:
         """What the messages call the motion planned: the gait's layer ("walk", "run")."""
         return self.patch.gait.layer or "walk"
 
     @property
-    def way(self):
+    def way(self) -> str:
         """'walkable way' for a walk, 'way the run can take' for a run (messages)."""
         name = self.gait_name
         return "walkable way" if name == "walk" else f"way the {name} can take"
 
     # -- nodes -------------------------------------------------------------------------
-    def entries(self, tiles_edges):
+    def entries(
+        self, tiles_edges: Iterable[tuple[tuple[int, int], Iterable[int]]]
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Keys, positions and headings of the entry states on given (tile, edges)."""
         n = self.patch.nodes
         keys = []
@@ -270,11 +287,12 @@ class SegmentGraph:
         p, h = self.node_pose(keys)
         return keys, p, h
 
-    def block(self, tile):
+    def block(self, tile: tuple[int, int]) -> list[tuple[tuple[int, int], list[int]]]:
+        """The 3 x 3 tiles around ``tile``, every edge of each (for :meth:`entries`)."""
         every = list(range(EDGES))
         return [((tile[0] + di, tile[1] + dj), every) for di in (-1, 0, 1) for dj in (-1, 0, 1)]
 
-    def node_key(self, p, h):
+    def node_key(self, p: np.ndarray, h: float) -> int:
         """Key of the lattice node at plan-frame position ``p`` with heading ``h`` (a piece
         boundary inside a plan); PlanError when no node is there."""
         keys, pos, head = self.entries(self.block(self.env.tile_of(np.asarray(p, float))))
@@ -284,7 +302,7 @@ class SegmentGraph:
             raise PlanError("a piece boundary of the plan is not on a lattice node")
         return int(keys[hit[0]])
 
-    def tile_tau(self, tile):
+    def tile_tau(self, tile: tuple[int, int]) -> np.ndarray:
         """tau (Eq. 3) of a tile, from the traversable props overlapping it (lazy)."""
         names = self.env.members(tile)
         props = [p for p in self.props if p.name in names and p.traversals()]
@@ -298,7 +316,7 @@ class SegmentGraph:
             ),
         )
 
-    def traversal_estimates(self, start):
+    def traversal_estimates(self, start: np.ndarray) -> list[tuple]:
         """[(f lower bound, prop, clip copy, tile id, entry x, entry y, entry heading,
         clip cost + heuristic from the exit)] of every traversal copy in the region.
 
@@ -375,7 +393,7 @@ class SegmentGraph:
             )
         return out
 
-    def through(self, copies):
+    def through(self, copies: list[tuple]) -> Callable[..., np.ndarray]:
         """``through(keys, fs, idx)`` of :class:`TraversalObserver` for ``copies`` of
         :meth:`traversal_estimates`: g of each node (f less its heuristic) + a lower bound
         of the entry part walked from it (its segment starts on the node) into the copy's
@@ -474,7 +492,14 @@ class TraversalObserver:
     + ``copies_stitched_at_goal`` copies stitched.
     """
 
-    def __init__(self, copies, stitch_copy, across, up_front=False, through=None):
+    def __init__(
+        self,
+        copies: list[tuple],
+        stitch_copy: Callable[[int, int], list[tuple]],
+        across: list[int],
+        up_front: bool = False,
+        through: Callable[..., np.ndarray] | None = None,
+    ) -> None:
         """``copies`` [(estimate, prop, copy, tile id, ...)]; ``stitch_copy(prop, copy) ->
         edges``; ``across[local]``: tile id offset of the other tile of a node;
         ``through(keys, fs, idx, below=None) -> (len(keys), len(idx))``: lower bounds of
@@ -507,7 +532,8 @@ class TraversalObserver:
         for i, t in enumerate(self.tile):
             self.unseen.setdefault(t, []).append(i)
 
-    def __call__(self, f, key):
+    def __call__(self, f: float, key: int) -> list[tuple] | tuple:
+        """The stitched edges to add as the search takes node ``key`` off with ``f``."""
         if self.ready:
             ready, self.ready = self.ready, []
             return ready

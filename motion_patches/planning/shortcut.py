@@ -17,12 +17,15 @@ interaction clips and the segment parts that stitch them are never changed.
 import numpy as np
 
 from ..patch import curves
+from .connectors import ConnectedGraph
 from .pieces import CONNECTOR_SCALES, Piece
 
 MIN_GAIN = 1e-3  # a replacement must save at least this much Eq. 5 cost
 
 
-def shorten(planner, pieces, start, goal):
+def shorten(
+    planner: ConnectedGraph, pieces: list[Piece], start: np.ndarray, goal: np.ndarray
+) -> list[Piece]:
     """``pieces`` with runs of locomotion pieces replaced by cheaper single curves (plan
     frame coordinates; the planner's environment is that of the plan frame)."""
     out = list(pieces)
@@ -61,7 +64,7 @@ def _locomotion(piece):
     return piece.kind in LOCOMOTION
 
 
-def entry_state(planner, piece):
+def entry_state(planner: ConnectedGraph, piece: Piece) -> tuple[np.ndarray, float]:
     """(position, heading) where a piece begins (plan frame)."""
     if piece.curve is not None:
         return piece.curve.pos[0], float(piece.curve.heading[0])
@@ -71,7 +74,7 @@ def entry_state(planner, piece):
     )
 
 
-def exit_state(planner, piece):
+def exit_state(planner: ConnectedGraph, piece: Piece) -> tuple[np.ndarray, float]:
     """(position, heading) where a piece ends (plan frame)."""
     if piece.curve is not None:
         return piece.curve.pos[-1], float(piece.curve.heading[-1])
@@ -140,7 +143,7 @@ def _fit(planner, a, b, old_cost):
     return best
 
 
-def long_last_piece(planner, pieces):
+def long_last_piece(planner: ConnectedGraph, pieces: list[Piece]) -> list[Piece]:
     """The pieces with a goal connector shorter than a gait cycle merged with the
     walking pieces before it into one goal piece (one curve followed the same way), so
     the stop (:mod:`.retime`) has a cycle to slow down over."""
@@ -164,7 +167,7 @@ PULL_CLEARANCE = 0.05  # metres kept beyond the radius by pulled chords (room fo
 PULL_ENDS = 3  # where pulling may end: the goal, or the start of one of the last pieces
 
 
-def pull_tail(planner, pieces, goal):
+def pull_tail(planner: ConnectedGraph, pieces: list[Piece], goal: np.ndarray) -> list[Piece]:
     """``pieces`` with the walk after the last clip re-laid as one goal piece when that is
     cheaper: the found path's ground points are string-pulled (the farthest point whose
     chord keeps the radius and a margin, and so on) and the corners joined by Dubins paths

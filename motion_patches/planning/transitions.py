@@ -30,18 +30,22 @@ the run-only plan.
 import contextlib
 import heapq
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, fields
 
 import numpy as np
 
 from ..kinematics import retime
-from ..patch.blend_table import from_node
+from ..kinematics.motion import Motion
+from ..patch.blend_table import Transition, from_node
+from ..patch.locomotion_patch import LocomotionPatch
 from ..patch.node_keys import unpack
 from ..quality import validate
 from . import shortcut
 from .motions import hips_to, plan_motions
 from .pieces import Piece, Plan, PlanError
 from .plan_frame import state_to_local, to_world
+from .planner import SegmentPlanner
 
 SWITCH_CANDIDATES = 3  # run nodes tried on each side of the run plan's traversals
 WALK_NODES_PER_SWITCH = 2  # walk nodes tried for each run node the blend must reach
@@ -58,14 +62,14 @@ class LayerPiece(Piece):
     transition: object = None
 
     @property
-    def label(self):
+    def label(self) -> str:
         if self.kind == "transition":
             return f"{self.transition.source} -> {self.transition.target}"
         base = Piece.label.fget(self)
         return base if self.kind in CLIPS else f"{self.patch.layer} {base}"
 
 
-def piece_layer(piece, layer):
+def piece_layer(piece: Piece, layer: str) -> str:
     """What a piece plays, for reports: its layer (``layer`` for a piece of a one-layer
     plan), "walk -> run" for a blend, "clip" for a traversal or interaction clip."""
     if piece.kind in CLIPS:
@@ -76,12 +80,12 @@ def piece_layer(piece, layer):
     return own.layer if own is not None else layer
 
 
-def layered(piece, patch):
+def layered(piece: Piece, patch: LocomotionPatch) -> LayerPiece:
     """``piece`` as a :class:`LayerPiece` of ``patch``'s layer."""
     return LayerPiece(**{f.name: getattr(piece, f.name) for f in fields(Piece)}, patch=patch)
 
 
-def transition_cost(t, planner_a, planner_b):
+def transition_cost(t: Transition, planner_a: SegmentPlanner, planner_b: SegmentPlanner) -> float:
     """Eq. 5 cost of a blend table entry ``t`` from ``planner_a``'s layer into
     ``planner_b``'s (weights of ``planner_a``): it goes straight (no turn); its effort is its
     seconds x the mean effort rate of the two layers (the blend weight's mean is one half)."""
@@ -92,7 +96,7 @@ def transition_cost(t, planner_a, planner_b):
     return planner_a.alpha * length + planner_a.gamma * rate * seconds
 
 
-def after(state, offset):
+def after(state: np.ndarray, offset: np.ndarray) -> np.ndarray:
     """The world state reached from ``state`` (x, y, heading) by a relative transform."""
     x, y, h = (float(v) for v in state)
     c, s = np.cos(h), np.sin(h)
@@ -101,7 +105,7 @@ def after(state, offset):
     )
 
 
-def before(state, offset):
+def before(state: np.ndarray, offset: np.ndarray) -> np.ndarray:
     """The world state from which the relative transform ``offset`` reaches ``state``."""
     h = float(state[2]) - float(offset[2])
     c, s = np.cos(h), np.sin(h)
@@ -127,7 +131,9 @@ def _wrap(a):
 
 
 @contextlib.contextmanager
-def on_node(planner, state, goal, margin_tiles=3):
+def on_node(
+    planner: SegmentPlanner, state: np.ndarray, goal: np.ndarray, margin_tiles: int = 3
+) -> Iterator[tuple[np.ndarray, int, np.ndarray, tuple[float, float, float]]]:
     """The planner framed (:meth:`~.planner.SegmentPlanner.framed`) so that world
     ``state`` is a node of its lattice: the middle node of tile (0, 0)'s west edge, heading
     along +x. Yields (local state, its node key, local goal, frame); the frame holds the
@@ -212,7 +218,14 @@ def _blend_clear(planner, t, state):
     return not planner.world_env.path_blocked(g[None])[0]
 
 
-def compose(walk, run, start, goal, margin_tiles=3, max_expansions=400_000):
+def compose(
+    walk: SegmentPlanner,
+    run: SegmentPlanner,
+    start: np.ndarray,
+    goal: np.ndarray,
+    margin_tiles: int = 3,
+    max_expansions: int = 400_000,
+) -> Plan:
     """The cheapest plan from ``start`` to ``goal`` (world x, y, heading) that walks, blends
     into a run, runs (taking the run layer's traversals), and blends back to walk before
     the goal; ``walk`` and ``run`` are :class:`~.planner.SegmentPlanner` of the two layers
@@ -413,7 +426,7 @@ def _transition(t, target_patch, state, cost):
     )
 
 
-def plan_layer_motions(plan, standing=True):
+def plan_layer_motions(plan: Plan, standing: bool = True) -> list[Motion]:
     """World motion of every piece of a plan whose pieces carry their layer
     (:class:`LayerPiece`): each leg's pieces as :func:`~.planner.plan_motions` makes them
     (eased across the stitches of its clips), each blend placed where it begins; with
@@ -446,7 +459,7 @@ def plan_layer_motions(plan, standing=True):
     return ms
 
 
-def glitches(plan, motions):
+def glitches(plan: Plan, motions: list[Motion]) -> list[dict]:
     """Glitch records (:func:`.validate.motion_glitches`) of a plan that changes layer:
     each piece judged by the limits of its own layer's gait (a blend and the clips by the
     faster layer's, the one it is entered from or blends into), joins included."""

@@ -12,7 +12,14 @@ each foot is pinned by two-bone IK where it is put down, under the body, moving 
 contacts along its recorded lift (:func:`stride_removed`): short steps turning the body,
 at the pace and with the posture of the recorded turn. It is labelled so wherever it
 shows ("turn in place (derived)").
+
+In a plan (:func:`plan_turning`) the walk turns on the spot where a person would: at the
+start when the goal lies behind, at the goal when its heading is against the way in, and
+where a walk planned without still loops near an end; each turn is a piece costed by
+Eq. 5 (:func:`turn_piece`).
 """
+
+from collections.abc import Callable
 
 import numpy as np
 
@@ -20,7 +27,11 @@ from ..kinematics import foot_lock, retime
 from ..kinematics.contacts import runs
 from ..kinematics.motion import Motion
 from ..kinematics.poses import pose_features
+from ..kinematics.skeleton import Skeleton
+from ..patch.cycle import Loop
+from ..patch.gait import Gait
 from ..patch.layers import has_flight
+from .connectors import ConnectedGraph
 from .pieces import FacingRefused, Piece, Plan, PlanError, Unreachable
 
 MIN_SHARE = 0.75  # the turn may end on a double-support frame from this share of the angle
@@ -30,7 +41,7 @@ SWAY = 0.5  # share of the stride's horizontal hip sway kept when stepping on th
 MIN_LOOP_TURN = np.radians(30.0)  # a loop turning less per cycle cannot turn on the spot
 
 
-def can_turn(gait, kmin, kmax):
+def can_turn(gait: Gait, kmin: float, kmax: float) -> bool:
     """True when the gait has a loop turning at least ``MIN_LOOP_TURN`` per cycle each way
     within the curvature range ``kmin``..``kmax`` the patch was baked to follow: a patch
     of a lone straight walk (or one limited to straight segments) has nothing to turn on
@@ -48,13 +59,13 @@ def can_turn(gait, kmin, kmax):
     return True
 
 
-def turn_loop(gait, delta):
+def turn_loop(gait: Gait, delta: float) -> Loop:
     """The gait's sharpest loop turning the way of ``delta`` (radians, + = left)."""
     k = np.array([lp.curvature for lp in gait.loops])
     return gait.loops[int(np.argmax(k) if delta > 0 else np.argmin(k))]
 
 
-def matching_phase(loop, root_local, rotations):
+def matching_phase(loop: Loop, root_local: np.ndarray, rotations: np.ndarray) -> int:
     """The frame of ``loop`` whose pose is nearest a pose (root (3,), rotations (J, 4)):
     the phase the turn continues from, so the feet carry on the stride they were in."""
     f = pose_features(loop.root_local, loop.rotations)
@@ -67,7 +78,7 @@ def _both_planted(loop):
     return (c[:, 0] | c[:, 1]) & (c[:, 2] | c[:, 3])
 
 
-def turn_phases(gait, delta, phase=0):
+def turn_phases(gait: Gait, delta: float, phase: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """(phases (K,), heading steps (K - 1,)) of a turn in place by ``delta`` starting on
     loop frame ``phase``: the sharpest loop's frames in order, its recorded heading change
     per frame scaled so the total is exactly ``delta``; it ends on the first frame with
@@ -90,12 +101,18 @@ def turn_phases(gait, delta, phase=0):
     return np.array(phases) % n, steps
 
 
-def frames_needed(gait, delta):
+def frames_needed(gait: Gait, delta: float) -> int:
     """Frames of a turn in place by ``delta`` from the loop's first frame (for its cost)."""
     return turn_phases(gait, delta)[0].size
 
 
-def turn_motion(gait, xy, heading, delta, previous=None):
+def turn_motion(
+    gait: Gait,
+    xy: tuple[float, float],
+    heading: float,
+    delta: float,
+    previous: Motion | None = None,
+) -> Motion:
     """Motion of turning on the spot at ``xy`` from ``heading`` by ``delta``; with the
     ``previous`` motion (what the character did before) the turn starts on the loop frame
     nearest its last pose. Not eased: the caller eases it in and out (:mod:`.retime`)."""
@@ -114,7 +131,7 @@ def turn_motion(gait, xy, heading, delta, previous=None):
     return stride_removed(gait.skeleton, m)
 
 
-def stride_removed(skel, motion):
+def stride_removed(skel: Skeleton, motion: Motion) -> Motion:
     """The motion with each foot pinned where it is put down: the ground frame no longer
     advances, so the recorded stride would sweep a planted foot back under the body. A
     contact (heel or toe) is held at the ankle's position on its middle frame (the first
@@ -156,7 +173,12 @@ LOOP_REACH = 2.0  # gait cycles of way from either end where such a loop is look
 MIN_TURN_IN_PLACE = np.radians(20.0)  # a start this close to facing the goal walks off
 
 
-def plan_turning(planner, start, goal, once):
+def plan_turning(
+    planner: ConnectedGraph,
+    start: np.ndarray,
+    goal: np.ndarray,
+    once: Callable[[np.ndarray, np.ndarray], Plan],
+) -> Plan:
     """:meth:`~.planner.SegmentPlanner.plan` with turns on the spot where a person would
     turn (see there); ``once(start, goal)`` searches one walk."""
     # The goal behind the character (or its heading against the way in): turn on the
@@ -191,7 +213,14 @@ def plan_turning(planner, start, goal, once):
     return best
 
 
-def turned(planner, start, goal, bearing, ends, once):
+def turned(
+    planner: ConnectedGraph,
+    start: np.ndarray,
+    goal: np.ndarray,
+    bearing: float,
+    ends: tuple[bool, bool],
+    once: Callable[[np.ndarray, np.ndarray], Plan],
+) -> Plan | None:
     """The plan with a turn on the spot at the start (towards the goal) and / or at the
     goal (to its heading, the walk arriving facing any way) where ``ends`` says, or
     None when that walk finds no path (or no turn is needed after all)."""
@@ -210,7 +239,7 @@ def turned(planner, start, goal, bearing, ends, once):
     )
 
 
-def loops(planner, plan):
+def loops(planner: ConnectedGraph, plan: Plan) -> tuple[bool, bool]:
     """(start, goal): the walk turns more than ``LOOP_TURN`` within its first (last)
     ``LOOP_REACH`` gait cycles of way: it may loop out of the start's heading (into
     the goal's), where a turn on the spot would do."""
@@ -227,7 +256,9 @@ def loops(planner, plan):
     return tuple(out)
 
 
-def turn_piece(planner, x, y, heading, to_heading):
+def turn_piece(
+    planner: ConnectedGraph, x: float, y: float, heading: float, to_heading: float
+) -> Piece:
     """A turn on the spot at (x, y) from ``heading`` to ``to_heading`` (the shorter
     way), costed by Eq. 5: its turn and its time, eased in and out."""
     gait, delta = planner.patch.gait, wrap(to_heading - heading)
@@ -237,7 +268,12 @@ def turn_piece(planner, x, y, heading, to_heading):
     return Piece("turn", cost=cost, turn=(float(x), float(y), float(heading), delta))
 
 
-def with_turns(planner, plan, start=None, goal=None):
+def with_turns(
+    planner: ConnectedGraph,
+    plan: Plan,
+    start: np.ndarray | None = None,
+    goal: np.ndarray | None = None,
+) -> Plan:
     """``plan`` with a turn on the spot from ``start``'s heading before it and / or
     one to ``goal``'s heading after it (the plan then starts facing its first piece's
     way, ends facing any way); Eq. 5 costs count each turn and its time."""
@@ -260,11 +296,11 @@ def with_turns(planner, plan, start=None, goal=None):
     )
 
 
-def wrap(a):
+def wrap(a: float) -> float:
     """The angle ``a`` in [-pi, pi)."""
     return float((a + np.pi) % (2 * np.pi) - np.pi)
 
 
-def final_cost(plan):
+def final_cost(plan: Plan) -> float:
     """Eq. 5 cost of a plan's pieces as they will be walked (after shortening)."""
     return float(plan.stats.get("cost_shortened", plan.cost))
