@@ -329,7 +329,7 @@ def compose(
                     heapq.heappush(
                         queue,
                         (
-                            partial + walk._per_metre * _distance(d_world, goal),
+                            partial + walk.per_metre * _distance(d_world, goal),
                             count,
                             (partial, head, (a_world, b_world, c_world, d_world)),
                         ),
