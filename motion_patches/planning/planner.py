@@ -6,9 +6,9 @@
 :mod:`.segment_search`, joined to the start and goal by the connectors of
 :mod:`.connectors`, with traversal clips stitched lazily (:class:`TraversalObserver`);
 then shortens the path (:mod:`.shortcut`) and turns on the spot where a person would
-(:mod:`.turn_in_place`). The motions of a plan are :mod:`.motions`'. The names other code
-imports from here (the planner, the pieces and refusals, the motions) stay importable
-from here.
+(:mod:`.turn_in_place`). A plan's motions are made by :mod:`.motions`. The names other
+code imports from here (the planner, the pieces and refusals, the motions) stay
+importable from here.
 """
 
 import contextlib
@@ -74,7 +74,9 @@ STITCH_PAYLOAD = -10  # payloads at or below this are stitched edges: -10 - inde
 
 
 class SegmentPlanner(ConnectedGraph):
-    """Plans one character's path on an environment with a baked locomotion patch."""
+    """Plans one character's path on an environment with a baked locomotion patch: the
+    graph and its connectors (:class:`~.connectors.ConnectedGraph`) framed, searched,
+    shortened and turned on the spot."""
 
     def __init__(
         self,
