@@ -9,6 +9,7 @@ a node is expanded again only when an edge added late by the observer lowers its
 """
 
 import heapq
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,17 +39,17 @@ class SearchResult:
 
 
 def search(
-    starts,
-    expand,
-    heuristic,
-    goal_cost,
-    max_expansions=500_000,
-    observer=None,
-    lazy_starts=(),
-    start_cost=None,
-    goal_bound=None,
-    heuristic_of=None,
-):
+    starts: Iterable[tuple[int, float, object]],
+    expand: Callable[[int], tuple],
+    heuristic: Callable[[np.ndarray], np.ndarray],
+    goal_cost: Callable[[int], tuple[float, object] | None],
+    max_expansions: int = 500_000,
+    observer: Callable[[float, int], Iterable[tuple]] | None = None,
+    lazy_starts: Iterable[tuple[int, float]] = (),
+    start_cost: Callable[[int], tuple[float, object] | None] | None = None,
+    goal_bound: Callable[[int], float | None] | None = None,
+    heuristic_of: Callable[[int], float] | None = None,
+) -> SearchResult:
     """Cheapest path from any of ``starts`` [(key, cost, payload)] to the virtual goal.
 
     ``expand(key) -> (keys, costs, payloads)`` (numpy arrays or lists); ``heuristic(keys)

@@ -9,21 +9,29 @@ which are meant to come close) is planned again with the radius grown by the gai
 only those plans pay for it, the rest keep the shortest way.
 """
 
+from collections.abc import Callable
+
 import numpy as np
 
 from ..kinematics.inplace import to_world
+from ..kinematics.motion import Motion
+from ..patch.gait import Gait
+from ..patch.locomotion_patch import LocomotionPatch
 from ..props.environment import Environment
-from .planner import PlanError, SegmentPlanner
+from .pieces import Piece, Plan, PlanError
+from .planner import SegmentPlanner
 
 CLIPS = ("traversal", "interaction")
 
 
-def sway(gait):
+def sway(gait: Gait) -> float:
     """Metres: how far the hips get from the ground path in any loop of the gait."""
     return float(max(np.linalg.norm(lp.root_local[:, :2], axis=1).max() for lp in gait.loops))
 
 
-def hips_too_close(patch, pieces, motions, env):
+def hips_too_close(
+    patch: LocomotionPatch, pieces: list[Piece], motions: list[Motion], env: Environment
+) -> list[int]:
     """Frames (indices into the joined motion) where the hips come within ``env``'s radius of
     a footprint, outside clips."""
     out, first = [], 0
@@ -37,7 +45,7 @@ def hips_too_close(patch, pieces, motions, env):
     return sorted(set(out))
 
 
-def grown(env, by):
+def grown(env: Environment, by: float) -> Environment:
     """A copy of ``env`` (the same footprints) keeping ``by`` metres more."""
     out = Environment(env.side, env.cells, env.radius + by)
     for ob in env.obstacles.values():
@@ -45,7 +53,15 @@ def grown(env, by):
     return out
 
 
-def keep_clear(planner, plan, motions, start, goal, motions_of, finish=lambda p: p):
+def keep_clear(
+    planner: SegmentPlanner,
+    plan: Plan,
+    motions: list[Motion],
+    start: np.ndarray,
+    goal: np.ndarray,
+    motions_of: Callable[[Plan], list[Motion]],
+    finish: Callable[[Plan], Plan] = lambda p: p,
+) -> tuple[Plan, list[Motion]]:
     """(plan, its motions): ``plan`` when its hips keep the radius, else the plan of
     ``start`` -> ``goal`` found keeping the gait's :func:`sway` more, when that one's hips do
     (``stats["body_clearance"]`` says so); else ``plan`` with

@@ -18,13 +18,16 @@ Never imports bpy.
 
 import contextlib
 import inspect
+from collections.abc import Iterable, Iterator
 
 import numpy as np
 
 from ..patch.locomotion_patch import entry_share
 from ..props.blocking import blocking_props
 from ..props.environment import Environment
-from .planner import PlanError, SegmentPlanner, piece_motion
+from .motions import piece_motion
+from .pieces import Plan, PlanError
+from .planner import SegmentPlanner
 
 SEARCH_LIMIT = inspect.signature(SegmentPlanner.plan).parameters["max_expansions"].default
 MARGIN_TILES = inspect.signature(SegmentPlanner.plan).parameters["margin_tiles"].default
@@ -35,13 +38,13 @@ class NoPath(PlanError):
     """No path, with its cause: ``cause`` is "search limit", "patch" or "props" and
     ``props`` the names of the props to blame (empty unless the cause is props)."""
 
-    def __init__(self, message, cause, props=()):
+    def __init__(self, message: str, cause: str, props: Iterable[str] = ()) -> None:
         super().__init__(message)
         self.cause, self.props = cause, list(props)
 
 
 @contextlib.contextmanager
-def counted(planner):
+def counted(planner: SegmentPlanner) -> Iterator[list[int]]:
     """Within the block ``planner`` counts the nodes its searches expand: yields a list
     whose only item is the count so far."""
     count = [0]
@@ -58,7 +61,13 @@ def counted(planner):
         del planner.expand
 
 
-def plan_explained(planner, start, goal, margin_tiles=MARGIN_TILES, max_expansions=SEARCH_LIMIT):
+def plan_explained(
+    planner: SegmentPlanner,
+    start: np.ndarray,
+    goal: np.ndarray,
+    margin_tiles: int = MARGIN_TILES,
+    max_expansions: int = SEARCH_LIMIT,
+) -> Plan:
     """``planner.plan(start, goal)``; when it finds no path, :class:`NoPath` whose message is
     the planner's followed by the cause."""
     with counted(planner) as expanded:
@@ -83,7 +92,13 @@ def _turn_radius(planner):
     return 1.0 / max(min(-planner.kmin, planner.kmax), 1e-9)
 
 
-def no_path_cause(planner, start, goal, margin_tiles=MARGIN_TILES, limit_hit=None):
+def no_path_cause(
+    planner: SegmentPlanner,
+    start: np.ndarray,
+    goal: np.ndarray,
+    margin_tiles: int = MARGIN_TILES,
+    limit_hit: int | None = None,
+) -> tuple[str, list[str], str]:
     """(cause, prop names, sentence) for a plan of ``planner`` from ``start`` to ``goal``
     (world (x, y, heading)) that found no path; ``limit_hit``: the node limit its search
     stopped at, if it did."""

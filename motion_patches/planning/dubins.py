@@ -26,7 +26,9 @@ def _mod2pi(a):
     return np.mod(a, 2 * np.pi)
 
 
-def words(p0, h0, p1, h1, radius):
+def words(
+    p0: np.ndarray, h0: np.ndarray, p1: np.ndarray, h1: np.ndarray, radius: float | np.ndarray
+) -> np.ndarray:
     """(W, N, 3) segment lengths (metres) of the six words for N state pairs (NaN where
     a word does not exist). ``p0, p1`` (N, 2), ``h0, h1`` (N,), ``radius`` a number or
     one per pair (N,)."""
@@ -89,7 +91,7 @@ def words(p0, h0, p1, h1, radius):
     return out * (radius[:, None] if radius.ndim else radius)
 
 
-def turns(lengths, radius):
+def turns(lengths: np.ndarray, radius: float | np.ndarray) -> np.ndarray:
     """(W, N) total |heading change| of each word: its arcs' lengths over the radius (a
     number, or one per pair (N,))."""
     arcs = np.array([[w[0] != "S", w[1] != "S", w[2] != "S"] for w in WORDS], float)
@@ -109,7 +111,13 @@ def _advance(x, y, h, k, length):
     return x + chord * np.cos(mid), y + chord * np.sin(mid), h + 2.0 * half
 
 
-def samples(p0, h0, word, lengths, radius):
+def samples(
+    p0: np.ndarray,
+    h0: np.ndarray,
+    word: int | np.ndarray,
+    lengths: np.ndarray,
+    radius: float | np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Samples of many words at once: arc length (P,), positions (P, 2), headings (P,),
     curvatures (P,) and each path's first sample (C + 1,). ``p0`` (C, 2), ``h0``, ``word``
     (indices into ``WORDS``), ``radius`` (C,), ``lengths`` (C, 3). Each path has
@@ -150,7 +158,7 @@ def samples(p0, h0, word, lengths, radius):
     return s, np.column_stack((px, py)), ph, kap[owner, part], first
 
 
-def curve(p0, h0, word, lengths, radius):
+def curve(p0: np.ndarray, h0: float, word: int | str, lengths: np.ndarray, radius: float) -> Curve:
     """The sampled :class:`Curve` of one word (an index into ``WORDS``, or its letters)
     from state (p0, h0) with segment ``lengths`` (3,)."""
     if not isinstance(word, (int, np.integer)):
@@ -161,7 +169,7 @@ def curve(p0, h0, word, lengths, radius):
     return Curve(s, pos, heading, smoothed(s, kappa))
 
 
-def smoothed(s, kappa):
+def smoothed(s: np.ndarray, kappa: np.ndarray) -> np.ndarray:
     """Curvature averaged over a window of ``BLEND_SMOOTHING`` metres (samples are evenly
     spaced in arc length)."""
     if s.size < 3:

@@ -10,17 +10,21 @@ by object patches) are computed lazily, the first time a tile is expanded.
 """
 
 import heapq
+from collections.abc import Callable
 
 import numpy as np
 
-from ..patch.locomotion_patch import split_node_id
+from ..patch.locomotion_patch import LocomotionPatch, split_node_id
+from ..props.environment import Environment
 
 STEP = {0: (0, -1), 1: (1, 0), 2: (0, 1), 3: (-1, 0)}  # exit edge -> neighbour offset
 OPPOSITE = {0: 2, 1: 3, 2: 0, 3: 1}
 SAMPLES = 16  # segments sampled per (entry edge, exit edge) for upsilon
 
 
-def edge_samples(patch, samples=SAMPLES):
+def edge_samples(
+    patch: LocomotionPatch, samples: int = SAMPLES
+) -> dict[tuple[int, int], np.ndarray]:
     """{(j, k): segment indices}, an evenly spaced sample of the segments from j to k."""
     e0, _, _ = split_node_id(patch.seg_entry, patch.nodes)
     e1, _, _ = split_node_id(patch.seg_exit, patch.nodes)
@@ -39,14 +43,20 @@ def edge_samples(patch, samples=SAMPLES):
 class TilePlanner:
     """A* over tiles with lazily computed avoidance (and traversal) probabilities."""
 
-    def __init__(self, patch, env, omega=1.0, traversal=None):
+    def __init__(
+        self,
+        patch: LocomotionPatch,
+        env: Environment,
+        omega: float = 1.0,
+        traversal: Callable[[tuple[int, int]], np.ndarray] | None = None,
+    ) -> None:
         self.patch, self.env, self.omega = patch, env, float(omega)
         self.samples = edge_samples(patch)
         self.traversal = traversal  # callable(tile) -> (4, 4) tau, or None
         self._upsilon = {}
         self.tiles_evaluated = 0
 
-    def upsilon(self, tile):
+    def upsilon(self, tile: tuple[int, int]) -> np.ndarray:
         """(4, 4) avoidance probabilities of a tile, computed on first use."""
         u = self._upsilon.get(tile)
         if u is None:
@@ -59,13 +69,14 @@ class TilePlanner:
             self._upsilon[tile] = u
         return u
 
-    def passability(self, tile):
+    def passability(self, tile: tuple[int, int]) -> np.ndarray:
+        """(4, 4) max(upsilon, tau) of a tile: the likelier way through it, j to k."""
         u = self.upsilon(tile)
         if self.traversal is not None:
             u = np.maximum(u, self.traversal(tile))
         return u
 
-    def edge_cost(self, tile, j, k):
+    def edge_cost(self, tile: tuple[int, int], j: int, k: int) -> float:
         """Eq. 4; infinite when neither avoidance nor traversal can pass."""
         p = self.passability(tile)
         pjk = p[j, k] if j is not None else p[:, k].max()
@@ -73,7 +84,13 @@ class TilePlanner:
             return np.inf
         return self.patch.side * pjk ** (-self.omega)
 
-    def plan(self, start_xy, goal_xy, region=None, max_expansions=100_000):
+    def plan(
+        self,
+        start_xy: np.ndarray,
+        goal_xy: np.ndarray,
+        region: tuple[int, int, int, int] | None = None,
+        max_expansions: int = 100_000,
+    ) -> list[tuple[int, int]] | None:
         """Tiles from the start's tile to the goal's tile, or None when none is passable."""
         side = self.patch.side
         goal = np.asarray(goal_xy, float)

@@ -20,13 +20,16 @@ prop's own frame: carts, doors, vehicles. A prop that changes shape or scale whi
 is followed only by its rigid part.
 """
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..kinematics.motion import concatenate
+from ..kinematics.motion import Motion, concatenate
+from ..patch.locomotion_patch import LocomotionPatch
 from ..props.environment import Obstacle, convex_hull
-from .planner import PlanError
+from .pieces import Plan, PlanError
+from .planner import SegmentPlanner
 from .shortcut import LOCOMOTION
 
 STILL_SPEED = 1e-3  # m/s (and rad/s x 1 m) under which a prop is asleep
@@ -47,7 +50,7 @@ class PropTrack:
     poses: np.ndarray  # (K, 3) world x, y, yaw at those times
     _hull_cache: dict = field(default_factory=dict, repr=False)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         self.polygon = np.asarray(self.polygon, float)
         self.times = np.asarray(self.times, float)
         self.poses = np.asarray(self.poses, float)
@@ -56,7 +59,7 @@ class PropTrack:
         if np.any(np.diff(self.times) <= 0):
             raise ValueError(f"prop track '{self.name}': times must increase")
 
-    def pose_at(self, t):
+    def pose_at(self, t: float | np.ndarray) -> np.ndarray:
         """(N, 3) poses at times ``t`` (N,): linear between samples, held before the first
         and after the last (a prop rests before and after its keyframes)."""
         t = np.atleast_1d(np.asarray(t, float))
@@ -70,12 +73,13 @@ class PropTrack:
             -1,
         )
 
-    def polygon_at(self, pose):
+    def polygon_at(self, pose: np.ndarray) -> np.ndarray:
+        """The footprint (M, 2) placed at ``pose`` (x, y, angle)."""
         c, s = np.cos(pose[2]), np.sin(pose[2])
         x, y = self.polygon[:, 0], self.polygon[:, 1]
         return np.column_stack((pose[0] + c * x - s * y, pose[1] + s * x + c * y))
 
-    def moving(self):
+    def moving(self) -> np.ndarray:
         """(K - 1,) True where the prop moves between consecutive samples (awake)."""
         if self.times.size < 2:
             return np.zeros(0, bool)
@@ -86,7 +90,7 @@ class PropTrack:
         )
         return step / dt > STILL_SPEED
 
-    def awake_at(self, t):
+    def awake_at(self, t: float) -> bool:
         """True when the prop moves at time ``t`` (it is awake)."""
         m = self.moving()
         if m.size == 0 or t < self.times[0] or t >= self.times[-1]:
@@ -94,7 +98,7 @@ class PropTrack:
         i = int(np.searchsorted(self.times, t, side="right")) - 1
         return bool(m[min(i, m.size - 1)])
 
-    def awake_intervals(self):
+    def awake_intervals(self) -> list[tuple[float, float]]:
         """[(t0, t1)] seconds while the prop moves."""
         m = self.moving()
         out, i = [], 0
@@ -109,7 +113,7 @@ class PropTrack:
                 i += 1
         return out
 
-    def swept(self, t0, t1, step=0.1):
+    def swept(self, t0: float, t1: float, step: float = 0.1) -> list[Obstacle]:
         """Obstacles covering the footprint over times ``t0``-``t1``: the convex hull of
         the footprints at each pair of neighbouring instants (``step`` s apart, and every
         sample between), which is the area a convex footprint sweeps while it translates."""
@@ -134,7 +138,7 @@ class Conflict:
     piece: int  # index of the plan piece walked then
     distance: float  # metres from the character's ground point to the prop's footprint
 
-    def describe(self, fps, frame_start=0, scene_fps=None):
+    def describe(self, fps: float, frame_start: int = 0, scene_fps: float | None = None) -> str:
         """Where and when, in the scene's frames (``frame`` counts the motion's frames at
         ``fps`` from ``frame_start``; the scene may run at ``scene_fps``)."""
         at = frame_start + int(round(self.frame * (scene_fps or fps) / fps))
@@ -144,7 +148,7 @@ class Conflict:
         )
 
 
-def piece_frames(motions):
+def piece_frames(motions: list[Motion]) -> np.ndarray:
     """(N + 1,) first frame of each piece in the concatenated motion (:func:`concatenate`
     shares each boundary frame between two pieces: it counts as the later one's), and the
     motion's frame count at the end."""
@@ -153,7 +157,9 @@ def piece_frames(motions):
     return np.concatenate((starts, [starts[-1] + counts[-1]]))
 
 
-def conflicts(motions, tracks, radius, fps, delay=0.0):
+def conflicts(
+    motions: list[Motion], tracks: list[PropTrack], radius: float, fps: float, delay: float = 0.0
+) -> list[Conflict]:
     """The first frame at which the planned walk comes within ``radius`` of each moving
     prop's footprint at that moment: [Conflict], earliest first. ``delay``: seconds the
     walk starts after the tracks' time 0 (the character stands still until then)."""
@@ -196,7 +202,13 @@ def _distances(xy, poses, polygon):
     return np.where(inside, 0.0, d)
 
 
-def wait_needed(motions, tracks, radius, fps, longest=MAX_DELAY_S):
+def wait_needed(
+    motions: list[Motion],
+    tracks: list[PropTrack],
+    radius: float,
+    fps: float,
+    longest: float = MAX_DELAY_S,
+) -> float | None:
     """Seconds to wait at the start (``DELAY_STEP_S`` steps) after which the walk meets no
     moving prop, or None within ``longest``."""
     for d in np.arange(DELAY_STEP_S, longest + 1e-9, DELAY_STEP_S):
@@ -206,8 +218,14 @@ def wait_needed(motions, tracks, radius, fps, longest=MAX_DELAY_S):
 
 
 def avoid(
-    planner, patch, plan, tracks, motions_of, max_rounds=MAX_ROUNDS, longest_wait=MAX_DELAY_S
-):
+    planner: SegmentPlanner,
+    patch: LocomotionPatch,
+    plan: Plan,
+    tracks: list[PropTrack],
+    motions_of: Callable[[Plan], list[Motion]],
+    max_rounds: int = MAX_ROUNDS,
+    longest_wait: float = MAX_DELAY_S,
+) -> tuple[Plan, float, list[dict], list[Conflict]]:
     """``plan`` made clear of the moving props ``tracks``: (plan, wait, repairs, unresolved).
 
     ``motions_of(plan)`` gives the plan's piece motions as they will be played (eased

@@ -45,7 +45,8 @@ class Piece:
     turn: tuple = None  # (x, y, heading, angle) of a turn on the spot (kind "turn"), world
 
     @property
-    def label(self):
+    def label(self) -> str:
+        """What the piece plays, for reports and strip names."""
         if self.kind == "turn":
             return f"turn {np.degrees(self.turn[3]):+.0f}deg in place (derived)"
         if self.kind == "segment":

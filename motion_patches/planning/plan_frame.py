@@ -10,14 +10,19 @@ to be. The planner works in these local coordinates (obstacles and props are mov
 them); every planned piece carries the frame that takes it back to the world.
 """
 
+from dataclasses import replace
+
 import numpy as np
 
 from ..props.environment import Environment, Obstacle
+from ..props.object_patch import ObjectPatch
 
 IDENTITY = (0.0, 0.0, 0.0)  # (x, y, angle): local -> world is rotate by angle, then shift
 
 
-def lattice_frame(start, goal, side, nodes):
+def lattice_frame(
+    start: np.ndarray, goal: np.ndarray, side: float, nodes: int
+) -> tuple[float, float, float]:
     """(x, y, angle) of the plan frame: +x along start -> goal (the start heading when the
     two coincide), the start at the middle of tile (0, 0) on the middle row of nodes."""
     d = np.asarray(goal[:2], float) - np.asarray(start[:2], float)
@@ -30,7 +35,7 @@ def lattice_frame(start, goal, side, nodes):
     return (float(origin[0]), float(origin[1]), angle)
 
 
-def to_local(frame, xy):
+def to_local(frame: tuple[float, float, float], xy: np.ndarray) -> np.ndarray:
     """World points (..., 2) in the plan frame."""
     x, y, a = frame
     p = np.asarray(xy, float) - np.array([x, y])
@@ -38,7 +43,7 @@ def to_local(frame, xy):
     return np.stack((c * p[..., 0] + s * p[..., 1], -s * p[..., 0] + c * p[..., 1]), axis=-1)
 
 
-def to_world(frame, xy):
+def to_world(frame: tuple[float, float, float], xy: np.ndarray) -> np.ndarray:
     """Plan-frame points (..., 2) in the world."""
     x, y, a = frame
     p = np.asarray(xy, float)
@@ -46,13 +51,15 @@ def to_world(frame, xy):
     return np.stack((c * p[..., 0] - s * p[..., 1] + x, s * p[..., 0] + c * p[..., 1] + y), axis=-1)
 
 
-def state_to_local(frame, state):
+def state_to_local(frame: tuple[float, float, float], state: np.ndarray) -> np.ndarray:
     """(x, y, heading) in the plan frame (a NaN heading, "any facing", stays NaN)."""
     p = to_local(frame, np.asarray(state[:2], float))
     return np.array([p[0], p[1], state[2] - frame[2]])
 
 
-def local_environment(env, frame, lo, hi):
+def local_environment(
+    env: Environment, frame: tuple[float, float, float], lo: tuple, hi: tuple
+) -> Environment:
     """An environment in the plan frame holding the obstacles of ``env`` that come within
     its radius of the local box ``lo``-``hi`` (found through ``env``'s tile membership, so a
     scene of many props costs only the ones near the plan)."""
@@ -72,10 +79,8 @@ def local_environment(env, frame, lo, hi):
     return out
 
 
-def local_prop(prop, frame):
+def local_prop(prop: ObjectPatch, frame: tuple[float, float, float]) -> ObjectPatch:
     """An object patch moved into the plan frame (its own clips and footprint unchanged)."""
-    from dataclasses import replace
-
     x, y, h = prop.pose
     p = to_local(frame, np.array([x, y]))
     out = replace(prop, pose=(float(p[0]), float(p[1]), float(h - frame[2])))

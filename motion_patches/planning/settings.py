@@ -7,6 +7,7 @@ range in the panel and another in a script. A request's settings travel from the
 the planner as one :class:`PlanSettings`."""
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, fields, replace
 
 
@@ -32,7 +33,7 @@ class Setting:
     def values(self) -> tuple:
         return tuple(c[0] for c in self.choices)
 
-    def check(self, value, where: str = ""):
+    def check(self, value: object, where: str = "") -> float | bool | str:
         """``value`` as this setting holds it (float, bool or a lower-case choice), or
         ValueError naming the setting, the range and the value."""
         what = where + self.name.replace("_", " ")
@@ -150,7 +151,7 @@ class PlanSettings:
     turn_in_place: bool = PLANNING["turn_in_place"]
 
     @classmethod
-    def checked(cls, where: str = "", **values) -> "PlanSettings":
+    def checked(cls, where: str = "", **values: object) -> "PlanSettings":
         """Settings from ``values`` (defaults for those left out), each checked by its
         :class:`Setting`; ValueError names the first bad one, TypeError an unknown name."""
         unknown = set(values) - set(BY_NAME)
@@ -158,11 +159,12 @@ class PlanSettings:
             raise TypeError(f"not planning settings: {', '.join(sorted(unknown))}")
         return cls(**{k: BY_NAME[k].check(v, where) for k, v in values.items()})
 
-    def replaced(self, **values) -> "PlanSettings":
+    def replaced(self, **values: object) -> "PlanSettings":
         """A copy with ``values`` checked and put in."""
         return replace(self, **PlanSettings.checked(**values).given(values))
 
-    def given(self, names) -> dict:
+    def given(self, names: Iterable[str]) -> dict:
+        """The settings ``names`` as a dict."""
         return {k: getattr(self, k) for k in names}
 
     def as_dict(self) -> dict:

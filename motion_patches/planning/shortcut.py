@@ -17,12 +17,15 @@ interaction clips and the segment parts that stitch them are never changed.
 import numpy as np
 
 from ..patch import curves
+from .connectors import ConnectedGraph
 from .pieces import CONNECTOR_SCALES, Piece
 
 MIN_GAIN = 1e-3  # a replacement must save at least this much Eq. 5 cost
 
 
-def shorten(planner, pieces, start, goal):
+def shorten(
+    planner: ConnectedGraph, pieces: list[Piece], start: np.ndarray, goal: np.ndarray
+) -> list[Piece]:
     """``pieces`` with runs of locomotion pieces replaced by cheaper single curves (plan
     frame coordinates; the planner's environment is that of the plan frame)."""
     out = list(pieces)
@@ -61,7 +64,7 @@ def _locomotion(piece):
     return piece.kind in LOCOMOTION
 
 
-def entry_state(planner, piece):
+def entry_state(planner: ConnectedGraph, piece: Piece) -> tuple[np.ndarray, float]:
     """(position, heading) where a piece begins (plan frame)."""
     if piece.curve is not None:
         return piece.curve.pos[0], float(piece.curve.heading[0])
@@ -71,7 +74,7 @@ def entry_state(planner, piece):
     )
 
 
-def exit_state(planner, piece):
+def exit_state(planner: ConnectedGraph, piece: Piece) -> tuple[np.ndarray, float]:
     """(position, heading) where a piece ends (plan frame)."""
     if piece.curve is not None:
         return piece.curve.pos[-1], float(piece.curve.heading[-1])
@@ -104,8 +107,8 @@ def _dubins(planner, a, b, old_cost):
     (pa, ha), (pb, hb) = a, b
     if not _worth_trying(planner, pa, pb, old_cost):
         return None
-    table = planner._dubins_table(pa[None], np.array([ha]), pb[None], np.array([hb]))
-    found = planner._first_valid(pa, ha, table, 0)
+    table = planner.dubins_table(pa[None], np.array([ha]), pb[None], np.array([hb]))
+    found = planner.first_valid(pa, ha, table, 0)
     if found is None or found[1] >= old_cost - MIN_GAIN:
         return None
     return found[0], found[2], found[1]
@@ -119,7 +122,7 @@ def _fit(planner, a, b, old_cost):
         return None
     p0, d0 = pa[None], curves.unit(ha)[None]
     p1, d1 = pb[None], curves.unit(hb)[None]
-    table = curves.tabulate(p0, d0, p1, d1, planner._measure, CONNECTOR_SCALES, samples=48)
+    table = curves.tabulate(p0, d0, p1, d1, planner.measure, CONNECTOR_SCALES, samples=48)
     least = int(np.argmin(table[1][0]))
     centre = table[0][0, least]
     best = None
@@ -127,17 +130,36 @@ def _fit(planner, a, b, old_cost):
         {int(np.floor(centre)), int(np.ceil(centre))} - {0}, key=lambda n: abs(n - centre)
     ):
         sc = curves.fit_scale(
-            p0, d0, p1, d1, float(n), planner._measure, CONNECTOR_SCALES, samples=48, table=table
+            p0, d0, p1, d1, float(n), planner.measure, CONNECTOR_SCALES, samples=48, table=table
         )[0]
         if np.isnan(sc):
             continue
         c = curves.hermite_curve(pa, curves.unit(ha), pb, curves.unit(hb), sc)
-        if not planner._valid(c):
+        if not planner.valid(c):
             continue
-        cost = planner._curve_cost(c, n)
+        cost = planner.curve_cost(c, n)
         if cost < old_cost - MIN_GAIN and (best is None or cost < best[2]):
             best = (c, n, cost)
     return best
+
+
+def long_last_piece(planner: ConnectedGraph, pieces: list[Piece]) -> list[Piece]:
+    """The pieces with a goal connector shorter than a gait cycle merged with the
+    walking pieces before it into one goal piece (one curve followed the same way), so
+    the stop (:mod:`.retime`) has a cycle to slow down over."""
+    out = list(pieces)
+    need = planner.patch.gait.cycle_distance
+    while (
+        len(out) > 1
+        and out[-1].kind == "goal"
+        and out[-1].curve.length < need
+        and out[-2].kind in ("segment", "shortcut", "start")
+    ):
+        before = out[-2]
+        c = before.curve if before.curve is not None else planner.segment_curve(before)
+        merged = curves.joined(c, out[-1].curve)
+        out[-2:] = [Piece("goal", curve=merged, cost=before.cost + out[-1].cost)]
+    return out
 
 
 PULL_SPACING = 0.2  # metres between the path points string pulling looks at
@@ -145,7 +167,7 @@ PULL_CLEARANCE = 0.05  # metres kept beyond the radius by pulled chords (room fo
 PULL_ENDS = 3  # where pulling may end: the goal, or the start of one of the last pieces
 
 
-def pull_tail(planner, pieces, goal):
+def pull_tail(planner: ConnectedGraph, pieces: list[Piece], goal: np.ndarray) -> list[Piece]:
     """``pieces`` with the walk after the last clip re-laid as one goal piece when that is
     cheaper: the found path's ground points are string-pulled (the farthest point whose
     chord keeps the radius and a margin, and so on) and the corners joined by Dubins paths
@@ -185,11 +207,11 @@ def _pull(planner, run, goal):
         parts = _chain(planner, corners, entry_state(planner, run[0]), end_heading)
         if parts is None:
             continue
-        parts += [p.curve if p.curve is not None else planner._segment_curve(p) for p in tail]
+        parts += [p.curve if p.curve is not None else planner.segment_curve(p) for p in tail]
         curve = parts[0]
         for c in parts[1:]:
             curve = curves.joined(curve, c)
-        cost = planner._curve_cost(curve, planner._cycles(curve))
+        cost = planner.curve_cost(curve, planner.cycles(curve))
         if cost < old_cost - MIN_GAIN:
             return Piece("goal", curve=curve, cost=cost)
     return None
@@ -228,14 +250,14 @@ def _chain(planner, corners, first, goal_heading, budget=60):
             return None
         # The options of a corner are sampled and tested together, tried in order.
         n, pb = len(heads), corners[j]
-        table = planner._dubins_table(
+        table = planner.dubins_table(
             np.tile(pa, (n, 1)),
             np.full(n, ha),
             np.tile(pb, (n, 1)),
             np.array(heads),
             max_length=np.inf,
         )
-        found = planner._first_valids(np.tile(pa, (n, 1)), np.full(n, ha), table, np.arange(n))
+        found = planner.first_valids(np.tile(pa, (n, 1)), np.full(n, ha), table, np.arange(n))
         for hb, got in zip(heads, found):
             tries[0] += 1
             if got is None:

@@ -18,8 +18,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..kinematics import poses
-from ..patch.locomotion_patch import node_id, split_node_id
+from ..patch.gait import Gait
+from ..patch.locomotion_patch import LocomotionPatch, node_id, split_node_id
 from ..patch.node_keys import NEXT_EDGE, TILE_STEP, pack
+from ..props.environment import Environment
+from ..props.object_patch import ObjectPatch
 
 POSITION_TOLERANCE = 0.2  # metres between the segment frame and the keyframe
 HEADING_TOLERANCE = np.radians(20)  # radians
@@ -51,7 +54,9 @@ class Stitch:
     to_key: int
 
 
-def phase_pose_distance(gait, motion_frame_root, motion_frame_rot):
+def phase_pose_distance(
+    gait: Gait, motion_frame_root: np.ndarray, motion_frame_rot: np.ndarray
+) -> np.ndarray:
     """(N,) pose distance of every phase of the straight loop to one pose (remembered per
     loop and pose: every copy of a clip has the same keyframe poses)."""
     lp = gait.straight
@@ -204,7 +209,7 @@ def _turned(patch):
     return got
 
 
-def part_speed(patch):
+def part_speed(patch: LocomotionPatch) -> float:
     """The fastest average speed (m/s) of any part a connection can use: a segment from
     its first frame to a later one, or from a frame to its last, at least 2 frames apart
     (cached on the patch). Parts of a cycle can walk faster than the gait's cycles on
@@ -228,7 +233,15 @@ def part_speed(patch):
     return got
 
 
-def stitch(patch, env, prop, clip_index, alpha, beta, gamma):
+def stitch(
+    patch: LocomotionPatch,
+    env: Environment,
+    prop: ObjectPatch,
+    clip_index: int,
+    alpha: float,
+    beta: float,
+    gamma: float,
+) -> list[Stitch]:
     """Every edge a traversal copy adds to the low-level graph (maybe none)."""
     table = stitch_table(patch, env, prop, clip_index, alpha, beta, gamma)
     if table is None:
@@ -241,7 +254,15 @@ def stitch(patch, env, prop, clip_index, alpha, beta, gamma):
     ]
 
 
-def stitch_table(patch, env, prop, clip_index, alpha, beta, gamma):
+def stitch_table(
+    patch: LocomotionPatch,
+    env: Environment,
+    prop: ObjectPatch,
+    clip_index: int,
+    alpha: float,
+    beta: float,
+    gamma: float,
+) -> tuple[list[Connection], list[Connection], list[int], list[int], float] | None:
     """The edges of :func:`stitch` as a table, or None when there are none: (entry
     connections, exit connections, their node keys (lists), the clip's Eq. 5 cost). Edge
     (a, b) runs from ``from_keys[a]`` to ``to_keys[b]`` and costs ``ins[a].cost +

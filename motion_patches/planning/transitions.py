@@ -30,17 +30,22 @@ the run-only plan.
 import contextlib
 import heapq
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, fields
 
 import numpy as np
 
 from ..kinematics import retime
-from ..patch.blend_table import from_node
+from ..kinematics.motion import Motion
+from ..patch.blend_table import Transition, from_node
+from ..patch.locomotion_patch import LocomotionPatch
 from ..patch.node_keys import unpack
 from ..quality import validate
 from . import shortcut
+from .motions import hips_to, plan_motions
+from .pieces import Piece, Plan, PlanError
 from .plan_frame import state_to_local, to_world
-from .planner import Piece, Plan, PlanError, hips_to, plan_motions
+from .planner import SegmentPlanner
 
 SWITCH_CANDIDATES = 3  # run nodes tried on each side of the run plan's traversals
 WALK_NODES_PER_SWITCH = 2  # walk nodes tried for each run node the blend must reach
@@ -57,14 +62,14 @@ class LayerPiece(Piece):
     transition: object = None
 
     @property
-    def label(self):
+    def label(self) -> str:
         if self.kind == "transition":
             return f"{self.transition.source} -> {self.transition.target}"
         base = Piece.label.fget(self)
         return base if self.kind in CLIPS else f"{self.patch.layer} {base}"
 
 
-def piece_layer(piece, layer):
+def piece_layer(piece: Piece, layer: str) -> str:
     """What a piece plays, for reports: its layer (``layer`` for a piece of a one-layer
     plan), "walk -> run" for a blend, "clip" for a traversal or interaction clip."""
     if piece.kind in CLIPS:
@@ -75,12 +80,12 @@ def piece_layer(piece, layer):
     return own.layer if own is not None else layer
 
 
-def layered(piece, patch):
+def layered(piece: Piece, patch: LocomotionPatch) -> LayerPiece:
     """``piece`` as a :class:`LayerPiece` of ``patch``'s layer."""
     return LayerPiece(**{f.name: getattr(piece, f.name) for f in fields(Piece)}, patch=patch)
 
 
-def transition_cost(t, planner_a, planner_b):
+def transition_cost(t: Transition, planner_a: SegmentPlanner, planner_b: SegmentPlanner) -> float:
     """Eq. 5 cost of a blend table entry ``t`` from ``planner_a``'s layer into
     ``planner_b``'s (weights of ``planner_a``): it goes straight (no turn); its effort is its
     seconds x the mean effort rate of the two layers (the blend weight's mean is one half)."""
@@ -91,7 +96,7 @@ def transition_cost(t, planner_a, planner_b):
     return planner_a.alpha * length + planner_a.gamma * rate * seconds
 
 
-def after(state, offset):
+def after(state: np.ndarray, offset: np.ndarray) -> np.ndarray:
     """The world state reached from ``state`` (x, y, heading) by a relative transform."""
     x, y, h = (float(v) for v in state)
     c, s = np.cos(h), np.sin(h)
@@ -100,7 +105,7 @@ def after(state, offset):
     )
 
 
-def before(state, offset):
+def before(state: np.ndarray, offset: np.ndarray) -> np.ndarray:
     """The world state from which the relative transform ``offset`` reaches ``state``."""
     h = float(state[2]) - float(offset[2])
     c, s = np.cos(h), np.sin(h)
@@ -126,7 +131,9 @@ def _wrap(a):
 
 
 @contextlib.contextmanager
-def on_node(planner, state, goal, margin_tiles=3):
+def on_node(
+    planner: SegmentPlanner, state: np.ndarray, goal: np.ndarray, margin_tiles: int = 3
+) -> Iterator[tuple[np.ndarray, int, np.ndarray, tuple[float, float, float]]]:
     """The planner framed (:meth:`~.planner.SegmentPlanner.framed`) so that world
     ``state`` is a node of its lattice: the middle node of tile (0, 0)'s west edge, heading
     along +x. Yields (local state, its node key, local goal, frame); the frame holds the
@@ -143,7 +150,7 @@ def on_node(planner, state, goal, margin_tiles=3):
     with planner.framed(np.r_[s2, h], np.r_[g2, h], margin_tiles + extra) as (_, _, frame):
         local = state_to_local(frame, state)
         local[2] = float(_wrap(local[2]))
-        key = planner._node_key(local[:2], local[2])
+        key = planner.node_key(local[:2], local[2])
         yield local, key, state_to_local(frame, goal), frame
 
 
@@ -178,7 +185,7 @@ def _stops(planner, pieces):
         elif p.kind == "part" and p.frames[0] > 0:
             if p.frames[1] - p.frames[0] >= planner.patch.gait.frames:
                 out.append(list(pieces[: i + 1]))
-            key = planner._node_key(*shortcut.exit_state(planner, p))
+            key = planner.node_key(*shortcut.exit_state(planner, p))
             nxt, costs, segs = planner.expand(key)
             rank = np.argsort(costs + planner.heuristic(nxt), kind="stable")[:SWITCH_CANDIDATES]
             ti, tj, _ = unpack(key)
@@ -198,7 +205,7 @@ def _stops(planner, pieces):
 def _nearest_nodes(planner, local, count):
     """[(key, position, heading)] of the ``count`` nodes of the planner's (framed) lattice
     nearest the local state ``local`` with its heading."""
-    keys, pos, head = planner._entries(planner._block(planner.env.tile_of(local[:2])))
+    keys, pos, head = planner.entries(planner.block(planner.env.tile_of(local[:2])))
     d = np.linalg.norm(pos - local[:2], axis=1)
     d[np.abs(_wrap(head - local[2])) > 1e-6] = np.inf
     order = [m for m in np.argsort(d, kind="stable")[:count] if np.isfinite(d[m])]
@@ -211,7 +218,14 @@ def _blend_clear(planner, t, state):
     return not planner.world_env.path_blocked(g[None])[0]
 
 
-def compose(walk, run, start, goal, margin_tiles=3, max_expansions=400_000):
+def compose(
+    walk: SegmentPlanner,
+    run: SegmentPlanner,
+    start: np.ndarray,
+    goal: np.ndarray,
+    margin_tiles: int = 3,
+    max_expansions: int = 400_000,
+) -> Plan:
     """The cheapest plan from ``start`` to ``goal`` (world x, y, heading) that walks, blends
     into a run, runs (taking the run layer's traversals), and blends back to walk before
     the goal; ``walk`` and ``run`` are :class:`~.planner.SegmentPlanner` of the two layers
@@ -268,7 +282,7 @@ def compose(walk, run, start, goal, margin_tiles=3, max_expansions=400_000):
     #    Best first: run legs and ways back are searched in the order of a lower bound of
     #    the total they can give (the legs known so far, both blends, and a heuristic cost
     #    per metre for the rest of the way), until the next bound reaches the best total.
-    per_metre = min(walk._per_metre, run._per_metre)
+    per_metre = min(walk.per_metre, run.per_metre)
     queue = [
         (cost1 + c_wr + c_rw + per_metre * _distance(after(a_world, wr.offset), goal), n, None)
         for n, (cost1, _, _) in enumerate(firsts)
@@ -315,7 +329,7 @@ def compose(walk, run, start, goal, margin_tiles=3, max_expansions=400_000):
                     heapq.heappush(
                         queue,
                         (
-                            partial + walk._per_metre * _distance(d_world, goal),
+                            partial + walk.per_metre * _distance(d_world, goal),
                             count,
                             (partial, head, (a_world, b_world, c_world, d_world)),
                         ),
@@ -329,7 +343,7 @@ def compose(walk, run, start, goal, margin_tiles=3, max_expansions=400_000):
             expansions += back.expansions
             tail = shortcut.shorten(walk, back.pieces, dl, gl2)
             tail = shortcut.pull_tail(walk, tail, gl2)
-            tail = walk._long_last_piece(tail)
+            tail = shortcut.long_last_piece(walk, tail)
             last = tail[-1]
             end_heading = last.curve.heading[-1] if last.curve is not None else back.goal[2]
         tried_count += 1
@@ -392,7 +406,7 @@ def _search(planner, start, goal, margin_tiles, max_expansions, **node):
     """The planner's search (framed) from ``start`` to ``goal`` (local states), beginning
     or ending on a node (``start_key`` / ``goal_key``); None when there is no way."""
     try:
-        return planner._plan_local(start, goal, margin_tiles, max_expansions, False, **node)
+        return planner.plan_local(start, goal, margin_tiles, max_expansions, False, **node)
     except PlanError:
         return None
 
@@ -412,7 +426,7 @@ def _transition(t, target_patch, state, cost):
     )
 
 
-def plan_layer_motions(plan, standing=True):
+def plan_layer_motions(plan: Plan, standing: bool = True) -> list[Motion]:
     """World motion of every piece of a plan whose pieces carry their layer
     (:class:`LayerPiece`): each leg's pieces as :func:`~.planner.plan_motions` makes them
     (eased across the stitches of its clips), each blend placed where it begins; with
@@ -445,7 +459,7 @@ def plan_layer_motions(plan, standing=True):
     return ms
 
 
-def glitches(plan, motions):
+def glitches(plan: Plan, motions: list[Motion]) -> list[dict]:
     """Glitch records (:func:`.validate.motion_glitches`) of a plan that changes layer:
     each piece judged by the limits of its own layer's gait (a blend and the clips by the
     faster layer's, the one it is entered from or blends into), joins included."""

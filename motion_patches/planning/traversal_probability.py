@@ -11,9 +11,11 @@ cells. All of it is lazy: nothing is computed for tiles the search never reaches
 """
 
 import hashlib
+from collections.abc import Callable, Iterable
 
 import numpy as np
 
+from ..patch.locomotion_patch import LocomotionPatch
 from ..props.environment import Environment, Obstacle
 from ..props.object_patch import ObjectPatch
 from .settings import PLANNING as DEFAULTS
@@ -23,7 +25,8 @@ _PSI = {}  # signature of a kind of prop -> psi
 EDGE_POINTS = np.array([[0.5, 0.0], [1.0, 0.5], [0.5, 1.0], [0.0, 0.5]])  # edge mid-points / side
 
 
-def signature(prop):
+def signature(prop: ObjectPatch) -> str:
+    """What makes two props the same kind for psi: footprint and clips."""
     h = hashlib.sha1(np.ascontiguousarray(prop.footprint).tobytes())
     for c in prop.clips:
         h.update(c.name.encode())
@@ -32,12 +35,12 @@ def signature(prop):
 
 
 def accessibility(
-    patch,
-    prop,
-    radius,
-    spots=(0.35, 0.65),
-    weights=tuple(DEFAULTS[k] for k in ("alpha", "beta", "gamma")),
-):
+    patch: LocomotionPatch,
+    prop: ObjectPatch,
+    radius: float,
+    spots: tuple[float, ...] = (0.35, 0.65),
+    weights: tuple[float, float, float] = tuple(DEFAULTS[k] for k in ("alpha", "beta", "gamma")),
+) -> float:
     """psi of a kind of prop (cached): mean over sampled placements of T / O, at most 1."""
     key = (signature(prop), round(radius, 4), patch.side)
     if key in _PSI:
@@ -63,7 +66,9 @@ def accessibility(
     return psi
 
 
-def density(prop, obstacles, tile_origin, side):
+def density(
+    prop: ObjectPatch, obstacles: Iterable[Obstacle], tile_origin: np.ndarray, side: float
+) -> np.ndarray:
     """(4, 4) rho_jk: the weighted share of the prop's density bins other props cover,
     bins weighted by closeness to entry edge j and exit edge k of the tile."""
     rects, _ = prop.density_bins()
@@ -82,7 +87,13 @@ def density(prop, obstacles, tile_origin, side):
     return rho
 
 
-def tile_traversal(patch, env, props_in_tile, tile, psi_of):
+def tile_traversal(
+    patch: LocomotionPatch,
+    env: Environment,
+    props_in_tile: list[ObjectPatch],
+    tile: tuple[int, int],
+    psi_of: Callable[[ObjectPatch], float],
+) -> np.ndarray:
     """(4, 4) tau of a tile: the best prop's psi (1 - rho_jk), times the free-cell share."""
     if not props_in_tile:
         return np.zeros((4, 4))

@@ -182,8 +182,7 @@ def test_per_tile_observer_stitches_the_chair_line_lazily(walk_patch, hurdle_cli
             assert dyn["copies_stitched_by_tile"] > 0
             with planner.framed(np.array(start), np.array(goal)) as (local_start, _, _):
                 below = sum(
-                    e <= plans["dynamic"].cost
-                    for e, *_ in planner._traversal_estimates(local_start)
+                    e <= plans["dynamic"].cost for e, *_ in planner.traversal_estimates(local_start)
                 )
             assert dyn["copies_stitched"] <= below
 
@@ -232,10 +231,10 @@ def test_traversal_probability_keeps_a_chair_line_tile_passable(walk_patch, hurd
     psi = tp.accessibility(walk_patch, props[0], env.radius)
     assert 0.0 < psi <= 1.0
     upsilon = TilePlanner(walk_patch, env).upsilon(tile)
-    tau = planner._tile_traversal(tile)
+    tau = planner.tile_tau(tile)
     assert upsilon[3, 1] == 0.0  # no walk crosses the line west to east ...
     assert tau[3, 1] > 0.2  # ... but the jump likely does (Eq. 3)
-    with_tau = TilePlanner(walk_patch, env, traversal=planner._tile_traversal)
+    with_tau = TilePlanner(walk_patch, env, traversal=planner.tile_tau)
     assert np.isfinite(with_tau.edge_cost(tile, 3, 1))
     assert np.isinf(TilePlanner(walk_patch, env).edge_cost(tile, 3, 1))
 
@@ -351,8 +350,8 @@ def test_bound_through_a_node_is_below_every_stitched_edge_from_it(walk_patch, h
     start, goal = np.array((0.5, 0.0, 0.0)), np.array((10.0, 0.5, 0.0))
     gaps, edges = [], 0
     with planner.framed(start, goal) as (local_start, _, _):
-        copies = planner._traversal_estimates(local_start)
-        through = planner._through(copies)
+        copies = planner.traversal_estimates(local_start)
+        through = planner.through(copies)
         for idx, (_, pi, ci, *_) in enumerate(copies):
             table = stitching.stitch_table(walk_patch, planner.env, planner.props[pi], ci, *weights)
             if table is None:
@@ -367,7 +366,7 @@ def test_bound_through_a_node_is_below_every_stitched_edge_from_it(walk_patch, h
         # With ``below`` (one node) the bounds under it are the full ones, the rest no
         # higher than the full ones: the observer's cheap first pass loses nothing.
         every, left_lower, kept = np.arange(len(copies)), 0, 0
-        for key in sorted(planner._entries(planner._block((0, 0)))[0].tolist())[:60]:
+        for key in sorted(planner.entries(planner.block((0, 0)))[0].tolist())[:60]:
             f = planner.heuristic_of(key) + 1.0
             full = through([key], [f], every)[0]
             below = full + np.random.default_rng(key).normal(0.0, 0.5, full.size)
@@ -381,7 +380,7 @@ def test_bound_through_a_node_is_below_every_stitched_edge_from_it(walk_patch, h
             assert np.array_equal(through([key], [f], every, below=far)[0], far)
         assert left_lower > 0 and kept > 0, (left_lower, kept)
         # Many nodes at once (the observer's first bound of a copy) as one by one.
-        keys = sorted(planner._entries(planner._block((0, 0)))[0].tolist())[:60]
+        keys = sorted(planner.entries(planner.block((0, 0)))[0].tolist())[:60]
         fs = [planner.heuristic_of(k) + 1.0 for k in keys]
         rows = np.stack([through([k], [f], every)[0] for k, f in zip(keys, fs)])
         assert np.allclose(through(keys, fs, every), rows, rtol=0, atol=1e-12)

@@ -62,7 +62,6 @@ def test_heuristic_never_overestimates_the_rest_of_a_found_path(walk_patch, seed
 def test_per_tile_heuristic_table_matches_the_vectorised_heuristic(walk_patch):
     planner = SegmentPlanner(walk_patch, pillar_field(walk_patch, 0))
     planner.goal = np.array([7.3, -2.1, 0.9])
-    planner._h_tiles = {}
     rng = np.random.default_rng(0)
     i, j = rng.integers(-6, 6, 200), rng.integers(-6, 6, 200)
     keys = pack(i, j, rng.integers(0, LOCAL, 200))
@@ -70,7 +69,6 @@ def test_per_tile_heuristic_table_matches_the_vectorised_heuristic(walk_patch):
     assert np.allclose(one, planner.heuristic(keys), rtol=0, atol=1e-12)
     # Any facing: no goal-heading term.
     planner.goal = np.array([7.3, -2.1, np.nan])
-    planner._h_tiles = {}
     assert np.allclose(
         [planner.heuristic_of(int(k)) for k in keys], planner.heuristic(keys), atol=1e-12
     )
@@ -92,7 +90,7 @@ def test_coarse_first_connector_test_answers_as_testing_every_sample(walk_patch)
     _, pos, _, _, first = dubins.samples(p0, h0, word, lens, 0.8)
     every = env.blocked(pos, radius=env.radius + PATH_MARGIN)
     expected = np.logical_or.reduceat(every, first[:-1])
-    got = planner._samples_blocked(pos, first)
+    got = planner.samples_blocked(pos, first)
     assert np.array_equal(got, expected)
     assert 0.2 * n < expected.sum() < 0.9 * n  # both answers are common here
 

@@ -1,0 +1,148 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""The motions of a plan: each piece played in the world (segments, connectors and
+shortcuts followed, clips placed, turns on the spot derived), eased across stitches and
+from and to standing; and the interaction clips (stand up, sit down) around a plan."""
+
+import numpy as np
+
+from ..kinematics import retime
+from ..kinematics.motion import Motion, ease_to, sliced
+from ..patch.locomotion_patch import LocomotionPatch
+from ..patch.synthesis import follow
+from ..props.object_patch import ObjectPatch
+from . import turn_in_place
+from .pieces import Piece, Plan
+from .plan_frame import IDENTITY
+from .stitching import BLEND_FRAMES
+
+
+def plan_motions(patch: LocomotionPatch, plan: Plan, standing: bool = True) -> list[Motion]:
+    """World-space motion of every piece, eased across stitches into and out of clips;
+    with ``standing`` a plan that starts (ends) walking starts from (ends in) standing:
+    its first (last) piece is time-warped (:mod:`.retime`), ramps one gait cycle long. A
+    turn on the spot continues from the pose the walk before it stopped in; the walk
+    slows to a stop at the goal and the turn eases in and out."""
+    ms = []
+    for i, p in enumerate(plan.pieces):
+        if p.kind == "turn":
+            ms.append(turn_motion(patch, p, ms[-1] if ms else None))
+        else:
+            ms.append(piece_motion(patch, p))
+    clips = ("traversal", "interaction")
+    kinds = [p.kind for p in plan.pieces]
+    if standing:
+        ramp, n = patch.gait.frames, len(ms)
+        for i, kind in enumerate(kinds):
+            if kind in clips:
+                continue
+            ease_in = i == 0 or kind == "turn" or kinds[i - 1] == "turn"
+            ease_out = i == n - 1 or kind == "turn" or kinds[i + 1] == "turn"
+            ms[i] = retime.eased(ms[i], ease_in, ease_out, ramp)
+        if kinds[-1] not in clips and np.isfinite(np.asarray(plan.goal[:2], float)).all():
+            ms[-1] = hips_to(ms[-1], plan.goal[:2], 2 * patch.gait.frames)
+    for i, kind in enumerate(kinds):
+        if kind in clips:
+            continue
+        if i + 1 < len(ms) and kinds[i + 1] in clips:
+            ms[i] = ease_to(ms[i], ms[i + 1], BLEND_FRAMES, at_end=True)
+        if i > 0 and (kinds[i - 1] in clips or "turn" in (kind, kinds[i - 1])):
+            ms[i] = ease_to(ms[i], ms[i - 1], BLEND_FRAMES, at_end=False)
+    return ms
+
+
+def turn_motion(patch: LocomotionPatch, piece: Piece, previous: Motion | None = None) -> Motion:
+    """World-space motion of a turn on the spot (kind "turn"), continuing ``previous``."""
+    x, y, heading, delta = piece.turn
+    return turn_in_place.turn_motion(patch.gait, (x, y), heading, delta, previous)
+
+
+def hips_to(motion: Motion, xy: np.ndarray, window: int) -> Motion:
+    """The motion with its root (the hips) brought onto the ground point ``xy`` on its last
+    frame: a walk stops wherever its stride ends, so the hips would stand a few centimetres
+    beside the ground path's end. Over the last ``window`` frames (a smoothstep) the root's
+    horizontal offset from the ground frame is blended from the stride's own sway to the
+    offset that puts it on ``xy`` (none when the ground path ends there, as a plan's
+    does): the body settles over the goal as a stopping walker does, never swaying farther
+    from the path than the stride itself, and the ground path (the object) is unchanged.
+    Planted feet move with the body by at most the sway; foot locking pins them."""
+    n = motion.frames
+    if n < 2:
+        return motion
+    g = motion.ground
+    c, s = np.cos(g[-1, 2]), np.sin(g[-1, 2])
+    d = np.asarray(xy, float) - g[-1, :2]
+    target = np.array([c * d[0] + s * d[1], -s * d[0] + c * d[1]])  # in the last ground frame
+    k = int(min(max(window, 2), n))
+    t = np.linspace(0.0, 1.0, k)
+    w = np.zeros(n)
+    w[-k:] = t * t * (3.0 - 2.0 * t)
+    root = motion.root_local.copy()
+    root[:, :2] += w[:, None] * (target[None] - root[:, :2])
+    return Motion(g, root, motion.rotations, motion.contacts)
+
+
+def with_interactions(
+    plan: Plan,
+    start: tuple[ObjectPatch, int] | None = None,
+    goal: tuple[ObjectPatch, int] | None = None,
+) -> Plan:
+    """The plan with an interaction clip before it (stand up) and/or after it (sit down):
+    ``start`` / ``goal`` are (ObjectPatch, clip index); the plan must run from the start
+    clip's last frame to the goal clip's first frame (see :func:`interaction_states`)."""
+
+    def piece(ref):
+        prop, ci = ref
+        return Piece("interaction", prop=prop, clip_index=ci, cost=prop.clips[ci].effort)
+
+    pieces = (
+        ([piece(start)] if start is not None else [])
+        + list(plan.pieces)
+        + ([piece(goal)] if goal is not None else [])
+    )
+    return Plan(
+        pieces,
+        plan.cost,
+        plan.expansions,
+        plan.seconds,
+        plan.start,
+        plan.goal,
+        dict(plan.stats, interactions=[p.label for p in pieces if p.kind == "interaction"]),
+    )
+
+
+def interaction_states(
+    start: tuple[ObjectPatch, int] | None = None, goal: tuple[ObjectPatch, int] | None = None
+) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """World (x, y, heading) where walking must start after a stand-up clip and end before
+    a sit-down clip: the clips' last and first ground frames."""
+    s = g = None
+    if start is not None:
+        prop, ci = start
+        s = prop.world_clip(prop.clips[ci]).ground[-1]
+    if goal is not None:
+        prop, ci = goal
+        g = prop.world_clip(prop.clips[ci]).ground[0]
+    return s, g
+
+
+def piece_motion(patch: LocomotionPatch, piece: Piece) -> Motion:
+    """World-space motion of one planned piece (not eased; see :func:`plan_motions`)."""
+    if piece.kind == "turn":
+        return turn_motion(patch, piece)
+    m = _local_piece_motion(patch, piece)
+    return m if piece.frame == IDENTITY else m.transformed(*piece.frame)
+
+
+def _local_piece_motion(patch, piece):
+    if piece.kind in ("segment", "part"):
+        m = patch.motion(piece.segment)
+        if piece.kind == "part":
+            m = sliced(m, *piece.frames)
+        return m.transformed(piece.tile[0] * patch.side, piece.tile[1] * patch.side)
+    if piece.kind in ("traversal", "interaction"):
+        return piece.prop.world_clip(piece.prop.clips[piece.clip_index])
+    if piece.kind == "start":
+        return follow(patch.gait, piece.curve, cycles="to node")
+    if piece.kind == "shortcut":
+        return follow(patch.gait, piece.curve, cycles=piece.cycles)
+    return follow(patch.gait, piece.curve, cycles=None, eased=(True, False))
