@@ -259,8 +259,8 @@ class Schedule:
     delay: int = 0
     holds: tuple = ()
     version: int = 0
-    track: np.ndarray = None
-    holdable: np.ndarray = None
+    track: np.ndarray | None = None
+    holdable: np.ndarray | None = None
     rank: int = 0
 
     @property

@@ -30,7 +30,7 @@ class Gait:
     skeleton: Skeleton
     loops: list  # Loop, sorted by curvature; exactly one is straight
     notes: list = field(default_factory=list)  # provenance, e.g. "right turn mirrored from 16_18"
-    turn_range: tuple = None  # sharpest (right, left) curvature: turn clips' one-cycle
+    turn_range: tuple | None = None  # sharpest (right, left) curvature: turn clips' one-cycle
     # windows, at least the straight stride's bend
 
     @property

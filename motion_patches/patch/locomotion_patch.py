@@ -352,7 +352,8 @@ def entry_share(patch):
 def sparse_message(patch):
     """Why a bake is refused as too sparse (from its ``stats``), and what to add."""
     stats = patch.stats
-    by, kmin, kmax = stats["culled_by"], *stats["curvature_limits"]
+    by = stats["culled_by"]
+    kmin, kmax = stats["curvature_limits"]
     radius = 1.0 / max(min(-kmin, kmax), 1e-9)
     why = [f"{by['curvature']:,} bend tighter than the gait turns (radius {radius:.2f} m)"]
     why += [
