@@ -11,14 +11,17 @@ frame, feet planted), then a later start, then a re-route round where the other 
 then. What none of these clears is reported by pair and frame, not hidden.
 """
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..kinematics import retime
 
 
-def disc(centre, radius, sides=12):
+def disc(centre: Sequence[float] | np.ndarray, radius: float, sides: int = 12) -> np.ndarray:
     """(sides, 2) convex polygon round a disc of ``radius`` about a point (its sides touch
     the circle, so nothing inside the polygon's inner circle is missed), counter-clockwise."""
     a = np.linspace(0.0, 2 * np.pi, sides, endpoint=False)
@@ -26,7 +29,9 @@ def disc(centre, radius, sides=12):
     return np.column_stack((centre[0] + r * np.cos(a), centre[1] + r * np.sin(a)))
 
 
-def standing_spots(ends, n, spacing, radius):
+def standing_spots(
+    ends: Sequence[tuple[Sequence[float], Sequence[float]]], n: int, spacing: float, radius: float
+) -> list[tuple[int, np.ndarray]]:
     """[(index, polygon)] of the spots character ``n`` walks around: the goals of the
     characters before it and the starts of those after it, as discs that keep ``spacing``
     between roots once grown by the planner's ``radius``. ``ends`` [(start, goal)] are
@@ -47,14 +52,22 @@ def standing_spots(ends, n, spacing, radius):
     return out
 
 
-def timeline(track, delay, horizon):
+def timeline(track: np.ndarray, delay: int, horizon: int) -> np.ndarray:
     """(horizon, 2) positions of a ground ``track`` started ``delay`` frames late: it
     stands at its first point before and at its last point after."""
     t = np.clip(np.arange(horizon) - delay, 0, len(track) - 1)
     return track[t]
 
 
-def ghosts(line, frame, spacing, radius, fps, window_seconds=1.5, step_m=0.3):
+def ghosts(
+    line: np.ndarray,
+    frame: int,
+    spacing: float,
+    radius: float,
+    fps: float,
+    window_seconds: float = 1.5,
+    step_m: float = 0.3,
+) -> list[np.ndarray]:
     """Discs [(polygon)] where a character walks around ``frame``: its positions on
     ``line`` (its timeline, :func:`timeline`) over ``window_seconds`` either side, every
     ``step_m`` metres, as obstacles that keep ``spacing`` between two roots once the planner
@@ -136,7 +149,7 @@ class Reservations:
             np.concatenate([np.arange(a, b) for a, b in zip(lo, hi) if b > a] or [np.empty(0, int)])
         )
 
-    def check(self, track, delay=0):
+    def check(self, track: ArrayLike, delay: int = 0) -> dict[int, tuple[np.ndarray, int, float]]:
         """Conflicts of a character walking ``track`` (frames, 2) from frame ``delay`` on,
         standing at its first point before and at its last point after: {other index:
         (frames too close (sorted array), closest frame, distance there)}."""
@@ -188,7 +201,7 @@ class Reservations:
             out[int(j)] = (np.unique(when[m]), int(when[m][k]), float(dist[m][k]))
         return out
 
-    def reserve(self, index, track, delay=0):
+    def reserve(self, index: int, track: ArrayLike, delay: int = 0) -> None:
         """Hold ``track``'s cells over its frames and its two standing spots for ``index``."""
         track = np.asarray(track, float)
         d, n = int(delay), len(track)
@@ -210,13 +223,15 @@ class Reservations:
         self.placed[index] = (d, track)
         self.horizon = max(self.horizon, d + n)
 
-    def line(self, index, horizon):
+    def line(self, index: int, horizon: int) -> np.ndarray:
         """(horizon, 2) positions of a reserved character (as :func:`timeline`)."""
         d, track = self.placed[index]
         return timeline(track, d, horizon)
 
 
-def held_track(track, at, hold, ramp, holdable=None):
+def held_track(
+    track: ArrayLike, at: float, hold: int, ramp: int, holdable: ArrayLike | None = None
+) -> tuple[np.ndarray, np.ndarray | None]:
     """``track`` (frames, 2) with an idle hold (:func:`motion_patches.retime.hold_phases`),
     and ``holdable`` (bool per frame) carried along: true on the frames of the held track
     that replay a holdable frame whole (so a later hold may be put there too)."""
@@ -231,7 +246,7 @@ def held_track(track, at, hold, ramp, holdable=None):
     return out, np.asarray(holdable, bool)[near] & (np.abs(u - near) < 1e-9)
 
 
-def hold_frames(holdable, before, ramp, count=3):
+def hold_frames(holdable: np.ndarray | None, before: int, ramp: int, count: int = 3) -> list[int]:
     """Up to ``count`` frames to hold on, latest first: frames where ``holdable`` (bool per
     track frame; double support on a walking piece) whose slow-down ends before frame
     ``before`` and whose ramps fit in the track, at least a ramp apart."""
@@ -259,12 +274,12 @@ class Schedule:
     delay: int = 0
     holds: tuple = ()
     version: int = 0
-    track: np.ndarray = None
-    holdable: np.ndarray = None
+    track: np.ndarray | None = None
+    holdable: np.ndarray | None = None
     rank: int = 0
 
     @property
-    def rerouted(self):
+    def rerouted(self) -> bool:
         return self.version > 0
 
 
@@ -406,20 +421,20 @@ def _resolve_once(
 
 
 def resolve(
-    tracks,
-    replan,
-    spacing,
-    radius,
-    fps,
-    max_delay,
-    step,
-    ramp=None,
-    max_hold=None,
-    holdable=None,
-    rounds=2,
-    stages=6,
-    restarts=4,
-):
+    tracks: Sequence[np.ndarray],
+    replan: Callable[[int, list[np.ndarray]], tuple[np.ndarray, np.ndarray | None] | None] | None,
+    spacing: float,
+    radius: float,
+    fps: float,
+    max_delay: int,
+    step: int,
+    ramp: int | None = None,
+    max_hold: int | None = None,
+    holdable: Sequence[np.ndarray | None] | None = None,
+    rounds: int = 2,
+    stages: int = 6,
+    restarts: int = 4,
+) -> tuple[list[Schedule], list[dict[str, Any]]]:
     """Schedules and the conflicts left for ``tracks`` [(frames, 2)] in priority order,
     all starting on frame 0: each character in turn is checked against the
     :class:`Reservations` of those before it and, while it comes closer than ``spacing``,
@@ -479,7 +494,9 @@ def resolve(
     return best[1], best[2]
 
 
-def conflicts_of(tracks, delays, spacing):
+def conflicts_of(
+    tracks: Sequence[np.ndarray], delays: Sequence[int], spacing: float
+) -> list[dict[str, Any]]:
     """Every pair of ``tracks`` (in order, started ``delays`` frames late) closer than
     ``spacing`` on some frame, as :func:`resolve` reports them: the check of what is
     finally written, independent of how it was resolved."""

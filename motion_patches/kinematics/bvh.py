@@ -6,6 +6,8 @@ the same world motion (Y-up converted to Blender's Z-up, the same scale) with
 rotation-free rest matrices, which is a valid :class:`Skeleton` for every core algorithm.
 """
 
+import os
+
 import numpy as np
 
 from . import quat
@@ -25,7 +27,7 @@ def _axis_quat(axis, deg):
     return np.concatenate((np.cos(a), v), axis=1)
 
 
-def read(path, scale=CMU_SCALE, name=None):
+def read(path: str | os.PathLike[str], scale: float = CMU_SCALE, name: str | None = None) -> Clip:
     """Clip of a BVH file: root position and per-joint rotations in Blender's axes."""
     with open(path) as fh:
         text = fh.read()
@@ -33,8 +35,12 @@ def read(path, scale=CMU_SCALE, name=None):
     if not motion:
         raise ValueError(f"{path}: no MOTION section")
     tokens = head.split()
-    names, parents, offsets, channels = [], [], [], []
-    stack, i, pending_end = [], 0, False
+    names: list[str] = []
+    parents: list[int] = []
+    offsets: list[np.ndarray | None] = []
+    channels: list[list[str]] = []
+    stack: list[int] = []
+    i, pending_end = 0, False
     while i < len(tokens):
         t = tokens[i]
         if t in ("ROOT", "JOINT"):
@@ -70,12 +76,12 @@ def read(path, scale=CMU_SCALE, name=None):
     if data.shape[0] != nframes:
         raise ValueError(f"{path}: header says {nframes} frames, found {data.shape[0]}")
 
-    parents = np.array(parents)
+    parent = np.array(parents)
     j = len(names)
     rest = np.tile(np.eye(4), (j, 1, 1))
     for k in range(j):
         off = Y_UP_TO_Z_UP @ offsets[k] * scale
-        rest[k, :3, 3] = off + (rest[parents[k], :3, 3] if parents[k] >= 0 else 0.0)
+        rest[k, :3, 3] = off + (rest[parent[k], :3, 3] if parent[k] >= 0 else 0.0)
     c = Y_UP_TO_Z_UP
     cq = quat.from_matrix(c)
     rot = np.tile(np.array([1.0, 0, 0, 0]), (nframes, j, 1))
@@ -93,12 +99,12 @@ def read(path, scale=CMU_SCALE, name=None):
                 pos[:, "XYZ".index(ch[0].upper())] = v
         # Conjugate into Z-up: R' = C R C^T.
         rot[:, k] = quat.mul(quat.mul(cq, q), quat.conj(cq))
-        if parents[k] < 0:
+        if parent[k] < 0:
             root_pos = (pos * scale) @ c.T + rest[k, :3, 3]
     rot = quat.make_continuous(rot, axis=0)
     return Clip(
         name or str(path).rsplit("/", 1)[-1].rsplit(".", 1)[0],
-        Skeleton(names, parents, rest),
+        Skeleton(names, parent, rest),
         1.0 / frame_time,
         root_pos,
         rot,

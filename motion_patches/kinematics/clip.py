@@ -24,21 +24,21 @@ class Clip:
     tags: dict = field(default_factory=dict)
 
     @property
-    def frames(self):
+    def frames(self) -> int:
         return self.root_pos.shape[0]
 
     @property
-    def duration(self):
+    def duration(self) -> float:
         return (self.frames - 1) / self.fps
 
-    def global_matrices(self):
+    def global_matrices(self) -> np.ndarray:
         return forward_kinematics(self.skeleton, self.root_pos, self.rotations)
 
-    def joint_positions(self):
+    def joint_positions(self) -> np.ndarray:
         """(F, J, 3) armature-space head position of every bone."""
         return self.global_matrices()[..., :3, 3]
 
-    def validate(self):
+    def validate(self) -> "Clip":
         """Raise ValueError with a user-facing message when the arrays are unusable."""
         f = self.frames
         if f < 2:
@@ -55,7 +55,7 @@ class Clip:
         return self
 
 
-def sample(clip, times):
+def sample(clip: Clip, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Clip values at arbitrary times (seconds): positions lerped, rotations slerped."""
     t = np.clip(np.asarray(times, float) * clip.fps, 0, clip.frames - 1)
     i0 = np.floor(t).astype(int)
@@ -68,14 +68,14 @@ def sample(clip, times):
     return pos, quat.make_continuous(rot, axis=0)
 
 
-def resample(clip, fps):
+def resample(clip: Clip, fps: float) -> Clip:
     """The clip at another frame rate, same duration (rounded down to whole frames)."""
     n = int(np.floor(clip.duration * fps + 1e-6)) + 1
     pos, rot = sample(clip, np.arange(n) / fps)
     return Clip(clip.name, clip.skeleton, float(fps), pos, rot, dict(clip.tags))
 
 
-def lateral_axis(skel):
+def lateral_axis(skel: Skeleton) -> np.ndarray:
     """Unit horizontal axis pointing from the right hip to the left hip in the rest pose."""
     left = skel.find("LeftUpLeg", "LeftHip", "LeftThigh", "thigh.L", "LeftUpperLeg")
     right = skel.find("RightUpLeg", "RightHip", "RightThigh", "thigh.R", "RightUpperLeg")
@@ -87,7 +87,7 @@ def lateral_axis(skel):
     return a / n
 
 
-def mirror(clip, name=None):
+def mirror(clip: Clip, name: str | None = None) -> Clip:
     """Left/right mirror image of a clip (a left turn becomes a right turn).
 
     Each bone's armature-space rotation *relative to its rest orientation* is reflected in

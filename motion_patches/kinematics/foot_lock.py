@@ -11,11 +11,14 @@ and bone lengths cannot.
 The correction eases in and out over a few frames around each run, so nothing pops.
 """
 
+from collections.abc import Callable
+
 import numpy as np
 
 from . import quat
 from .contacts import CONTACT_SPEED, foot_joints, runs
 from .inplace import root_channel_to_ground, root_positions
+from .motion import Motion
 from .retarget import segment_parent
 from .skeleton import Skeleton, per_skeleton
 
@@ -25,7 +28,7 @@ STILL_SHARE = 0.5  # nor one moving faster than this share of the body's pace, w
 STRETCH = 0.985  # the straightest a locked leg gets, as a fraction of thigh + shin
 
 
-def leg_chains(skel):
+def leg_chains(skel: Skeleton) -> list[tuple[int, int, int, int]]:
     """[(hip, knee, ankle, toe) joint indices] per side, left then right. The knee is the
     joint above the ankle and the hip the joint above the knee, skipping limb segments
     (Rigify's ``DEF-shin.L.001`` under ``DEF-shin.L``)."""
@@ -56,7 +59,9 @@ def _speeds(xy):
     return v
 
 
-def still_contacts(skel, world, fps, posed=None):
+def still_contacts(
+    skel: Skeleton, world: Motion, fps: float, posed: tuple[np.ndarray, np.ndarray] | None = None
+) -> np.ndarray:
     """(F, 4) planted flags of ``world`` (a Motion; left ankle, toe, right ankle, toe) kept
     only on frames where that joint, as synthesised, moves no faster than ``STILL_FACTOR``
     x ``contacts.CONTACT_SPEED`` (the speed above which the source clips' contacts call a
@@ -84,7 +89,13 @@ def still_contacts(skel, world, fps, posed=None):
     return planted
 
 
-def planted_offsets(ankle_xy, toe_xy, ankle_on, toe_on, blend=BLEND_FRAMES):
+def planted_offsets(
+    ankle_xy: np.ndarray,
+    toe_xy: np.ndarray,
+    ankle_on: np.ndarray,
+    toe_on: np.ndarray,
+    blend: int = BLEND_FRAMES,
+) -> np.ndarray:
     """(F, 2) horizontal corrections of the ankle that pin a foot while it is planted.
 
     On frames where the ankle is planted it is moved to the mean position of its run. On
@@ -234,7 +245,14 @@ def _ik_turns(hip, knee, ankle, target, hinge, forward=None):
     return swing, bend
 
 
-def two_bone_ik(hip, knee, ankle, target, hinge, forward=None):
+def two_bone_ik(
+    hip: np.ndarray,
+    knee: np.ndarray,
+    ankle: np.ndarray,
+    target: np.ndarray,
+    hinge: np.ndarray,
+    forward: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
     """(F, 3, 3) world rotations (thigh, shin) that move ``ankle`` to ``target``.
 
     The knee angle is set for the hip-target distance (clamped to what the leg reaches
@@ -327,7 +345,7 @@ class _Legs:
             self.bones.append(thigh + shin + [(c_ankle, "ankle")])
 
 
-def pose_legs(skel, world):
+def pose_legs(skel: Skeleton, world: Motion) -> tuple[np.ndarray, np.ndarray]:
     """The legs' bones posed as in ``world`` (a Motion): world rotations (B, F, 3, 3) and
     positions (B, F, 3), for :func:`still_contacts` and :func:`lock_feet` to share."""
     return _leg_positions(_legs(skel), world, with_frames=True)
@@ -352,13 +370,19 @@ def _legs(skel):
     return _Legs(skel)
 
 
-def locked_bones(skel):
+def locked_bones(skel: Skeleton) -> np.ndarray:
     """Indices of the bones whose channels :func:`lock_feet` may change beyond a sign:
     each leg's thigh, shin and ankle and the limb segments between them."""
     return np.array(sorted(j for side in _legs(skel).bones for j, _ in side))
 
 
-def lock_feet(skel, world, blend=BLEND_FRAMES, offsets=None, posed=None):
+def lock_feet(
+    skel: Skeleton,
+    world: Motion,
+    blend: int = BLEND_FRAMES,
+    offsets: Callable[[int, np.ndarray, np.ndarray], np.ndarray] | None = None,
+    posed: tuple[np.ndarray, np.ndarray] | None = None,
+) -> np.ndarray:
     """Rotation channels (F, J, 4) of ``world`` (a Motion) with planted feet pinned.
 
     Only the hip (thigh) and knee (shin) channels of each leg change, and the ankle's so

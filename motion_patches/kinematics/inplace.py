@@ -11,18 +11,18 @@ the split the NLA output uses (shared in-place actions, one root trajectory).
 import numpy as np
 
 from . import quat
-from .clip import lateral_axis
-from .skeleton import per_skeleton
+from .clip import Clip, lateral_axis
+from .skeleton import Skeleton, per_skeleton
 
 
-def rest_facing(skel):
+def rest_facing(skel: Skeleton) -> np.ndarray:
     """Horizontal facing of the skeleton in its rest pose (armature space)."""
     lat = lateral_axis(skel)  # towards the left hip
     f = np.cross(lat, [0.0, 0.0, 1.0])
     return f / np.linalg.norm(f)
 
 
-def facing_yaw(clip):
+def facing_yaw(clip: Clip) -> np.ndarray:
     """Heading (radians from +X, unwrapped) of the root bone's facing on every frame."""
     skel = clip.skeleton
     r = skel.root
@@ -40,7 +40,7 @@ def _root_rest(skel):
     return quat.from_matrix(skel.rest[skel.root, :3, :3])
 
 
-def root_channel_to_ground(skel, root_rot, heading):
+def root_channel_to_ground(skel: Skeleton, root_rot: np.ndarray, heading: np.ndarray) -> np.ndarray:
     """Root rotation channels relative to a ground frame turned by ``heading``."""
     q_rest = _root_rest(skel)
     # basis' = rest^-1 * Rz(-heading) * rest * basis; the turn before the basis is made
@@ -50,7 +50,7 @@ def root_channel_to_ground(skel, root_rot, heading):
     return quat.mul(quat.mul(quat.mul(quat.conj(q_rest), yaw), q_rest), root_rot)
 
 
-def to_inplace(clip, ground):
+def to_inplace(clip: Clip, ground: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(root_local (F, 3), rotations (F, J, 4)) of ``clip`` relative to ``ground`` (F, 3)."""
     ground = np.asarray(ground, float)
     c, s = np.cos(ground[:, 2]), np.sin(ground[:, 2])
@@ -64,7 +64,7 @@ def to_inplace(clip, ground):
     return local, quat.make_continuous(rot, axis=0)
 
 
-def root_positions(ground, root_local):
+def root_positions(ground: np.ndarray, root_local: np.ndarray) -> np.ndarray:
     """Armature-space root positions (F, 3): ``root_local`` carried by the ground frame
     (the first half of :func:`to_world`, for callers that need no rotation)."""
     ground = np.asarray(ground, float)
@@ -74,7 +74,9 @@ def root_positions(ground, root_local):
     return np.stack((x, y, root_local[:, 2]), 1)
 
 
-def to_world(skel, ground, root_local, rotations):
+def to_world(
+    skel: Skeleton, ground: np.ndarray, root_local: np.ndarray, rotations: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Armature-space (world, for an identity object) root positions and rotation channels."""
     ground = np.asarray(ground, float)
     pos = root_positions(ground, root_local)

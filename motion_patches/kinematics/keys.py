@@ -15,14 +15,19 @@ channel is stored the cheapest way that plays back the same values:
 so the choice changes the file, not the motion.
 """
 
+from typing import Any
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 KEY_BYTES = 72  # a BezTriple in a .blend
 SAMPLE_BYTES = 16  # an FPoint
 BASE = 64  # the coarsest key spacing tried, frames
 
 
-def linear_keys(values, tol, base=BASE, give_up_at=None):
+def linear_keys(
+    values: np.ndarray, tol: float, base: int = BASE, give_up_at: int | None = None
+) -> Any:
     """Mask (F, C) of the frames to key per column of ``values`` (F, C) so that linear
     interpolation between kept frames is within ``tol`` of every value; the first and last
     frames are always kept. Intervals that miss are halved until they fit.
@@ -73,13 +78,13 @@ def linear_keys(values, tol, base=BASE, give_up_at=None):
     return keep if give_up_at is None else (keep, gave_up)
 
 
-def plan(values, tol):
+def plan(values: ArrayLike, tol: float) -> tuple[str, np.ndarray | None]:
     """How to store one channel (F,): ("constant", None), ("keys", kept frame indices) or
     ("samples", None), the cheapest that plays every value within ``tol``."""
     return plan_columns(np.asarray(values, float)[:, None], tol)[0]
 
 
-def must_keep(values, tol):
+def must_keep(values: ArrayLike, tol: float) -> np.ndarray:
     """(C,) a lower bound on the frames any linear keying of each column of ``values``
     (F, C) within ``tol`` keeps: the first and last, and every frame whose second
     difference exceeds 4 ``tol``. (Within one linear piece the three frames round an inner
@@ -95,7 +100,7 @@ def must_keep(values, tol):
     return np.count_nonzero(bend > 4.0 * tol * (1.0 + 1e-9) + 1e-15, axis=0) + 2
 
 
-def plan_columns(values, tol):
+def plan_columns(values: ArrayLike, tol: float) -> list[tuple[str, np.ndarray | None]]:
     """:func:`plan` of every column of ``values`` (F, C), the kept keys of all the
     channels that vary found in one vectorised :func:`linear_keys` (a pose has ~100).
 
@@ -106,7 +111,7 @@ def plan_columns(values, tol):
     if v.size == 0:
         return [("constant", None)] * v.shape[1]
     varies = np.ptp(v, axis=0) > tol
-    out = [("constant", None)] * v.shape[1]
+    out: list[tuple[str, np.ndarray | None]] = [("constant", None)] * v.shape[1]
     n = v.shape[0]
     # keys cost more than samples from this many on: stop refining such a column
     limit = -(-n * SAMPLE_BYTES // KEY_BYTES)

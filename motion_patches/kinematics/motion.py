@@ -1,13 +1,14 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """Motion: synthesised animation as a ground trajectory plus in-place body channels."""
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from . import quat
 from .inplace import to_world
-from .skeleton import forward_kinematics
+from .skeleton import Skeleton, forward_kinematics
 
 
 @dataclass
@@ -18,10 +19,10 @@ class Motion:
     contacts: np.ndarray  # (F, 4) planted flags from the source loops
 
     @property
-    def frames(self):
+    def frames(self) -> int:
         return self.ground.shape[0]
 
-    def transformed(self, dx, dy, dheading=0.0):
+    def transformed(self, dx: float, dy: float, dheading: float = 0.0) -> "Motion":
         """The same motion with its ground frame moved by a rigid transform of the plane."""
         c, s = np.cos(dheading), np.sin(dheading)
         g = self.ground.copy()
@@ -30,12 +31,12 @@ class Motion:
         g[:, 2] = self.ground[:, 2] + dheading
         return Motion(g, self.root_local, self.rotations, self.contacts)
 
-    def world_matrices(self, skel):
+    def world_matrices(self, skel: Skeleton) -> np.ndarray:
         pos, rot = to_world(skel, self.ground, self.root_local, self.rotations)
         return forward_kinematics(skel, pos, rot)
 
 
-def sliced(m, start, stop):
+def sliced(m: Motion, start: int, stop: int) -> Motion:
     """Frames ``start`` to ``stop`` (inclusive) of a motion."""
     sl = slice(start, stop + 1)
     return Motion(m.ground[sl], m.root_local[sl], m.rotations[sl], m.contacts[sl])
@@ -44,7 +45,7 @@ def sliced(m, start, stop):
 EASE_RATE = np.radians(3.0)  # radians per frame a bone is eased at, at most, onto a clip
 
 
-def ease_to(m, target, frames, at_end=True):
+def ease_to(m: Motion, target: Motion, frames: int, at_end: bool = True) -> Motion:
     """The motion with its last (or first) ``frames`` frames eased onto ``target``'s first
     (or last) frame: ground offset and body channels, smoothstep weights, so a stitch
     between two clips lands without a jump. A bone whose rotation differs by more than
@@ -82,7 +83,7 @@ def ease_to(m, target, frames, at_end=True):
     return Motion(g, root, quat.make_continuous(rot, axis=0), con)
 
 
-def concatenate(parts):
+def concatenate(parts: Sequence[Motion]) -> Motion:
     """Join motions end to start; each part's first frame repeats the previous last frame."""
     keep = [parts[0]] + [
         Motion(p.ground[1:], p.root_local[1:], p.rotations[1:], p.contacts[1:]) for p in parts[1:]

@@ -6,9 +6,10 @@ arrays; no per-frame Python objects.
 """
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 
-def normalize(q):
+def normalize(q: np.ndarray) -> np.ndarray:
     """``q`` (..., N) scaled to unit length along its last axis. The squares are summed
     component by component, in order: the same sums as ``np.linalg.norm`` (bit for bit)
     at a third of its cost on short vectors."""
@@ -20,7 +21,7 @@ def normalize(q):
     return q / np.sqrt(total)[..., None]
 
 
-def mul(a, b):
+def mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     a, b = np.asarray(a, float), np.asarray(b, float)
     aw, ax, ay, az = a[..., 0], a[..., 1], a[..., 2], a[..., 3]
     bw, bx, by, bz = b[..., 0], b[..., 1], b[..., 2], b[..., 3]
@@ -32,12 +33,12 @@ def mul(a, b):
     return out
 
 
-def conj(q):
+def conj(q: np.ndarray) -> np.ndarray:
     q = np.asarray(q, float)
     return q * np.array([1.0, -1.0, -1.0, -1.0])
 
 
-def to_matrix(q):
+def to_matrix(q: np.ndarray) -> np.ndarray:
     """Rotation matrices (..., 3, 3) of unit quaternions (..., 4)."""
     w, x, y, z = np.moveaxis(normalize(q), -1, 0)
     m = np.empty(np.shape(w) + (3, 3))
@@ -53,7 +54,7 @@ def to_matrix(q):
     return m
 
 
-def from_matrix(m):
+def from_matrix(m: np.ndarray) -> np.ndarray:
     """Unit quaternions (..., 4) with w >= 0 from rotation matrices (..., 3, 3)."""
     m = np.asarray(m, float)
     shape = m.shape[:-2]
@@ -117,14 +118,14 @@ def from_matrix(m):
     return q.reshape(shape + (4,))
 
 
-def about_z(angle):
+def about_z(angle: ArrayLike) -> np.ndarray:
     """Quaternions of rotations by ``angle`` (radians) about +Z."""
     a = np.asarray(angle, float) * 0.5
     z = np.zeros_like(a)
     return np.stack((np.cos(a), z, z, np.sin(a)), axis=-1)
 
 
-def make_continuous(q, axis=0):
+def make_continuous(q: np.ndarray, axis: int = 0) -> np.ndarray:
     """Flip signs along ``axis`` so consecutive quaternions lie in one hemisphere.
 
     Blender interpolates quaternion channels component-wise, so a sign flip between keys
@@ -148,7 +149,7 @@ def make_continuous(q, axis=0):
     return np.moveaxis(q, 0, axis)
 
 
-def slerp(a, b, t):
+def slerp(a: np.ndarray, b: np.ndarray, t: ArrayLike) -> np.ndarray:
     """Spherical interpolation, t broadcast over leading axes (shortest arc)."""
     a = normalize(a)
     b = normalize(b)
@@ -165,7 +166,7 @@ def slerp(a, b, t):
     return normalize(wa * a + wb * b)
 
 
-def log(q):
+def log(q: np.ndarray) -> np.ndarray:
     """Rotation vectors (..., 3) (axis * angle) of unit quaternions."""
     q = normalize(q)
     q = np.where(q[..., :1] < 0, -q, q)
@@ -176,7 +177,7 @@ def log(q):
     return v * scale
 
 
-def exp(r):
+def exp(r: np.ndarray) -> np.ndarray:
     """Unit quaternions of rotation vectors (..., 3)."""
     r = np.asarray(r, float)
     ang = np.linalg.norm(r, axis=-1, keepdims=True)
@@ -185,7 +186,7 @@ def exp(r):
     return np.concatenate((np.cos(half), r * k), axis=-1)
 
 
-def angle_between(a, b):
+def angle_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Rotation angle (radians) taking a to b, shortest arc."""
     d = np.abs(np.sum(normalize(a) * normalize(b), axis=-1))
     return 2.0 * np.arccos(np.clip(d, 0.0, 1.0))

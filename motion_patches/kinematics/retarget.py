@@ -43,6 +43,7 @@ in their rest pose).
 
 import hashlib
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -169,7 +170,7 @@ CONVENTIONS = {
 }
 
 
-def base_name(name):
+def base_name(name: str) -> str:
     """A bone name without a ``namespace:`` prefix, lower case (how names are compared)."""
     return name.rsplit(":", 1)[-1].lower()
 
@@ -182,16 +183,17 @@ def _exclusive():
     }
 
 
-def roles(skel):
+def roles(skel: Skeleton) -> tuple[str, dict[str, int]]:
     """(convention, {role: bone index}) of the convention that names the skeleton's bones
     best: one point per role it finds, one more when the name found is the convention's
     own (CMU's ``Neck1``, Mixamo's ``Spine2``: the conventions share most names); ties go
     to the first in :data:`CONVENTIONS`."""
-    lower = {}
+    lower: dict[str, int] = {}
     for i, n in enumerate(skel.names):
         lower.setdefault(base_name(n), i)
     own = _exclusive()
-    best, best_score = ("", {}), 0
+    best: tuple[str, dict[str, int]] = ("", {})
+    best_score = 0
     for conv, table in CONVENTIONS.items():
         found, score = {}, 0
         for role, names in table.items():
@@ -205,7 +207,7 @@ def roles(skel):
     return best
 
 
-def hip_height(skel, hips, feet):
+def hip_height(skel: Skeleton, hips: int, feet: Sequence[int]) -> float:
     """Standing height of the hips joint above the lowest of the ``feet`` joints (rest)."""
     z = skel.rest[:, 2, 3]
     return float(z[hips] - min(z[f] for f in feet))
@@ -239,7 +241,7 @@ def _descendants(skel):
     return out
 
 
-def subtree(skel, root):
+def subtree(skel: Skeleton, root: int) -> Skeleton:
     """The skeleton of bone ``root`` and everything below it (parents remapped)."""
     keep = [root] + sorted(_descendants(skel)[root])
     keep.sort()
@@ -263,11 +265,11 @@ class RigMap:
     unmapped: list = field(default_factory=list)  # source bones no target bone plays
 
     @property
-    def mapping(self):
+    def mapping(self) -> dict[str, str]:
         """{source bone name: target bone name}."""
         return {self.source.names[s]: self.target.names[t] for s, t in self.pairs}
 
-    def signature(self):
+    def signature(self) -> str:
         """Short hash of everything that shapes the retargeted motion: rigs with the same
         skeleton and map share it (and so share retargeted segment actions)."""
         h = hashlib.sha1()
@@ -278,7 +280,7 @@ class RigMap:
         h.update(np.round([self.scale, self.floor], 6).tobytes())
         return h.hexdigest()[:10]
 
-    def note(self):
+    def note(self) -> str:
         """One line for reports: conventions, scale and what is left out."""
         src, tgt = self.convention
         text = (
@@ -291,7 +293,7 @@ class RigMap:
                 text += f" and {len(self.unmapped) - 8} more"
         return text
 
-    def global_rotations(self, src_global):
+    def global_rotations(self, src_global: np.ndarray) -> np.ndarray:
         """Target armature-space rotations (F, Jt, 3, 3) from source ones (F, Js, 3, 3)."""
         src, tgt = self.source, self.target
         nf = src_global.shape[0]
@@ -313,18 +315,18 @@ class RigMap:
                 out[:, j] = out[:, p] @ local_rest[j, :3, :3]
         return out
 
-    def rotations(self, src_rotations):
+    def rotations(self, src_rotations: np.ndarray) -> np.ndarray:
         """Target pose rotation channels (F, Jt, 4) from source ones (F, Js, 4)."""
         g = forward_kinematics(self.source, np.zeros((len(src_rotations), 3)), src_rotations)
         return local_rotations_from_global(self.target, self.global_rotations(g[..., :3, :3]))
 
-    def position(self, root_pos):
+    def position(self, root_pos: np.ndarray) -> np.ndarray:
         """Target root head positions (F, 3) from the source's: scaled about the floor."""
         p = np.array(root_pos, float) * self.scale
         p[:, 2] = self.floor + (np.asarray(root_pos)[:, 2] - self.floor) * self.scale
         return p
 
-    def clip(self, clip, name=None):
+    def clip(self, clip: Clip, name: str | None = None) -> Clip:
         """The clip on the target skeleton."""
         tags = dict(clip.tags)
         tags["retargeted_from"] = clip.name
@@ -337,7 +339,7 @@ class RigMap:
             tags,
         )
 
-    def motion(self, m):
+    def motion(self, m: Motion) -> Motion:
         """A planned (in-place) motion on the target: ground positions and the root's
         offset from the ground frame scaled, rotations retargeted, contacts kept."""
         g = m.ground.copy()
@@ -387,7 +389,13 @@ def _aims(source, target, pairs, lat_s, eps=1e-4):
     return out
 
 
-def rig_map(source, target, overrides=None, floor=0.0, label="patch"):
+def rig_map(
+    source: Skeleton,
+    target: Skeleton,
+    overrides: dict[str, str] | None = None,
+    floor: float = 0.0,
+    label: str = "patch",
+) -> "RigMap":
     """The :class:`RigMap` from skeleton ``source`` (a patch's, a clip's) onto ``target``
     (a rig's), pairing bones by role and ``overrides`` ({source bone: target bone or ""}).
 
@@ -428,13 +436,13 @@ def rig_map(source, target, overrides=None, floor=0.0, label="patch"):
             pairs.pop(si, None)
     required = []
     for role in REQUIRED:
-        si = s_roles.get(role)
-        if si is None:
+        found = s_roles.get(role)
+        if found is None:
             raise RetargetError(
                 f"the {label} skeleton has no bone for the {role} (none of "
                 f"the naming conventions {', '.join(CONVENTIONS)} names it)"
             )
-        required.append(si)
+        required.append(found)
     missing = [source.names[si] for si in required if si not in pairs]
     if missing:
         raise RetargetError(
@@ -497,7 +505,7 @@ def rig_map(source, target, overrides=None, floor=0.0, label="patch"):
     )
 
 
-def same_skeleton(a, b, tol=1e-4):
+def same_skeleton(a: Skeleton, b: Skeleton, tol: float = 1e-4) -> bool:
     """Whether two skeletons are the same (names, parents, rest matrices)."""
     return (
         a.names == b.names
@@ -509,7 +517,7 @@ def same_skeleton(a, b, tol=1e-4):
 _SEGMENT = re.compile(r"^(.*)\.\d{3}$")
 
 
-def segment_parent(skel, j):
+def segment_parent(skel: Skeleton, j: int) -> int:
     """The parent of bone ``j``, skipping B-bone style segments of one limb (Rigify's
     ``DEF-shin.L.001`` is the lower half of ``DEF-shin.L``): the joint above ``j``."""
     p = int(skel.parents[j])
@@ -523,7 +531,9 @@ def segment_parent(skel, j):
     return p
 
 
-def retarget(clip, target, scale=None, name=None):
+def retarget(
+    clip: Clip, target: Skeleton, scale: float | None = None, name: str | None = None
+) -> Clip:
     """The clip on another skeleton (another subject, or another naming convention).
 
     Each bone keeps its armature-space rotation relative to its (aligned) rest orientation

@@ -19,7 +19,13 @@ from .motion import Motion
 MIN_RATE = 0.04  # playback rate on the first / last frame (of the recorded pace)
 
 
-def warp_phases(frames, ease_in=False, ease_out=False, ramp=None, min_rate=MIN_RATE):
+def warp_phases(
+    frames: int,
+    ease_in: bool = False,
+    ease_out: bool = False,
+    ramp: float | None = None,
+    min_rate: float = MIN_RATE,
+) -> np.ndarray:
     """Fractional frame positions (K,) at which to sample a motion of ``frames`` frames so
     that its playback rate rises from ``min_rate`` to 1 over ``ramp`` frames of time
     (``ease_in``) and / or falls back to ``min_rate`` over the last ``ramp`` (``ease_out``);
@@ -50,7 +56,7 @@ def warp_phases(frames, ease_in=False, ease_out=False, ramp=None, min_rate=MIN_R
     return u
 
 
-def resample(motion, u):
+def resample(motion: Motion, u: np.ndarray) -> Motion:
     """The motion sampled at fractional frame positions ``u`` (K,): ground and root
     linear, rotations slerped between neighbouring frames, contacts of the nearer frame."""
     lo = np.clip(np.floor(u).astype(int), 0, motion.frames - 1)
@@ -67,7 +73,9 @@ def resample(motion, u):
     return Motion(ground, root, quat.make_continuous(rot, axis=0), motion.contacts[near])
 
 
-def eased(motion, ease_in=False, ease_out=False, ramp=None):
+def eased(
+    motion: Motion, ease_in: bool = False, ease_out: bool = False, ramp: float | None = None
+) -> Motion:
     """``motion`` starting from standing (``ease_in``) and / or stopping (``ease_out``),
     each ramp ``ramp`` frames long (default: as long as the motion)."""
     if not (ease_in or ease_out) or motion.frames < 3:
@@ -81,7 +89,7 @@ def _ramp_area(a):
     return a - a**3 + 0.5 * a**4
 
 
-def hold_phases(frames, at, hold, ramp):
+def hold_phases(frames: int, at: float, hold: int, ramp: float) -> np.ndarray:
     """Fractional frame positions (K,) that play a motion of ``frames`` frames at its pace,
     slow to a stop on frame ``at`` over ``ramp`` frames of time (a smoothstep in rate),
     stay there ``hold`` frames and speed up again over ``ramp``: an idle hold. Held on a
@@ -111,6 +119,6 @@ def hold_phases(frames, at, hold, ramp):
     return u
 
 
-def held(motion, at, hold, ramp):
+def held(motion: Motion, at: float, hold: int, ramp: float) -> Motion:
     """``motion`` with an idle hold of ``hold`` frames on frame ``at`` (:func:`hold_phases`)."""
     return resample(motion, hold_phases(motion.frames, at, hold, ramp))

@@ -13,12 +13,15 @@ read at the same fractional patch frames (:func:`at_scene_rate`), so body and ro
 in step.
 """
 
+from collections.abc import Sequence
+
 import numpy as np
 
+from .motion import Motion
 from .retime import resample
 
 
-def piece_bounds(frames, ratio):
+def piece_bounds(frames: Sequence[int], ratio: float) -> tuple[np.ndarray, np.ndarray]:
     """(patch bounds (P + 1,), scene bounds (P + 1,) ints) of pieces of ``frames`` frames
     each (joined end to start) played ``ratio`` scene frames per patch frame."""
     patch = np.concatenate(([0], np.cumsum([int(f) - 1 for f in frames])))
@@ -28,12 +31,12 @@ def piece_bounds(frames, ratio):
     return patch, scene
 
 
-def scene_positions(patch_bounds, scene_bounds):
+def scene_positions(patch_bounds: np.ndarray, scene_bounds: np.ndarray) -> np.ndarray:
     """Fractional patch frame (K,) shown on each scene frame 0 .. scene_bounds[-1]."""
     return np.interp(np.arange(scene_bounds[-1] + 1), scene_bounds, patch_bounds)
 
 
-def at_scene_rate(motion, patch_bounds, scene_bounds):
+def at_scene_rate(motion: Motion, patch_bounds: np.ndarray, scene_bounds: np.ndarray) -> Motion:
     """``motion`` (on the patch's frames) on the scene's frames: unchanged when they are
     the same, else resampled at :func:`scene_positions`."""
     if np.array_equal(patch_bounds, scene_bounds):

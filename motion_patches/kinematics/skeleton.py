@@ -8,11 +8,15 @@ transforms and mirrors without Blender, and lets a test compare against the deps
 """
 
 import re
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any, TypeVar
 
 import numpy as np
 
 from . import quat
+
+T = TypeVar("T")
 
 
 @dataclass
@@ -24,14 +28,14 @@ class Skeleton:
     # patch bones it plays ({patch bone name: index}, motion_patches.retarget).
     aliases: dict = field(default_factory=dict, repr=False, compare=False)
 
-    def index(self, name):
+    def index(self, name: str) -> int:
         return self.names.index(name)
 
     @property
-    def root(self):
+    def root(self) -> int:
         return int(np.flatnonzero(self.parents < 0)[0])
 
-    def find(self, *candidates):
+    def find(self, *candidates: str) -> int | None:
         """Index of the first bone whose name (or alias) is one of ``candidates``
         (case-insensitive); failing that, of a bone whose name is one of them after a
         ``namespace:`` prefix (Mixamo's ``mixamorig:``) or a Rigify ``DEF-`` prefix."""
@@ -48,7 +52,7 @@ class Skeleton:
                 return bare.index(c.lower())
         raise KeyError(f"none of the bones {candidates} is in the skeleton")
 
-    def local_rest(self):
+    def local_rest(self) -> np.ndarray:
         """(J, 4, 4) rest matrix of each bone relative to its parent's rest matrix."""
         out = self.rest.copy()
         for j, p in enumerate(self.parents):
@@ -56,7 +60,7 @@ class Skeleton:
                 out[j] = np.linalg.inv(self.rest[p]) @ self.rest[j]
         return out
 
-    def mirror_map(self):
+    def mirror_map(self) -> np.ndarray:
         """Index of each bone's left/right counterpart (itself when it has none)."""
 
         def swap(name):
@@ -77,11 +81,11 @@ class Skeleton:
         idx = {n: i for i, n in enumerate(self.names)}
         return np.array([idx.get(swap(n), i) for i, n in enumerate(self.names)])
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
         return {"names": np.array(self.names), "parents": self.parents, "rest": self.rest}
 
     @classmethod
-    def from_dict(cls, d):
+    def from_dict(cls, d: dict[str, Any]) -> "Skeleton":
         return cls(
             [str(n) for n in d["names"]],
             np.asarray(d["parents"], int),
@@ -89,12 +93,12 @@ class Skeleton:
         )
 
 
-def per_skeleton(fn):
+def per_skeleton(fn: Callable[[Skeleton], T]) -> Callable[[Skeleton], T]:
     """``fn(skel)`` made once per skeleton object: what a write derives from the rig alone
     (its legs, its facing) is shared by every character of a crowd on that rig. A
     skeleton is never changed once made, so the entry is keyed by the object; it holds
     the skeleton, so the id is not reused while cached. Arrays come back read-only."""
-    cache = {}
+    cache: dict[int, tuple[Skeleton, T]] = {}
 
     def once(skel):
         hit = cache.get(id(skel))
@@ -107,11 +111,12 @@ def per_skeleton(fn):
             hit = cache[id(skel)] = (skel, value)
         return hit[1]
 
-    once.__doc__, once.__name__, once.__wrapped__ = fn.__doc__, fn.__name__, fn
+    once.__doc__, once.__name__ = fn.__doc__, fn.__name__
+    once.__wrapped__ = fn  # type: ignore[attr-defined]
     return once
 
 
-def compose(rot, pos):
+def compose(rot: np.ndarray, pos: np.ndarray) -> np.ndarray:
     """4x4 matrices from rotation quaternions (..., 4) and positions (..., 3)."""
     m = np.zeros(np.shape(pos)[:-1] + (4, 4))
     m[..., :3, :3] = quat.to_matrix(rot)
@@ -120,7 +125,7 @@ def compose(rot, pos):
     return m
 
 
-def forward_kinematics(skel, root_pos, rotations):
+def forward_kinematics(skel: Skeleton, root_pos: np.ndarray, rotations: np.ndarray) -> np.ndarray:
     """Armature-space bone matrices (F, J, 4, 4).
 
     ``root_pos`` (F, 3) is the root bone's armature-space head position and
@@ -148,19 +153,19 @@ def forward_kinematics(skel, root_pos, rotations):
     return out
 
 
-def root_location_to_position(skel, location):
+def root_location_to_position(skel: Skeleton, location: np.ndarray) -> np.ndarray:
     """Root bone ``location`` channels (F, 3) -> armature-space head positions."""
     r = skel.rest[skel.root]
     return np.asarray(location, float) @ r[:3, :3].T + r[:3, 3]
 
 
-def root_position_to_location(skel, pos):
+def root_position_to_location(skel: Skeleton, pos: np.ndarray) -> np.ndarray:
     """Inverse of :func:`root_location_to_position`."""
     r = skel.rest[skel.root]
     return (np.asarray(pos, float) - r[:3, 3]) @ r[:3, :3]
 
 
-def local_rotations_from_global(skel, global_rot):
+def local_rotations_from_global(skel: Skeleton, global_rot: np.ndarray) -> np.ndarray:
     """Pose rotation channels (F, J, 4) that give armature-space rotations (F, J, 3, 3)."""
     local_rest = skel.local_rest()
     nf, nj = global_rot.shape[:2]

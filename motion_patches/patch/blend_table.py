@@ -23,6 +23,8 @@ import numpy as np
 
 from ..kinematics import poses, quat
 from ..kinematics.motion import Motion
+from .gait import Gait
+from .locomotion_patch import LocomotionPatch
 
 
 @dataclass
@@ -39,7 +41,7 @@ class Transition:
     end_pose: int  # target pose cluster the blend ends in
 
     @property
-    def frames(self):
+    def frames(self) -> int:
         return self.motion.frames
 
 
@@ -59,7 +61,7 @@ def _at(loop, u):
     return root, rot, con
 
 
-def blend(gait_a, gait_b, phase=0):
+def blend(gait_a: Gait, gait_b: Gait, phase: int = 0) -> Motion:
     """Motion blending ``gait_a``'s straight loop from its frame ``phase`` into
     ``gait_b``'s straight loop, ending on B's cycle start (its node pose); the ground goes
     straight along +x from the origin. Both gaits must share one skeleton."""
@@ -92,7 +94,7 @@ def blend(gait_a, gait_b, phase=0):
     return Motion(ground, root, quat.make_continuous(q), con)
 
 
-def from_node(patch_a, patch_b):
+def from_node(patch_a: LocomotionPatch, patch_b: LocomotionPatch) -> Transition:
     """The blend table's entry for the node pose of ``patch_a`` (every segment starts and
     ends on it: its straight loop's cycle start, phase 0) into ``patch_b``: a layer is
     changed where one of its segments ends, feet planted as both gaits plant them. The
@@ -116,7 +118,7 @@ def from_node(patch_a, patch_b):
     return got
 
 
-def table(patch_a, patch_b):
+def table(patch_a: LocomotionPatch, patch_b: LocomotionPatch) -> list[Transition]:
     """The blend table from ``patch_a``'s layer into ``patch_b``'s: one
     :class:`Transition` per pose cluster of A, starting at the straight loop's frame
     nearest that cluster, ending in B's node pose."""

@@ -6,12 +6,16 @@ fits thousands of them; tangent magnitudes are ``scale * chord`` so one scalar p
 controls its length (the paper's "scale the tangent vectors").
 """
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
+# measure(pos, vel, acc[, kappa]) of sampled curves (C, M, 2) -> (C,): arc length, cycles, ...
+Measure = Callable[..., np.ndarray]
 
-def unit(angle):
+
+def unit(angle: float | np.ndarray) -> np.ndarray:
     angle = np.asarray(angle, float)
     return np.stack((np.cos(angle), np.sin(angle)), axis=-1)
 
@@ -47,7 +51,14 @@ def _hermite_parts(p0, d0, p1, d1, u):
     ]
 
 
-def hermite(p0, d0, p1, d1, scale, u):
+def hermite(
+    p0: np.ndarray,
+    d0: np.ndarray,
+    p1: np.ndarray,
+    d1: np.ndarray,
+    scale: float | np.ndarray,
+    u: np.ndarray,
+) -> tuple[np.ndarray, ...]:
     """Positions, first and second derivatives (C, M, 2) of Hermite curves at params u (M,).
 
     ``p0, p1`` (C, 2) end points, ``d0, d1`` (C, 2) unit end directions, ``scale`` (C,).
@@ -59,7 +70,7 @@ def hermite(p0, d0, p1, d1, scale, u):
     return tuple((ctrl @ b).reshape(c, 2, -1).transpose(0, 2, 1) for b in _basis(u))
 
 
-def curvature(vel, acc):
+def curvature(vel: np.ndarray, acc: np.ndarray) -> np.ndarray:
     """Signed curvature (1/m) from derivatives (..., 2); positive turns left."""
     vx, vy = vel[..., 0], vel[..., 1]
     cross = vx * acc[..., 1] - vy * acc[..., 0]
@@ -67,7 +78,9 @@ def curvature(vel, acc):
     return cross / (speed * speed * speed)
 
 
-def follows_turn_limits(pos, vel, kmin, kmax, slack=0.02):
+def follows_turn_limits(
+    pos: np.ndarray, vel: np.ndarray, kmin: float, kmax: float, slack: float = 0.02
+) -> np.ndarray:
     """(C,) True where sampled curves (C, M, 2) turn, between every two samples, no more
     than the curvature limits allow over the distance between them (plus ``slack``
     radians). Curvature at the samples misses a cusp: where the speed vanishes the tangent
@@ -80,7 +93,7 @@ def follows_turn_limits(pos, vel, kmin, kmax, slack=0.02):
     return ok.all(axis=-1)
 
 
-def arc_lengths(pos):
+def arc_lengths(pos: np.ndarray) -> np.ndarray:
     """Cumulative chord length along sampled curves (..., M, 2) -> (..., M)."""
     dx, dy = np.diff(pos[..., 0], axis=-1), np.diff(pos[..., 1], axis=-1)
     seg = np.sqrt(dx * dx + dy * dy)
@@ -97,10 +110,10 @@ class Curve:
     kappa: np.ndarray  # (M,) signed curvature
 
     @property
-    def length(self):
+    def length(self) -> float:
         return float(self.s[-1])
 
-    def at(self, s):
+    def at(self, s: float | np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(x, y, heading, curvature) arrays at arc lengths ``s``."""
         s = np.clip(np.asarray(s, float), 0.0, self.length)
         x = np.interp(s, self.s, self.pos[:, 0])
@@ -109,11 +122,11 @@ class Curve:
         k = np.interp(s, self.s, self.kappa)
         return x, y, h, k
 
-    def total_turn(self):
+    def total_turn(self) -> float:
         return float(np.sum(np.abs(np.diff(self.heading))))
 
 
-def joined(a, b):
+def joined(a: Curve, b: Curve) -> Curve:
     """One curve running along ``a`` then ``b`` (b starts where a ends)."""
     turns = np.round((a.heading[-1] - b.heading[0]) / (2 * np.pi)) * 2 * np.pi
     return Curve(
@@ -124,7 +137,9 @@ def joined(a, b):
     )
 
 
-def hermite_curve(p0, d0, p1, d1, scale, samples=257):
+def hermite_curve(
+    p0: np.ndarray, d0: np.ndarray, p1: np.ndarray, d1: np.ndarray, scale: float, samples: int = 257
+) -> Curve:
     """The :class:`Curve` of one Hermite curve, ``samples`` samples evenly in its parameter."""
     return hermite_curves(
         np.atleast_2d(p0),
@@ -136,7 +151,14 @@ def hermite_curve(p0, d0, p1, d1, scale, samples=257):
     )[0]
 
 
-def hermite_curves(p0, d0, p1, d1, scale, samples=257):
+def hermite_curves(
+    p0: np.ndarray,
+    d0: np.ndarray,
+    p1: np.ndarray,
+    d1: np.ndarray,
+    scale: float | np.ndarray,
+    samples: int = 257,
+) -> list[Curve]:
     """:func:`hermite_curve` of many curves (C,) at once: a list of C curves."""
     pos, vel, acc = hermite(p0, d0, p1, d1, scale, np.linspace(0.0, 1.0, samples))
     pos = np.ascontiguousarray(pos)
@@ -145,7 +167,7 @@ def hermite_curves(p0, d0, p1, d1, scale, samples=257):
     return [Curve(s[i], pos[i], heading[i], kappa[i]) for i in range(pos.shape[0])]
 
 
-def curve_length(pos, vel, acc):
+def curve_length(pos: np.ndarray, vel: np.ndarray, acc: np.ndarray) -> np.ndarray:
     return arc_lengths(pos)[..., -1]
 
 
@@ -154,8 +176,15 @@ TABULATE_BATCH = 100_000  # samples evaluated together when tabulating few curve
 
 
 def tabulate(
-    p0, d0, p1, d1, measure=curve_length, scales=DEFAULT_SCALES, samples=96, shares_curvature=False
-):
+    p0: np.ndarray,
+    d0: np.ndarray,
+    p1: np.ndarray,
+    d1: np.ndarray,
+    measure: Measure = curve_length,
+    scales: np.ndarray = DEFAULT_SCALES,
+    samples: int = 96,
+    shares_curvature: bool = False,
+) -> tuple[np.ndarray, np.ndarray]:
     """``measure`` and largest |curvature| of curves (C,) at every scale of a grid (C, S).
     The curves at each scale are their fixed part plus the scale times their tangent part
     (:func:`_hermite_parts`); with ``shares_curvature`` the measure is called with the
@@ -181,8 +210,16 @@ def tabulate(
 
 
 def fit_scale(
-    p0, d0, p1, d1, target, measure=curve_length, scales=DEFAULT_SCALES, samples=96, table=None
-):
+    p0: np.ndarray,
+    d0: np.ndarray,
+    p1: np.ndarray,
+    d1: np.ndarray,
+    target: float | np.ndarray,
+    measure: Measure = curve_length,
+    scales: np.ndarray = DEFAULT_SCALES,
+    samples: int = 96,
+    table: tuple[np.ndarray, np.ndarray] | None = None,
+) -> np.ndarray:
     """Tangent scale per curve whose ``measure`` equals ``target`` (C,), NaN where none does.
 
     ``measure(pos, vel, acc)`` maps sampled curves (C, M, 2) to (C,) (arc length by
@@ -232,7 +269,9 @@ def fit_scale(
     return out
 
 
-def arc_frame(p0, heading0, kappa, s):
+def arc_frame(
+    p0: np.ndarray, heading0: float, kappa: float, s: float | np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Position (..., 2) and heading on a constant-curvature arc after arc length ``s``."""
     s = np.asarray(s, float)
     h = heading0 + kappa * s
@@ -246,7 +285,7 @@ def arc_frame(p0, heading0, kappa, s):
     return pos, h
 
 
-def arc_project(p0, heading0, kappa, points):
+def arc_project(p0: np.ndarray, heading0: float, kappa: float, points: np.ndarray) -> np.ndarray:
     """Arc length of the closest point on the arc for each point (N, 2)."""
     points = np.asarray(points, float)
     if abs(kappa) < 1e-9:

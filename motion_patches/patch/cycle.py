@@ -7,7 +7,9 @@ travelled distance per frame, and contacts; the small mismatch between the first
 pose is spread linearly over the cycle so the loop repeats without a pop.
 """
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -31,18 +33,18 @@ class Loop:
     seam_deg: float  # largest joint mismatch spread over the cycle by the seam fix
 
     @property
-    def frames(self):
+    def frames(self) -> int:
         return self.rotations.shape[0]
 
     @property
-    def cycle_distance(self):
+    def cycle_distance(self) -> float:
         return float(self.distance[-1])
 
     @property
-    def curvature(self):
+    def curvature(self) -> float:
         return self.turn / self.cycle_distance
 
-    def to_dict(self, prefix):
+    def to_dict(self, prefix: str) -> dict[str, Any]:
         return {
             prefix + k: v
             for k, v in (
@@ -56,7 +58,7 @@ class Loop:
         }
 
     @classmethod
-    def from_dict(cls, d, prefix):
+    def from_dict(cls, d: Mapping[str, Any], prefix: str) -> "Loop":
         turn, seam = d[prefix + "scalars"]
         return cls(
             str(d[prefix + "name"]),
@@ -77,7 +79,7 @@ class CycleInfo:
     speed: float  # m/s
 
 
-def detect_cycles(clip):
+def detect_cycles(clip: Clip) -> CycleInfo:
     """Left-foot strikes, cycle period and distance of a locomotion clip.
 
     Raises ValueError when fewer than two strikes are found (not a gait clip).
@@ -100,13 +102,13 @@ def detect_cycles(clip):
     )
 
 
-def cycle_turns(clip, info):
+def cycle_turns(clip: Clip, info: CycleInfo) -> np.ndarray:
     """Heading change (radians) over each detected cycle, from the root's facing."""
     yaw = facing_yaw(clip)
     return yaw[info.strikes[1:]] - yaw[info.strikes[:-1]]
 
 
-def extract_loop(clip, start, end, frames, name=None):
+def extract_loop(clip: Clip, start: int, end: int, frames: int, name: str | None = None) -> Loop:
     """Loop of the cycle between frames ``start`` and ``end`` resampled to ``frames`` frames."""
     times = (start + (end - start) * np.arange(frames + 1) / frames) / clip.fps
     pos, rot = sample(clip, times)
@@ -151,7 +153,7 @@ def extract_loop(clip, start, end, frames, name=None):
     )
 
 
-def best_cycle(clip, info, prefer="seam"):
+def best_cycle(clip: Clip, info: CycleInfo, prefer: str = "seam") -> tuple[int, int]:
     """(start, end) frames of the cycle to loop: smallest pose seam, or largest turn."""
     pairs = list(zip(info.strikes[:-1], info.strikes[1:]))
     if prefer == "turn":

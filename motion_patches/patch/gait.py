@@ -11,7 +11,9 @@ straight clip alone turns too, up to ``STRAIGHT_BEND_RADIUS`` (turn clips that t
 sharper widen the range).
 """
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -30,15 +32,15 @@ class Gait:
     skeleton: Skeleton
     loops: list  # Loop, sorted by curvature; exactly one is straight
     notes: list = field(default_factory=list)  # provenance, e.g. "right turn mirrored from 16_18"
-    turn_range: tuple = None  # sharpest (right, left) curvature: turn clips' one-cycle
+    turn_range: tuple | None = None  # sharpest (right, left) curvature: turn clips' one-cycle
     # windows, at least the straight stride's bend
 
     @property
-    def frames(self):
+    def frames(self) -> int:
         return self.loops[0].frames
 
     @property
-    def straight(self):
+    def straight(self) -> Loop:
         # Asked for in every connector and synthesis call: the loop list is fixed once a
         # gait is built, so its index is looked up once.
         key = id(self.loops), len(self.loops)
@@ -49,18 +51,18 @@ class Gait:
         return self.loops[cached[1]]
 
     @property
-    def curvatures(self):
+    def curvatures(self) -> np.ndarray:
         """Blend parameter of each loop: its curvature, the straight loop's taken as 0."""
         k = np.array([lp.curvature for lp in self.loops])
         k[np.argmin(np.abs(k))] = 0.0
         return k
 
     @property
-    def cycle_distance(self):
+    def cycle_distance(self) -> float:
         return self.straight.cycle_distance
 
     @property
-    def kappa_limits(self):
+    def kappa_limits(self) -> tuple[float, float]:
         """Curvature range the bake culls with: the loops, the sharpest one-cycle window
         of the turn clips and the straight stride's bend (``turn_range``)."""
         k = np.array([lp.curvature for lp in self.loops])
@@ -69,7 +71,7 @@ class Gait:
             lo, hi = min(lo, self.turn_range[0]), max(hi, self.turn_range[1])
         return lo, hi
 
-    def weights(self, kappa):
+    def weights(self, kappa: float | np.ndarray) -> np.ndarray:
         """(K, L) blend weights of the loops for curvatures (K,): two neighbours lerped."""
         k = self.curvatures
         if len(k) == 1:
@@ -83,29 +85,31 @@ class Gait:
         np.put_along_axis(w, hi[..., None], t[..., None], axis=-1)
         return w
 
-    def blended_distance(self, kappa):
+    def blended_distance(self, kappa: float | np.ndarray) -> np.ndarray:
         """Cycle distance at curvatures ``kappa``; equals ``weights(kappa) @ distances``."""
         return np.interp(kappa, self.curvatures, self.cycle_distances())
 
-    def straight_weights(self, n):
+    def straight_weights(self, n: int) -> np.ndarray:
         w = np.zeros((n, len(self.loops)))
         w[:, int(np.argmin(np.abs(self.curvatures)))] = 1.0
         return w
 
-    def floor(self):
+    def floor(self) -> float:
         """Floor height under the straight loop (where interaction clips are put down)."""
         lp = self.straight
         return floor_level(Clip("loop", self.skeleton, self.fps, lp.root_local, lp.rotations))
 
-    def cycle_distances(self):
+    def cycle_distances(self) -> np.ndarray:
         return np.array([lp.cycle_distance for lp in self.loops])
 
-    def steps(self, phase, weights):
+    def steps(self, phase: int | np.ndarray, weights: np.ndarray) -> np.ndarray:
         """Distance travelled from frame ``phase`` to the next, blended (K,)."""
         st = np.stack([np.diff(lp.distance) for lp in self.loops], axis=1)  # (N, L)
         return np.sum(st[np.asarray(phase) % self.frames] * weights, axis=-1)
 
-    def pose(self, phase, weights):
+    def pose(
+        self, phase: int | np.ndarray, weights: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Blended root_local (K, 3), rotations (K, J, 4), contacts (K, 4) at frame phases."""
         ph = np.asarray(phase) % self.frames
         root = np.zeros((ph.size, 3))
@@ -132,7 +136,7 @@ class Gait:
             acc = acc + w
         return root, quat.make_continuous(rot), contacts
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
         d = {
             "gait_layer": np.array(self.layer),
             "gait_fps": np.array(self.fps),
@@ -146,7 +150,7 @@ class Gait:
         return d
 
     @classmethod
-    def from_dict(cls, d):
+    def from_dict(cls, d: Mapping[str, Any]) -> "Gait":
         skel = Skeleton.from_dict({k[5:]: d[k] for k in d if k.startswith("skel_")})
         loops = [Loop.from_dict(d, f"loop{i}_") for i in range(int(d["gait_count"]))]
         tr = tuple(float(v) for v in d["gait_turn_range"]) if "gait_turn_range" in d else None
@@ -190,7 +194,7 @@ its entry states have a way on and 6 of 20 random pillar fields are planned (1 m
 """
 
 
-def sharpest_turn(clip, cycle_frames):
+def sharpest_turn(clip: Clip, cycle_frames: float) -> tuple[float, float]:
     """(most negative, most positive) heading change per metre over any window of one
     cycle: the curvature a turn clip really reaches, not only at strike-aligned cycles."""
     yaw = facing_yaw(clip)
@@ -202,8 +206,13 @@ def sharpest_turn(clip, cycle_frames):
 
 
 def build_gait(
-    layer, straight, turns=(), fps=30.0, mirror_turns=True, bend_radius=STRAIGHT_BEND_RADIUS
-):
+    layer: str,
+    straight: Clip,
+    turns: Sequence[Clip] = (),
+    fps: float = 30.0,
+    mirror_turns: bool = True,
+    bend_radius: float = STRAIGHT_BEND_RADIUS,
+) -> Gait:
     """Gait of a layer from a straight clip and turn clips (all one skeleton).
 
     Every cycle of a turn clip that turns by at least ``MIN_TURN`` becomes a loop; when
@@ -248,8 +257,8 @@ def build_gait(
     turn_loops = [tc for c in turns for tc in turning_cycles(c)]
     lo, hi = -1.0 / bend_radius, 1.0 / bend_radius
     for c in turns:
-        a, b = sharpest_turn(c, detect_cycles(c).period * c.fps)
-        lo, hi = min(lo, a), max(hi, b)
+        right, left = sharpest_turn(c, detect_cycles(c).period * c.fps)
+        lo, hi = min(lo, right), max(hi, left)
     has_left = any(lp[3].split(" ")[1] == "left" for lp in turn_loops)
     has_right = any(lp[3].split(" ")[1] == "right" for lp in turn_loops)
     if mirror_turns and turn_loops and has_left != has_right:

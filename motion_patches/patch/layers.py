@@ -17,7 +17,12 @@ Traversal clips declare the layer they are entered from and left in (``layer_in`
 sides (:func:`serves`).
 """
 
+from collections.abc import Sequence
+from typing import Any
+
 import numpy as np
+
+from .gait import Gait
 
 GAITS = ("walk", "run", "auto")
 
@@ -33,19 +38,19 @@ REFERENCE_WALK_SPEED = 1.2  # m/s: the walking pace ``WALK_EFFORT_RATE`` is coun
 FLIGHT_SHARE = 0.05  # share of a cycle with no foot planted that makes a gait a run
 
 
-def has_flight(gait):
+def has_flight(gait: Gait) -> bool:
     """True when the gait's straight cycle has a flight phase (frames with no foot
     joint planted): a run, whatever its layer is called."""
     c = np.asarray(gait.straight.contacts, bool)
     return bool(np.mean(~c.any(axis=1)) >= FLIGHT_SHARE)
 
 
-def speed(gait):
+def speed(gait: Gait) -> float:
     """Metres per second of the gait's straight cycle."""
     return float(gait.cycle_distance * gait.fps / gait.frames)
 
 
-def effort_rate(gait):
+def effort_rate(gait: Gait) -> float:
     """Effort T per second of a layer: ``WALK_EFFORT_RATE`` for a gait without flight,
     ``RUN_COST_PER_METRE`` x speed / ``REFERENCE_WALK_SPEED`` for a run (2 x 2.81 / 1.2 =
     4.7 for CMU 16_35). With the default weights a metre of running then costs a little
@@ -56,7 +61,7 @@ def effort_rate(gait):
     return WALK_EFFORT_RATE
 
 
-def serves(clip, layer):
+def serves(clip: Any, layer: str) -> bool:
     """A traversal clip is used by the patch of ``layer`` when both its incoming and its
     outgoing layer name it (each a name, a comma-separated list of names, or "*" for
     every layer: the 16_06 standing jump may serve "walk, run")."""
@@ -69,7 +74,7 @@ def serves(clip, layer):
     )
 
 
-def for_layer(prop, layer):
+def for_layer(prop: Any, layer: str) -> Any:
     """The object patch with only the traversal clips that serve ``layer`` (interaction
     clips are kept: they start or end a path in whatever layer it walks)."""
     from dataclasses import replace
@@ -80,7 +85,7 @@ def for_layer(prop, layer):
     return replace(prop, clips=keep)
 
 
-def check_gait(gait_choice):
+def check_gait(gait_choice: str) -> str:
     """Refuse a layer choice that is not a layer name or "auto"; returns it stripped."""
     if not isinstance(gait_choice, str) or not gait_choice.strip():
         raise ValueError(
@@ -89,11 +94,11 @@ def check_gait(gait_choice):
     return gait_choice.strip()
 
 
-def choose(costs):
+def choose(costs: Sequence[float | None]) -> int | None:
     """Index of the cheapest of the layers' plan costs (ties: the first given, walk
     before run); None when no layer has a plan (cost None)."""
-    best = None
+    best: int | None = None
     for i, c in enumerate(costs):
-        if c is not None and (best is None or c < costs[best]):
+        if c is not None and (best is None or c < costs[best]):  # type: ignore[operator]
             best = i
     return best

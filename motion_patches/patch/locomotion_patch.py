@@ -10,13 +10,17 @@ curve (its frames are synthesised on demand), its cell bitmask ``B_P`` and cost 
 A patch too sparse to connect tiles is refused (:class:`SparsePatch`).
 """
 
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from ..kinematics import poses
+from ..kinematics.motion import Motion
 from ..quality.validate import segment_glitches
 from . import curves
+from .curves import Curve
 from .gait import Gait
 from .synthesis import cycles_along, follow, frame_arclengths
 
@@ -49,16 +53,20 @@ class SparsePatch(ValueError):
     """A bake whose segments leave too many entry states without a way on."""
 
 
-def node_id(edge, slot, direction, nodes):
+def node_id(
+    edge: int | np.ndarray, slot: int | np.ndarray, direction: int | np.ndarray, nodes: int
+) -> np.ndarray:
     return (np.asarray(edge) * nodes + np.asarray(slot)) * DIRECTIONS + np.asarray(direction)
 
 
-def split_node_id(node, nodes):
+def split_node_id(node: int | np.ndarray, nodes: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     node = np.asarray(node)
     return node // (nodes * DIRECTIONS), (node // DIRECTIONS) % nodes, node % DIRECTIONS
 
 
-def node_position(edge, slot, side, nodes):
+def node_position(
+    edge: int | np.ndarray, slot: int | np.ndarray, side: float, nodes: int
+) -> np.ndarray:
     """Local (x, y) of node slots on edges; slots run along +x or +y."""
     edge = np.asarray(edge)
     t = (np.asarray(slot) + 0.5) * side / nodes
@@ -88,14 +96,16 @@ class LocomotionPatch:
     stats: dict = field(default_factory=dict)
 
     @property
-    def cell_size(self):
+    def cell_size(self) -> float:
         return self.side / self.cells
 
     @property
-    def segment_count(self):
+    def segment_count(self) -> int:
         return int(self.seg_entry.size)
 
-    def endpoints(self, seg):
+    def endpoints(
+        self, seg: int | np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """p0, d0, p1, d1 arrays of segments (local coordinates, unit directions)."""
         e0, k0, h0 = split_node_id(self.seg_entry[seg], self.nodes)
         e1, k1, h1 = split_node_id(self.seg_exit[seg], self.nodes)
@@ -106,20 +116,20 @@ class LocomotionPatch:
             curves.unit(h1 * np.pi / 4),
         )
 
-    def curve(self, seg):
+    def curve(self, seg: int) -> Curve:
         p0, d0, p1, d1 = self.endpoints(np.array([seg]))
         return curves.hermite_curve(p0[0], d0[0], p1[0], d1[0], self.seg_scale[seg])
 
-    def curves(self, segs):
+    def curves(self, segs: np.ndarray) -> list[Curve]:
         """:meth:`curve` of many segments, sampled together."""
         p0, d0, p1, d1 = self.endpoints(np.asarray(segs))
         return curves.hermite_curves(p0, d0, p1, d1, self.seg_scale[segs])
 
-    def motion(self, seg):
+    def motion(self, seg: int) -> Motion:
         """Synthesised in-place motion of one segment, in patch coordinates."""
         return follow(self.gait, self.curve(seg), cycles=int(self.seg_cycles[seg]))
 
-    def all_ground(self):
+    def all_ground(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Every segment's ground frames stacked (T, 3), arc lengths (T,), and each
         segment's first row (S + 1,): one array to search when stitching (cached)."""
         cache = self.__dict__.get("_all_ground")
@@ -138,7 +148,7 @@ class LocomotionPatch:
             self.__dict__["_all_ground"] = cache
         return cache
 
-    def path_points(self):
+    def path_points(self) -> np.ndarray:
         """(S, PATH_SAMPLES, 2) points along every segment's curve, patch coordinates, at
         most about 4 cm apart: what the planner tests exactly against footprints when a
         segment crosses cells only partly occluded (cached)."""
@@ -151,7 +161,7 @@ class LocomotionPatch:
             pts = self.__dict__["_path_points"] = np.ascontiguousarray(pts)
         return pts
 
-    def ground(self, seg, curve=None):
+    def ground(self, seg: int, curve: Curve | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(F, 3) ground frames of a segment (patch coordinates) and (F,) arc lengths,
         without synthesising poses; cached, as stitching looks at many segments
         (``curve``: the segment's curve, when the caller has it)."""
@@ -164,7 +174,7 @@ class LocomotionPatch:
             g = cache[seg] = (np.column_stack((x, y, h)), s)
         return g
 
-    def without(self, segments):
+    def without(self, segments: Iterable[int]) -> "LocomotionPatch":
         """The patch with the given segments removed (caches dropped)."""
         keep = np.setdiff1d(np.arange(self.segment_count), np.asarray(segments, int))
         arrays = {name: getattr(self, name)[keep] for name in SEGMENT_ARRAYS}
@@ -180,11 +190,11 @@ class LocomotionPatch:
             **arrays,
         )
 
-    def costs(self, alpha, beta, gamma):
+    def costs(self, alpha: float, beta: float, gamma: float) -> np.ndarray:
         """Eq. 5 cost of every segment for the weights of one character."""
         return alpha * self.seg_length + beta * self.seg_turn + gamma * self.seg_effort
 
-    def by_entry(self):
+    def by_entry(self) -> tuple[np.ndarray, np.ndarray]:
         """CSR index: segments of entry state e are order[start[e]:start[e + 1]]."""
         n = EDGES * self.nodes * DIRECTIONS
         order = np.argsort(self.seg_entry, kind="stable")
@@ -192,7 +202,7 @@ class LocomotionPatch:
         return order, start
 
 
-def cell_mask(points, side, cells):
+def cell_mask(points: np.ndarray, side: float, cells: int) -> np.ndarray:
     """uint64 bitmask of the cells of a square of ``side`` that points (..., M, 2) visit."""
     c = side / cells
     ix = np.clip(np.floor(points[..., 0] / c).astype(np.int64), 0, cells - 1)
@@ -201,22 +211,30 @@ def cell_mask(points, side, cells):
     return np.bitwise_or.reduce(bits, axis=-1)
 
 
-def candidate_states(nodes):
+def candidate_states(nodes: int) -> tuple[np.ndarray, np.ndarray]:
     """All (entry id, exit id) pairs: entries point inward, exits outward, other edges."""
-    entries, exits = [], []
+    entry_list, exit_list = [], []
     for e in range(EDGES):
         for k in range(nodes):
             for dd in (-1, 0, 1):
-                entries.append((e, k, (INWARD[e] + dd) % DIRECTIONS))
-                exits.append((e, k, (INWARD[e] + 4 + dd) % DIRECTIONS))
-    entries, exits = np.array(entries), np.array(exits)
+                entry_list.append((e, k, (INWARD[e] + dd) % DIRECTIONS))
+                exit_list.append((e, k, (INWARD[e] + 4 + dd) % DIRECTIONS))
+    entries, exits = np.array(entry_list), np.array(exit_list)
     ei, xi = np.meshgrid(np.arange(len(entries)), np.arange(len(exits)), indexing="ij")
     ei, xi = ei.ravel(), xi.ravel()
     keep = entries[ei, 0] != exits[xi, 0]
     return entries[ei[keep]], exits[xi[keep]]
 
 
-def bake(gait, cells=8, nodes=8, side=None, effort_rate=1.0, curvature_margin=1.0, progress=None):
+def bake(
+    gait: Gait,
+    cells: int = 8,
+    nodes: int = 8,
+    side: float | None = None,
+    effort_rate: float = 1.0,
+    curvature_margin: float = 1.0,
+    progress: Callable[[float], object] | None = None,
+) -> LocomotionPatch:
     """Bake the locomotion patch of a gait; ``progress(fraction)`` is called as it goes."""
     if cells * cells > 64:
         raise ValueError(f"{cells}x{cells} cells do not fit a 64-bit cell bitmask")
@@ -297,7 +315,7 @@ def bake(gait, cells=8, nodes=8, side=None, effort_rate=1.0, curvature_margin=1.
     culled = {
         r: int(np.sum(reason[np.isnan(scale)] == r)) for r in ("curvature", "outside", "no fit")
     }
-    stats = {
+    stats: dict[str, Any] = {
         "candidates": int(ncand),
         "kept": int(keep.size),
         "culled": int(ncand - keep.size),
@@ -343,16 +361,17 @@ def bake(gait, cells=8, nodes=8, side=None, effort_rate=1.0, curvature_margin=1.
     return patch
 
 
-def entry_share(patch):
+def entry_share(patch: LocomotionPatch) -> float:
     """Share of the patch's entry states (every node, its three inward headings) that at
     least one segment leaves from: where a walk entering the tile there can go on."""
     return float(np.unique(patch.seg_entry).size / (EDGES * patch.nodes * 3))
 
 
-def sparse_message(patch):
+def sparse_message(patch: LocomotionPatch) -> str:
     """Why a bake is refused as too sparse (from its ``stats``), and what to add."""
     stats = patch.stats
-    by, kmin, kmax = stats["culled_by"], *stats["curvature_limits"]
+    by = stats["culled_by"]
+    kmin, kmax = stats["curvature_limits"]
     radius = 1.0 / max(min(-kmin, kmax), 1e-9)
     why = [f"{by['curvature']:,} bend tighter than the gait turns (radius {radius:.2f} m)"]
     why += [

@@ -10,6 +10,8 @@ written in the header; files of a newer schema are refused.
 
 import io
 import json
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
@@ -23,7 +25,7 @@ VERSION = 1
 _ARRAYS = (*SEGMENT_ARRAYS, "pose_centres")
 
 
-def patch_to_bytes(patch):
+def patch_to_bytes(patch: LocomotionPatch) -> bytes:
     header = {
         "format": FORMAT,
         "version": VERSION,
@@ -42,7 +44,7 @@ def patch_to_bytes(patch):
     return buf.getvalue()
 
 
-def patch_from_bytes(data):
+def patch_from_bytes(data: bytes) -> LocomotionPatch:
     """Inverse of :func:`patch_to_bytes`; ValueError naming the cause on anything that is
     not a patch this add-on can plan with: every header field and every array's dtype,
     shape and values are checked (:func:`validate`) before a patch is built."""
@@ -53,7 +55,7 @@ def patch_from_bytes(data):
         raise ValueError(f"not a stored locomotion patch ({exc})") from None
     header = validate(d)
     gait = Gait.from_dict(d)
-    return LocomotionPatch(
+    return LocomotionPatch(  # type: ignore[call-arg]  # (mypy cannot count the *arrays)
         header["layer"],
         gait,
         float(header["side"]),
@@ -122,7 +124,7 @@ def _number(header, key, integer=False, lo=None, hi=None, above=None):
     return v
 
 
-def validate(d):
+def validate(d: Mapping[str, np.ndarray]) -> dict[str, Any]:
     """The header (dict) of the arrays ``d`` read from a patch file, after checking the
     header's fields (format tag, schema version, layer, side, cells, nodes, effort rate,
     stats) and every array the patch and its gait are built from; ValueError naming the

@@ -9,13 +9,21 @@ loop, so every node carries the same pose and segments join without a pop.
 import numpy as np
 
 from ..kinematics.motion import Motion
-from .curves import arc_lengths, curvature
+from .curves import Curve, arc_lengths, curvature
+from .gait import Gait
 
 RAMP = 0.25  # of a straight cycle's distance: blend easing length at segment ends
 WEIGHT_WINDOW = 0.125  # of a gait cycle's frames: loop weights averaged this far either side
 
 
-def cycles_along(gait, pos, vel, acc, eased=(True, True), kappa=None):
+def cycles_along(
+    gait: Gait,
+    pos: np.ndarray,
+    vel: np.ndarray,
+    acc: np.ndarray,
+    eased: tuple[bool, bool] = (True, True),
+    kappa: np.ndarray | None = None,
+) -> np.ndarray:
     """Gait cycles needed to follow sampled curves (..., M, 2) -> (...).
 
     The phase advances by ds / D(w(s)) with D the blended cycle distance at the eased
@@ -32,7 +40,9 @@ def cycles_along(gait, pos, vel, acc, eased=(True, True), kappa=None):
     return np.sum(np.diff(s, axis=-1) / dmid, axis=-1)
 
 
-def cycles_along_many(gait, pos, first, eased=(True, True)):
+def cycles_along_many(
+    gait: Gait, pos: np.ndarray, first: np.ndarray, eased: tuple[bool, bool] = (True, True)
+) -> np.ndarray:
     """:func:`cycles_along` of many sampled curves at once, each with the derivatives
     ``np.gradient`` takes of its samples: ``pos`` (N, 2) holds the curves one after the
     other, curve c from row ``first[c]`` to ``first[c + 1]`` (at least 3 rows each)."""
@@ -73,7 +83,13 @@ def _ease(s, length, ramp_len, eased):
     return e
 
 
-def frame_arclengths(gait, curve, cycles=None, start_phase=0, eased=(True, True)):
+def frame_arclengths(
+    gait: Gait,
+    curve: Curve,
+    cycles: int | str | None = None,
+    start_phase: int = 0,
+    eased: tuple[bool, bool] = (True, True),
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Frame phases (K,), arc length of the root on the curve per frame (K,), and the
     curve's easing weights: the timing of :func:`follow` without building any pose."""
     n = gait.frames
@@ -93,6 +109,7 @@ def frame_arclengths(gait, curve, cycles=None, start_phase=0, eased=(True, True)
         phase_at *= (whole - profile[start_phase]) / phase_at[-1]
         total = whole * n - start_phase
     elif cycles is not None:
+        assert not isinstance(cycles, str), cycles  # "to node" is the one word
         phase_at *= cycles / phase_at[-1]
         total = cycles * n
     else:
@@ -105,7 +122,7 @@ def frame_arclengths(gait, curve, cycles=None, start_phase=0, eased=(True, True)
     return k, np.interp(target, phase_at, curve.s), ease
 
 
-def held_weights(weights, half):
+def held_weights(weights: np.ndarray, half: int) -> np.ndarray:
     """Loop weights (K, L) averaged over ``half`` frames either side, the window shrinking
     towards both ends so the first and last frames keep their own weights (a segment still
     starts and ends on the node pose). Loops of neighbouring curvatures can be different
@@ -122,7 +139,13 @@ def held_weights(weights, half):
     return (c[f + h + 1] - c[f - h]) / (2 * h + 1)[:, None]
 
 
-def follow(gait, curve, cycles=None, start_phase=0, eased=(True, True)):
+def follow(
+    gait: Gait,
+    curve: Curve,
+    cycles: int | str | None = None,
+    start_phase: int = 0,
+    eased: tuple[bool, bool] = (True, True),
+) -> Motion:
     """Motion of the gait along ``curve``.
 
     With ``cycles`` the motion lasts exactly ``cycles`` loops (the curve was fitted to it)

@@ -4,13 +4,16 @@ unreachable pair, read from the planner's own occluded cells (not from meshes), 
 what the planner actually could not get past."""
 
 from collections import deque
+from collections.abc import Sequence
 
 import numpy as np
 
-from .environment import polygons_within
+from .environment import Environment, polygons_within
 
 
-def blocking_props(env, start, goal, margin_tiles=3):
+def blocking_props(
+    env: Environment, start: Sequence[float], goal: Sequence[float], margin_tiles: int = 3
+) -> tuple[list[str], str]:
     """(names, reason) of the props that keep ``start`` from ``goal`` on ``env``.
 
     Read from the planner's own view: the free-cell bitfields ``B_t`` (footprints grown by

@@ -21,9 +21,13 @@ tested exactly).
 """
 
 import math
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
+
+Tile = tuple[int, int]  # (i, j) of a tile on the ground
 
 FULL = np.uint64(0xFFFFFFFFFFFFFFFF)
 PATH_MARGIN = 0.002  # metres: sampled paths are tested this much wider (the frames between
@@ -48,10 +52,10 @@ class Obstacle:
         # time are cheaper in Python than in numpy.
         self.box = (float(self.lo[0]), float(self.lo[1]), float(self.hi[0]), float(self.hi[1]))
 
-    def bounds(self):
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         return self.lo, self.hi
 
-    def within(self, points, radius):
+    def within(self, points: np.ndarray, radius: float) -> np.ndarray:
         """(N,) True where points come within ``radius`` of the footprint."""
         out = np.zeros(points.shape[0], bool)
         near = np.all((points > self.lo - radius) & (points < self.hi + radius), axis=1)
@@ -65,7 +69,7 @@ def _cross2(a, b):
     return a[0] * b[1] - a[1] * b[0]
 
 
-def convex_hull(points):
+def convex_hull(points: ArrayLike) -> np.ndarray:
     """Counter-clockwise convex hull (monotone chain) of points (N, 2)."""
     pts = np.unique(np.asarray(points, float).round(9), axis=0)
     if pts.shape[0] < 3:
@@ -97,7 +101,7 @@ def _segment_distance(points, a, b):
     return np.linalg.norm(points[:, None] - proj, axis=-1)
 
 
-def inside_convex(points, polygon):
+def inside_convex(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
     """(N,) True where points lie inside a counter-clockwise convex polygon."""
     a = polygon
     b = np.roll(polygon, -1, axis=0)
@@ -107,14 +111,14 @@ def inside_convex(points, polygon):
     return np.all(cross >= 0, axis=1)
 
 
-def distance_to_polygon(points, polygon):
+def distance_to_polygon(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
     """(N,) distance from points to a convex polygon (0 inside)."""
     points = np.atleast_2d(np.asarray(points, float))
     d = _segment_distance(points, polygon, np.roll(polygon, -1, axis=0)).min(axis=1)
     return np.where(inside_convex(points, polygon), 0.0, d)
 
 
-def convex_closest(points, polygon):
+def convex_closest(points: np.ndarray, polygon: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Exact distance (N,) from points (N, 2) to a convex polygon (0 inside) and the
     polygon's point nearest each (N, 2) (the point itself inside), by the edge lines:
     outside, the nearest point lies on the edge whose line the point is farthest beyond
@@ -174,7 +178,7 @@ def _edges_cross(poly_a, poly_b):
     return bool(np.any((d1 * d2 < 0) & (d3 * d4 < 0)))
 
 
-def polygons_within(poly_a, poly_b, radius):
+def polygons_within(poly_a: np.ndarray, poly_b: np.ndarray, radius: float) -> bool:
     """True when two convex polygons come within ``radius`` of each other."""
     if np.any(inside_convex(poly_a, poly_b)) or np.any(inside_convex(poly_b, poly_a)):
         return True
@@ -185,7 +189,9 @@ def polygons_within(poly_a, poly_b, radius):
     return min(da, db) < radius
 
 
-def cells_within(x0, y0, size, polygon, radius):
+def cells_within(
+    x0: np.ndarray, y0: np.ndarray, size: float, polygon: np.ndarray, radius: float
+) -> np.ndarray:
     """(K,) True for the square cells (corner x0, y0; side ``size``) that come within
     ``radius`` of a convex polygon: the exact distance between two convex shapes, for all
     cells of a tile at once."""
@@ -254,7 +260,7 @@ class Environment:
         self._grid = np.full((1, 1), -1, np.int64)
         self._grid_origin = (0, 0)
 
-    def tile_of(self, xy):
+    def tile_of(self, xy: Sequence[float] | np.ndarray) -> Tile:
         return (math.floor(float(xy[0]) / self.side), math.floor(float(xy[1]) / self.side))
 
     def _tiles_overlapping(self, obstacle):
@@ -264,7 +270,7 @@ class Environment:
         i1, j1 = math.floor((x1 + r) / side), math.floor((y1 + r) / side)
         return {(i, j) for i in range(i0, i1 + 1) for j in range(j0, j1 + 1)}
 
-    def place(self, obstacle):
+    def place(self, obstacle: Obstacle) -> None:
         """Add or move an obstacle: only tile membership changes (no occlusion work)."""
         self.remove(obstacle.name)
         self._pack = None
@@ -277,7 +283,7 @@ class Environment:
             self._solid.pop(t, None)
         self._forget_raster(obstacle)
 
-    def remove(self, name):
+    def remove(self, name: str) -> None:
         self._pack = None
         for t in self._tiles_of.pop(name, ()):
             self._members[t].discard(name)
@@ -306,10 +312,10 @@ class Environment:
                 if 0 <= gi < self._grid.shape[0] and 0 <= gj < self._grid.shape[1]:
                     self._grid[gi, gj] = -1
 
-    def members(self, tile):
+    def members(self, tile: Tile) -> set[str]:
         return self._members.get(tile, set())
 
-    def free_cells(self, tile):
+    def free_cells(self, tile: Tile) -> np.uint64:
         """``B_t``: bit c set when cell c of the tile is not occluded (computed lazily)."""
         f = self._free.get(tile)
         if f is None:
@@ -317,7 +323,7 @@ class Environment:
             self._free[tile], self._solid[tile] = f, solid
         return f
 
-    def cell_states(self, tile):
+    def cell_states(self, tile: Tile) -> tuple[np.uint64, np.uint64]:
         """(free, solid) bitfields of a tile: free cells have no point within the radius of
         an obstacle (Eq. 8's ``B_t``); solid cells no point outside it. A segment through
         cells that are neither is decided by testing its own path (the planner does)."""
@@ -377,7 +383,7 @@ class Environment:
             dist < self.cap, np.minimum(dist - slack, other - self.rho), dist - self.rho
         )
 
-    def sub_states(self, tile, radius):
+    def sub_states(self, tile: Tile, radius: float) -> tuple[np.ndarray, np.ndarray]:
         """(free, solid) bitfields of the tile's sub-cells (``SUB`` x ``SUB`` per cell; bit b
         of word w for sub-cell 64 w + b, sub-cell index sy * cells * SUB + sx), each (W,)
         uint64: a free sub-cell has no point within ``radius`` of a footprint, a solid one
@@ -394,7 +400,7 @@ class Environment:
             got = self._sub[key] = (self._slots.get(tile), free, solid)
         return got[1], got[2]
 
-    def sub_mask(self, points):
+    def sub_mask(self, points: np.ndarray) -> np.ndarray:
         """(n, W) uint64 sub-cell bitmasks of point sets (n, M, 2) given in tile
         coordinates (0 .. side): the sub-cells the points lie in (as :meth:`sub_states`)."""
         m = self.cells * SUB
@@ -405,7 +411,7 @@ class Environment:
         return np.packbits(bits, axis=1, bitorder="little").view(np.uint64)
 
     # -- clearance raster ------------------------------------------------------------------
-    def clearance(self, tile):
+    def clearance(self, tile: Tile) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The raster of a tile: four (G * G,) arrays (G = cells x ``FINE``; index
         fy * G + fx) holding at each raster cell's centre c the distance to the nearest
         footprint, the offset q - c (x, then y) of that footprint's point q nearest c, and
@@ -488,7 +494,9 @@ class Environment:
             )
         return got
 
-    def _raster_rows(self, points):
+    def _raster_rows(
+        self, points: np.ndarray
+    ) -> tuple[tuple[np.ndarray, ...], np.ndarray, np.ndarray]:
         """The raster's four values at the cells holding world points (N, 2) (a tuple of
         (N,) arrays), and the points' offsets x, y from those cells' centres."""
         g, h = self.fine, self.fine_size
@@ -513,7 +521,9 @@ class Environment:
         rows = tuple(a[k].reshape(-1).take(flat) for k in range(4))
         return rows, ox, oy
 
-    def decided(self, rows, ox, oy, radius):
+    def decided(
+        self, rows: tuple[np.ndarray, ...], ox: np.ndarray, oy: np.ndarray, radius: float
+    ) -> tuple[np.ndarray, np.ndarray]:
         """(blocked, unsure) of points at offsets (``ox``, ``oy``) from the centres of raster
         cells whose values are ``rows``, for ``radius``. With q the nearest footprint point
         of the centre c and p the point: |p - q| bounds the distance from above; the
@@ -534,7 +544,9 @@ class Environment:
         unsure = ~blocked & (lower < radius + _EPS)
         return blocked, unsure
 
-    def names_in_box(self, lo, hi):
+    def names_in_box(
+        self, lo: Sequence[float] | np.ndarray, hi: Sequence[float] | np.ndarray
+    ) -> list[str]:
         """Names of the obstacles whose bounds overlap the box ``lo``-``hi`` (world)."""
         i0, j0 = self.tile_of(lo)
         i1, j1 = self.tile_of(hi)
@@ -555,7 +567,7 @@ class Environment:
         out.sort()
         return out
 
-    def near(self, xy):
+    def near(self, xy: Sequence[float] | np.ndarray) -> list[str]:
         """Sorted names of the obstacles a point (x, y) comes within the radius of."""
         p = np.asarray(xy, float)[None, :2]
         return sorted(
@@ -564,7 +576,9 @@ class Environment:
             if self.obstacles[n].within(p, self.radius)[0]
         )
 
-    def blocked(self, points, exclude=(), radius=None):
+    def blocked(
+        self, points: np.ndarray, exclude: Collection[str] = (), radius: float | None = None
+    ) -> np.ndarray:
         """(N,) True where world points come within the radius (or ``radius``, at most a
         tile side more) of any obstacle but those named in ``exclude``. Many points
         (``RASTER_MIN_POINTS`` or more) go through the clearance raster first; the answer
@@ -665,7 +679,7 @@ class Environment:
             )
         return self._pack
 
-    def path_blocked(self, paths):
+    def path_blocked(self, paths: np.ndarray) -> np.ndarray:
         """(n,) True where sampled paths (n, M, 2) come within the radius of an obstacle
         anywhere between samples, to the precision of their sampling: every sample is
         tested ``PATH_MARGIN`` wider (the samples are the caller's to keep close: about
@@ -674,7 +688,9 @@ class Environment:
         hit = self.blocked(paths.reshape(-1, 2), radius=self.radius + PATH_MARGIN)
         return hit.reshape(n, m).any(axis=1)
 
-    def tile_paths_blocked(self, tile, paths, index, ox, oy):
+    def tile_paths_blocked(
+        self, tile: Tile, paths: np.ndarray, index: np.ndarray, ox: np.ndarray, oy: np.ndarray
+    ) -> np.ndarray:
         """:meth:`path_blocked` of paths (n, M, 2) lying in one tile, given the raster index
         (n, M) of each sample within the tile (fy * G + fx) and its offset x, y from that
         raster cell's centre (n, M each): the planner's segments, whose samples are fixed

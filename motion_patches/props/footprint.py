@@ -24,6 +24,7 @@ Never imports bpy.
 """
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .environment import convex_hull, distance_to_polygon
 
@@ -34,7 +35,7 @@ GROUP_CELLS = 16  # cells per side of an island's bounding box when grouping
 COVER_SAMPLES = 32  # samples per side of an island's hull in the convexity test
 
 
-def outline(points, thickness=MIN_THICKNESS):
+def outline(points: ArrayLike, thickness: float = MIN_THICKNESS) -> np.ndarray | None:
     """Counter-clockwise convex polygon (P >= 3, 2) holding plan points (N, 2), at least
     ``thickness`` wide (a segment or a point is grown by a square of that side); None
     when there are no points."""
@@ -49,7 +50,7 @@ def outline(points, thickness=MIN_THICKNESS):
     return convex_hull((hull[:, None, :] + square[None]).reshape(-1, 2))
 
 
-def width(polygon):
+def width(polygon: np.ndarray) -> float:
     """Least width of a convex polygon: over its edges, the farthest vertex from the edge's
     line (rotating calipers' answer, by brute force: polygons here are small)."""
     a = np.asarray(polygon, float)
@@ -69,7 +70,7 @@ def width(polygon):
     return float(d.max(axis=1).min())
 
 
-def area(polygon):
+def area(polygon: np.ndarray) -> float:
     """Area (m²) of a polygon (shoelace)."""
     if polygon is None or len(polygon) < 3:
         return 0.0
@@ -122,7 +123,14 @@ def _covered(polys, hull):
     return not len(pts)
 
 
-def parts(vertices, face_vertex=(), face_start=(), face_total=(), edges=(), band=BODY_BAND):
+def parts(
+    vertices: ArrayLike,
+    face_vertex: ArrayLike = (),
+    face_start: ArrayLike = (),
+    face_total: ArrayLike = (),
+    edges: ArrayLike = (),
+    band: tuple[float, float] = BODY_BAND,
+) -> list[np.ndarray]:
     """Convex parts [(P, 2)] of a mesh given in world space: ``vertices`` (N, 3), faces as
     flat vertex indices ``face_vertex`` with each face's ``face_start`` and ``face_total``,
     ``edges`` (E, 2) vertex index pairs (loose edges join islands; face edges may be

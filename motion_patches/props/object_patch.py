@@ -10,15 +10,17 @@ extended bounds sort the clips by where they start and end, so another prop over
 a bin culls the clips that use it without testing them one by one.
 """
 
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..kinematics import contacts as contacts_mod
-from ..kinematics.clip import resample
+from ..kinematics.clip import Clip, resample
 from ..kinematics.inplace import facing_yaw, to_inplace
 from ..kinematics.motion import Motion
-from .environment import distance_to_polygon, polygons_within
+from .environment import Obstacle, distance_to_polygon, polygons_within
 
 TRAVERSAL, INTERACTION = "traversal", "interaction"
 BINS = 4  # density bins per side of the extended bounds
@@ -37,14 +39,14 @@ class PatchClip:
     angle: float = 0.0  # rotation of this copy about the prop (radians)
 
     @property
-    def entry(self):
+    def entry(self) -> np.ndarray:
         return self.motion.ground[0]
 
     @property
-    def exit(self):
+    def exit(self) -> np.ndarray:
         return self.motion.ground[-1]
 
-    def length(self):
+    def length(self) -> float:
         """Metres the ground frame travels (computed once: a clip's motion is fixed)."""
         got = self.__dict__.get("_length")
         if got is None:
@@ -53,7 +55,7 @@ class PatchClip:
             )
         return got
 
-    def turn(self):
+    def turn(self) -> float:
         """Radians the ground frame turns in all (computed once)."""
         got = self.__dict__.get("_turn")
         if got is None:
@@ -62,14 +64,14 @@ class PatchClip:
             )
         return got
 
-    def rotated(self, angle):
+    def rotated(self, angle: float) -> "PatchClip":
         m = self.motion.transformed(0.0, 0.0, angle)
         return PatchClip(
             self.name, self.kind, m, self.effort, self.layer_in, self.layer_out, self.angle + angle
         )
 
 
-def clip_ground(clip):
+def clip_ground(clip: Clip) -> np.ndarray:
     """Ground frame of a non-cyclic clip: the straight line from its first to its last
     root position, the root projected on it (never moving backwards), facing along it;
     a clip that barely moves (sit down) keeps its smoothed facing instead."""
@@ -87,12 +89,20 @@ def clip_ground(clip):
     return np.column_stack((pos, np.full(clip.frames, np.arctan2(u[1], u[0]))))
 
 
-def ends_lower(clip):
+def ends_lower(clip: Clip) -> bool:
     """True when the clip ends with the root much lower than it starts (a sit down)."""
     return clip.root_pos[-1, 2] < clip.root_pos[0, 2] - 0.2
 
 
-def patch_clip_from(clip, kind, fps, effort=1.0, anchor=None, name=None, floor=None):
+def patch_clip_from(
+    clip: Clip,
+    kind: str,
+    fps: float,
+    effort: float = 1.0,
+    anchor: np.ndarray | Sequence[float] | None = None,
+    name: str | None = None,
+    floor: float | None = None,
+) -> PatchClip:
     """A PatchClip from a recorded clip, placed so ``anchor`` (in the clip's ground
     coordinates) sits on the prop's origin and the clip starts facing +X.
 
@@ -140,7 +150,7 @@ class ObjectPatch:
     clips: list = field(default_factory=list)  # PatchClip in prop coordinates (copies included)
     pose: tuple = (0.0, 0.0, 0.0)  # x, y, heading of the prop on the ground
 
-    def to_world(self, xy):
+    def to_world(self, xy: ArrayLike) -> np.ndarray:
         x, y, h = self.pose
         c, s = np.cos(h), np.sin(h)
         xy = np.asarray(xy, float)
@@ -148,19 +158,21 @@ class ObjectPatch:
             (x + c * xy[..., 0] - s * xy[..., 1], y + s * xy[..., 0] + c * xy[..., 1]), -1
         )
 
-    def world_footprint(self):
+    def world_footprint(self) -> np.ndarray:
         return self.to_world(self.footprint)
 
-    def world_clip(self, clip):
+    def world_clip(self, clip: PatchClip) -> Motion:
         return clip.motion.transformed(*self.pose)
 
-    def traversals(self):
+    def traversals(self) -> list[PatchClip]:
         return [c for c in self.clips if c.kind == TRAVERSAL]
 
-    def interactions(self):
+    def interactions(self) -> list[PatchClip]:
         return [c for c in self.clips if c.kind == INTERACTION]
 
-    def add_traversal_copies(self, clip, step_deg=10.0, clearance=0.05):
+    def add_traversal_copies(
+        self, clip: PatchClip, step_deg: float = 10.0, clearance: float = 0.05
+    ) -> int:
         """Add ``clip`` rotated about the prop every ``step_deg`` degrees, keeping only the
         copies whose take-off and landing stay ``clearance`` clear of the footprint."""
         added = 0
@@ -172,13 +184,14 @@ class ObjectPatch:
                 added += 1
         return added
 
-    def extended_bounds(self):
+    def extended_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Footprint bounds grown to contain every clip's entry and exit point."""
-        pts = [self.footprint] + [np.array([c.entry[:2], c.exit[:2]]) for c in self.clips]
-        pts = np.concatenate(pts)
+        pts = np.concatenate(
+            [self.footprint] + [np.array([c.entry[:2], c.exit[:2]]) for c in self.clips]
+        )
         return pts.min(axis=0), pts.max(axis=0)
 
-    def occluded_bins(self, obstacles):
+    def occluded_bins(self, obstacles: Iterable[Obstacle]) -> np.ndarray:
         """(BINS*BINS,) True for the density bins another prop's footprint overlaps."""
         rects, _ = self.density_bins()
         out = np.zeros(len(rects), bool)
@@ -206,7 +219,7 @@ class ObjectPatch:
                 out[b] = polygons_within(polys[b], ob.polygon, 0.0)
         return out
 
-    def density_bins(self):
+    def density_bins(self) -> tuple[np.ndarray, np.ndarray]:
         """(BINS*BINS, 4) bin rectangles (x0, y0, x1, y1) in prop coordinates, and for every
         clip the (entry bin, exit bin) it starts and ends in (cached)."""
         cached = self.__dict__.get("_bins")

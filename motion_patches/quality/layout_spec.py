@@ -4,6 +4,7 @@ studio writes them), validated before anything is planned, and the verdict of on
 against its limits. Plain Python, so a spec can be checked without Blender."""
 
 import math
+from typing import Any
 
 
 class SpecError(ValueError):
@@ -66,7 +67,7 @@ def _place(value, where):
     raise _spec_error(f"{where} must be an object name or [x, y, heading_deg]")
 
 
-def normalise(spec):
+def normalise(spec: dict[str, Any]) -> dict[str, Any]:
     """A validated copy of a layout spec (keys as ``cli.SPEC_HELP`` lists); SpecError if bad."""
     if not isinstance(spec, dict):
         raise _spec_error("the top level must be a table / object")
@@ -75,7 +76,7 @@ def normalise(spec):
         raise _spec_error(
             f"unknown key(s) {', '.join(sorted(unknown))} (known: {', '.join(sorted(TOP_KEYS))})"
         )
-    out = {"patch": spec.get("patch")}
+    out: dict[str, Any] = {"patch": spec.get("patch")}
     if out["patch"] is not None and not isinstance(out["patch"], str):
         raise _spec_error("patch must be a name")
     for k in ("alpha", "beta", "gamma", "radius", "margin_tiles"):
@@ -145,7 +146,7 @@ def _label(place):
     return f"({place[0]:g}, {place[1]:g}, {place[2]:g} deg)"
 
 
-def judge(r, lim):
+def judge(r: dict[str, Any], lim: dict[str, Any]) -> list[str]:
     """The limits a planned pair ``r`` breaks, as sentences (none: it passed)."""
     if not r["reachable"]:
         if not lim["must_reach"]:

@@ -7,12 +7,16 @@ measured the same way on the source clip, it gives the floor a synthesised motio
 compared against.
 """
 
+from collections.abc import Sequence
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..kinematics import quat
+from ..kinematics.clip import Clip
 
 
-def foot_skate(foot_pos, fps, planted):
+def foot_skate(foot_pos: np.ndarray, fps: float, planted: np.ndarray) -> dict[str, float]:
     """Skate statistics of foot joint positions (F, K, 3) with planted labels (F, K).
 
     A joint is scored on a frame step when it is planted on both frames of the step.
@@ -42,7 +46,7 @@ def foot_skate(foot_pos, fps, planted):
     }
 
 
-def distance_to_polyline(points, polyline):
+def distance_to_polyline(points: np.ndarray, polyline: np.ndarray) -> np.ndarray:
     """Distance of each point (N, 2) to a polyline (M, 2)."""
     p = np.asarray(points, float)[:, None, :]
     a = np.asarray(polyline, float)[None, :-1, :]
@@ -53,12 +57,14 @@ def distance_to_polyline(points, polyline):
     return d.min(axis=1)
 
 
-def angle_difference(a, b):
+def angle_difference(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     """Signed smallest difference a - b of angles (radians)."""
     return (np.asarray(a) - np.asarray(b) + np.pi) % (2 * np.pi) - np.pi
 
 
-def boundary_pops(local_rotations, boundaries, fps):
+def boundary_pops(
+    local_rotations: np.ndarray, boundaries: Sequence[int] | np.ndarray, fps: float
+) -> dict[str, float]:
     """Largest joint rotation jump (degrees) across strip boundaries, against its floor.
 
     ``local_rotations`` (F, J, 4); ``boundaries`` frame indices where a new strip starts.
@@ -76,27 +82,31 @@ def boundary_pops(local_rotations, boundaries, fps):
     }
 
 
-def bone_steps(local_rotations, stride=1):
+def bone_steps(local_rotations: np.ndarray, stride: int = 1) -> np.ndarray:
     """(F - stride, J) degrees each bone turns over ``stride`` frames."""
     q = np.asarray(local_rotations, float)
     return np.degrees(quat.angle_between(q[stride:], q[:-stride]))
 
 
-def source_bone_steps(clips, fps, mirror_map=None):
+def source_bone_steps(
+    clips: Sequence[Clip], fps: float, mirror_map: np.ndarray | None = None
+) -> np.ndarray:
     """(J,) each bone's largest per-frame turn in the source ``clips`` at ``fps`` (a clip
     of another rate sampled every round(its fps / fps) frames), or its left / right
     counterpart's when ``mirror_map`` is given (a gait's mirrored loops move a left hand as
     the recorded right hand moved). What a synthesised motion's :func:`bone_steps` are
     held against: a bone stepping far faster than in any source is a spin."""
-    out = 0.0
+    steps: float | np.ndarray = 0.0
     for c in clips:
         stride = max(int(round(c.fps / fps)), 1)
-        out = np.maximum(out, bone_steps(c.rotations, stride).max(axis=0))
-    out = np.asarray(out, float)
+        steps = np.maximum(steps, bone_steps(c.rotations, stride).max(axis=0))
+    out = np.asarray(steps, float)
     return out if mirror_map is None else np.maximum(out, out[np.asarray(mirror_map)])
 
 
-def step_ratio(local_rotations, reference, floor_deg=1.0):
+def step_ratio(
+    local_rotations: np.ndarray, reference: np.ndarray, floor_deg: float = 1.0
+) -> tuple[float, int]:
     """(worst ratio, joint index): the largest per-frame turn of any bone over that bone's
     ``reference`` (:func:`source_bone_steps`), steps under ``floor_deg`` counted as that
     (bones the sources barely move)."""

@@ -25,9 +25,13 @@ measured); :func:`motion_glitches` adds ``piece``.
 Never imports bpy.
 """
 
+from collections.abc import Iterable, Sequence
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import numpy as np
+
+from ..kinematics.motion import Motion
 
 MARGIN = 1.5  # over the gait's own per-frame maxima
 BACKWARD_TOLERANCE = 1e-3  # m per frame against the heading before a step counts as backwards
@@ -48,7 +52,7 @@ class Limits:
     join_heading: float  # rad between pieces' shared frames
     margin: float
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, float]:
         return asdict(self)
 
 
@@ -57,12 +61,12 @@ def _wrap(a):
 
 
 def limits(
-    gait,
-    margin=MARGIN,
-    backward=BACKWARD_TOLERANCE,
-    join_position=JOIN_POSITION,
-    join_heading=JOIN_HEADING,
-):
+    gait: Any,
+    margin: float = MARGIN,
+    backward: float = BACKWARD_TOLERANCE,
+    join_position: float = JOIN_POSITION,
+    join_heading: float = JOIN_HEADING,
+) -> Limits:
     """The gait's own per-frame maxima, times ``margin``.
 
     ``gait`` is a :class:`~motion_patches.patch.gait.Gait`, or a locomotion patch (then the
@@ -82,7 +86,7 @@ def limits(
       a join where the velocity changes by more than this is not continuous. For the
       walk: (1.18 cm + 0.35 cm) x 1.5 = 2.3 cm/frame^2 (clean segments: at most 0.96).
     """
-    patch_stats = {}
+    patch_stats: dict[str, Any] = {}
     if hasattr(gait, "gait"):
         patch_stats = getattr(gait, "stats", {}) or {}
         gait = gait.gait
@@ -126,7 +130,9 @@ def _step_flags(ground, lim):
     return dh, along, step
 
 
-def ground_glitches(ground, lim, joins=()):
+def ground_glitches(
+    ground: np.ndarray, lim: Limits, joins: Sequence[int] = ()
+) -> list[dict[str, Any]]:
     """Glitch records of one ground track (F, 3).
 
     Every step: |heading change| over ``lim.heading`` ("spin"; "jump" at a join step),
@@ -139,13 +145,13 @@ def ground_glitches(ground, lim, joins=()):
     (unwrapped), so a walk turning round and round is clean.
     """
     g = np.asarray(ground, float)
-    out = []
+    out: list[dict[str, Any]] = []
     if g.shape[0] < 2:
         return out
-    joins = np.asarray(sorted({int(j) for j in joins}), int)
+    join_steps = np.asarray(sorted({int(j) for j in joins}), int)
     dh, along, step = _step_flags(g, lim)
     join_step = np.zeros(step.size, bool)
-    inner = joins[(joins >= 0) & (joins < step.size)]
+    inner = join_steps[(join_steps >= 0) & (join_steps < step.size)]
     join_step[inner] = True  # the step leaving a join frame
     for i in np.flatnonzero(np.abs(dh) > lim.heading):
         out.append(
@@ -166,7 +172,7 @@ def ground_glitches(ground, lim, joins=()):
         )
     for i in np.flatnonzero(step > lim.step):
         out.append(_record(i + 1, "jump", step[i], lim.step, "m/frame", "step length"))
-    inner = joins[(joins >= 1) & (joins <= g.shape[0] - 2)]
+    inner = join_steps[(join_steps >= 1) & (join_steps <= g.shape[0] - 2)]
     if inner.size:
         p = g[:, :2]
         acc = np.linalg.norm(p[inner + 1] - 2 * p[inner] + p[inner - 1], axis=1)
@@ -222,7 +228,7 @@ def _stacked_glitches(g, first, lim):
     return found
 
 
-def track_glitches(tracks, lim):
+def track_glitches(tracks: Sequence[np.ndarray], lim: Limits) -> dict[int, list[dict[str, Any]]]:
     """{index: records} of the ground tracks (a list of (F, 3) arrays) that glitch, all
     checked at once as :func:`ground_glitches` checks one (without joins): for a bake that
     wants to test candidate segments before it builds the patch."""
@@ -236,7 +242,9 @@ def track_glitches(tracks, lim):
     return dict(sorted(found.items()))
 
 
-def segment_glitches(patch, lim=None, details=False):
+def segment_glitches(
+    patch: Any, lim: Limits | None = None, details: bool = False
+) -> list[int] | dict[int, list[dict[str, Any]]]:
     """Indices of the baked segments whose frames glitch (sorted list of ints).
 
     Each segment's ground track is checked as :func:`ground_glitches` does (all segments
@@ -276,7 +284,9 @@ def segment_glitches(patch, lim=None, details=False):
     return sorted(found)
 
 
-def motion_glitches(motions, kinds, lim):
+def motion_glitches(
+    motions: Sequence[Motion | np.ndarray], kinds: Sequence[Any], lim: Limits
+) -> list[dict[str, Any]]:
     """Glitch records of a planned motion given piece by piece (frames of the concatenated
     motion, :func:`motion.concatenate`, which drops each piece's first frame).
 
@@ -351,14 +361,16 @@ def motion_glitches(motions, kinds, lim):
     return out
 
 
-def plan_glitches(patch, plan, motions, lim=None):
+def plan_glitches(
+    patch: Any, plan: Any, motions: Sequence[Motion | np.ndarray], lim: Limits | None = None
+) -> list[dict[str, Any]]:
     """:func:`motion_glitches` of a plan's played motions (``planner.plan_motions``)."""
     return motion_glitches(motions, plan.pieces, limits(patch) if lim is None else lim)
 
 
-def count(records):
+def count(records: Iterable[dict[str, Any]]) -> dict[str, int]:
     """{kind: number of records} of a list of glitch records."""
-    out = {}
+    out: dict[str, int] = {}
     for r in records:
         out[r["kind"]] = out.get(r["kind"], 0) + 1
     return out
