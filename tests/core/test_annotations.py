@@ -8,8 +8,9 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
 # Files, or directories whose every .py file is hinted.
-# Next: motion_patches/planning, then the API.
+# Next: the API.
 HINTED = [
+    "motion_patches/planning",
     "motion_patches/kinematics",
     "motion_patches/quality",
     "motion_patches/patch",

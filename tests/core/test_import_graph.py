@@ -130,7 +130,7 @@ def test_graph_is_read(graph):
     tests see no edges, not that the core is clean)."""
     edges, _ = graph
     assert "motion_patches.kinematics.quat" in edges["motion_patches.kinematics.skeleton"]
-    assert "motion_patches.patch.curves" in edges["motion_patches.planning.planner"]
+    assert "motion_patches.patch.curves" in edges["motion_patches.planning.connectors"]
     assert "motion_patches.kinematics.retime" in edges["motion_patches.crowd.crowd"]
     assert sum(map(len, edges.values())) > 100
 
