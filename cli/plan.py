@@ -53,9 +53,8 @@ def cmd_plan(args):
     scene = bpy.context.scene
     char = object_named(args.character, "character", {"ARMATURE"})
     goal, goal_obj = _goal_of(args, scene)
-    w = api.planning_settings(
-        scene, **settings_given(args)
-    )  # what is used: the flags over the scene's
+    # What is used: the flags over the scene's.
+    w = api.planning_settings(scene, **settings_given(args))
     save = save_target(args)
     try:
         res = api.plan_path(
