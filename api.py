@@ -38,6 +38,7 @@ from .motion_patches.planning.planner import (
     with_interactions,
 )
 from .motion_patches.planning.settings import PLANNING as DEFAULTS
+from .motion_patches.planning.settings import SETTINGS as SETTINGS  # for the doors
 from .motion_patches.planning.settings import PlanSettings
 from .motion_patches.props import blocking, object_patch
 from .motion_patches.props.environment import Obstacle

@@ -21,7 +21,7 @@ Sections:
   are written. The first write creates the plan's shared segment actions, the others
   reuse them, as characters of one crowd do. Timed with the foot lock and without.
 * ``crowd``: plan and write 100 characters with ``api.plan_crowd`` (the user's path: the
-  Plan Crowd operator and ``cli.py crowd`` call it): 10 x 10 characters, each walking
+  Plan Crowd operator and the CLI's ``crowd`` call it): 10 x 10 characters, each walking
   about 8 m along +X in its own lane, a few pillars between the lanes' ends. Timed end
   to end (search, synthesis, staggering, writing), with its split.
 

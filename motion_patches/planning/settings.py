@@ -28,6 +28,9 @@ class Setting:
     unit: str = ""  # "m" for lengths (the panel shows the scene's length unit)
     choices: tuple = ()
     flag: str = ""  # the CLI's words for it (default: the name with dashes)
+    # The CLI's switches in place of one flag: (value, words, help) each, mutually exclusive
+    # (--foot-lock / --no-foot-lock); an empty help is the setting's, or the choice's.
+    switches: tuple = ()
 
     @property
     def values(self) -> tuple:
@@ -108,6 +111,10 @@ SETTINGS = (
         bool,
         "Lock Planted Feet",
         "Pin each planted foot with leg IK (a Combine track over the walk) so it does not slide",
+        switches=(
+            (True, "foot-lock", ""),
+            (False, "no-foot-lock", "Leave planted feet as synthesised (no leg IK track)"),
+        ),
     ),
     Setting(
         "goal_facing",
@@ -119,6 +126,7 @@ SETTINGS = (
             ("exact", "Exact", "Arrive facing the goal object's facing (its -Y axis)"),
             ("any", "Any", "Arrive facing whichever way is cheapest (e.g. a goal in a dead end)"),
         ),
+        switches=(("any", "any-facing", ""), ("exact", "exact-facing", "")),
     ),
     Setting(
         "turn_in_place",
@@ -128,6 +136,10 @@ SETTINGS = (
         "Where a walk would loop to leave the start or reach the goal facing its way, stop "
         "and turn on the spot (a turn derived from the walk's sharpest turn loop; the mocap "
         "has no turn-in-place clip)",
+        switches=(
+            (True, "turn-in-place", ""),
+            (False, "no-turn-in-place", "Walk the loops instead of turning on the spot"),
+        ),
     ),
 )
 BY_NAME = {s.name: s for s in SETTINGS}

@@ -184,9 +184,9 @@ def test_a_yaml_spec_is_told_specs_are_json_or_toml(addon_module, tmp_path):
     spec = tmp_path / "layout.yaml"
     spec.write_text("pairs:\n  - character: Walker\n    goal: Goal\n")
     with pytest.raises(cli.CLIError, match="specs are JSON or TOML") as info:
-        cli._load_spec(spec)
+        cli.load_spec(spec)
     assert info.value.code == cli.BAD_INPUT
     same = tmp_path / "layout.json"
     same.write_text(spec.read_text())
     with pytest.raises(cli.CLIError, match="as JSON \\(specs are JSON, or TOML"):
-        cli._load_spec(same)
+        cli.load_spec(same)
