@@ -110,7 +110,7 @@ SETTINGS = (
         True,
         bool,
         "Lock Planted Feet",
-        "Pin each planted foot with leg IK (a Combine track over the walk) so it does not slide",
+        "Pin each planted foot with leg IK (an Add track over the walk) so it does not slide",
         switches=(
             (True, "foot-lock", ""),
             (False, "no-foot-lock", "Leave planted feet as synthesised (no leg IK track)"),
