@@ -114,12 +114,7 @@ def bake_locomotion_patch(
             mirror_turns,
             progress,
         )
-    s = scene.motion_patches  # the clips this patch came from, as the panel shows them
-    s.source_armature = armature
-    s.straight_action = straight
-    s.turn_actions.clear()
-    for t in turns:
-        s.turn_actions.add().action = t
+    storage.remember_bake_clips(scene, armature, straight, turns)
     storage.make_active(scene, res.name)
     res.armature, res.straight, res.turns = armature.name, straight.name, [t.name for t in turns]
     res.imported = [a.name for a in imported.values()]

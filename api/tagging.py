@@ -48,10 +48,5 @@ def tag_object_patch(
             object_patch.patch_clip_from(clip, props_io.KINDS[kind], scene_fps(scene), effort)
     except ValueError as exc:
         raise MotionPatchesError(f"cannot tag '{obj.name}': {exc}") from None
-    mp = obj.motion_patch
-    mp.enabled = True
-    mp.clips.clear()
-    for action, kind, effort, step in clips:
-        item = mp.clips.add()
-        item.action, item.kind, item.effort, item.copy_step = action, kind, effort, step
+    props_io.tag(obj, clips)
     return obj
