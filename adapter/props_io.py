@@ -17,6 +17,17 @@ from . import scene as scene_io
 KINDS = {"TRAVERSAL": op.TRAVERSAL, "INTERACTION": op.INTERACTION}
 
 
+def tag(obj, clips):
+    """Make ``obj`` a tagged prop carrying ``clips`` [(action, kind, effort, copy_step)]
+    (its clip list replaced)."""
+    mp = obj.motion_patch
+    mp.enabled = True
+    mp.clips.clear()
+    for action, kind, effort, step in clips:
+        item = mp.clips.add()
+        item.action, item.kind, item.effort, item.copy_step = action, kind, effort, step
+
+
 def prop_pose(obj):
     m = np.array(obj.matrix_world)
     return (float(m[0, 3]), float(m[1, 3]), float(np.arctan2(m[1, 0], m[0, 0])))

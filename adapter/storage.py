@@ -40,6 +40,17 @@ def store_patch(scene, patch, name):
     return item
 
 
+def remember_bake_clips(scene, armature, straight, turns):
+    """Keep in the scene's bake settings the clips a patch came from (what the Locomotion
+    Patches panel shows and bakes again)."""
+    s = scene.motion_patches
+    s.source_armature = armature
+    s.straight_action = straight
+    s.turn_actions.clear()
+    for t in turns:
+        s.turn_actions.add().action = t
+
+
 def active_name(scene):
     """The patch used when none is named: the active one, else the first; None when none
     is baked. The one place that decides it."""

@@ -180,7 +180,7 @@ def section_strips(bpy, addon, args):
     goal = goal_empty(bpy, "Goal", 36.0, 0.5, 0.0)
     first = character(bpy, source, "Walker000", 0.0, 0.0)
     captured = {}
-    write = api._write
+    write = api._write  # plan_path calls it as api.plan._write
 
     def spy(*a, **kw):
         captured["args"], captured["kw"] = a, kw
@@ -192,11 +192,11 @@ def section_strips(bpy, addon, args):
     def unshortened(self, *a, **kw):  # the search's own chain of segments, one strip each
         return plan(self, *a, **dict(kw, shorten=False))
 
-    api._write, planner.plan = spy, unshortened
+    api.plan._write, planner.plan = spy, unshortened
     try:
         res = api.plan_path(scene, first, goal, frame_start=1)
     finally:
-        api._write, planner.plan = write, plan
+        api.plan._write, planner.plan = write, plan
     pieces = len(res.pieces)
     a, kw = captured["args"], captured["kw"]
     out = {
@@ -206,7 +206,7 @@ def section_strips(bpy, addon, args):
         "plan_frames": res.frame_end - res.frame_start + 1,
     }
     nla = addon.adapter.nla
-    kw = {k: v for k, v in kw.items() if k not in ("lock", "fit")}
+    kw = {k: v for k, v in kw.items() if k != "fit"}
     for lock in (True, False):
         # fresh segment actions: the first write creates them, as in a new file; the
         # characters of the last pass go, so each pass writes into the same scene
@@ -228,7 +228,8 @@ def section_strips(bpy, addon, args):
             t = []
             for c in chars:
                 t0 = time.perf_counter()
-                write(a[0], c, *a[2:9], lock, *a[10:], fit=False, **kw)
+                # a[8]: the request's PlanSettings, here with the foot lock on or off
+                write(a[0], c, *a[2:8], a[8].replaced(foot_lock=lock), *a[9:], fit=False, **kw)
                 t.append(time.perf_counter() - t0)
             t0 = time.perf_counter()
             api._fit_frame_range(scene)
@@ -393,11 +394,11 @@ def section_crowd(bpy, addon, args):
         finally:
             writes.append(time.perf_counter() - t)
 
-    api._write = timed_write
+    api.crowd._write = timed_write  # what plan_crowd calls
     try:
         res = profiled(args.profile, api.plan_crowd, scene, pairs, frame_start=1)
     finally:
-        api._write = write
+        api.crowd._write = write
     total = time.perf_counter() - t0
     strips = sum(len(p.strips) for p in res.plans)
     out = {

@@ -3,26 +3,9 @@
 its clip list, its footprint and the tag / untag buttons."""
 
 import bpy
-import numpy as np
 
-from ..motion_patches.props import footprint as fp
+from .. import api
 from .sidebar import SidebarPanel, list_with_buttons
-
-MAX_FOOTPRINT_VERTICES = 20000  # above this the panel does not compute the footprint area
-
-
-def footprint_info(ob):
-    """(vertex count, plan-view area in m² of the mesh's footprint as a tagged prop's
-    (:func:`motion_patches.props.footprint.outline`), or None when the mesh is too large to
-    measure while drawing). Modifiers are not applied here."""
-    me = ob.data
-    n = len(me.vertices)
-    if n == 0 or n > MAX_FOOTPRINT_VERTICES:
-        return n, None
-    co = np.empty(n * 3)
-    me.vertices.foreach_get("co", co)
-    m = np.array(ob.matrix_world)
-    return n, fp.area(fp.outline(co.reshape(n, 3) @ m[:2, :3].T + m[:2, 3]))
 
 
 class MOTION_PATCHES_UL_clips(bpy.types.UIList):
@@ -67,7 +50,7 @@ class MOTION_PATCHES_PT_object_patch(SidebarPanel, bpy.types.Panel):
                 row = layout.row(align=True)
                 row.prop(clip, "layer_in")
                 row.prop(clip, "layer_out")
-        n, area = footprint_info(ob)
+        n, area = api.footprint_info(ob)
         layout.label(
             text=f"{n} vertices" + (f", footprint {area:.2f} m²" if area is not None else ""),
             icon="MESH_DATA",

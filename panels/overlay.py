@@ -16,13 +16,6 @@ import bpy
 import numpy as np
 
 from .. import api, props
-from ..adapter import storage
-from ..motion_patches.planning.plan_frame import (
-    lattice_frame,
-    local_environment,
-    to_local,
-    to_world,
-)
 from .sidebar import SidebarPanel, wrapped_label
 
 COLOURS = {
@@ -68,31 +61,16 @@ def buffers(scene, depsgraph=None):
 
 
 def marker_buffers(scene, depsgraph=None):
-    """{"markers": (P, 3) points, "ticks": (2P, 3) line ends} of every tagged prop's clips:
-    for each (copy of a) clip its first ground frame (ENTRY colour) and last (EXIT colour),
-    each with a TICK-long line along the heading there. Nothing is marked when no patch is
-    baked, or when a tagged prop cannot be read (a clip without an action): planning would
-    refuse that scene too, and says why."""
+    """{"markers": (P, 3) points, "ticks": (2P, 3) line ends} of every tagged prop's clips
+    (:func:`api.clip_ends`): for each (copy of a) clip its first ground frame (ENTRY
+    colour) and last (EXIT colour), each with a TICK-long line along the heading there."""
     points, pcol, ticks, tcol = [], [], [], []
-    try:
-        patch = storage.load_patch(scene)
-    except ValueError:
-        patch = None
-    if patch is not None and any(_tagged(scene)):
-        if depsgraph is None:
-            depsgraph = bpy.context.evaluated_depsgraph_get()
-        try:
-            props = api.object_patches(scene, depsgraph, patch)
-        except api.MotionPatchesError:
-            props = []
-        for prop in props:
-            for clip in prop.clips:
-                g = prop.world_clip(clip).ground
-                for (x, y, h), colour in ((g[0], ENTRY), (g[-1], EXIT)):
-                    points.append((x, y, Z))
-                    ticks += [(x, y, Z), (x + TICK * np.cos(h), y + TICK * np.sin(h), Z)]
-                    pcol.append(colour)
-                    tcol += [colour, colour]
+    for x, y, h, entry in api.clip_ends(scene, depsgraph):
+        colour = ENTRY if entry else EXIT
+        points.append((x, y, Z))
+        ticks += [(x, y, Z), (x + TICK * np.cos(h), y + TICK * np.sin(h), Z)]
+        pcol.append(colour)
+        tcol += [colour, colour]
     return {"markers": (_arr(points, 3), _arr(pcol, 4)), "ticks": (_arr(ticks, 3), _arr(tcol, 4))}
 
 
@@ -136,76 +114,36 @@ def _tagged(scene):
 
 
 def plan_buffers(scene):
-    """{"lines", "points", "tris"} of every planned character (see :func:`buffers`): the
-    props it walked around grown by its radius are filled ("tris"): where its root cannot
-    go; the cells the planner's bitmask marks occluded are outlined ("lines"): a 0.33 m
-    cell touched by the grown footprint counts as occluded there, though a segment through
-    a partly covered cell is then tested exactly against the footprint."""
+    """{"lines", "points", "tris"} of every planned character (see :func:`buffers`,
+    :func:`api.plan_drawings`): the props it walked around grown by its radius are filled
+    ("tris"): where its root cannot go; the cells the planner's bitmask marks occluded are
+    outlined ("lines")."""
     lines, lcol, points, pcol, tris, tcol = [], [], [], [], [], []
-    try:
-        patch = storage.load_patch(scene)
-    except ValueError:
-        patch = None
-    for ob in scene.objects:
-        if ob.type != "ARMATURE" or not storage.has_plan(ob):
-            continue
-        meta, arrays = storage.load_plan(ob)
-        g = arrays["ground"]
-        kinds = np.full(g.shape[0] - 1, "segment", dtype=object)
-        strip_starts = [meta["frame_start"]] + list(meta["boundaries"])
-        parity = np.zeros(g.shape[0] - 1, int)
-        for n, s in enumerate(strip_starts):
-            parity[s - meta["frame_start"] :] = n % 2
-        for key in ("traversals", "interactions"):
-            for a, b in meta.get(key, []):
-                kinds[a - meta["frame_start"] : b - meta["frame_start"]] = key[:-1]
+
+    def at_z(pts):
+        return [(x, y, Z) for x, y in pts]
+
+    for d in api.plan_drawings(scene):
+        g = d.ground
         for i in range(g.shape[0] - 1):
             lines += [(g[i, 0], g[i, 1], Z), (g[i + 1, 0], g[i + 1, 1], Z)]
-            options = COLOURS.get(kinds[i], COLOURS["segment"])
-            c = options[parity[i] % len(options)]
+            options = COLOURS.get(d.kinds[i], COLOURS["segment"])
+            c = options[d.parity[i] % len(options)]
             lcol += [c, c]
-        for s in strip_starts:
-            k = s - meta["frame_start"]
+        for k in d.stitches:
             if 0 <= k < g.shape[0]:
                 points.append((g[k, 0], g[k, 1], Z))
                 pcol.append(STITCH)
-        if patch is None:
-            continue
-        env = storage.plan_environment(meta, patch.side, patch.cells, meta["radius"])
-        # The plan's own lattice (motion_patches.plan_frame): anchored at the start, +x
-        # towards the goal, as the planner laid it.
-        frame = lattice_frame(g[0], meta["goal"], patch.side, patch.nodes)
-        local = to_local(frame, g[:, :2])
-        lo = np.floor(local.min(axis=0) / patch.side).astype(int) - 1
-        hi = np.floor(local.max(axis=0) / patch.side).astype(int) + 1
-        lenv = local_environment(env, frame, lo * patch.side, (hi + 1) * patch.side)
-        c = patch.cell_size
-
-        def world(*pts):
-            w = to_world(frame, np.array(pts, float))
-            return [(float(x), float(y), Z) for x, y in w]
-
-        for i in range(lo[0], hi[0] + 2):
-            x = i * patch.side
-            lines += world((x, lo[1] * patch.side), (x, (hi[1] + 1) * patch.side))
+        for edge in d.grid:
+            lines += at_z(edge)
             lcol += [GRID, GRID]
-        for j in range(lo[1], hi[1] + 2):
-            y = j * patch.side
-            lines += world((lo[0] * patch.side, y), ((hi[0] + 1) * patch.side, y))
-            lcol += [GRID, GRID]
-        for i in range(lo[0], hi[0] + 1):
-            for j in range(lo[1], hi[1] + 1):
-                free = int(lenv.free_cells((i, j)))
-                for cell in range(patch.cells * patch.cells):
-                    if not free >> cell & 1:
-                        x0 = i * patch.side + (cell % patch.cells) * c
-                        y0 = j * patch.side + (cell // patch.cells) * c
-                        corners = world((x0, y0), (x0 + c, y0), (x0 + c, y0 + c), (x0, y0 + c))
-                        for k in range(4):
-                            lines += [corners[k], corners[(k + 1) % 4]]
-                        lcol += [OCCLUDED] * 8
-        for poly in meta["obstacles"].values():
-            outline = grown(np.array(poly), meta["radius"])
+        for cell in d.occluded:
+            corners = at_z(cell)
+            for k in range(4):
+                lines += [corners[k], corners[(k + 1) % 4]]
+            lcol += [OCCLUDED] * 8
+        for poly in d.obstacles:
+            outline = grown(poly, d.radius)
             tris += _fan_quads(outline, Z)
             tcol += [BLOCKED] * (3 * len(outline))
             for k in range(len(outline)):
@@ -227,10 +165,7 @@ def _patch_key(scene):
 
 
 def _plans_key(scene):
-    return json.dumps(
-        [storage.plan_fingerprint(ob) for ob in scene.objects if ob.type == "ARMATURE"]
-        + _patch_key(scene)
-    )
+    return json.dumps(api.plan_fingerprints(scene) + _patch_key(scene))
 
 
 def _markers_key(scene):

@@ -233,7 +233,7 @@ def test_failed_bake_rolls_back_the_import(
     def refuse(*a, **k):  # the core bake, after the import: the API puts the import back
         raise ValueError("every candidate segment was culled")
 
-    monkeypatch.setattr(cli.api, "bake", refuse)
+    monkeypatch.setattr(cli.api.baking, "bake", refuse)
     fps = clean_scene.render.fps
     out = tmp_path / "out.blend"
     code, doc, err = call_json(

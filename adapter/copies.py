@@ -1,0 +1,59 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Linked copies of an armature with their goal empties, in a collection of their own (a
+crowd made from one character), and their removal."""
+
+import bpy
+import numpy as np
+
+from . import nla, storage
+
+
+def make_copies(scene, source, starts, goals, facing, collection):
+    """[(copy, goal empty)]: a copy of ``source`` (object copied, armature data shared) on
+    each start (x, y) facing its goal (``facing``: the skeleton's forward angle,
+    :func:`nla.facing_angle`), without the source's animation or plan, and a goal empty on
+    each goal facing the same way (its -Y), all linked in a new collection ``collection``
+    under the scene's."""
+    coll = bpy.data.collections.new(collection)
+    scene.collection.children.link(coll)
+    pairs = []
+    for k, (s, g) in enumerate(zip(starts, goals)):
+        heading = float(np.arctan2(g[1] - s[1], g[0] - s[0]))
+        ob = source.copy()  # object copy, armature data shared
+        ob.name = f"{source.name}.crowd{k:03d}"
+        ob.animation_data_clear()
+        for key in (storage.PLAN_KEY, nla.TRACKS_KEY):
+            if key in ob:
+                del ob[key]
+        coll.objects.link(ob)
+        ob.location = (s[0], s[1], source.location[2])
+        ob.rotation_mode = "XYZ"
+        ob.rotation_euler = (0.0, 0.0, heading - facing)
+        goal = bpy.data.objects.new(f"{ob.name} goal", None)
+        coll.objects.link(goal)
+        goal.location = (g[0], g[1], 0.0)
+        goal.rotation_euler = (0.0, 0.0, heading + np.pi / 2)  # its -Y along the heading
+        ob.motion_patches_character.goal = goal
+        pairs.append((ob, goal))
+    return pairs
+
+
+def remove_copies(pairs, collection):
+    """Remove the copies and goals of :func:`make_copies`, the actions planning made for
+    them (:data:`nla.CHARACTER_KEY`) and their collections (named from ``collection``) when
+    left empty."""
+    colls = set()
+    for ob, goal in pairs:
+        for o in (ob, goal):
+            colls.update(c for c in o.users_collection if c.name.startswith(collection))
+        names = {ob.name}
+        if ob.animation_data is not None:
+            ob.animation_data_clear()
+        bpy.data.objects.remove(ob)
+        bpy.data.objects.remove(goal)
+        for a in list(bpy.data.actions):
+            if a.get(nla.CHARACTER_KEY) in names and a.users == 0:
+                bpy.data.actions.remove(a)
+    for c in colls:
+        if not c.objects and not c.children:
+            bpy.data.collections.remove(c)

@@ -1,0 +1,295 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Checking: figures of the evaluated motion against its plan (:func:`analyse`) and a
+layout spec's pairs planned without writing (:func:`check_layout`)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+
+import bpy
+import numpy as np
+
+from ..adapter import evaluate, storage
+from ..adapter import scene as scene_io
+from ..motion_patches.kinematics.motion import concatenate
+from ..motion_patches.planning import causes
+from ..motion_patches.planning.planner import PlanError, SegmentPlanner, plan_motions
+from ..motion_patches.props import blocking
+from ..motion_patches.quality import layout_spec, metrics
+from .common import (
+    _check_character,
+    _check_far,
+    _limit_text,
+    _shrunk,
+    _size,
+    _some_names,
+    load_plan_record,
+    object_patches,
+    path_length,
+    scene_fps,
+    state_dict,
+)
+from .errors import MotionPatchesError
+from .settings import plan_settings
+
+
+def analyse(context: bpy.types.Context, character: bpy.types.Object, keep: bool = False) -> dict:
+    """Figures of the evaluated (depsgraph) motion against the last plan on ``character``;
+    ``keep`` stores them on it (:func:`last_analysis`, the Analysis panel)."""
+    figures = _analyse(context, character)
+    if keep:
+        storage.store_analysis(character, figures)
+    return figures
+
+
+def _analyse(context, character):
+    meta, arrays = load_plan_record(character)
+    frames = np.arange(meta["frame_start"], meta["frame_end"] + 1)
+    bones = [meta["root_name"]] + list(meta["foot_names"])
+    pos, ground, rot, _ = evaluate.sample_armature(context, character, frames, bones)
+    fps = scene_fps(context.scene)
+    root, feet = pos[:, 0], pos[:, 1:]
+    skate = metrics.foot_skate(feet, fps, arrays["contacts"])
+    by_layer = _skate_by_layer(meta, frames, feet, fps, arrays["contacts"])
+    goal = np.array(meta["goal"])
+    planned_root = arrays["root"]
+    root_err = np.linalg.norm(root[:, :2] - planned_root[:, :2], axis=1)
+    path_err = metrics.distance_to_polyline(ground[:, :2], arrays["ground"][:, :2])
+    env = storage.plan_environment(meta)
+    inside_mask = env.blocked(root[:, :2]) if meta["obstacles"] else np.zeros(frames.size, bool)
+    during = np.zeros(frames.size, bool)
+    for a, b in meta.get("traversals", []) + meta.get("interactions", []):
+        during[(frames >= a) & (frames <= b)] = True  # clips that touch their prop
+    inside = int((inside_mask & ~during).sum())
+    boundaries = [b - meta["frame_start"] for b in meta["boundaries"]]
+    pops = metrics.boundary_pops(rot, boundaries, fps)
+    end_heading = ground[-1, 2] + meta["facing"]
+    return {
+        "frames": int(frames.size),
+        "seconds": float((frames.size - 1) / fps),
+        "foot_skate": skate,
+        **({"foot_skate_by_layer": by_layer} if by_layer else {}),
+        "root_from_plan_cm": {
+            "mean": float(root_err.mean() * 100),
+            "max": float(root_err.max() * 100),
+        },
+        "ground_from_path_cm": {"max": float(path_err.max() * 100)},
+        "goal_position_error_cm": float(np.linalg.norm(ground[-1, :2] - goal[:2]) * 100),
+        "goal_root_position_error_cm": float(np.linalg.norm(root[-1, :2] - goal[:2]) * 100),
+        "goal_heading_error_deg": float(
+            abs(np.degrees(metrics.angle_difference(end_heading, goal[2])))
+        ),
+        "frames_root_inside_obstacle": inside,
+        "frames_root_over_prop_in_traversal": int((inside_mask & during).sum()),
+        "traversals": len(meta.get("traversals", [])),
+        "boundary_pop": pops,
+    }
+
+
+def _skate_by_layer(meta, frames, feet, fps, planted):
+    """{layer: foot skate} over the frames of each layer's strips (blends and clips counted
+    in none) of a plan that changes layer; None for a plan in one layer."""
+    spans = meta.get("layers") or []
+    names = sorted({n for _, _, n in spans if n != "clip" and "->" not in n})
+    if len(names) < 2:
+        return None
+    out = {}
+    for name in names:
+        mine = np.zeros(frames.size, bool)
+        for a, b, n in spans:
+            if n == name:
+                mine[(frames >= a) & (frames <= b)] = True
+        out[name] = metrics.foot_skate(feet, fps, np.asarray(planted, bool) & mine[:, None])
+    return out
+
+
+def _resolve(scene, place, what, patch):
+    """(state, object or None) for the name of an object of ``scene`` or [x, y,
+    heading_deg]; a start that is an armature starts where its own skeleton stands (it may
+    be retargeted)."""
+    if what == "exclude":
+        ob = scene.objects.get(place)
+        if ob is None:
+            raise MotionPatchesError(f"layout spec: no object named '{place}' to exclude")
+        return None, ob
+    if not isinstance(place, str):
+        return np.array([place[0], place[1], math.radians(place[2])]), None
+    ob = scene.objects.get(place)
+    if ob is None:
+        raise MotionPatchesError(
+            f"layout spec: no object named '{place}' for a {what} "
+            f"(have: {_some_names(scene.objects)})"
+        )
+    if what == "character" or (what == "start" and ob.type == "ARMATURE"):
+        rig = _check_character(ob, patch)  # the rule plan_path applies to its character
+        return scene_io.character_state(ob, rig.target if rig else patch.gait.skeleton), ob
+    return scene_io.ground_state(ob), ob
+
+
+def planned_pairs(
+    scene: bpy.types.Scene,
+    characters: Iterable[bpy.types.Object] = (),
+    goals: Iterable[bpy.types.Object] = (),
+) -> list[dict]:
+    """Layout-spec pairs (:func:`check_layout`) for ``characters``: each from the character
+    to the goal object at the same place in ``goals``, or (no goals) from where its stored
+    plan starts to the goal that plan reached. No characters: every armature of the scene
+    that has a plan."""
+    characters, goals = list(characters), list(goals)
+    if goals and len(goals) != len(characters):
+        raise MotionPatchesError(
+            f"give one goal per character ({len(characters)} characters, "
+            f"{len(goals)} goals), or none to use each one's planned goal"
+        )
+    if not characters:
+        characters = [ob for ob in scene.objects if ob.type == "ARMATURE" and storage.has_plan(ob)]
+        if not characters:
+            raise MotionPatchesError(
+                "nothing to check: no pairs given and no character in the scene has a planned path"
+            )
+    pairs = []
+    for n, ob in enumerate(characters):
+        if ob is None or ob.type != "ARMATURE":
+            raise MotionPatchesError("a character to check must be an armature")
+        if goals:
+            pairs.append({"name": ob.name, "character": ob.name, "goal": goals[n].name})
+            continue
+        meta, arrays = load_plan_record(ob)
+        g0, goal = arrays["ground"][0], meta["goal"]
+        pairs.append(
+            {
+                "name": ob.name,
+                "start": [float(g0[0]), float(g0[1]), math.degrees(g0[2])],
+                "goal": [float(goal[0]), float(goal[1]), math.degrees(goal[2])],
+                "exclude": [ob.name],
+            }
+        )
+    return pairs
+
+
+def check_layout(
+    scene: bpy.types.Scene, spec: dict, context: bpy.types.Context | None = None
+) -> list[dict]:
+    """Plan every start/goal pair of a layout ``spec`` WITHOUT writing to the scene.
+
+    Returns one dict per pair: reachable, seconds of motion, length, cost, the props
+    blocking it when it is not reachable, and whether it passed its limits. Raises
+    :class:`MotionPatchesError` for a bad spec (unknown object or patch), before planning.
+    """
+    try:
+        spec = layout_spec.normalise(spec)
+    except layout_spec.SpecError as exc:
+        raise MotionPatchesError(str(exc)) from None
+    try:
+        patch = storage.load_patch(scene, spec["patch"])
+    except ValueError as exc:
+        raise MotionPatchesError(str(exc)) from None
+    try:
+        w = plan_settings(scene, **{k: spec[k] for k in ("alpha", "beta", "gamma", "radius")})
+    except MotionPatchesError as exc:
+        raise MotionPatchesError(f"layout spec: {exc}") from None
+    margin = 3 if spec["margin_tiles"] is None else int(spec["margin_tiles"])
+    # Evaluate first: it also brings the objects' world matrices up to date.
+    depsgraph = (context or bpy.context).evaluated_depsgraph_get()
+    jobs = []
+    for p in spec["pairs"]:
+        start, sob = _resolve(
+            scene, p["start"], "character" if p.get("character") else "start", patch
+        )
+        goal, gob = _resolve(scene, p["goal"], "goal", patch)
+        # A retargeted character plans in the world shrunk by its size (see _size).
+        size = (
+            _size(_check_character(sob, patch))
+            if sob is not None and sob.type == "ARMATURE"
+            else 1.0
+        )
+        # Not obstacles: the start and goal objects with their children (a character's own
+        # body mesh) and whatever the spec excludes.
+        exclude = {}
+        for ob in [sob, gob] + [
+            _resolve(scene, n, "exclude", patch)[1] for n in spec["exclude"] + p["exclude"]
+        ]:
+            if ob is not None:
+                for o in (ob, *ob.children_recursive):
+                    exclude[o.name] = o
+        jobs.append((p, start, sob, goal, gob, exclude, size))
+    envs, results, props = {}, [], {}
+    for p, start, sob, goal, gob, exclude, size in jobs:
+        allow = bool(p["limits"]["allow_traversal"])
+        key = (tuple(sorted(exclude)), allow, size)
+        if key not in envs:
+            env = scene_io.environment(
+                scene, depsgraph, patch, w.radius, tuple(exclude.values()), size
+            )
+            if size not in props:  # tagged props offer traversals
+                props[size] = object_patches(scene, depsgraph, patch, size)
+            usable = [pr for pr in props[size] if pr.name not in exclude] if allow else []
+            try:
+                planner = SegmentPlanner(
+                    patch,
+                    env,
+                    w.alpha,
+                    w.beta,
+                    w.gamma,
+                    props=usable,
+                    turn_in_place=w.turn_in_place,
+                )
+            except PlanError as exc:
+                raise MotionPatchesError(str(exc)) from None
+            envs[key] = env, planner
+        env, planner = envs[key]
+        r = {
+            "name": p["name"],
+            "start": state_dict(start, sob and sob.name),
+            "goal": state_dict(goal, gob and gob.name),
+            "reachable": False,
+            "seconds": None,
+            "frames": None,
+            "length_m": None,
+            "cost": None,
+            "pieces": None,
+            "traversals": 0,
+            "expansions": None,
+            "plan_seconds": None,
+            "blocked_by": [],
+            "blocked_reason": None,
+            "error": None,
+            "limits": p["limits"],
+        }
+        r["goal_facing"] = p["goal_facing"]
+        if p["goal_facing"] == "any":
+            goal = np.array([goal[0], goal[1], np.nan])
+        start, goal = _shrunk(start, size), _shrunk(goal, size)
+        try:
+            _check_far(start, goal, "start", size)
+            with causes.counted(planner) as expanded:
+                plan = planner.plan(start, goal, margin_tiles=margin)
+        except MotionPatchesError as exc:
+            r["error"], r["blocked_reason"] = str(exc), "refused"
+        except PlanError as exc:
+            if expanded[0] >= causes.SEARCH_LIMIT:
+                r["error"], r["blocked_reason"] = _limit_text(expanded[0]), "search limit"
+            else:
+                r["error"] = str(exc)
+                names, r["blocked_reason"] = blocking.blocking_props(env, start, goal, margin)
+                r["blocked_by"] = scene_io.owners(names)
+        else:
+            world = concatenate(plan_motions(patch, plan))
+            r["goal"] = state_dict(_shrunk(plan.goal, 1.0 / size), gob and gob.name)
+            seconds = (world.frames - 1) / patch.gait.fps
+            r.update(
+                reachable=True,
+                frames=int(round(seconds * scene_fps(scene))) + 1,
+                seconds=seconds,
+                length_m=path_length(world.ground) * size,
+                cost=float(plan.cost),
+                pieces=len(plan.pieces),
+                expansions=int(plan.expansions),
+                plan_seconds=float(plan.seconds),
+                traversals=sum(pc.kind == "traversal" for pc in plan.pieces),
+            )
+        r["failures"] = layout_spec.judge(r, p["limits"])
+        r["passed"] = not r["failures"]
+        results.append(r)
+    return results

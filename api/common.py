@@ -1,0 +1,180 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Shared by every use case: the scene's frame rate, the stored patch and plan records, the
+character's size against the patch, a start or goal's checks."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..adapter import nla, props_io, storage
+from .errors import MotionPatchesError
+
+if TYPE_CHECKING:
+    import bpy
+
+    from ..motion_patches.patch.locomotion_patch import LocomotionPatch
+    from ..motion_patches.props.object_patch import ObjectPatch
+
+
+PLAN_KEY = storage.PLAN_KEY  # the custom property holding a character's plan record
+
+
+def scene_fps(scene: bpy.types.Scene) -> float:
+    """Frames per second of ``scene`` (its rate over its base)."""
+    return scene.render.fps / scene.render.fps_base
+
+
+def active_patch_name(scene: bpy.types.Scene) -> str | None:
+    """The patch planning uses when none is named (None: no patch is baked)."""
+    return storage.active_name(scene)
+
+
+def object_patches(
+    scene: bpy.types.Scene,
+    depsgraph: bpy.types.Depsgraph,
+    patch: LocomotionPatch,
+    scale: float = 1.0,
+) -> list[ObjectPatch]:
+    """Core object patches of every tagged prop in the scene (``scale``: the character's
+    size relative to the patch skeleton, :func:`_size`: props placed in the world the
+    planner sees, shrunk by it)."""
+    out = []
+    floor = patch.gait.floor()
+    for obj in props_io.tagged(scene):
+        try:
+            out.append(
+                props_io.object_patch(
+                    obj,
+                    depsgraph,
+                    patch.gait.skeleton,
+                    patch.gait.fps,
+                    gait_floor=floor,
+                    scale=scale,
+                )
+            )
+        except ValueError as exc:
+            raise MotionPatchesError(str(exc)) from None
+    return out
+
+
+def load_plan_record(obj: bpy.types.Object) -> tuple[dict, dict]:
+    """The last plan written on ``obj`` (meta dict, arrays dict)."""
+    try:
+        return storage.load_plan(obj)
+    except ValueError as exc:
+        raise MotionPatchesError(str(exc)) from None
+
+
+def last_analysis(obj: bpy.types.Object | None) -> dict | None:
+    """The figures :func:`analyse` kept on ``obj`` last time, or None."""
+    return storage.last_analysis(obj)
+
+
+def state_dict(state: Sequence[float], name: str | None = None) -> dict:
+    """(x, y, heading) as JSON-friendly numbers (heading in degrees, -180..180)."""
+    h = (float(np.degrees(state[2])) + 180.0) % 360.0 - 180.0
+    d = {
+        "x": round(float(state[0]), 6),
+        "y": round(float(state[1]), 6),
+        "heading_deg": round(h, 4) + 0.0,
+    }
+    if name is not None:
+        d["object"] = name
+    return d
+
+
+def path_length(ground: np.ndarray) -> float:
+    """Metres walked by a ground trajectory (frames, >= 2)."""
+    return float(np.linalg.norm(np.diff(np.asarray(ground)[:, :2], axis=0), axis=1).sum())
+
+
+def _patch_for_planning(scene, patch_name):
+    """The stored patch to plan with. A scene at another frame rate than the patch's is
+    fine: strips play the patch's keys scaled in time
+    (:mod:`motion_patches.kinematics.scene_rate`)."""
+    try:
+        return storage.load_patch(scene, patch_name)
+    except ValueError as exc:
+        raise MotionPatchesError(str(exc)) from None
+
+
+def _check_character(character, patch):
+    """The :class:`~motion_patches.kinematics.retarget.RigMap` that puts the patch on the character
+    (None: it is the patch's own skeleton); :class:`MotionPatchesError` naming the patch
+    bones its armature cannot play."""
+    try:
+        return nla.check_rig(character, patch.gait.skeleton, patch.gait.floor())
+    except ValueError as exc:
+        raise MotionPatchesError(str(exc)) from None
+
+
+def _size(rig):
+    """How much larger the character is than the patch's skeleton (its hip-height ratio).
+    The planner works in the world divided by it, where the patch's steps are the
+    character's; its motion is scaled back by :meth:`RigMap.motion`."""
+    return 1.0 if rig is None else float(rig.scale)
+
+
+def _shrunk(state, scale):
+    """A world (x, y, heading) in the planner's world of a character ``scale`` times the
+    patch skeleton's size (and back with ``1 / scale``)."""
+    state = np.array(state, float)
+    state[:2] /= scale
+    return state
+
+
+def _not_obstacles(objects):
+    """Objects that never block: the given ones with their children (a character's own
+    body mesh), except tagged props (a goal prop to sit on stays an obstacle)."""
+    out = []
+    for ob in objects:
+        if ob is not None and not (ob.type == "MESH" and ob.motion_patch.enabled):
+            out += [ob, *ob.children_recursive]
+    return tuple(out)
+
+
+MAX_COORDINATE = 1e5  # metres from the origin a start or goal may lie
+MAX_DISTANCE = 2000.0  # metres between start and goal of one plan (plan longer walks in legs)
+SAME_PLACE = 0.05  # metres: a goal this near the start, facing the same way, is the start
+SAME_FACING = np.radians(2.0)
+
+
+def _check_far(start, goal, who, scale=1.0):
+    """Refuse a start or goal farther from the origin than ``MAX_COORDINATE`` or start and
+    goal farther apart than ``MAX_DISTANCE`` (planner-world states of a character ``scale``
+    times the patch's size), and a goal where the start is (same place, same facing)."""
+    for what, state in (("start", start), ("goal", goal)):
+        far = float(np.abs(np.asarray(state[:2], float)).max()) * scale
+        if not far <= MAX_COORDINATE:
+            raise MotionPatchesError(
+                f"the {what} of {who} lies {far:.3g} m from the origin; "
+                f"plans stay within {MAX_COORDINATE:g} m of it"
+            )
+    d = float(np.hypot(*(np.asarray(goal[:2], float) - np.asarray(start[:2], float)))) * scale
+    if d > MAX_DISTANCE:
+        raise MotionPatchesError(
+            f"the goal of {who} is {d:,.0f} m from its start; one plan "
+            f"walks at most {MAX_DISTANCE:,.0f} m: plan the walk in legs"
+        )
+    turn = abs((float(goal[2]) - float(start[2]) + np.pi) % (2 * np.pi) - np.pi)
+    if d < SAME_PLACE and (np.isnan(goal[2]) or turn < SAME_FACING):
+        raise MotionPatchesError(
+            f"the goal of {who} is where it stands ({d * 100:.0f} cm away, "
+            f"facing the same way): there is nothing to plan"
+        )
+
+
+def _limit_text(nodes):
+    return (
+        f"search limit reached after {nodes:,} nodes: the search stopped before finding a "
+        f"way, which does not mean the props close it; plan to a nearer goal first and on "
+        f"from there"
+    )
+
+
+def _some_names(coll, limit=8):
+    names = sorted(x.name for x in coll)
+    return (", ".join(names[:limit]) + (", ..." if len(names) > limit else "")) or "none"

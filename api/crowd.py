@@ -1,0 +1,552 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Planning a crowd (:func:`plan_crowd`): who is in it, each one's path round the others'
+standing spots, then kept apart in time by holds, waits and re-routes."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+from functools import partial
+
+import bpy
+import numpy as np
+
+from ..adapter import moving as moving_io
+from ..adapter import scene as scene_io
+from ..adapter import transaction
+from ..motion_patches.crowd import crowd
+from ..motion_patches.planning import moving_props
+from ..motion_patches.planning.planner import plan_motions
+from ..motion_patches.planning.settings import PlanSettings
+from ..motion_patches.props.environment import Obstacle
+from .common import (
+    PLAN_KEY,
+    _check_character,
+    _not_obstacles,
+    _patch_for_planning,
+    _shrunk,
+    _size,
+    object_patches,
+    scene_fps,
+)
+from .crowd_holds import CROWD_HOLD_RAMP_SECONDS, _holdable, _root_track, _with_hold
+from .errors import MotionPatchesError, PathNotFound
+from .results import CrowdResult, CrowdSchedule
+from .settings import plan_settings
+from .solve import (
+    _avoid_moving,
+    _check_clear,
+    _check_ends,
+    _endpoints,
+    _frame_start,
+    _goal,
+    _planner,
+    _solve,
+    _without,
+    _writable,
+)
+from .writing import FRAME_RANGE_KEY, _fit_frame_range, _placed, _write
+
+CROWD_RESOLVE_SLACK = 0.05  # metres the crowd is resolved wider than its spacing (see plan_crowd)
+CROWD_SPOT = "\x00crowd spot "  # obstacle names of other characters' standing spots
+CROWD_GHOST = "\x00crowd ghost "  # where another character walks when two would meet
+
+
+def crowd_members(
+    scene: bpy.types.Scene, characters: Iterable[bpy.types.Object] | None = None
+) -> list[tuple]:
+    """Who is in a crowd and where each walks: [(armature, goal object)] by name, what
+    :func:`plan_crowd` takes. The one rule for the operator, the CLI and scripts.
+
+    ``characters``: the objects chosen (the selection, the CLI's --character); the
+    armatures among them are the crowd (a selected body mesh is no character). None:
+    every armature of the scene that has its own goal. Each walks to its own goal, else to
+    the scene's; a character with neither, or whose goal is itself, is refused by name,
+    and so is a choice with no armature in it."""
+    scene_goal = scene.motion_patches.goal
+    if characters is None:
+        chosen = [
+            ob
+            for ob in scene.objects
+            if ob.type == "ARMATURE" and ob.motion_patches_character.goal is not None
+        ]
+        if not chosen:
+            raise MotionPatchesError(
+                "no crowd: no armature in the scene has its own goal; "
+                "choose the characters, or give each its own goal"
+            )
+    else:
+        chosen = [ob for ob in characters if ob is not None and ob.type == "ARMATURE"]
+        if not chosen:
+            raise MotionPatchesError("no crowd: none of the chosen objects is an armature")
+    pairs = []
+    for ob in sorted({ob.name: ob for ob in chosen}.values(), key=lambda o: o.name):
+        if scene.objects.get(ob.name) != ob:
+            raise MotionPatchesError(f"'{ob.name}' is not in the scene '{scene.name}'")
+        goal = ob.motion_patches_character.goal or scene_goal
+        if goal is None:
+            raise MotionPatchesError(
+                f"'{ob.name}' has no goal: give it its own goal or set the scene's goal"
+            )
+        if goal == ob:
+            raise MotionPatchesError(f"the goal of '{ob.name}' is the character itself")
+        pairs.append((ob, goal))
+    return pairs
+
+
+def plan_crowd(
+    scene: bpy.types.Scene,
+    pairs: list[tuple],
+    patch_name: str | None = None,
+    alpha: float | None = None,
+    beta: float | None = None,
+    gamma: float | None = None,
+    radius: float | None = None,
+    frame_start: int | None = None,
+    context: bpy.types.Context | None = None,
+    stitching: str | None = None,
+    progress: Callable[[float], None] | None = None,
+    max_wait_seconds: float = 4.0,
+    spacing: float | None = None,
+    foot_lock: bool | None = None,
+    goal_facing: str | None = None,
+    turn_in_place: bool | None = None,
+) -> CrowdResult:
+    """Plan several characters and write each one's NLA; ``pairs`` = [(armature, goal)] or
+    [(armature, goal, options)], a goal being an object or (x, y, heading); ``options``:
+    {"start_prop": a tagged prop with a stand-up clip to start seated on, "priority":
+    a number, higher planned first}. A goal that is a tagged prop with a sit-down clip
+    ends the walk seated on it. Characters that find no path are listed in ``failed``
+    with the reason.
+
+    Characters are taken in priority order (the given priority, then the longer distance
+    from start to goal first). Each path is planned against the props and the spots where
+    the others stand still while it walks: the goals of those before it and the starts of
+    those after it (:func:`motion_patches.crowd.crowd.standing_spots`; dropped when they box it
+    in). Then each character in turn is checked against a space-time reservation of
+    everyone before it and kept ``spacing`` metres (default: two radii) from them by an
+    idle hold mid-walk on a double-support frame, else a wait at its start (whole 0.2 s
+    steps, each at most ``max_wait_seconds``), else a re-route round where the other walks
+    then (:func:`motion_patches.crowd.crowd.resolve`). Closer approaches left are returned as
+    ``conflicts`` by pair and frame, checked on the motion as written. Bad input (a
+    character twice, two characters sent to one goal, goals closer than ``spacing``: one
+    could never be free) raises :class:`MotionPatchesError` before anything is written."""
+    settings = plan_settings(
+        scene,
+        alpha=alpha,
+        beta=beta,
+        gamma=gamma,
+        radius=radius,
+        stitching=stitching,
+        foot_lock=foot_lock,
+        goal_facing=goal_facing,
+        turn_in_place=turn_in_place,
+    )
+    t0 = time.perf_counter()
+    c = _request(
+        scene, pairs, patch_name, settings, frame_start, context, max_wait_seconds, spacing
+    )
+    _place_ends(c)
+    planned, failed = _plan_each(c, progress)
+    planned, schedules = _resolve(c, planned)
+    holds = _lay_holds(c, planned, schedules)
+    # what is reported is checked on the motion written, whatever resolved it
+    ranked = sorted(range(len(planned)), key=lambda k: schedules[k].rank)  # order kept
+    conflicts = crowd.conflicts_of(
+        [_root_track(planned[k][3]) for k in ranked],
+        [schedules[k].delay for k in ranked],
+        c.spacing,
+    )
+    moving_left = _moving_conflicts(c, planned, schedules)
+    if progress is not None:
+        progress(0.9)
+    written = _write_all(c, planned, schedules)
+    if progress is not None:
+        progress(1.0)
+    names = [c.pairs[p[0]][0].name for p in planned]
+    for x in conflicts:
+        x["a"], x["b"] = names[ranked[x["a"]]], names[ranked[x["b"]]]
+        x["frame"] += c.first
+        x["first_frame"] += c.first
+    for p in planned:  # holds on the scene's frames (a character that holds starts at once)
+        name = c.pairs[p[0]][0].name
+        if name in holds:
+            holds[name] = [
+                {"frame": written[p[0]].frame_start + f + c.ramp // 2, "frames": int(n)}
+                for f, n in holds[name]
+            ]
+    return CrowdSchedule(
+        [written[n] for n in sorted(written)],
+        failed,
+        conflicts,
+        {nm: s.delay for nm, s in zip(names, schedules)},
+        time.perf_counter() - t0,
+        [nm for nm, s in zip(names, schedules) if s.rerouted],
+        holds,
+        [names[k] for k in ranked],
+        moving_left,
+    )
+
+
+@dataclass
+class _World:
+    """The planner's world of the characters of one size (retargeted rigs are planned in
+    the world shrunk by their size): its environment, props, planner, and the props that
+    move (``tracks``; ``awake``: those moving on the first frame)."""
+
+    env: object
+    props: list
+    by_name: dict
+    tracks: list
+    awake: list
+    planner: object = None
+
+
+@dataclass
+class _Crowd:
+    """A crowd request, checked: its characters (``pairs``, ``options``, ``rigs``,
+    ``sizes`` by entry), its settings, and what the steps of :func:`plan_crowd` find."""
+
+    scene: object
+    patch: object
+    patch_name: str | None
+    settings: PlanSettings
+    pairs: list
+    options: list
+    rigs: list
+    sizes: list
+    first: int  # the scene frame the crowd starts on
+    spacing: float
+    max_wait_seconds: float
+    depsgraph: object
+    fps: float
+    worlds: dict = field(default_factory=dict)  # size -> _World
+    ends: list = field(default_factory=list)  # _endpoints per entry, in its world
+    own: list = field(default_factory=list)  # names no obstacle for each (its goal, seat)
+    order: list = field(default_factory=list)  # entries in priority order
+    rank_ends: list = field(default_factory=list)  # (start, goal) in the world, by rank
+
+    @property
+    def ramp(self) -> int:
+        return max(2, int(round(CROWD_HOLD_RAMP_SECONDS * self.fps)) // 2 * 2)
+
+    @property
+    def same_rate(self) -> bool:
+        return abs(self.fps - self.patch.gait.fps) < 1e-6
+
+
+def _request(scene, pairs, patch_name, settings, frame_start, context, max_wait_seconds, spacing):
+    """The crowd request checked (:class:`MotionPatchesError` before anything is written):
+    each entry (character, goal[, options]) and the spacing."""
+    patch = _patch_for_planning(scene, patch_name)
+    context = context or bpy.context
+    context.view_layer.update()
+    pairs = [tuple(p) for p in pairs]
+    if not pairs:
+        raise MotionPatchesError("a crowd needs at least one character with a goal")
+    if any(len(p) not in (2, 3) for p in pairs):
+        raise MotionPatchesError(
+            "each crowd entry is (character, goal) or (character, goal, options)"
+        )
+    options = [dict(p[2]) if len(p) == 3 and p[2] else {} for p in pairs]
+    pairs = [p[:2] for p in pairs]
+    spacing = 2 * settings.radius if spacing is None else float(spacing)
+    if not (0 <= spacing < np.inf and 0 <= max_wait_seconds < np.inf):
+        raise MotionPatchesError("spacing and the longest wait must be numbers >= 0")
+    rigs = _checked_entries(pairs, options, patch)
+    first = _frame_start(scene, frame_start)
+    return _Crowd(
+        scene,
+        patch,
+        patch_name,
+        settings,
+        pairs,
+        options,
+        rigs,
+        [_size(r) for r in rigs],
+        first,
+        spacing,
+        max_wait_seconds,
+        context.evaluated_depsgraph_get(),
+        scene_fps(scene),
+    )
+
+
+def _checked_entries(pairs, options, patch):
+    """The rig map of each entry's character; :class:`MotionPatchesError` for an unknown
+    option, a character twice, a goal missing or its own, a priority that is no number, or
+    a goal / start seat shared by two characters."""
+    seen, rigs, taken = set(), [], {}
+    for (character, goal), opt in zip(pairs, options):
+        unknown = set(opt) - {"start_prop", "priority"}
+        if unknown:
+            raise MotionPatchesError(
+                f"unknown crowd option(s) {', '.join(sorted(unknown))} "
+                f"for '{getattr(character, 'name', character)}'"
+            )
+        rigs.append(_check_character(character, patch))
+        if character.name in seen:
+            raise MotionPatchesError(f"'{character.name}' appears twice in the crowd")
+        seen.add(character.name)
+        if goal is None:
+            raise MotionPatchesError(f"'{character.name}' has no goal")
+        if goal == character:
+            raise MotionPatchesError(f"the goal of '{character.name}' is the character itself")
+        _goal(goal)
+        _writable(character)
+        try:
+            opt["priority"] = float(opt.get("priority", 0.0))
+        except (TypeError, ValueError):
+            raise MotionPatchesError(
+                f"the priority of '{character.name}' must be a number"
+            ) from None
+        for what, ob in (("goal", goal), ("start seat", opt.get("start_prop"))):
+            if isinstance(ob, bpy.types.Object):
+                if ob.name in taken:
+                    raise MotionPatchesError(
+                        f"'{ob.name}' is the {what} of both '{taken[ob.name]}' and "
+                        f"'{character.name}': one spot, one character; give each its own"
+                    )
+                taken[ob.name] = character.name
+    return rigs
+
+
+def _world_of(c, size):
+    """The :class:`_World` of characters of ``size``, made on first use.
+
+    Characters are not obstacles of the scene: they are kept apart in space and time, and
+    where they stand still (goals of earlier ones, starts of later ones) in space. A goal
+    object is no obstacle for its own character only."""
+    if size not in c.worlds:
+        env = scene_io.environment(
+            c.scene,
+            c.depsgraph,
+            c.patch,
+            c.settings.radius,
+            _not_obstacles([ch for ch, _ in c.pairs]),
+            size,
+        )
+        props = object_patches(c.scene, c.depsgraph, c.patch, size)
+        # props that move (keyframed): where each stands on the first frame; the ones
+        # moving then are left out of the global plans and walked round after (Sec. 4.4)
+        tracks = moving_io.tracks(c.scene, c.depsgraph, list(env.obstacles), c.first, size)
+        for t in tracks:
+            env.remove(t.name)
+            env.place(Obstacle(t.name, t.polygon_at(t.pose_at(0.0)[0])))
+        awake = [t.name for t in tracks if t.awake_at(0.0)]
+        c.worlds[size] = _World(env, props, {p.name: p for p in props}, tracks, awake)
+    return c.worlds[size]
+
+
+def _place_ends(c):
+    """Each entry's start and goal (checked clear, and goals ``spacing`` apart), one
+    planner per world, and the priority order: the given priority, then the longer way
+    first."""
+    skel = c.patch.gait.skeleton
+    c.ends = [
+        _endpoints(
+            ch,
+            g,
+            opt.get("start_prop"),
+            _world_of(c, sz).by_name,
+            r.target if r else skel,
+            c.settings.goal_facing,
+            sz,
+        )
+        for (ch, g), opt, r, sz in zip(c.pairs, c.options, c.rigs, c.sizes)
+    ]
+    c.own = [
+        [
+            o.name
+            for o in _not_obstacles([g, opt.get("start_prop")])
+            if isinstance(o, bpy.types.Object)
+        ]
+        for (_, g), opt in zip(c.pairs, c.options)
+    ]
+    for (ch, _), e, mine, sz in zip(c.pairs, c.ends, c.own, c.sizes):
+        _check_ends(ch, e, sz)
+        with _without(_world_of(c, sz).env, mine):
+            _check_clear(_world_of(c, sz).env, ch, e, _world_of(c, sz).by_name)
+    for w in c.worlds.values():
+        w.planner = _planner(c.patch, w.env, c.settings, w.props)
+    world_ends = [
+        (_shrunk(e[0], 1.0 / sz), _shrunk(e[1], 1.0 / sz)) for e, sz in zip(c.ends, c.sizes)
+    ]
+    goals = np.array([g[1][:2] for g in world_ends])
+    for i in range(len(c.pairs)):
+        for j in range(i):
+            gap = float(np.linalg.norm(goals[i] - goals[j]))
+            if gap < c.spacing:
+                raise MotionPatchesError(
+                    f"the goals of '{c.pairs[j][0].name}' and '{c.pairs[i][0].name}' are "
+                    f"{gap:.2f} m apart, closer than the spacing ({c.spacing:.2f} m): the one "
+                    f"arriving second would never find its goal free; move one of them"
+                )
+    c.order = sorted(
+        range(len(c.pairs)),
+        key=lambda n: (
+            -c.options[n]["priority"],
+            -float(np.linalg.norm(world_ends[n][1][:2] - world_ends[n][0][:2])),
+        ),
+    )
+    c.rank_ends = [world_ends[n] for n in c.order]
+
+
+def _solve_one(c, n, ghosts=()):
+    """Plan entry n round the standing spots (dropped when they box it in) and, when
+    re-routing, round ``ghosts`` (world polygons; PathNotFound if they box it in)."""
+    character, e, size = c.pairs[n][0], c.ends[n], c.sizes[n]
+    w, radius = _world_of(c, size), c.settings.radius
+    env, planner = w.env, w.planner
+    spots = [
+        Obstacle(f"{CROWD_SPOT}{c.pairs[c.order[m]][0].name}", polygon / size)
+        for m, polygon in crowd.standing_spots(c.rank_ends, c.order.index(n), c.spacing, radius)
+    ]
+    mine = np.array([e[0][:2], e[1][:2]], float)
+    extra = [Obstacle(f"{CROWD_GHOST}{k}", polygon / size) for k, polygon in enumerate(ghosts)]
+    extra = [g for g in extra if not g.within(mine, radius).any()]  # not on its own ends
+    with _without(env, c.own[n]):
+        for ob in spots + extra:  # where the others stand still while this one walks
+            env.place(ob)
+        try:
+            with _without(env, w.awake):
+                try:
+                    plan = _solve(planner, character, e, explain=not (spots or extra))
+                except PathNotFound:
+                    if not spots or extra:
+                        raise
+                    for spot in spots:  # boxed in by the others: plan past them
+                        env.remove(spot.name)
+                    spots = []
+                    plan = _solve(planner, character, e)
+            if w.tracks:  # round the moving props by re-routing (the crowd times waits)
+                plan, _ = _avoid_moving(
+                    planner, c.patch, plan, w.tracks, character, c.first, c.fps, longest_wait=0.0
+                )
+            return plan
+        finally:
+            for ob in spots + extra:
+                env.remove(ob.name)
+
+
+def _synthesised(c, n, plan):
+    """[n, plan, raw piece motions, placed motion, holdable frames or None] of entry n."""
+    raw = plan_motions(c.patch, plan)
+    placed = _placed(c.scene, c.patch, c.rigs[n], raw)
+    return [n, plan, raw, placed, (_holdable(plan, placed, c.ramp) if c.same_rate else None)]
+
+
+def _plan_each(c, progress):
+    """(planned: [[n, plan, raw, placed, holdable]] in priority order, failed: [(name,
+    why)]): each entry planned round the others' standing spots."""
+    planned, failed = [], []
+    for count, n in enumerate(c.order):
+        try:
+            planned.append(_synthesised(c, n, _solve_one(c, n)))
+        except PathNotFound as exc:
+            failed.append((c.pairs[n][0].name, str(exc)))
+        if progress is not None:
+            progress(0.8 * (count + 1) / len(c.pairs))
+    return planned, failed
+
+
+def _replan(c, versions, k, ghosts):
+    """Planned character k re-planned round ``ghosts``: its new track and holdable frames
+    (the next version of its plan, kept in ``versions[k]``), or None."""
+    n = versions[k][0][0]
+    try:
+        plan = _solve_one(c, n, ghosts)
+    except PathNotFound:
+        return None
+    versions[k].append(_synthesised(c, n, plan))
+    return _root_track(versions[k][-1][3]), versions[k][-1][4]
+
+
+def _resolve(c, planned):
+    """(the version of each planned character the crowd settled on, its schedules):
+    :func:`motion_patches.crowd.crowd.resolve` with every re-plan kept."""
+    versions = [[p] for p in planned]  # every re-plan kept: the crowd may settle on any
+    # Resolved a little wider than reported: a hold is laid into the written motion by a time
+    # warp, which may bring a pair a few millimetres nearer than the track the table saw.
+    schedules, _ = crowd.resolve(
+        [_root_track(p[3]) for p in planned],
+        partial(_replan, c, versions),
+        c.spacing + CROWD_RESOLVE_SLACK,
+        c.settings.radius,
+        c.fps,
+        round(c.max_wait_seconds * c.fps),
+        max(1, round(0.2 * c.fps)),
+        ramp=c.ramp,
+        holdable=[p[4] for p in planned],
+    )
+    return [v[s.version] for v, s in zip(versions, schedules)], schedules
+
+
+def _lay_holds(c, planned, schedules):
+    """Each schedule's holds put in the piece they fall in, as its own strip (``planned``
+    updated); {name: [(frame from its start, frames held)]}."""
+    holds = {}
+    for p, s in zip(planned, schedules):
+        if s.holds:
+            at = []
+            for k, h in s.holds:
+                bounds = np.concatenate(([0], np.cumsum([m.frames - 1 for m in p[2]])))
+                p[1], p[2] = _with_hold(p[1], p[2], bounds, k, h, c.ramp)
+                at = [(f + h + c.ramp if f > k else f, n) for f, n in at] + [(k, h)]
+            p[3] = _placed(c.scene, c.patch, c.rigs[p[0]], p[2])
+            holds[c.pairs[p[0]][0].name] = sorted(at)
+    return holds
+
+
+def _moving_conflicts(c, planned, schedules):
+    """The props that move, against each walk as scheduled (its wait and holds included):
+    [{"character", "prop", "frame", "distance_m"}]."""
+    out = []
+    for p, s in zip(planned, schedules):
+        w = _world_of(c, c.sizes[p[0]])
+        if not w.tracks:
+            continue
+        wait = s.delay / c.fps
+        for x in moving_props.conflicts(
+            p[2], w.tracks, w.planner.world_env.radius, c.patch.gait.fps, wait
+        ):
+            out.append(
+                {
+                    "character": c.pairs[p[0]][0].name,
+                    "prop": x.prop,
+                    "frame": c.first + s.delay + int(round(x.frame * c.fps / c.patch.gait.fps)),
+                    "distance_m": float(x.distance),
+                }
+            )
+    return out
+
+
+def _write_all(c, planned, schedules):
+    """{entry: PlanResult} of every planned character written (all refused before the
+    first is written when one cannot be), the frame range fitted once after."""
+    written = {}
+    for (n, plan, _, placed, _), s in zip(planned, schedules):
+        _writable(c.pairs[n][0], c.first + s.delay, placed[2].frames)
+    with transaction.kept(
+        bpy, c.scene, [c.pairs[n][0] for n, *_ in planned], (PLAN_KEY, FRAME_RANGE_KEY)
+    ):
+        for (n, plan, _, placed, _), s in zip(planned, schedules):
+            env = _world_of(c, c.sizes[n]).env
+            with _without(env, c.own[n]):  # the plan record lists what it walked around
+                written[n] = _write(
+                    c.scene,
+                    c.pairs[n][0],
+                    c.patch,
+                    c.patch_name,
+                    plan,
+                    placed,
+                    c.first + s.delay,
+                    env,
+                    c.settings,
+                    c.rigs[n],
+                    fit=False,
+                )
+        if written:
+            _fit_frame_range(c.scene)  # once: it reads every character's plan record
+    return written

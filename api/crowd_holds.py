@@ -1,0 +1,62 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Idle holds: a crowd character standing still mid-walk while another passes."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..motion_patches.kinematics import retime
+from ..motion_patches.kinematics.inplace import root_positions
+from .errors import MotionPatchesError
+
+CROWD_HOLD_RAMP_SECONDS = 0.5  # slowing to an idle hold and walking on again, each
+_CLIPS = ("traversal", "interaction")
+
+
+def _piece_holding(plan, bounds, at, ramp):
+    """Index of the walking piece whose scene frames ``bounds[i]..bounds[i+1]`` hold frame
+    ``at`` with half a ``ramp`` to spare on both sides, or None."""
+    half = ramp // 2
+    for i, p in enumerate(plan.pieces):
+        if p.kind not in _CLIPS and bounds[i] + half <= at <= bounds[i + 1] - half:
+            return i
+    return None
+
+
+def _holdable(plan, placed, ramp):
+    """Bool per scene frame of a placed plan (:func:`_placed`): frames a crowd may hold on,
+    double support (a planted joint on each foot) inside a walking piece with room for the
+    slow-down and speed-up in that piece."""
+    _, bounds, world = placed
+    c = world.contacts
+    ok = c[:, :2].any(axis=1) & c[:, 2:].any(axis=1)
+    inside = np.zeros_like(ok)
+    half = ramp // 2
+    for i, p in enumerate(plan.pieces):
+        if p.kind not in _CLIPS:
+            inside[bounds[i] + half : bounds[i + 1] - half + 1] = True
+    return ok & inside
+
+
+def _with_hold(plan, raw, bounds, at, hold, ramp):
+    """(plan, raw piece motions) with an idle hold of ``hold`` frames on scene frame ``at``
+    (the scene at the patch's rate): the piece it falls in is time-warped
+    (:func:`motion_patches.kinematics.retime.held`) and becomes a piece of kind "hold", so it is
+    written as its own action, not the shared segment action."""
+    i = _piece_holding(plan, bounds, at, ramp)
+    if i is None:
+        raise MotionPatchesError(f"internal: frame {at} is in no walking piece to hold in")
+    raw = list(raw)
+    raw[i] = retime.held(raw[i], at - bounds[i], hold, ramp)
+    pieces = list(plan.pieces)
+    pieces[i] = dataclasses.replace(pieces[i], kind="hold")
+    return dataclasses.replace(plan, pieces=pieces), raw
+
+
+def _root_track(placed):
+    """(frames, 2) ground position of the root joint of a placed motion (:func:`_placed`):
+    what a crowd keeps apart (the hips sway a few centimetres about the ground track)."""
+    world = placed[2]
+    return root_positions(world.ground, world.root_local)[:, :2]

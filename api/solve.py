@@ -1,0 +1,236 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""One character's path, shared by :func:`plan_path` and :func:`plan_crowd`: its start and
+goal states, the checks before searching, the search and its refusals."""
+
+from __future__ import annotations
+
+import contextlib
+import math
+
+import bpy
+import numpy as np
+
+from ..adapter import props_io, transaction
+from ..adapter import scene as scene_io
+from ..motion_patches.planning import body_clearance, causes, moving_props
+from ..motion_patches.planning.planner import (
+    PlanError,
+    SegmentPlanner,
+    interaction_states,
+    plan_motions,
+    with_interactions,
+)
+from ..motion_patches.planning.settings import PlanSettings
+from .common import _check_far, _limit_text, _shrunk
+from .errors import MotionPatchesError, PathNotFound
+
+
+def _goal(goal):
+    if isinstance(goal, bpy.types.Object):
+        return scene_io.ground_state(goal)
+    try:
+        state = np.asarray(goal, float).reshape(3)
+    except (TypeError, ValueError):
+        raise MotionPatchesError(
+            "choose a goal object (its location and facing) or give (x, y, heading)"
+        ) from None
+    if not np.isfinite(state).all():
+        raise MotionPatchesError("the goal (x, y, heading) must be finite numbers")
+    return state
+
+
+def _endpoints(character, goal, start_prop, by_name, skel, goal_facing="exact", scale=1.0):
+    """Start and goal states with the interaction clips that begin / end the path there;
+    ``goal_facing`` "any" leaves the goal heading free (NaN) unless a clip fixes it.
+    ``skel``: the character's own skeleton; the states are in the planner's world of a
+    character ``scale`` times the patch's size (:func:`_size`)."""
+    if goal_facing not in ("exact", "any"):
+        raise MotionPatchesError(f"goal facing must be 'exact' or 'any', not {goal_facing!r}")
+    start_state = _shrunk(scene_io.character_state(character, skel), scale)
+    goal_state = _shrunk(_goal(goal), scale)
+    if goal_facing == "any":
+        goal_state = np.array([goal_state[0], goal_state[1], np.nan])
+    start_ref = goal_ref = None
+    if isinstance(goal, bpy.types.Object) and goal.name in by_name:
+        i = props_io.interaction_clip(by_name[goal.name], sitting=True)
+        if i is None:
+            raise MotionPatchesError(
+                f"the goal '{goal.name}' is a prop without a sit-down "
+                f"interaction clip: there is nowhere to end the path"
+            )
+        goal_ref = (by_name[goal.name], i)
+    if start_prop is not None:
+        if start_prop.name not in by_name:
+            raise MotionPatchesError(f"'{start_prop.name}' is not a tagged object patch")
+        i = props_io.interaction_clip(by_name[start_prop.name], sitting=False)
+        if i is None:
+            raise MotionPatchesError(f"'{start_prop.name}' has no stand-up interaction clip")
+        start_ref = (by_name[start_prop.name], i)
+    s_state, g_state = interaction_states(start_ref, goal_ref)
+    return (
+        start_state if s_state is None else s_state,
+        goal_state if g_state is None else g_state,
+        start_ref,
+        goal_ref,
+    )
+
+
+@contextlib.contextmanager
+def _without(env, names):
+    """``env`` with the named obstacles (and their parts, :func:`adapter.scene.part_name`)
+    taken out for the block (put back after)."""
+    names = set(names)
+    saved = [ob for n, ob in env.obstacles.items() if n in names or scene_io.owner(n) in names]
+    for ob in saved:
+        env.remove(ob.name)
+    try:
+        yield env
+    finally:
+        for ob in saved:
+            env.place(ob)
+
+
+def _check_clear(env, character, endpoints, by_name):
+    """Refuse a start or goal the character cannot stand on, naming the prop in the way."""
+    for what, state, ref in (
+        ("start", endpoints[0], endpoints[2]),
+        ("goal", endpoints[1], endpoints[3]),
+    ):
+        if ref is not None:  # sitting down / standing up: the clip's own end, beside the prop
+            continue
+        near = scene_io.owners(env.near(state))
+        if not near:
+            continue
+        who = f"the {what} of '{character.name}'"
+        tagged = [n for n in near if n in by_name]
+        if tagged:
+            raise MotionPatchesError(
+                f"{who} is inside the object patch '{tagged[0]}', which has no interaction "
+                f"clip that starts or ends there: move the {what} out, or give "
+                f"'{tagged[0]}' a sit-down / stand-up clip and use the prop itself"
+            )
+        raise MotionPatchesError(
+            f"{who} is inside or within {env.radius:.2f} m of "
+            f"{', '.join(repr(n) for n in near[:4])}: move it into the open"
+        )
+
+
+def _planner(patch, env, settings: PlanSettings, props) -> SegmentPlanner:
+    """The core planner of one world, its keyword arguments taken from the request's
+    settings (weights, stitching, turns on the spot)."""
+    return SegmentPlanner(
+        patch,
+        env,
+        settings.alpha,
+        settings.beta,
+        settings.gamma,
+        props=props,
+        mode=settings.stitching,
+        turn_in_place=settings.turn_in_place,
+    )
+
+
+def _solve(planner, character, endpoints, explain=True):
+    """The plan of one character; :class:`PathNotFound` naming the cause when there is none
+    (``explain=False`` skips finding the cause: a crowd retries such a failure without
+    the others' standing spots)."""
+    start_state, goal_state, start_ref, goal_ref = endpoints
+    try:
+        if explain:
+            plan = causes.plan_explained(planner, start_state, goal_state)
+        else:
+            plan = planner.plan(start_state, goal_state)
+    except causes.NoPath as exc:
+        if exc.cause == "search limit":
+            raise PathNotFound(
+                f"no path for '{character.name}': {_limit_text(causes.SEARCH_LIMIT)}", exc.cause
+            ) from None
+        raise PathNotFound(
+            f"no path for '{character.name}': {exc}", exc.cause, scene_io.owners(exc.props)
+        ) from None
+    except PlanError as exc:
+        raise PathNotFound(f"no path for '{character.name}': {exc}") from None
+    return with_interactions(plan, start_ref, goal_ref)
+
+
+def _body_clear(planner, plan, motions, ends):
+    """(plan, its motions) whose hips keep the radius too (:mod:`body_clearance`)."""
+    return body_clearance.keep_clear(
+        planner,
+        plan,
+        motions,
+        ends[0],
+        ends[1],
+        lambda p: plan_motions(planner.patch, p),
+        lambda p: with_interactions(p, ends[2], ends[3]),
+    )
+
+
+def _writable(character, first=None, frames=None):
+    """Refuse, before anything is written, a plan on ``character`` that writing could not
+    carry out or that would delete user data (:func:`adapter.transaction.check_writable`);
+    ``first``: its first frame, ``frames``: how many."""
+    why = transaction.check_writable(
+        bpy, character, first, None if first is None else first + frames - 1
+    )
+    if why:
+        raise MotionPatchesError(why)
+
+
+def _frame_start(scene, frame_start):
+    """The first frame of a plan: the scene's current frame, or ``frame_start`` (a whole
+    number Blender can hold)."""
+    if frame_start is None:
+        return scene.frame_current
+    lo, hi = transaction.frame_limits(bpy)
+    try:
+        f = float(frame_start)
+    except (TypeError, ValueError):
+        raise MotionPatchesError(f"the start frame must be a number, not {frame_start!r}") from None
+    if not (math.isfinite(f) and lo <= f <= hi):
+        raise MotionPatchesError(
+            f"the start frame {frame_start} is outside what Blender holds ({lo} to {hi})"
+        )
+    return int(round(f))
+
+
+def _check_ends(character, endpoints, scale):
+    """:func:`_check_far` of a character's start and goal states (``_endpoints``) unless a
+    prop's clip starts or ends the path there."""
+    if endpoints[2] is None and endpoints[3] is None:
+        _check_far(endpoints[0], endpoints[1], f"'{character.name}'", scale)
+
+
+def _avoid_moving(
+    planner, patch, plan, tracks, character, frame_start, fps, longest_wait=moving_props.MAX_DELAY_S
+):
+    """(plan, seconds to wait at the start) clear of the props that move during it
+    (:mod:`moving_props`: a wait of at most ``longest_wait`` or a repaired run);
+    :class:`PathNotFound` naming the prop and the frame when neither keeps clear of it.
+    ``fps``: the scene's rate."""
+    scene_fps_ratio = fps / patch.gait.fps
+    plan, wait, repairs, left = moving_props.avoid(
+        planner,
+        patch,
+        plan,
+        tracks,
+        lambda p: plan_motions(patch, p),
+        longest_wait=longest_wait,
+    )
+    if left:
+        raise PathNotFound(
+            f"no path for '{character.name}' clear of moving props: "
+            + "; ".join(c.describe(patch.gait.fps, frame_start, fps) for c in left)
+            + " (move the prop's keyframes, or start later with Frame Start)",
+            "moving",
+            [c.prop for c in left],
+        )
+    plan.stats["moving_props"] = {
+        "props": [t.name for t in tracks],
+        "awake_at_start": [t.name for t in tracks if t.awake_at(0.0)],
+        "wait_s": wait,
+        "repairs": [
+            dict(r, frame=frame_start + int(round(r["frame"] * scene_fps_ratio))) for r in repairs
+        ],
+    }
+    return plan, wait

@@ -1,0 +1,163 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Writing a plan: its motion placed on the character at the scene's rate, the NLA strips,
+the plan record and the scene's frame range."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+
+import bpy
+
+from ..adapter import nla, storage
+from ..motion_patches.kinematics import contacts, foot_lock, scene_rate
+from ..motion_patches.kinematics.inplace import root_positions
+from ..motion_patches.kinematics.motion import Motion, concatenate
+from ..motion_patches.planning import transitions
+from ..motion_patches.planning.settings import PlanSettings
+from .common import _shrunk, _size, path_length, scene_fps
+from .results import PlanResult
+
+
+def _placed(scene, patch, rig, motions):
+    """A plan's piece motions (:func:`plan_motions`) put on the character: (its pieces'
+    motions on its skeleton, at the patch's rate; the scene frames where the pieces start
+    and the last ends, from 0; the whole motion on the scene's frames). ``rig``: the
+    character's :class:`~motion_patches.kinematics.retarget.RigMap` (None: the patch skeleton)."""
+    if rig is not None:
+        motions = [rig.motion(m) for m in motions]
+    patch_bounds, bounds = scene_rate.piece_bounds(
+        [m.frames for m in motions], scene_fps(scene) / patch.gait.fps
+    )
+    world = scene_rate.at_scene_rate(concatenate(motions), patch_bounds, bounds)
+    return motions, bounds, world
+
+
+FRAME_RANGE_KEY = "motion_patches_frame_range"  # the scene frame range last set by a plan
+BLENDER_DEFAULT_RANGE = (1, 250)  # a new scene's: not a range anyone chose
+
+
+def fitted_frame_range(
+    current: Sequence[int], plans: Iterable[Sequence[int]], ours: Sequence[int] | None = None
+) -> tuple[int, int]:
+    """The scene's frame range after planning: the span of ``plans`` ((start, end) of every
+    planned character), unless ``current`` is a range the user chose (neither Blender's
+    default 1-250 nor ``ours``, the range planning set last), which is only extended to
+    cover the plans, never shortened."""
+    lo, hi = min(p[0] for p in plans), max(p[1] for p in plans)
+    current = tuple(int(f) for f in current)
+    if current == BLENDER_DEFAULT_RANGE or (ours is not None and current == tuple(ours)):
+        return lo, hi
+    return min(current[0], lo), max(current[1], hi)
+
+
+def _fit_frame_range(scene):
+    """Apply :func:`fitted_frame_range` to ``scene`` when its Fit Frame Range is on."""
+    if not getattr(scene.motion_patches, "fit_frame_range", True):
+        return
+    plans = [storage.plan_range(ob) for ob in scene.objects if storage.has_plan(ob)]
+    if plans:
+        ours = scene.get(FRAME_RANGE_KEY)
+        start, end = fitted_frame_range(
+            (scene.frame_start, scene.frame_end), plans, tuple(ours) if ours is not None else None
+        )
+        scene.frame_start, scene.frame_end = start, end
+        scene[FRAME_RANGE_KEY] = [start, end]
+
+
+def _write(
+    scene,
+    character,
+    patch,
+    patch_name,
+    plan,
+    placed,
+    frame_start,
+    env,
+    settings: PlanSettings,
+    rig=None,
+    fit=True,
+    layer_keys=None,
+):
+    """NLA strips and the plan record of one planned character (``placed``: its motion,
+    :func:`_placed`; ``env``: the planner's world, shrunk by the character's size; ``settings``: the
+    request's, whose radius and foot lock it records and applies).
+    ``fit``: fit the scene's frame range now (a crowd fits it once, after every write).
+    ``layer_keys``: {layer: patch key} of a plan that changes layer (:func:`_gait_change`)."""
+    scale = _size(rig)
+    goal_state = _shrunk(plan.goal, 1.0 / scale)  # the facing reached when any would do
+    skel = rig.target if rig is not None else patch.gait.skeleton
+    motions, bounds, world = placed
+    # Feet moving fast while labelled planted (through a blend) are not planted: neither
+    # pinned nor measured as skating (foot_lock.still_contacts).
+    posed = foot_lock.pose_legs(skel, world)
+    world = Motion(
+        world.ground,
+        world.root_local,
+        world.rotations,
+        foot_lock.still_contacts(skel, world, patch.gait.fps, posed),
+    )
+    locked = foot_lock.lock_feet(skel, world, posed=posed) if settings.foot_lock else None
+    strips, stashed = nla.write_plan(
+        bpy,
+        character,
+        patch,
+        storage.patch_key(scene, patch_name),
+        plan,
+        motions,
+        world,
+        frame_start,
+        locked,
+        rig,
+        bounds,
+        layer_keys,
+    )
+    root = root_positions(world.ground, world.root_local)  # the hips
+    foot = contacts.foot_joints(skel)
+    frame_end = frame_start + world.frames - 1
+    if rig is not None:
+        plan.stats["retarget"] = rig.note()
+    if abs(scene_fps(scene) - patch.gait.fps) > 1e-3:
+        plan.stats["frame_rate"] = (
+            f"patch baked at {patch.gait.fps:g} fps, played at the "
+            f"scene's {scene_fps(scene):g} fps (strips scaled)"
+        )
+    storage.store_plan(
+        character,
+        {
+            "ground": world.ground,
+            "root": root,
+            "contacts": world.contacts,
+            "foot_names": [skel.names[i] for i in foot],
+            "root_name": skel.names[skel.root],
+            "frame_start": frame_start,
+            "frame_end": frame_end,
+            "goal": goal_state.tolist(),
+            "boundaries": [s["start"] for s in strips[1:]],
+            "radius": settings.radius,
+            "facing": nla.facing_angle(skel),
+            "foot_lock": bool(settings.foot_lock),
+            "traversals": [[s["start"], s["end"]] for s in strips if s["kind"] == "traversal"],
+            "interactions": [[s["start"], s["end"]] for s in strips if s["kind"] == "interaction"],
+            "layers": [
+                [s["start"], s["end"], transitions.piece_layer(p, patch.layer)]
+                for s, p in zip(strips, plan.pieces)
+            ],
+            "obstacles": {o.name: (o.polygon * scale).tolist() for o in env.obstacles.values()},
+        },
+    )
+    if fit:
+        _fit_frame_range(scene)
+    return PlanResult(
+        character.name,
+        frame_start,
+        frame_end,
+        [p.label for p in plan.pieces],
+        plan.cost,
+        plan.seconds,
+        plan.expansions,
+        strips,
+        stashed,
+        plan.stats,
+        path_length(world.ground),
+        tuple(goal_state),
+    )
