@@ -169,12 +169,12 @@ class PlanSettings:
         unknown = set(values) - set(BY_NAME)
         if unknown:
             raise TypeError(f"not planning settings: {', '.join(sorted(unknown))}")
-        checked = {k: BY_NAME[k].check(v, where) for k, v in values.items()}
-        return cls(**checked)  # type: ignore[arg-type]  # each is checked as its field's kind
+        settings = {k: BY_NAME[k].check(v, where) for k, v in values.items()}
+        return cls(**settings)  # type: ignore[arg-type]  # each is checked as its field's kind
 
     def replaced(self, **values: object) -> "PlanSettings":
         """A copy with ``values`` checked and put in."""
-        # values holds settings only (checked's ``where`` is never one of them)
+        # mypy reads ``values`` as possibly holding checked's ``where`` (they are settings)
         return replace(self, **PlanSettings.checked(**values).given(values))  # type: ignore[arg-type]
 
     def given(self, names: Iterable[str]) -> dict:
