@@ -9,7 +9,7 @@ a node is expanded again only when an edge added late by the observer lowers its
 """
 
 import heapq
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -45,7 +45,7 @@ def search(
     goal_cost: Callable[[int], tuple[float, object] | None],
     max_expansions: int = 500_000,
     observer: Callable[[float, int], Iterable[tuple]] | None = None,
-    lazy_starts: Iterable[tuple[int, float]] = (),
+    lazy_starts: Sequence[tuple[int, float]] = (),
     start_cost: Callable[[int], tuple[float, object] | None] | None = None,
     goal_bound: Callable[[int], float | None] | None = None,
     heuristic_of: Callable[[int], float] | None = None,
@@ -84,9 +84,9 @@ def search(
     cheaper than f (e.g. every edge whose lower bound of cost + heuristic of the paths
     through it is <= f).
     """
-    g = {}
-    parent = {}
-    heap = []
+    g: dict[int, float] = {}
+    parent: dict[int, tuple[int, object]] = {}  # key -> (parent key, payload of the edge)
+    heap: list[tuple[float, int, int]] = []  # (f, tie, key)
     tie = 0
     for key, cost, payload in starts:
         if cost < g.get(key, np.inf):
@@ -97,7 +97,7 @@ def search(
         for k, h in zip(keys.tolist(), heuristic(keys).tolist()):
             heapq.heappush(heap, (g[k] + h, tie, k))
             tie += 1
-    h_of = {}  # heuristic of the nodes of lazy starts
+    h_of: dict[int, float] = {}  # heuristic of the nodes of lazy starts
     if len(lazy_starts):
         lazy = np.array([k for k, _ in lazy_starts], np.int64)
         for (k, bound), h in zip(lazy_starts, heuristic(lazy).tolist()):
@@ -105,10 +105,11 @@ def search(
             heap.append((bound + h, tie, _LAZY - 1 - 2 * k))
             tie += 1
         heapq.heapify(heap)  # the same order of pops as pushing them one by one
-    closed = set()
+    closed: set[int] = set()
     expansions = 0
     best_goal = np.inf
-    extra = {}  # from_key -> [(to_key, cost, payload)] added by the observer
+    # from_key -> [(to_key, cost, payload)] added by the observer
+    extra: dict[int, list[tuple[int, float, object]]] = {}
     heappop, push, gget, discard, inf = heapq.heappop, heapq.heappush, g.get, closed.discard, _INF
     while heap or observer is not None:
         if heap:
@@ -118,6 +119,7 @@ def search(
         if key <= _LAZY:  # a connector known by its bound so far: its cost now
             k, is_start = divmod(_LAZY - key, 2)
             if is_start:
+                assert start_cost is not None, "lazy_starts need start_cost"
                 got = start_cost(k)
                 if got is not None and got[0] < g.get(k, np.inf):
                     g[k] = got[0]
@@ -163,9 +165,9 @@ def search(
             break
         gk = g[key]
         if goal_bound is not None:
-            bound = goal_bound(key)
-            if bound is not None and gk + bound < best_goal:
-                heapq.heappush(heap, (gk + bound, tie, _LAZY - 2 * key))
+            link_bound = goal_bound(key)
+            if link_bound is not None and gk + link_bound < best_goal:
+                heapq.heappush(heap, (gk + link_bound, tie, _LAZY - 2 * key))
                 tie += 1
             link = None
         else:

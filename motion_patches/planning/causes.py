@@ -54,7 +54,8 @@ def counted(planner: SegmentPlanner) -> Iterator[list[int]]:
         count[0] += 1
         return expand(key)
 
-    planner.expand = counting  # an instance attribute shadows the method for the block
+    # An instance attribute shadows the method for the block (mypy forbids it of a method).
+    planner.expand = counting  # type: ignore[method-assign]
     try:
         yield count
     finally:
@@ -139,7 +140,8 @@ def no_path_cause(
                 f"a turn clip so it turns tighter"
             ),
         )
-    names, reason = blocking_props(env, start, goal, margin_tiles)
+    # blocking_props reads arrays as well as sequences (its hint says only Sequence[float]).
+    names, reason = blocking_props(env, start, goal, margin_tiles)  # type: ignore[arg-type]
     if not names:
         names, reason = _props_along(env, patch, found), "along"
     who = ", ".join(repr(n) for n in names[:NAMED]) + (", ..." if len(names) > NAMED else "")

@@ -10,6 +10,7 @@ The same words, measures and tests serve shortening (:mod:`.shortcut`).
 """
 
 from collections.abc import Callable, Iterable
+from typing import Any
 
 import numpy as np
 
@@ -49,10 +50,12 @@ class ConnectedGraph(SegmentGraph):
         props: Iterable[ObjectPatch] = (),
     ) -> None:
         super().__init__(patch, env, alpha, beta, gamma, props)
-        self._start_table = {"valid": 0, "done": 0}
-        self._goal_table = None
-        self._goal_links = {}
-        self._goal_asked = []
+        # The search's start and goal connectors so far (:meth:`start_connectors`,
+        # :meth:`goal_connectors`): tables of arrays, counts and caches by name.
+        self._start_table: dict[str, Any] = {"valid": 0, "done": 0}
+        self._goal_table: dict[str, Any] | None = None
+        self._goal_links: dict[int, tuple[float, Callable[[], Piece]] | None] = {}
+        self._goal_asked: list[int] = []
 
     # -- curves ------------------------------------------------------------------------
     def curve_cost(self, curve: curves.Curve, cycles_count: float) -> float:
@@ -254,13 +257,15 @@ class ConnectedGraph(SegmentGraph):
     def goal_bound(self, key: int) -> float | None:
         """A lower bound of the cost of node ``key``'s goal link (its cheapest Dubins word's
         Eq. 5 cost, :meth:`dubins_table`), or None for a node with no link."""
-        m = self._goal_table["index"].get(key)
+        t = self._goal_table
+        assert t is not None, "goal_connectors tables the goal first"
+        m = t["index"].get(key)
         if m is None:
             return None
-        if not self._goal_table["tiled"][m // self._goal_table["per_tile"]]:
+        if not t["tiled"][m // t["per_tile"]]:
             self._goal_tiles([m])
         self._goal_asked.append(key)
-        return float(self._goal_table["bound"][m])
+        return float(t["bound"][m])
 
     def goal_link(self, key: int) -> tuple[float, Callable[[], Piece]] | None:
         """(cost, Piece maker) of the cheapest valid connector from node ``key`` into the
@@ -270,6 +275,7 @@ class ConnectedGraph(SegmentGraph):
         if key in self._goal_links:
             return self._goal_links[key]
         t = self._goal_table
+        assert t is not None, "goal_connectors tables the goal first"
         if key not in t["index"]:
             return None
         batch = [key]
@@ -471,6 +477,7 @@ class ConnectedGraph(SegmentGraph):
                         rank[i] += tries
                         more.append(i)
             todo = more
+        found: list[tuple[float, float, Callable[[], curves.Curve]] | None]
         found = [None] * len(columns)
         use = sorted(chosen)[:limit]
         if use:
@@ -484,7 +491,8 @@ class ConnectedGraph(SegmentGraph):
                 frames = n * self.patch.gait.frames
                 effort = self.patch.effort_rate * frames / self.patch.gait.fps
                 c = self.alpha * float(part[0][-1]) + self.beta * turn + self.gamma * effort
-                found[i] = (c, n, lambda part=part: _dubins_curve(part))
+                # mypy cannot type a lambda with a default argument (the loop's part bound)
+                found[i] = (c, n, lambda part=part: _dubins_curve(part))  # type: ignore[misc]
         return found
 
     def samples_blocked(self, pos: np.ndarray, first: np.ndarray) -> np.ndarray:
@@ -506,7 +514,9 @@ class ConnectedGraph(SegmentGraph):
         return out
 
 
-def _dubins_curve(samples):
+def _dubins_curve(
+    samples: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+) -> curves.Curve:
     """A :class:`~.curves.Curve` of a Dubins word from its samples (arc length, positions,
     headings, curvatures; :func:`.dubins.samples`), the curvature smoothed for blending."""
     arc, pos, heading, kappa = samples

@@ -113,7 +113,7 @@ def _advance(x, y, h, k, length):
 
 def samples(
     p0: np.ndarray,
-    h0: np.ndarray,
+    h0: float | np.ndarray,
     word: int | np.ndarray,
     lengths: np.ndarray,
     radius: float | np.ndarray,

@@ -19,6 +19,7 @@ from ..props.environment import Environment
 
 STEP = {0: (0, -1), 1: (1, 0), 2: (0, 1), 3: (-1, 0)}  # exit edge -> neighbour offset
 OPPOSITE = {0: 2, 1: 3, 2: 0, 3: 1}
+_State = tuple[tuple[int, int], int]  # (tile, edge it was entered by; -1: the start's)
 SAMPLES = 16  # segments sampled per (entry edge, exit edge) for upsilon
 
 
@@ -53,7 +54,7 @@ class TilePlanner:
         self.patch, self.env, self.omega = patch, env, float(omega)
         self.samples = edge_samples(patch)
         self.traversal = traversal  # callable(tile) -> (4, 4) tau, or None
-        self._upsilon = {}
+        self._upsilon: dict[tuple[int, int], np.ndarray] = {}  # tile -> upsilon, computed once
         self.tiles_evaluated = 0
 
     def upsilon(self, tile: tuple[int, int]) -> np.ndarray:
@@ -76,8 +77,9 @@ class TilePlanner:
             u = np.maximum(u, self.traversal(tile))
         return u
 
-    def edge_cost(self, tile: tuple[int, int], j: int, k: int) -> float:
-        """Eq. 4; infinite when neither avoidance nor traversal can pass."""
+    def edge_cost(self, tile: tuple[int, int], j: int | None, k: int) -> float:
+        """Eq. 4; infinite when neither avoidance nor traversal can pass (``j`` None: the
+        start's tile, entered by no edge)."""
         p = self.passability(tile)
         pjk = p[j, k] if j is not None else p[:, k].max()
         if pjk <= 0:
@@ -100,12 +102,12 @@ class TilePlanner:
             centre = (np.asarray(tile) + 0.5) * side
             return float(np.linalg.norm(goal - centre))
 
-        start = (ts, -1)
+        start: _State = (ts, -1)
         g = {start: 0.0}
-        parent = {start: None}
+        parent: dict[_State, _State | None] = {start: None}
         heap = [(h(ts), 0, start)]
         tie = 1
-        closed = set()
+        closed: set[_State] = set()
         while heap and len(closed) < max_expansions:
             _, _, state = heapq.heappop(heap)
             if state in closed:
@@ -114,9 +116,10 @@ class TilePlanner:
             tile, j = state
             if tile == tg:
                 path = []
-                while state is not None:
-                    path.append(state[0])
-                    state = parent[state]
+                at: _State | None = state
+                while at is not None:
+                    path.append(at[0])
+                    at = parent[at]
                 return path[::-1]
             for k in range(4):
                 if k == j:

@@ -3,6 +3,8 @@
 shortcuts followed, clips placed, turns on the spot derived), eased across stitches and
 from and to standing; and the interaction clips (stand up, sit down) around a plan."""
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from ..kinematics import retime
@@ -22,7 +24,7 @@ def plan_motions(patch: LocomotionPatch, plan: Plan, standing: bool = True) -> l
     its first (last) piece is time-warped (:mod:`.retime`), ramps one gait cycle long. A
     turn on the spot continues from the pose the walk before it stopped in; the walk
     slows to a stop at the goal and the turn eases in and out."""
-    ms = []
+    ms: list[Motion] = []
     for i, p in enumerate(plan.pieces):
         if p.kind == "turn":
             ms.append(turn_motion(patch, p, ms[-1] if ms else None))
@@ -52,11 +54,12 @@ def plan_motions(patch: LocomotionPatch, plan: Plan, standing: bool = True) -> l
 
 def turn_motion(patch: LocomotionPatch, piece: Piece, previous: Motion | None = None) -> Motion:
     """World-space motion of a turn on the spot (kind "turn"), continuing ``previous``."""
+    assert piece.turn is not None, "a turn piece has its turn"
     x, y, heading, delta = piece.turn
     return turn_in_place.turn_motion(patch.gait, (x, y), heading, delta, previous)
 
 
-def hips_to(motion: Motion, xy: np.ndarray, window: int) -> Motion:
+def hips_to(motion: Motion, xy: Sequence[float] | np.ndarray, window: int) -> Motion:
     """The motion with its root (the hips) brought onto the ground point ``xy`` on its last
     frame: a walk stops wherever its stride ends, so the hips would stand a few centimetres
     beside the ground path's end. Over the last ``window`` frames (a smoothstep) the root's

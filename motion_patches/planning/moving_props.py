@@ -242,7 +242,8 @@ def avoid(
     kept}]; ``unresolved``: the conflicts left, by prop and frame."""
     fps = patch.gait.fps
     radius = planner.world_env.radius
-    repairs, extra = [], []
+    repairs: list[dict] = []
+    extra: list[Obstacle] = []  # every footprint swept so far
     for _ in range(max_rounds):
         motions = motions_of(plan)
         found = conflicts(motions, tracks, radius, fps)
@@ -267,16 +268,13 @@ def avoid(
                 if first == 0 and last == n - 1:
                     break
                 first, last = max(first - 1, 0), min(last + 1, n - 1)
+        if done is None:  # no way round: wait if that helps
+            return (plan, wait, repairs, []) if wait is not None else (plan, 0.0, repairs, found)
         longer = (
-            None
-            if done is None
-            else (sum(m.frames - 1 for m in motions_of(done)) - sum(m.frames - 1 for m in motions))
-            / fps
-        )
-        if wait is not None and (done is None or wait <= longer):
+            sum(m.frames - 1 for m in motions_of(done)) - sum(m.frames - 1 for m in motions)
+        ) / fps
+        if wait is not None and wait <= longer:
             return plan, wait, repairs, []
-        if done is None:
-            return plan, 0.0, repairs, found
         repairs.append(
             {
                 "prop": c.prop,

@@ -7,6 +7,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..patch.curves import Curve
+from ..props.object_patch import ObjectPatch
 from .plan_frame import IDENTITY
 
 CONNECTOR_SCALES = np.linspace(0.25, 4.0, 40)  # coarser than the bake: fitted at plan time
@@ -35,25 +37,29 @@ class Piece:
     kind: str  # "segment", "part", "traversal", "start" or "goal"
     segment: int = -1  # patch segment index (kinds "segment" and "part")
     tile: tuple = (0, 0)
-    curve: object = None  # curves.Curve in world coordinates (connectors)
+    curve: Curve | None = None  # in world coordinates (connectors)
     cycles: int = 0  # whole cycles (segments and start connectors)
     cost: float = 0.0
-    frames: tuple = None  # (first, last) frame of a segment used in part ("part")
-    prop: object = None  # ObjectPatch of a traversal
+    frames: tuple[int, int] | None = None  # (first, last) frame of a segment used in part ("part")
+    prop: ObjectPatch | None = None  # of a traversal
     clip_index: int = -1
     frame: tuple = IDENTITY  # plan frame (x, y, angle) taking the piece to the world
-    turn: tuple = None  # (x, y, heading, angle) of a turn on the spot (kind "turn"), world
+    # (x, y, heading, angle) of a turn on the spot (kind "turn"), world
+    turn: tuple[float, float, float, float] | None = None
 
     @property
     def label(self) -> str:
         """What the piece plays, for reports and strip names."""
         if self.kind == "turn":
+            assert self.turn is not None, "a turn piece has its turn"
             return f"turn {np.degrees(self.turn[3]):+.0f}deg in place (derived)"
         if self.kind == "segment":
             return f"seg{self.segment:04d}"
         if self.kind == "part":
+            assert self.frames is not None, "a part has its frames"
             return f"seg{self.segment:04d}[{self.frames[0]}-{self.frames[1]}]"
         if self.kind in ("traversal", "interaction"):
+            assert self.prop is not None, "a traversal has its prop"
             c = self.prop.clips[self.clip_index]
             return f"{self.prop.name} {c.name} {np.degrees(c.angle):.0f}deg"
         return self.kind

@@ -48,8 +48,8 @@ from .plan_frame import (
     to_local,
 )
 from .segment_search import TraversalObserver
-from .settings import PLANNING as DEFAULTS
-from .stitching import Stitch, stitch_table
+from .settings import PlanSettings
+from .stitching import Connection, Stitch, stitch_table
 from .turn_in_place import can_turn, plan_turning
 
 __all__ = [
@@ -71,6 +71,7 @@ __all__ = [
 
 CORRIDOR_TILES = 2  # tiles either side of the high-level path the corridor holds
 STITCH_PAYLOAD = -10  # payloads at or below this are stitched edges: -10 - index
+_DEFAULTS = PlanSettings()  # the settings a planner is made with when not given
 
 
 class SegmentPlanner(ConnectedGraph):
@@ -82,12 +83,12 @@ class SegmentPlanner(ConnectedGraph):
         self,
         patch: LocomotionPatch,
         env: Environment,
-        alpha: float = DEFAULTS["alpha"],
-        beta: float = DEFAULTS["beta"],
-        gamma: float = DEFAULTS["gamma"],
+        alpha: float = _DEFAULTS.alpha,
+        beta: float = _DEFAULTS.beta,
+        gamma: float = _DEFAULTS.gamma,
         props: Iterable[ObjectPatch] = (),
-        mode: str = DEFAULTS["stitching"],
-        turn_in_place: bool = DEFAULTS["turn_in_place"],
+        mode: str = _DEFAULTS.stitching,
+        turn_in_place: bool = _DEFAULTS.turn_in_place,
     ) -> None:
         self.turn_in_place = bool(turn_in_place)  # plan() turns on the spot where it helps
         if mode not in ("dynamic", "static"):
@@ -331,7 +332,8 @@ class SegmentPlanner(ConnectedGraph):
                 w = range(-CORRIDOR_TILES, CORRIDOR_TILES + 1)
                 self.corridor = {(t[0] + di, t[1] + dj) for t in tiles for di in w for dj in w}
 
-        stitched, stitches = {}, []
+        stitched: dict[tuple[int, int], list[tuple[int, int, float, int]]] = {}  # copy -> edges
+        stitches: list[tuple[int, int, Connection, Connection, float, int, int]] = []
         counters = {"stitch_seconds": 0.0}
 
         def stitch_copy(pi, ci):
@@ -421,7 +423,9 @@ class SegmentPlanner(ConnectedGraph):
         keys = [k for k, _ in result.path]
         first = keys[0]
         if start_key is None:
-            pieces.append(self.start_link(first)[1]())
+            link = self.start_link(first)
+            assert link is not None, "the path begins on a start connector the search took"
+            pieces.append(link[1]())
         for (k, payload), prev in zip(result.path[1:], keys[:-1]):
             if k == astar.GOAL:
                 if payloads[prev] is not None:
@@ -463,7 +467,9 @@ class SegmentPlanner(ConnectedGraph):
                 )
         seconds = time.perf_counter() - t0
         if np.isnan(goal[2]):  # any facing: the plan ends facing along its last connector
-            goal = np.array([goal[0], goal[1], pieces[-1].curve.heading[-1]])
+            last = pieces[-1].curve
+            assert last is not None, "a plan to a goal of any facing ends on its goal connector"
+            goal = np.array([goal[0], goal[1], last.heading[-1]])
         return Plan(
             pieces,
             float(result.cost),

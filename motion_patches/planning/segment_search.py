@@ -67,7 +67,7 @@ class SegmentGraph:
         loops = patch.gait.loops
         self.max_speed = max(lp.cycle_distance for lp in loops) * patch.gait.fps / patch.gait.frames
         self.kmin, self.kmax = patch.stats.get("curvature_limits", patch.gait.kappa_limits)
-        self.corridor = None
+        self.corridor: set[tuple[int, int]] | None = None  # tiles of the high-level path's corridor
         e, _, _ = split_node_id(np.arange(LOCAL), patch.nodes)
         step = TILE_STEP[e % EDGES]
         # Tile ids are node keys // LOCAL; a node on edge e of its tile also lies in the
@@ -79,18 +79,23 @@ class SegmentGraph:
         rel = ((self.step[:, 0] * (2 * BIAS) + self.step[:, 1]) * LOCAL + self.next_local).astype(
             np.int64
         )
+        # Per local entry state: (segments, cell masks, relative keys, costs), None for none.
+        self._out: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None]
         self._out = [None] * LOCAL
         for local in range(LOCAL):
             segs = self.order[self.first[local] : self.first[local + 1]]
             if segs.size:
                 self._out[local] = (segs, patch.seg_mask[segs], rel[segs], self.costs[segs])
         self._cos, self._sin = np.cos(self.local_heading), np.sin(self.local_heading)
-        self._entry_ids = {}  # edges of a tile -> local ids of their entry states
+        # edges of a tile -> local ids of their entry states
+        self._entry_ids: dict[tuple[int, ...], np.ndarray] = {}
         self._all_local = np.arange(LOCAL, dtype=np.int64)
-        self._h_tiles = {}  # tile id -> heuristic of its LOCAL keys (:meth:`heuristic_of`)
+        # tile id -> heuristic of its LOCAL keys (:meth:`heuristic_of`)
+        self._h_tiles: dict[int, list[float]] = {}
         self._lx, self._ly = self.local_pos[:, 0].copy(), self.local_pos[:, 1].copy()
-        self._goal = None
-        self.region = None  # (i0, j0, i1, j1): the tiles the search may enter
+        self._goal: np.ndarray | None = None
+        # (i0, j0, i1, j1): the tiles the search may enter
+        self.region: tuple[int, int, int, int] | None = None
         self.frame_angle = 0.0  # of the plan frame, for the messages (world degrees)
         self.bin_culled = 0  # traversal copies the last search culled by density bins
 
@@ -117,8 +122,10 @@ class SegmentGraph:
         keys = np.asarray(keys, np.int64)
         local = keys % LOCAL
         tile = keys // LOCAL
+        goal = self.goal
+        assert goal is not None, "the planner sets the goal before searching"
         # Goal relative to each node: goal - tile corner - node's place in the tile.
-        gx, gy = self.goal[0] + BIAS * self.patch.side, self.goal[1] + BIAS * self.patch.side
+        gx, gy = goal[0] + BIAS * self.patch.side, goal[1] + BIAS * self.patch.side
         dx = (gx - self._lx[local]) - (tile // (2 * BIAS)) * self.patch.side
         dy = (gy - self._ly[local]) - (tile % (2 * BIAS)) * self.patch.side
         dist = np.sqrt(dx * dx + dy * dy)
@@ -176,10 +183,12 @@ class SegmentGraph:
     def state_heuristic(self, p: np.ndarray, h: np.ndarray, gap: float = 0.0) -> np.ndarray:
         """:meth:`heuristic` of states: positions (n, 2), headings (n,); ``gap``: the walk
         on may start that far from the state (see :meth:`_turn_to_goal`)."""
-        d = self.goal[:2] - p
+        goal = self.goal
+        assert goal is not None, "the planner sets the goal before searching"
+        d = goal[:2] - p
         dist = np.linalg.norm(d, axis=-1)
         h = np.asarray(h, float)
-        to = _turn_bound(h, self.goal[2]) if np.isfinite(self.goal[2]) else np.zeros_like(h)
+        to = _turn_bound(h, goal[2]) if np.isfinite(goal[2]) else np.zeros_like(h)
         turn = self._turn_to_goal(d[:, 0], d[:, 1], dist, np.cos(h), np.sin(h), to, gap)
         return self.per_metre * dist + self.beta * turn
 
@@ -254,6 +263,7 @@ class SegmentGraph:
         if self.corridor is not None:
             return (int(i), int(j)) in self.corridor
         r = self.region
+        assert r is not None, "the planner sets the region before searching"
         return r[0] <= i <= r[2] and r[1] <= j <= r[3]
 
     # -- connectors ----------------------------------------------------------------------
@@ -515,11 +525,15 @@ class TraversalObserver:
         self.stitch_copy, self.across, self.through = stitch_copy, across, through
         self.by_tile = self.at_goal = 0
         self.ready = []
-        self.unseen = {}  # tile id -> indices of its copies, for tiles not entered yet
-        self.taken = {}  # tile id -> ([keys], [fs]) of the nodes taken off in it
-        self.waiting = []  # heap of (estimate, copy index) of copies of entered tiles
-        self.active = {}  # tile id -> indices of its copies with a bound, not stitched
-        self.due = []  # heap of (bound, copy index)
+        # tile id -> indices of its copies, for tiles not entered yet
+        self.unseen: dict[int, list[int]] = {}
+        # tile id -> ([keys], [fs]) of the nodes taken off in it
+        self.taken: dict[int, tuple[list[int], list[float]]] = {}
+        # heap of (estimate, copy index) of copies of entered tiles
+        self.waiting: list[tuple[float, int]] = []
+        # tile id -> indices of its copies with a bound, not stitched
+        self.active: dict[int, np.ndarray] = {}
+        self.due: list[tuple[float, int]] = []  # heap of (bound, copy index)
         if up_front:
             for _, pi, ci, *_ in copies:
                 self.ready += stitch_copy(pi, ci)

@@ -9,6 +9,9 @@ the planner as one :class:`PlanSettings`."""
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass, fields, replace
+from typing import TypeVar
+
+_T = TypeVar("_T")
 
 
 @dataclass(frozen=True)
@@ -41,12 +44,14 @@ class Setting:
         ValueError naming the setting, the range and the value."""
         what = where + self.name.replace("_", " ")
         if self.kind is float:
+            lo, hi = self.minimum, self.maximum
+            assert lo is not None and hi is not None, "a float setting has a range"
             try:
-                v = float(value)
+                v = float(value)  # type: ignore[arg-type]  # any value is tried; the except catches
                 ok = not isinstance(value, bool) and math.isfinite(v)
             except (TypeError, ValueError):
                 ok = False
-            if ok and self.minimum <= v <= self.maximum:
+            if ok and lo <= v <= hi:
                 return v
             unit = " of metres" if self.unit == "m" else ""
             raise ValueError(
@@ -57,9 +62,9 @@ class Setting:
             if value in (True, False):
                 return bool(value)
             raise ValueError(f"{what} must be True or False, not {value!r}")
-        v = value.lower() if isinstance(value, str) else value
-        if v in self.values:
-            return v
+        choice = value.lower() if isinstance(value, str) else value
+        if isinstance(choice, str) and choice in self.values:  # the values are str
+            return choice
         raise ValueError(
             f"{what} must be {' or '.join(repr(a) for a in self.values)}, not {value!r}"
         )
@@ -148,19 +153,26 @@ STITCHING = BY_NAME["stitching"].values
 GOAL_FACING = BY_NAME["goal_facing"].values
 
 
+def _default(name: str, kind: type[_T]) -> _T:
+    """The default of setting ``name``, which is a ``kind``."""
+    value = BY_NAME[name].default
+    assert isinstance(value, kind), name
+    return value
+
+
 @dataclass(frozen=True)
 class PlanSettings:
     """The settings of one plan request, checked (:meth:`checked`), carried from the door
     (panel, CLI, script) to the planner in place of loose keyword arguments."""
 
-    alpha: float = PLANNING["alpha"]
-    beta: float = PLANNING["beta"]
-    gamma: float = PLANNING["gamma"]
-    radius: float = PLANNING["radius"]
-    stitching: str = PLANNING["stitching"]
-    foot_lock: bool = PLANNING["foot_lock"]
-    goal_facing: str = PLANNING["goal_facing"]
-    turn_in_place: bool = PLANNING["turn_in_place"]
+    alpha: float = _default("alpha", float)
+    beta: float = _default("beta", float)
+    gamma: float = _default("gamma", float)
+    radius: float = _default("radius", float)
+    stitching: str = _default("stitching", str)
+    foot_lock: bool = _default("foot_lock", bool)
+    goal_facing: str = _default("goal_facing", str)
+    turn_in_place: bool = _default("turn_in_place", bool)
 
     @classmethod
     def checked(cls, where: str = "", **values: object) -> "PlanSettings":
@@ -169,11 +181,13 @@ class PlanSettings:
         unknown = set(values) - set(BY_NAME)
         if unknown:
             raise TypeError(f"not planning settings: {', '.join(sorted(unknown))}")
-        return cls(**{k: BY_NAME[k].check(v, where) for k, v in values.items()})
+        settings = {k: BY_NAME[k].check(v, where) for k, v in values.items()}
+        return cls(**settings)  # type: ignore[arg-type]  # each is checked as its field's kind
 
     def replaced(self, **values: object) -> "PlanSettings":
         """A copy with ``values`` checked and put in."""
-        return replace(self, **PlanSettings.checked(**values).given(values))
+        # mypy reads ``values`` as possibly holding checked's ``where`` (they are settings)
+        return replace(self, **PlanSettings.checked(**values).given(values))  # type: ignore[arg-type]
 
     def given(self, names: Iterable[str]) -> dict:
         """The settings ``names`` as a dict."""

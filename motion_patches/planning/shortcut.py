@@ -149,15 +149,14 @@ def long_last_piece(planner: ConnectedGraph, pieces: list[Piece]) -> list[Piece]
     the stop (:mod:`.retime`) has a cycle to slow down over."""
     out = list(pieces)
     need = planner.patch.gait.cycle_distance
-    while (
-        len(out) > 1
-        and out[-1].kind == "goal"
-        and out[-1].curve.length < need
-        and out[-2].kind in ("segment", "shortcut", "start")
-    ):
+    while len(out) > 1 and out[-1].kind == "goal":
+        last = out[-1].curve
+        assert last is not None, "a goal piece is a connector: it has its curve"
+        if not (last.length < need and out[-2].kind in ("segment", "shortcut", "start")):
+            break
         before = out[-2]
         c = before.curve if before.curve is not None else planner.segment_curve(before)
-        merged = curves.joined(c, out[-1].curve)
+        merged = curves.joined(c, last)
         out[-2:] = [Piece("goal", curve=merged, cost=before.cost + out[-1].cost)]
     return out
 

@@ -58,15 +58,19 @@ class LayerPiece(Piece):
     (segment indices are per patch); a "transition" piece carries its blend table entry
     and is placed by ``frame``, the world state where the blend begins."""
 
-    patch: object = None
-    transition: object = None
+    patch: LocomotionPatch | None = None
+    transition: Transition | None = None
 
     @property
     def label(self) -> str:
         if self.kind == "transition":
+            assert self.transition is not None, "a transition piece has its blend"
             return f"{self.transition.source} -> {self.transition.target}"
-        base = Piece.label.fget(self)
-        return base if self.kind in CLIPS else f"{self.patch.layer} {base}"
+        base = super().label
+        if self.kind in CLIPS:
+            return base
+        assert self.patch is not None, "a layer piece has its patch"
+        return f"{self.patch.layer} {base}"
 
 
 def piece_layer(piece: Piece, layer: str) -> str:
@@ -258,7 +262,7 @@ def compose(
     #    reaches (about) a run node of the run plan.
     firsts = []
     with walk.framed(start, goal, margin_tiles) as (ls, _, fw):
-        tried = {}
+        tried: dict[int, tuple[np.ndarray, float]] = {}  # node -> its position, heading
         for b in switches:
             a = state_to_local(fw, before(b, wr.offset))
             for key, p, h in _nearest_nodes(walk, a, WALK_NODES_PER_SWITCH):
@@ -283,7 +287,7 @@ def compose(
     #    the total they can give (the legs known so far, both blends, and a heuristic cost
     #    per metre for the rest of the way), until the next bound reaches the best total.
     per_metre = min(walk.per_metre, run.per_metre)
-    queue = [
+    queue: list[tuple[float, int, tuple[float, list[Piece], tuple] | None]] = [
         (cost1 + c_wr + c_rw + per_metre * _distance(after(a_world, wr.offset), goal), n, None)
         for n, (cost1, _, _) in enumerate(firsts)
     ]
@@ -433,19 +437,19 @@ def plan_layer_motions(plan: Plan, standing: bool = True) -> list[Motion]:
     ``standing`` the first piece starts from standing and the last stops, settling the
     hips over the goal, as in a one-layer plan."""
     pieces = plan.pieces
-    ms = [None] * len(pieces)
+    ms: list[Motion] = []  # one per piece, in order
     i = 0
     while i < len(pieces):
         p = pieces[i]
         if p.kind == "transition":
-            ms[i] = p.transition.motion.transformed(*p.frame)
+            ms.append(p.transition.motion.transformed(*p.frame))
             i += 1
             continue
         j = i
         while j < len(pieces) and pieces[j].kind != "transition" and pieces[j].patch is p.patch:
             j += 1
         sub = Plan(list(pieces[i:j]), 0.0, 0, 0.0, plan.start, plan.goal)
-        ms[i:j] = plan_motions(p.patch, sub, standing=False)
+        ms += plan_motions(p.patch, sub, standing=False)
         i = j
     if standing:
         first, last = pieces[0], pieces[-1]

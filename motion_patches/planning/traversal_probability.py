@@ -18,10 +18,12 @@ import numpy as np
 from ..patch.locomotion_patch import LocomotionPatch
 from ..props.environment import Environment, Obstacle
 from ..props.object_patch import ObjectPatch
-from .settings import PLANNING as DEFAULTS
+from .settings import PlanSettings
 from .stitching import stitch
 
-_PSI = {}  # signature of a kind of prop -> psi
+_DEFAULTS = PlanSettings()
+
+_PSI: dict[tuple[str, float, float], float] = {}  # signature of a kind of prop -> psi
 EDGE_POINTS = np.array([[0.5, 0.0], [1.0, 0.5], [0.5, 1.0], [0.0, 0.5]])  # edge mid-points / side
 
 
@@ -39,13 +41,13 @@ def accessibility(
     prop: ObjectPatch,
     radius: float,
     spots: tuple[float, ...] = (0.35, 0.65),
-    weights: tuple[float, float, float] = tuple(DEFAULTS[k] for k in ("alpha", "beta", "gamma")),
+    weights: tuple[float, float, float] = (_DEFAULTS.alpha, _DEFAULTS.beta, _DEFAULTS.gamma),
 ) -> float:
     """psi of a kind of prop (cached): mean over sampled placements of T / O, at most 1."""
     key = (signature(prop), round(radius, 4), patch.side)
     if key in _PSI:
         return _PSI[key]
-    ratios = []
+    ratios: list[float] = []
     for fx in spots:
         for fy in spots:
             env = Environment(patch.side, patch.cells, radius)
@@ -61,7 +63,7 @@ def accessibility(
                 if c.kind == "traversal"
             )
             ratios.append(created / max(occluded, 1))
-    psi = float(min(1.0, np.mean(ratios)))
+    psi = min(1.0, float(np.mean(ratios)))
     _PSI[key] = psi
     return psi
 

@@ -88,7 +88,8 @@ def turn_phases(gait: Gait, delta: float, phase: int = 0) -> tuple[np.ndarray, n
     step = np.abs(loop.turn) * np.diff(loop.distance) / loop.cycle_distance  # (n,)
     both = _both_planted(loop)
     target, turned, k = abs(float(delta)), 0.0, int(phase)
-    phases, steps = [k], []
+    phases: list[int] = [k]
+    steps: list[float] = []  # heading change per frame, as recorded
     limit = int(np.ceil(target / max(abs(loop.turn), 1e-6) * n)) + 2 * n
     while len(steps) < limit:
         turned += step[k % n]
@@ -97,8 +98,8 @@ def turn_phases(gait: Gait, delta: float, phase: int = 0) -> tuple[np.ndarray, n
         phases.append(k)
         if turned >= (MIN_SHARE if both[k % n] else 2.0 - MIN_SHARE) * target:
             break  # on both feet once most of the way round, else a little past it
-    steps = np.array(steps) * (target / max(turned, 1e-12)) * np.sign(delta)
-    return np.array(phases) % n, steps
+    scaled = np.array(steps) * (target / max(turned, 1e-12)) * np.sign(delta)
+    return np.array(phases) % n, scaled
 
 
 def frames_needed(gait: Gait, delta: float) -> int:
@@ -209,6 +210,7 @@ def plan_turning(
             best = found
             best.stats["exact_facing_cost"] = None if exact is None else final_cost(exact)
     if best is None:
+        assert error is not None, "no walk only when the exact search was refused"
         raise error
     return best
 
@@ -253,7 +255,7 @@ def loops(planner: ConnectedGraph, plan: Plan) -> tuple[bool, bool]:
         near = c.s <= c.s[0] + reach if end == 0 else c.s >= c.s[-1] - reach
         h = np.unwrap(c.heading[near])
         out.append(bool(h.size > 1 and np.sum(np.abs(np.diff(h))) > LOOP_TURN))
-    return tuple(out)
+    return out[0], out[1]
 
 
 def turn_piece(
@@ -277,12 +279,15 @@ def with_turns(
     """``plan`` with a turn on the spot from ``start``'s heading before it and / or
     one to ``goal``'s heading after it (the plan then starts facing its first piece's
     way, ends facing any way); Eq. 5 costs count each turn and its time."""
-    before = [] if start is None else [turn_piece(planner, *start[:3], plan.start[2])]
-    after = [] if goal is None else [turn_piece(planner, *goal[:2], plan.goal[2], goal[2])]
+    before = (
+        [] if start is None else [turn_piece(planner, start[0], start[1], start[2], plan.start[2])]
+    )
+    after = [] if goal is None else [turn_piece(planner, goal[0], goal[1], plan.goal[2], goal[2])]
     added = sum(p.cost for p in before + after)
     stats = dict(
         plan.stats,
-        turn_in_place_deg=[float(np.degrees(p.turn[3])) for p in before + after],
+        # turn_piece's pieces carry their turn (mypy sees Piece.turn as Optional)
+        turn_in_place_deg=[float(np.degrees(p.turn[3])) for p in before + after],  # type: ignore[index]
         cost_shortened=final_cost(plan) + added,
     )
     return Plan(
