@@ -31,7 +31,7 @@ from .common import (
     scene_fps,
     state_dict,
 )
-from .crowd import CROWD_SPOT, crowd_members, plan_crowd
+from .crowd import CROWD_SPOT, cluster_executor, crowd_members, plan_crowd
 from .crowd_copies import CROWD_COLLECTION, duplicate_crowd, remove_crowd
 from .crowd_holds import CROWD_HOLD_RAMP_SECONDS, _holdable
 from .errors import MotionPatchesError, PathNotFound
@@ -62,6 +62,7 @@ __all__ = [
     "CROWD_COLLECTION",
     "CROWD_HOLD_RAMP_SECONDS",
     "CROWD_SPOT",
+    "cluster_executor",
     "CrowdResult",
     "CrowdSchedule",
     "DEFAULTS",

@@ -116,7 +116,10 @@ def bake_locomotion_patch(
         )
     storage.remember_bake_clips(scene, armature, straight, turns)
     storage.make_active(scene, res.name)
-    res.armature, res.straight, res.turns = armature.name, straight.name, [t.name for t in turns]
+    assert not isinstance(armature, str)  # a name only stands for an armature to import onto
+    res.armature = armature.name
+    # actions by now (_bake_action found each one named); mypy keeps the parameters' types
+    res.straight, res.turns = straight.name, [t.name for t in turns]  # type: ignore[union-attr]
     res.imported = [a.name for a in imported.values()]
     return res
 
@@ -142,7 +145,9 @@ def _bake_armature(scene, armature, importing):
     return armature
 
 
-def _bake_action(clip, imported):
+def _bake_action(clip, imported) -> bpy.types.Action:
+    """The action of a bake's clip given as an action or by name (an imported file's stem
+    first)."""
     if not isinstance(clip, str):
         return clip
     return imported.get(clip) or bpy.data.actions[clip]

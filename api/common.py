@@ -76,7 +76,7 @@ def last_analysis(obj: bpy.types.Object | None) -> dict | None:
 def state_dict(state: Sequence[float], name: str | None = None) -> dict:
     """(x, y, heading) as JSON-friendly numbers (heading in degrees, -180..180)."""
     h = (float(np.degrees(state[2])) + 180.0) % 360.0 - 180.0
-    d = {
+    d: dict[str, float | str] = {
         "x": round(float(state[0]), 6),
         "y": round(float(state[1]), 6),
         "heading_deg": round(h, 4) + 0.0,

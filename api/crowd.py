@@ -8,6 +8,7 @@ import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from functools import partial
+from typing import Any
 
 import bpy
 import numpy as np
@@ -15,9 +16,9 @@ import numpy as np
 from ..adapter import moving as moving_io
 from ..adapter import scene as scene_io
 from ..adapter import transaction
-from ..motion_patches.crowd import crowd
+from ..motion_patches import cluster
+from ..motion_patches.crowd import crowd, members
 from ..motion_patches.planning import moving_props
-from ..motion_patches.planning.planner import plan_motions
 from ..motion_patches.planning.settings import PlanSettings
 from ..motion_patches.props.environment import Obstacle
 from .common import (
@@ -30,19 +31,17 @@ from .common import (
     object_patches,
     scene_fps,
 )
-from .crowd_holds import CROWD_HOLD_RAMP_SECONDS, _holdable, _root_track, _with_hold
-from .errors import MotionPatchesError, PathNotFound
+from .crowd_holds import CROWD_HOLD_RAMP_SECONDS, _root_track, _with_hold
+from .errors import MotionPatchesError
 from .results import CrowdResult, CrowdSchedule
 from .settings import plan_settings
 from .solve import (
-    _avoid_moving,
     _check_clear,
     _check_ends,
     _endpoints,
     _frame_start,
     _goal,
-    _planner,
-    _solve,
+    _not_found,
     _without,
     _writable,
 )
@@ -50,7 +49,30 @@ from .writing import FRAME_RANGE_KEY, _fit_frame_range, _placed, _write
 
 CROWD_RESOLVE_SLACK = 0.05  # metres the crowd is resolved wider than its spacing (see plan_crowd)
 CROWD_SPOT = "\x00crowd spot "  # obstacle names of other characters' standing spots
-CROWD_GHOST = "\x00crowd ghost "  # where another character walks when two would meet
+CROWD_GHOST = members.GHOST  # where another character walks when two would meet
+
+
+def cluster_executor(
+    workers: int | None = None, scheduler: str | None = None
+) -> cluster.InProcess | cluster.DaskCluster:
+    """Where a crowd's members (or a batch's items) are planned: in this process (neither
+    given), on a new Dask ``LocalCluster`` of ``workers`` processes, or on the running Dask
+    scheduler at ``scheduler`` ("tcp://host:8786"). Close it (or use it as a context
+    manager) when done. :class:`MotionPatchesError` when Dask is missing or the scheduler
+    cannot be reached."""
+    if workers is not None and (
+        isinstance(workers, bool) or int(workers) != workers or workers < 1
+    ):
+        raise MotionPatchesError(f"workers must be a whole number of at least 1, not {workers!r}")
+    try:
+        return cluster.executor(workers, scheduler)
+    except ImportError as exc:
+        raise MotionPatchesError(
+            f"a Dask cluster needs the dask and distributed packages ({exc}); "
+            "pip install dask distributed into Blender's Python, or plan in process"
+        ) from None
+    except OSError as exc:
+        raise MotionPatchesError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}") from None
 
 
 def crowd_members(
@@ -112,6 +134,7 @@ def plan_crowd(
     foot_lock: bool | None = None,
     goal_facing: str | None = None,
     turn_in_place: bool | None = None,
+    executor: cluster.InProcess | cluster.DaskCluster | None = None,
 ) -> CrowdResult:
     """Plan several characters and write each one's NLA; ``pairs`` = [(armature, goal)] or
     [(armature, goal, options)], a goal being an object or (x, y, heading); ``options``:
@@ -131,7 +154,10 @@ def plan_crowd(
     then (:func:`motion_patches.crowd.crowd.resolve`). Closer approaches left are returned as
     ``conflicts`` by pair and frame, checked on the motion as written. Bad input (a
     character twice, two characters sent to one goal, goals closer than ``spacing``: one
-    could never be free) raises :class:`MotionPatchesError` before anything is written."""
+    could never be free) raises :class:`MotionPatchesError` before anything is written.
+
+    ``executor``: where the members' paths are planned (:func:`cluster_executor`: a Dask
+    cluster, or in this process, the default); the plans are the same wherever."""
     settings = plan_settings(
         scene,
         alpha=alpha,
@@ -147,6 +173,8 @@ def plan_crowd(
     c = _request(
         scene, pairs, patch_name, settings, frame_start, context, max_wait_seconds, spacing
     )
+    if executor is not None:
+        c.executor = executor
     _place_ends(c)
     planned, failed = _plan_each(c, progress)
     planned, schedules = _resolve(c, planned)
@@ -193,14 +221,28 @@ def plan_crowd(
 class _World:
     """The planner's world of the characters of one size (retargeted rigs are planned in
     the world shrunk by their size): its environment, props, planner, and the props that
-    move (``tracks``; ``awake``: those moving on the first frame)."""
+    move (``tracks``; ``awake``: those moving on the first frame), as the core's
+    :class:`~motion_patches.crowd.members.MemberWorld` its members are planned in."""
 
-    env: object
-    props: list
+    members: members.MemberWorld
     by_name: dict
-    tracks: list
     awake: list
-    planner: object = None
+
+    @property
+    def env(self):
+        return self.members.env
+
+    @property
+    def props(self):
+        return self.members.props
+
+    @property
+    def tracks(self):
+        return self.members.tracks
+
+    @property
+    def planner(self):
+        return self.members.planner
 
 
 @dataclass
@@ -209,7 +251,7 @@ class _Crowd:
     ``sizes`` by entry), its settings, and what the steps of :func:`plan_crowd` find."""
 
     scene: object
-    patch: object
+    patch: Any
     patch_name: str | None
     settings: PlanSettings
     pairs: list
@@ -226,6 +268,8 @@ class _Crowd:
     own: list = field(default_factory=list)  # names no obstacle for each (its goal, seat)
     order: list = field(default_factory=list)  # entries in priority order
     rank_ends: list = field(default_factory=list)  # (start, goal) in the world, by rank
+    rank: dict = field(default_factory=dict)  # entry -> its place in ``order``
+    executor: object = field(default_factory=cluster.InProcess)  # where members are planned
 
     @property
     def ramp(self) -> int:
@@ -335,7 +379,17 @@ def _world_of(c, size):
             env.remove(t.name)
             env.place(Obstacle(t.name, t.polygon_at(t.pose_at(0.0)[0])))
         awake = [t.name for t in tracks if t.awake_at(0.0)]
-        c.worlds[size] = _World(env, props, {p.name: p for p in props}, tracks, awake)
+        mw = members.MemberWorld(
+            c.patch,
+            env,
+            props,
+            c.settings,
+            tracks,
+            tuple(_obstacle_names(env, awake)),
+            c.first,
+            c.fps,
+        )
+        c.worlds[size] = _World(mw, {p.name: p for p in props}, awake)
     return c.worlds[size]
 
 
@@ -369,7 +423,7 @@ def _place_ends(c):
         with _without(_world_of(c, sz).env, mine):
             _check_clear(_world_of(c, sz).env, ch, e, _world_of(c, sz).by_name)
     for w in c.worlds.values():
-        w.planner = _planner(c.patch, w.env, c.settings, w.props)
+        w.members.planner  # made here, before any standing spot is placed
     world_ends = [
         (_shrunk(e[0], 1.0 / sz), _shrunk(e[1], 1.0 / sz)) for e, sz in zip(c.ends, c.sizes)
     ]
@@ -391,63 +445,58 @@ def _place_ends(c):
         ),
     )
     c.rank_ends = [world_ends[n] for n in c.order]
+    c.rank = {n: i for i, n in enumerate(c.order)}
 
 
-def _solve_one(c, n, ghosts=()):
-    """Plan entry n round the standing spots (dropped when they box it in) and, when
-    re-routing, round ``ghosts`` (world polygons; PathNotFound if they box it in)."""
-    character, e, size = c.pairs[n][0], c.ends[n], c.sizes[n]
-    w, radius = _world_of(c, size), c.settings.radius
-    env, planner = w.env, w.planner
+def _obstacle_names(env, names):
+    """Names of ``env``'s obstacles that are, or are parts of, the objects ``names``."""
+    names = set(names)
+    return [n for n in env.obstacles if n in names or scene_io.owner(n) in names]
+
+
+def _task(c, n, ghosts=()):
+    """Entry n as the core plans it: its ends, what is no obstacle for it, where the others
+    stand still while it walks (:func:`motion_patches.crowd.crowd.standing_spots`) and,
+    when re-routing, ``ghosts`` (world polygons) in its world."""
+    size, radius = c.sizes[n], c.settings.radius
     spots = [
-        Obstacle(f"{CROWD_SPOT}{c.pairs[c.order[m]][0].name}", polygon / size)
-        for m, polygon in crowd.standing_spots(c.rank_ends, c.order.index(n), c.spacing, radius)
+        (f"{CROWD_SPOT}{c.pairs[c.order[m]][0].name}", polygon / size)
+        for m, polygon in crowd.standing_spots(c.rank_ends, c.rank[n], c.spacing, radius)
     ]
-    mine = np.array([e[0][:2], e[1][:2]], float)
-    extra = [Obstacle(f"{CROWD_GHOST}{k}", polygon / size) for k, polygon in enumerate(ghosts)]
-    extra = [g for g in extra if not g.within(mine, radius).any()]  # not on its own ends
-    with _without(env, c.own[n]):
-        for ob in spots + extra:  # where the others stand still while this one walks
-            env.place(ob)
-        try:
-            with _without(env, w.awake):
-                try:
-                    plan = _solve(planner, character, e, explain=not (spots or extra))
-                except PathNotFound:
-                    if not spots or extra:
-                        raise
-                    for spot in spots:  # boxed in by the others: plan past them
-                        env.remove(spot.name)
-                    spots = []
-                    plan = _solve(planner, character, e)
-            if w.tracks:  # round the moving props by re-routing (the crowd times waits)
-                plan, _ = _avoid_moving(
-                    planner, c.patch, plan, w.tracks, character, c.first, c.fps, longest_wait=0.0
-                )
-            return plan
-        finally:
-            for ob in spots + extra:
-                env.remove(ob.name)
+    own = _obstacle_names(_world_of(c, size).env, c.own[n])
+    return members.MemberTask(
+        n, c.ends[n], tuple(own), spots, [p / size for p in ghosts], c.rigs[n]
+    )
 
 
-def _synthesised(c, n, plan):
-    """[n, plan, raw piece motions, placed motion, holdable frames or None] of entry n."""
-    raw = plan_motions(c.patch, plan)
-    placed = _placed(c.scene, c.patch, c.rigs[n], raw)
-    return [n, plan, raw, placed, (_holdable(plan, placed, c.ramp) if c.same_rate else None)]
+def _entry(member):
+    """[n, plan, raw piece motions, placed motion, holdable frames or None] of a member."""
+    m = member
+    return [m.entry, m.plan, m.raw, (m.motions, m.bounds, m.world), m.holdable]
 
 
 def _plan_each(c, progress):
     """(planned: [[n, plan, raw, placed, holdable]] in priority order, failed: [(name,
-    why)]): each entry planned round the others' standing spots."""
+    why)]): each entry planned round the others' standing spots, on ``c.executor``."""
+    tasks = [_task(c, n) for n in c.order]
+    answers = {}
+    for size in dict.fromkeys(c.sizes[n] for n in c.order):
+        mine = [t for t in tasks if c.sizes[t.entry] == size]
+        world = _world_of(c, size).members
+        done = c.executor.map(
+            members.plan_member,
+            mine,
+            world=world,
+            progress=None if progress is None else lambda f: progress(0.8 * f),
+        )
+        answers.update((t.entry, a) for t, a in zip(mine, done))
     planned, failed = [], []
-    for count, n in enumerate(c.order):
-        try:
-            planned.append(_synthesised(c, n, _solve_one(c, n)))
-        except PathNotFound as exc:
-            failed.append((c.pairs[n][0].name, str(exc)))
-        if progress is not None:
-            progress(0.8 * (count + 1) / len(c.pairs))
+    for n in c.order:
+        a = answers[n]
+        if isinstance(a, members.NoPlan):
+            failed.append((c.pairs[n][0].name, str(_not_found(c.pairs[n][0].name, a))))
+        else:
+            planned.append(_entry(a))
     return planned, failed
 
 
@@ -455,11 +504,10 @@ def _replan(c, versions, k, ghosts):
     """Planned character k re-planned round ``ghosts``: its new track and holdable frames
     (the next version of its plan, kept in ``versions[k]``), or None."""
     n = versions[k][0][0]
-    try:
-        plan = _solve_one(c, n, ghosts)
-    except PathNotFound:
+    a = members.plan_member(_task(c, n, ghosts), _world_of(c, c.sizes[n]).members)
+    if isinstance(a, members.NoPlan):
         return None
-    versions[k].append(_synthesised(c, n, plan))
+    versions[k].append(_entry(a))
     return _root_track(versions[k][-1][3]), versions[k][-1][4]
 
 

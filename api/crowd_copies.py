@@ -42,15 +42,15 @@ def duplicate_crowd(
     rig = _check_character(source, patch)
     try:
         count = int(count)
-        region = np.asarray(region, float).reshape(2, 2)
-        goal_region = np.asarray(goal_region, float).reshape(2, 2)
+        corners = np.asarray(region, float).reshape(2, 2)
+        goal_corners = np.asarray(goal_region, float).reshape(2, 2)
     except (TypeError, ValueError):
         raise MotionPatchesError(
             "a crowd needs a count and two regions ((x0, y0), (x1, y1))"
         ) from None
     if count < 1:
         raise MotionPatchesError("a crowd needs at least one character")
-    for what, r in (("region", region), ("goal region", goal_region)):
+    for what, r in (("region", corners), ("goal region", goal_corners)):
         if not np.isfinite(r).all() or (r[1] <= r[0]).any():
             raise MotionPatchesError(
                 f"the {what} must have its second corner above and right of its first"
@@ -76,7 +76,7 @@ def duplicate_crowd(
             f"clear of the props: make it larger or the crowd smaller"
         )
 
-    starts, goals = scatter(region, "region"), scatter(goal_region, "goal region")
+    starts, goals = scatter(corners, "region"), scatter(goal_corners, "goal region")
     rng.shuffle(goals)
     skel = rig.target if rig is not None else patch.gait.skeleton
     facing = nla.facing_angle(skel)

@@ -5,14 +5,12 @@ from __future__ import annotations
 
 import dataclasses
 
-import numpy as np
-
+from ..motion_patches.crowd import members
 from ..motion_patches.kinematics import retime
-from ..motion_patches.kinematics.inplace import root_positions
 from .errors import MotionPatchesError
 
-CROWD_HOLD_RAMP_SECONDS = 0.5  # slowing to an idle hold and walking on again, each
-_CLIPS = ("traversal", "interaction")
+CROWD_HOLD_RAMP_SECONDS = members.HOLD_RAMP_SECONDS
+_CLIPS = members.CLIPS
 
 
 def _piece_holding(plan, bounds, at, ramp):
@@ -26,18 +24,9 @@ def _piece_holding(plan, bounds, at, ramp):
 
 
 def _holdable(plan, placed, ramp):
-    """Bool per scene frame of a placed plan (:func:`_placed`): frames a crowd may hold on,
-    double support (a planted joint on each foot) inside a walking piece with room for the
-    slow-down and speed-up in that piece."""
-    _, bounds, world = placed
-    c = world.contacts
-    ok = c[:, :2].any(axis=1) & c[:, 2:].any(axis=1)
-    inside = np.zeros_like(ok)
-    half = ramp // 2
-    for i, p in enumerate(plan.pieces):
-        if p.kind not in _CLIPS:
-            inside[bounds[i] + half : bounds[i + 1] - half + 1] = True
-    return ok & inside
+    """Bool per scene frame of a placed plan (:func:`_placed`): frames a crowd may hold on
+    (:func:`motion_patches.crowd.members.holdable`)."""
+    return members.holdable(plan, placed[1], placed[2], ramp)
 
 
 def _with_hold(plan, raw, bounds, at, hold, ramp):
@@ -56,7 +45,5 @@ def _with_hold(plan, raw, bounds, at, hold, ramp):
 
 
 def _root_track(placed):
-    """(frames, 2) ground position of the root joint of a placed motion (:func:`_placed`):
-    what a crowd keeps apart (the hips sway a few centimetres about the ground track)."""
-    world = placed[2]
-    return root_positions(world.ground, world.root_local)[:, :2]
+    """(frames, 2) ground position of the root joint of a placed motion (:func:`_placed`)."""
+    return members.root_track(placed[2])

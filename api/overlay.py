@@ -145,4 +145,5 @@ def footprint_info(ob: bpy.types.Object) -> tuple[int, float | None]:
     co = np.empty(n * 3)
     me.vertices.foreach_get("co", co)
     m = np.array(ob.matrix_world)
-    return n, fp.area(fp.outline(co.reshape(n, 3) @ m[:2, :3].T + m[:2, 3]))
+    outline = fp.outline(co.reshape(n, 3) @ m[:2, :3].T + m[:2, 3])
+    return n, None if outline is None else fp.area(outline)

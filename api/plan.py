@@ -135,9 +135,11 @@ def plan_path(
     costs = [float(t[3].stats.get("cost_shortened", t[3].cost)) for t in tried]
     change, why = _gait_change(tried) if gait == "auto" else (None, None)
     best = layers.choose(costs + ([change[0].cost] if change else []))
+    assert best is not None  # every plan tried has a cost
     layer_keys = None
     if best == len(tried):  # the plan that changes layer: written with the walk's patch
         patch, rig, env, _, _, start_frame, _, name = min(tried, key=lambda t: t[0].effort_rate)
+        assert change is not None  # best is past the layers tried only when it exists
         plan, motions = change
         layer_keys = {t[0].layer: storage.patch_key(scene, t[7]) for t in tried}
     else:

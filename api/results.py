@@ -29,10 +29,10 @@ class PlanResult:
     seconds: float
     expansions: int
     strips: list
-    stashed_action_track: str = None
+    stashed_action_track: str | None = None
     stats: dict = field(default_factory=dict)
     length_m: float = 0.0
-    goal: tuple = None  # (x, y, heading) reached: the facing chosen when any would do
+    goal: tuple | None = None  # (x, y, heading) reached: the facing chosen when any would do
 
 
 @dataclass

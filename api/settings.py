@@ -4,7 +4,7 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ..motion_patches.planning.settings import PLANNING as DEFAULTS
 from ..motion_patches.planning.settings import SETTINGS, PlanSettings
@@ -23,7 +23,7 @@ __all__ = [
 ]
 
 
-def planning_checked(**values) -> PlanSettings:
+def planning_checked(**values: Any) -> PlanSettings:
     """:meth:`PlanSettings.checked` with :class:`MotionPatchesError` naming a bad value."""
     try:
         return PlanSettings.checked(**values)
@@ -31,7 +31,7 @@ def planning_checked(**values) -> PlanSettings:
         raise MotionPatchesError(str(e)) from None
 
 
-def plan_settings(scene: bpy.types.Scene, **given) -> PlanSettings:
+def plan_settings(scene: bpy.types.Scene, **given: object) -> PlanSettings:
     """The planning settings of a request (the names of
     :data:`motion_patches.planning.settings.SETTINGS`): each one given (not None) as given,
     the others the scene's (its Planning panel, which starts from those defaults). All are
@@ -47,6 +47,6 @@ def plan_settings(scene: bpy.types.Scene, **given) -> PlanSettings:
     return planning_checked(**values)
 
 
-def planning_settings(scene: bpy.types.Scene, **given) -> dict:
+def planning_settings(scene: bpy.types.Scene, **given: object) -> dict:
     """:func:`plan_settings` as a dict {name: value} (what the CLI reports as used)."""
     return plan_settings(scene, **given).as_dict()

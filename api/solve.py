@@ -12,6 +12,7 @@ import numpy as np
 
 from ..adapter import props_io, transaction
 from ..adapter import scene as scene_io
+from ..motion_patches.crowd import members
 from ..motion_patches.planning import body_clearance, causes, moving_props
 from ..motion_patches.planning.planner import (
     PlanError,
@@ -134,23 +135,28 @@ def _solve(planner, character, endpoints, explain=True):
     """The plan of one character; :class:`PathNotFound` naming the cause when there is none
     (``explain=False`` skips finding the cause: a crowd retries such a failure without
     the others' standing spots)."""
-    start_state, goal_state, start_ref, goal_ref = endpoints
     try:
-        if explain:
-            plan = causes.plan_explained(planner, start_state, goal_state)
-        else:
-            plan = planner.plan(start_state, goal_state)
-    except causes.NoPath as exc:
-        if exc.cause == "search limit":
-            raise PathNotFound(
-                f"no path for '{character.name}': {_limit_text(causes.SEARCH_LIMIT)}", exc.cause
-            ) from None
-        raise PathNotFound(
-            f"no path for '{character.name}': {exc}", exc.cause, scene_io.owners(exc.props)
-        ) from None
+        return members.planned_path(planner, endpoints, explain)
     except PlanError as exc:
-        raise PathNotFound(f"no path for '{character.name}': {exc}") from None
-    return with_interactions(plan, start_ref, goal_ref)
+        raise _not_found(character.name, members.no_plan_of(-1, exc)) from None
+
+
+def _not_found(name: str, why: members.NoPlan) -> PathNotFound:
+    """The :class:`PathNotFound` of a refusal of the core (:class:`members.NoPlan`)."""
+    if why.kind == "limit":
+        return PathNotFound(f"no path for '{name}': {_limit_text(causes.SEARCH_LIMIT)}", why.cause)
+    if why.kind == "cause":
+        return PathNotFound(
+            f"no path for '{name}': {why.text}", why.cause, scene_io.owners(why.props)
+        )
+    if why.kind == "moving":
+        return PathNotFound(
+            f"no path for '{name}' clear of moving props: {why.text}"
+            " (move the prop's keyframes, or start later with Frame Start)",
+            "moving",
+            why.props,
+        )
+    return PathNotFound(f"no path for '{name}': {why.text}")
 
 
 def _body_clear(planner, plan, motions, ends):
@@ -208,29 +214,12 @@ def _avoid_moving(
     (:mod:`moving_props`: a wait of at most ``longest_wait`` or a repaired run);
     :class:`PathNotFound` naming the prop and the frame when neither keeps clear of it.
     ``fps``: the scene's rate."""
-    scene_fps_ratio = fps / patch.gait.fps
-    plan, wait, repairs, left = moving_props.avoid(
-        planner,
-        patch,
-        plan,
-        tracks,
-        lambda p: plan_motions(patch, p),
-        longest_wait=longest_wait,
+    plan, wait, left = members.around_moving(
+        planner, patch, plan, tracks, frame_start, fps, longest_wait
     )
     if left:
-        raise PathNotFound(
-            f"no path for '{character.name}' clear of moving props: "
-            + "; ".join(c.describe(patch.gait.fps, frame_start, fps) for c in left)
-            + " (move the prop's keyframes, or start later with Frame Start)",
-            "moving",
-            [c.prop for c in left],
+        text = members.moving_text(left, patch, frame_start, fps)
+        raise _not_found(
+            character.name, members.NoPlan(-1, "moving", text, "moving", [x.prop for x in left])
         )
-    plan.stats["moving_props"] = {
-        "props": [t.name for t in tracks],
-        "awake_at_start": [t.name for t in tracks if t.awake_at(0.0)],
-        "wait_s": wait,
-        "repairs": [
-            dict(r, frame=frame_start + int(round(r["frame"] * scene_fps_ratio))) for r in repairs
-        ],
-    }
     return plan, wait

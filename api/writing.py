@@ -11,7 +11,7 @@ import bpy
 from ..adapter import nla, storage
 from ..motion_patches.kinematics import contacts, foot_lock, scene_rate
 from ..motion_patches.kinematics.inplace import root_positions
-from ..motion_patches.kinematics.motion import Motion, concatenate
+from ..motion_patches.kinematics.motion import Motion
 from ..motion_patches.planning import transitions
 from ..motion_patches.planning.settings import PlanSettings
 from .common import _shrunk, _size, path_length, scene_fps
@@ -23,13 +23,7 @@ def _placed(scene, patch, rig, motions):
     motions on its skeleton, at the patch's rate; the scene frames where the pieces start
     and the last ends, from 0; the whole motion on the scene's frames). ``rig``: the
     character's :class:`~motion_patches.kinematics.retarget.RigMap` (None: the patch skeleton)."""
-    if rig is not None:
-        motions = [rig.motion(m) for m in motions]
-    patch_bounds, bounds = scene_rate.piece_bounds(
-        [m.frames for m in motions], scene_fps(scene) / patch.gait.fps
-    )
-    world = scene_rate.at_scene_rate(concatenate(motions), patch_bounds, bounds)
-    return motions, bounds, world
+    return scene_rate.placed(patch, rig, motions, scene_fps(scene))
 
 
 FRAME_RANGE_KEY = "motion_patches_frame_range"  # the scene frame range last set by a plan

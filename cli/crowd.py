@@ -34,16 +34,18 @@ def cmd_crowd(args):
     progress = Progress("crowd", enabled=not args.json)
     wait = {} if args.max_wait is None else {"max_wait_seconds": args.max_wait}
     try:
-        res = api.plan_crowd(
-            scene,
-            pairs,
-            patch_name=args.patch,
-            frame_start=args.frame_start,
-            progress=progress,
-            spacing=args.spacing,
-            **wait,
-            **w,
-        )
+        with api.cluster_executor(args.workers, args.scheduler) as executor:
+            res = api.plan_crowd(
+                scene,
+                pairs,
+                patch_name=args.patch,
+                frame_start=args.frame_start,
+                progress=progress,
+                spacing=args.spacing,
+                executor=executor,
+                **wait,
+                **w,
+            )
     finally:
         progress.close()
     fps = api.scene_fps(scene)
@@ -61,6 +63,8 @@ def cmd_crowd(args):
         "seconds": res.seconds,
         "patch": args.patch or api.active_patch_name(scene),
         "weights": w,
+        "workers": args.workers,
+        "scheduler": args.scheduler,
         "saved": saved,
     }
     text = [

@@ -300,8 +300,27 @@ def _crowd_parser(sub, common):
         metavar="M",
         help="closest two characters' roots may come, in metres (default: two radii)",
     )
+    _cluster_options(p)
     _save_options(p)
     p.set_defaults(run=cmd_crowd)
+
+
+def _cluster_options(p):
+    """--workers / --scheduler: where the independent work runs (Dask distributed)."""
+    g = p.add_mutually_exclusive_group()
+    g.add_argument(
+        "--workers",
+        type=int,
+        metavar="N",
+        help="plan on a Dask LocalCluster of N worker processes (needs dask and "
+        "distributed in Blender's Python; default: in this process)",
+    )
+    g.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="plan on the running Dask scheduler at ADDRESS (tcp://host:8786): any Dask "
+        "cluster, e.g. SLURM through dask-jobqueue or Kubernetes",
+    )
 
 
 def _export_parser(sub, common):

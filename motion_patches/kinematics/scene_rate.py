@@ -14,10 +14,12 @@ in step.
 """
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
-from .motion import Motion
+from .motion import Motion, concatenate
+from .retarget import RigMap
 from .retime import resample
 
 
@@ -42,3 +44,12 @@ def at_scene_rate(motion: Motion, patch_bounds: np.ndarray, scene_bounds: np.nda
     if np.array_equal(patch_bounds, scene_bounds):
         return motion
     return resample(motion, scene_positions(patch_bounds, scene_bounds))
+
+
+def placed(patch: Any, rig: RigMap | None, raw: list, scene_fps: float) -> tuple:
+    """(piece motions on the character's rig, scene bounds of the pieces, the whole motion on
+    the scene's frames) of a plan's piece motions ``raw`` at the patch's rate. ``rig``: the
+    character's rig map (None: the patch's skeleton)."""
+    motions = [rig.motion(m) for m in raw] if rig is not None else list(raw)
+    patch_bounds, bounds = piece_bounds([m.frames for m in motions], scene_fps / patch.gait.fps)
+    return motions, bounds, at_scene_rate(concatenate(motions), patch_bounds, bounds)

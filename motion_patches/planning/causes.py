@@ -140,8 +140,7 @@ def no_path_cause(
                 f"a turn clip so it turns tighter"
             ),
         )
-    # blocking_props reads arrays as well as sequences (its hint says only Sequence[float]).
-    names, reason = blocking_props(env, start, goal, margin_tiles)  # type: ignore[arg-type]
+    names, reason = blocking_props(env, start, goal, margin_tiles)
     if not names:
         names, reason = _props_along(env, patch, found), "along"
     who = ", ".join(repr(n) for n in names[:NAMED]) + (", ..." if len(names) > NAMED else "")

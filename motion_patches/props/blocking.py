@@ -12,7 +12,10 @@ from .environment import Environment, polygons_within
 
 
 def blocking_props(
-    env: Environment, start: Sequence[float], goal: Sequence[float], margin_tiles: int = 3
+    env: Environment,
+    start: Sequence[float] | np.ndarray,
+    goal: Sequence[float] | np.ndarray,
+    margin_tiles: int = 3,
 ) -> tuple[list[str], str]:
     """(names, reason) of the props that keep ``start`` from ``goal`` on ``env``.
 

@@ -661,6 +661,54 @@ def test_crowd_plans_everyone_and_keeps_them_apart(cli, capsys, crossing, tmp_pa
     assert (still & moved[1:] & far[1:]).sum() >= 6
 
 
+def test_crowd_on_a_local_dask_cluster_plans_what_it_plans_in_process(
+    cli, capsys, crossing, tmp_path
+):
+    """--workers 2: the members' paths are planned on a Dask LocalCluster of two worker
+    processes (no Blender in them); the written crowd is the same as planned in process:
+    the same strips, frames and costs, and through the depsgraph the same root motion."""
+    pairs = ["--pair", "East", "EastGoal", "--pair", "North", "NorthGoal"]
+    docs, roots = [], []
+    for extra in ([], ["--workers", "2"]):
+        out = tmp_path / f"crowd{len(docs)}.blend"
+        code, doc, err = call_json(
+            cli,
+            capsys,
+            "crowd",
+            "--blend",
+            crossing,
+            *pairs,
+            "--spacing",
+            "1",
+            "--frame-start",
+            "1",
+            "--save",
+            out,
+            *extra,
+        )
+        assert code == 0 and doc["conflicts"] == [] and doc["failed"] == [], err
+        docs.append(doc)
+        open_blend(out)
+        end = max(p["frame_end"] for p in doc["planned"])
+        roots.append(evaluated_roots(cli, ["East", "North"], range(1, end + 1)))
+    assert docs[1]["workers"] == 2 and docs[0]["workers"] is None
+
+    def plans(doc):
+        keys = ("character", "frame_start", "frame_end", "length_m", "cost", "pieces", "strips")
+        return [{k: p[k] for k in keys} for p in doc["planned"]]
+
+    assert plans(docs[0]) == plans(docs[1])
+    assert docs[0]["delays_frames"] == docs[1]["delays_frames"]
+    assert np.array_equal(roots[0], roots[1])
+
+
+def test_crowd_with_no_worker_exits_2(cli, capsys, crossing):
+    code, doc, err = call_json(
+        cli, capsys, "crowd", "--blend", crossing, "--pair", "East", "EastGoal", "--workers", "0"
+    )
+    assert code == 2 and "workers must be a whole number of at least 1" in doc["error"], err
+
+
 def test_crowd_with_an_unreachable_goal_exits_1_and_saves_nothing(cli, capsys, layout, tmp_path):
     scene = open_blend(layout)
     walker_from(scene.motion_patches.source_armature, "North", (1.0, -2.0, 0.0))

@@ -8,8 +8,9 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
 # Files, or directories whose every .py file is hinted.
-# Next: the API.
 HINTED = [
+    "api",
+    "motion_patches/cluster.py",
     "motion_patches/planning",
     "motion_patches/kinematics",
     "motion_patches/quality",

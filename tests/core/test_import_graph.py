@@ -11,7 +11,7 @@ import pytest
 
 CORE = Path(__file__).resolve().parents[2] / "motion_patches"
 # Top to bottom: a module may import its own layer or a lower one.
-LAYERS = ["crowd", "planning", "props", "patch", "quality", "kinematics"]
+LAYERS = ["cluster", "crowd", "planning", "props", "patch", "quality", "kinematics"]
 
 
 def core_modules(root):

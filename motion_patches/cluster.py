@@ -1,0 +1,180 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Where independent work runs: in this process, or on a Dask distributed cluster.
+
+A crowd's paths, a batch of bakes or of layout checks are many tasks that share a patch and
+a layout and do not depend on each other. :class:`InProcess` runs them one after the other;
+:class:`DaskCluster` runs them on a Dask ``LocalCluster`` (one single-threaded worker process
+per core by default) or on any running Dask scheduler (``scheduler="tcp://host:8786"``: a
+SLURM or Kubernetes cluster started by dask-jobqueue or dask-kubernetes, say). Both keep the
+order of the results, so what is planned does not depend on where.
+
+Workers need no Blender, only numpy and this core: the core is sent to every worker as a
+zip (``Client.upload_file``, which also reaches workers that join or are restarted later)
+under the very module name it has here, so functions and results pickle by reference both
+ways, whether the core is ``motion_patches`` (tests, benches) or the package of an installed
+extension. Shared inputs (the patch, the props) are scattered to every worker once per call.
+Dask retries a task whose worker was lost; the tasks are pure, so the result is the same.
+
+Dask is an optional dependency: it is imported when a :class:`DaskCluster` is made, so a
+Blender session that never asks for one does not need it.
+"""
+
+import os
+import tempfile
+import uuid
+import zipfile
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+CORE = Path(__file__).resolve().parent
+CORE_NAME = __name__.rpartition(".")[0]  # the core's module name in this process
+
+
+def chunks(n: int, parts: int) -> list[range]:
+    """``range(n)`` cut into at most ``parts`` runs of near-equal length, in order."""
+    parts = max(1, min(parts, n))
+    edges = [round(k * n / parts) for k in range(parts + 1)]
+    return [range(a, b) for a, b in zip(edges[:-1], edges[1:]) if b > a]
+
+
+def run_chunk(fn: Callable, items: Sequence, shared: dict) -> list:
+    """``[fn(item, **shared) for item in items]``: one task's share of a map."""
+    return [fn(item, **shared) for item in items]
+
+
+class InProcess:
+    """Runs every task here, in order: the default, and what Blender's window uses."""
+
+    workers = 0
+    address = "in-process"
+
+    def map(
+        self,
+        fn: Callable,
+        items: Sequence,
+        progress: Callable[[float], None] | None = None,
+        chunk: int | None = None,
+        **shared: Any,
+    ) -> list:
+        """``[fn(item, **shared) for item in items]``; ``progress(fraction done)`` after each."""
+        out = []
+        for item in items:
+            out.append(fn(item, **shared))
+            if progress is not None:
+                progress(len(out) / len(items))
+        return out
+
+    def close(self) -> None:
+        pass
+
+    def __enter__(self) -> "InProcess":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def core_zip(folder: str | Path) -> Path:
+    """A zip of the core under its module name here (``a.b.motion_patches`` becomes
+    ``a/b/motion_patches/...`` with empty ``__init__.py`` files for ``a`` and ``a.b``, so the
+    add-on's own ``__init__``, which needs Blender, is never run on a worker)."""
+    parts = CORE_NAME.split(".")
+    path = Path(folder) / f"core_{uuid.uuid4().hex[:8]}.zip"
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
+        for k in range(1, len(parts)):
+            z.writestr("/".join(parts[:k]) + "/__init__.py", "")
+        base = "/".join(parts)
+        for f in sorted(CORE.rglob("*.py")):
+            z.write(f, base + "/" + f.relative_to(CORE).as_posix())
+    return path
+
+
+class DaskCluster:
+    """Runs tasks on Dask distributed: a new ``LocalCluster`` of ``workers`` processes
+    (default: one per core), or the running scheduler at ``scheduler``."""
+
+    def __init__(self, workers: int | None = None, scheduler: str | None = None) -> None:
+        from distributed import Client, LocalCluster  # optional: only when a cluster is asked for
+
+        if workers is not None and workers < 1:
+            raise ValueError(f"workers must be at least 1, not {workers}")
+        self.cluster = None
+        if scheduler:
+            self.client = Client(scheduler, timeout="30s")
+        else:
+            self.cluster = LocalCluster(
+                n_workers=workers or os.cpu_count() or 1,
+                threads_per_worker=1,  # numpy work holds the GIL often: a process per core
+                processes=True,
+                dashboard_address=None,
+            )
+            self.client = Client(self.cluster)
+        self.address = self.client.scheduler.address
+        self._tmp = tempfile.TemporaryDirectory(prefix="motion-patches-core-")
+        self.client.upload_file(str(core_zip(self._tmp.name)))
+
+    @property
+    def workers(self) -> int:
+        return len(self.client.scheduler_info().get("workers", {}))
+
+    def map(
+        self,
+        fn: Callable,
+        items: Sequence,
+        progress: Callable[[float], None] | None = None,
+        chunk: int | None = None,
+        **shared: Any,
+    ) -> list:
+        """``[fn(item, **shared) for item in items]`` on the workers, in the items' order;
+        ``progress(fraction done)`` as tasks finish. ``chunk``: items per task (default:
+        about four tasks per worker)."""
+        items = list(items)
+        if not items:
+            return []
+        scattered = {k: self.client.scatter(v, broadcast=True) for k, v in shared.items()}
+        parts = (
+            chunks(len(items), 4 * max(self.workers, 1))
+            if chunk is None
+            else [range(a, min(a + chunk, len(items))) for a in range(0, len(items), chunk)]
+        )
+        tag = uuid.uuid4().hex[:8]
+        futures = [
+            self.client.submit(
+                run_chunk,
+                fn,
+                [items[i] for i in r],
+                scattered,
+                key=f"{getattr(fn, '__name__', 'task')}-{tag}-{k}",
+                pure=False,
+            )
+            for k, r in enumerate(parts)
+        ]
+        if progress is not None:
+            from distributed import as_completed
+
+            for done, _ in enumerate(as_completed(futures), 1):
+                progress(done / len(futures))
+        out: list = []
+        for part in self.client.gather(futures):
+            out.extend(part)
+        return out
+
+    def close(self) -> None:
+        self.client.close()
+        if self.cluster is not None:
+            self.cluster.close()
+        self._tmp.cleanup()
+
+    def __enter__(self) -> "DaskCluster":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def executor(workers: int | None = None, scheduler: str | None = None) -> "InProcess | DaskCluster":
+    """In process unless ``workers`` or ``scheduler`` is given."""
+    if workers is None and not scheduler:
+        return InProcess()
+    return DaskCluster(workers, scheduler)

@@ -1,0 +1,273 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""A crowd member's own work: its path planned round the props and the spots where the others
+stand still, its motion synthesised and put on its rig at the scene's rate, and the frames on
+which it may hold.
+
+This work does not depend on the other members' plans, only on their ends, so the members of
+a crowd can be planned anywhere, in any order (:mod:`motion_patches.cluster`): a task is a
+:class:`MemberTask` and the world it plans in a :class:`MemberWorld`, both plain data that
+pickle; the answer is a :class:`Member` or a :class:`NoPlan` (exceptions of the planner are
+turned into data, so nothing has to be raised across a process boundary).
+"""
+
+import contextlib
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..kinematics.inplace import root_positions
+from ..kinematics.motion import Motion
+from ..kinematics.retarget import RigMap
+from ..kinematics.scene_rate import placed
+from ..planning import causes, moving_props
+from ..planning.pieces import Plan, PlanError
+from ..planning.planner import SegmentPlanner, plan_motions, with_interactions
+from ..planning.settings import PlanSettings
+from ..props.environment import Environment, Obstacle
+
+HOLD_RAMP_SECONDS = 0.5  # slowing to an idle hold and walking on again, each
+CLIPS = ("traversal", "interaction")
+GHOST = "\x00crowd ghost "  # obstacle names of where another member walks when two would meet
+
+
+@dataclass
+class MemberWorld:
+    """What the members of one character size share: the patch, the props as the planner sees
+    them (``env``, the object patches ``props``), the settings, the props that move
+    (``tracks``; ``awake``: obstacle names of those moving on the first frame), the scene's
+    first frame and rate. Its planner is made where it is first used, once per process."""
+
+    patch: Any
+    env: Environment
+    props: list
+    settings: PlanSettings
+    tracks: list = field(default_factory=list)
+    awake: tuple = ()
+    first: int = 1
+    scene_fps: float = 30.0
+    _planner: SegmentPlanner | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def planner(self) -> SegmentPlanner:
+        if self._planner is None:
+            s = self.settings
+            self._planner = SegmentPlanner(
+                self.patch,
+                self.env,
+                s.alpha,
+                s.beta,
+                s.gamma,
+                props=self.props,
+                mode=s.stitching,
+                turn_in_place=s.turn_in_place,
+            )
+        return self._planner
+
+    @property
+    def ramp(self) -> int:
+        """Frames of a hold's slow-down and speed-up together (even)."""
+        return max(2, int(round(HOLD_RAMP_SECONDS * self.scene_fps)) // 2 * 2)
+
+    @property
+    def same_rate(self) -> bool:
+        return abs(self.scene_fps - self.patch.gait.fps) < 1e-6
+
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        state["_planner"] = None  # made again where it is used
+        return state
+
+
+@dataclass
+class MemberTask:
+    """One member to plan: ``ends`` = (start, goal, start clip, goal clip) in its world;
+    ``own``: obstacle names that are no obstacle for it (its goal, its seat); ``spots``:
+    (name, polygon) where the others stand still while it walks; ``ghosts``: polygons of
+    where others walk when it meets them (re-routing); ``rig``: its rig map or None."""
+
+    entry: int
+    ends: tuple
+    own: tuple = ()
+    spots: Sequence = ()
+    ghosts: Sequence = ()
+    rig: RigMap | None = None
+
+
+@dataclass
+class NoPlan:
+    """Why a member has no plan: ``kind`` "limit" (the search's node limit), "cause" (no
+    path, ``cause`` and ``props`` say why), "plan" (a refusal of the planner, ``text``) or
+    "moving" (props keyframed across every way; ``text`` describes each, ``props`` names
+    them)."""
+
+    entry: int
+    kind: str
+    text: str
+    cause: str | None = None
+    props: list = field(default_factory=list)
+
+
+@dataclass
+class Member:
+    """A member planned: its plan, the plan's piece motions at the patch's rate (``raw``),
+    those put on its rig (``motions``) with the scene frames where the pieces start and the
+    last ends (``bounds``) and the whole on the scene's frames (``world``), and the scene
+    frames it may hold on (None when the scene plays at another rate than the patch)."""
+
+    entry: int
+    plan: Plan
+    raw: list
+    motions: list
+    bounds: np.ndarray
+    world: Motion
+    holdable: np.ndarray | None
+
+    @property
+    def root_track(self) -> np.ndarray:
+        return root_track(self.world)
+
+
+def no_plan_of(entry: int, exc: PlanError) -> NoPlan:
+    """A refusal of the planner (:class:`causes.NoPath` or any :class:`PlanError`) as data."""
+    if isinstance(exc, causes.NoPath):
+        kind = "limit" if exc.cause == "search limit" else "cause"
+        return NoPlan(entry, kind, str(exc), exc.cause, list(exc.props))
+    return NoPlan(entry, "plan", str(exc))
+
+
+def planned_path(planner: SegmentPlanner, ends: tuple, explain: bool = True) -> Plan:
+    """The plan from ``ends[0]`` to ``ends[1]`` with the clips that start and end it;
+    ``explain``: on failure find its cause (:func:`causes.plan_explained`)."""
+    start, goal, start_ref, goal_ref = ends
+    if explain:
+        plan = causes.plan_explained(planner, start, goal)
+    else:
+        plan = planner.plan(start, goal)
+    return with_interactions(plan, start_ref, goal_ref)
+
+
+def around_moving(
+    planner: SegmentPlanner,
+    patch: Any,
+    plan: Plan,
+    tracks: list,
+    frame_start: int,
+    fps: float,
+    longest_wait: float = moving_props.MAX_DELAY_S,
+) -> tuple[Plan, float, list]:
+    """(plan, seconds to wait at the start, conflicts left) clear of the props that move
+    during it (:func:`moving_props.avoid`); the plan's stats say what was done. ``fps``:
+    the scene's rate, ``frame_start`` its first frame (for the frames the stats name)."""
+    ratio = fps / patch.gait.fps
+    plan, wait, repairs, left = moving_props.avoid(
+        planner, patch, plan, tracks, lambda p: plan_motions(patch, p), longest_wait=longest_wait
+    )
+    if not left:
+        plan.stats["moving_props"] = {
+            "props": [t.name for t in tracks],
+            "awake_at_start": [t.name for t in tracks if t.awake_at(0.0)],
+            "wait_s": wait,
+            "repairs": [
+                dict(r, frame=frame_start + int(round(r["frame"] * ratio))) for r in repairs
+            ],
+        }
+    return plan, wait, left
+
+
+def moving_text(left: list, patch: Any, frame_start: int, fps: float) -> str:
+    """What a walk that cannot keep clear of moving props meets: each prop and frame."""
+    return "; ".join(c.describe(patch.gait.fps, frame_start, fps) for c in left)
+
+
+def holdable(plan: Plan, bounds: np.ndarray, world: Motion, ramp: int) -> np.ndarray:
+    """Bool per scene frame: frames a member may hold on, double support (a planted joint on
+    each foot) inside a walking piece with room for the slow-down and speed-up in it."""
+    c = world.contacts
+    ok = c[:, :2].any(axis=1) & c[:, 2:].any(axis=1)
+    inside = np.zeros_like(ok)
+    half = ramp // 2
+    for i, p in enumerate(plan.pieces):
+        if p.kind not in CLIPS:
+            inside[bounds[i] + half : bounds[i + 1] - half + 1] = True
+    return ok & inside
+
+
+def root_track(world: Motion) -> np.ndarray:
+    """(frames, 2) ground position of the root joint: what a crowd keeps apart (the hips
+    sway a few centimetres about the ground track)."""
+    return root_positions(world.ground, world.root_local)[:, :2]
+
+
+@contextlib.contextmanager
+def without(env: Environment, names: Sequence[str]) -> Iterator[Environment]:
+    """``env`` with the obstacles ``names`` taken out for the block (put back after)."""
+    taken = set(names)
+    saved = [ob for n, ob in env.obstacles.items() if n in taken]
+    for ob in saved:
+        env.remove(ob.name)
+    try:
+        yield env
+    finally:
+        for ob in saved:
+            env.place(ob)
+
+
+def synthesised(task: MemberTask, world: MemberWorld, plan: Plan) -> Member:
+    """The member's motion for ``plan``: synthesised, on its rig, at the scene's rate."""
+    raw = plan_motions(world.patch, plan)
+    motions, bounds, whole = placed(world.patch, task.rig, raw, world.scene_fps)
+    hold = holdable(plan, bounds, whole, world.ramp) if world.same_rate else None
+    return Member(task.entry, plan, raw, motions, bounds, whole, hold)
+
+
+def plan_member(task: MemberTask, world: MemberWorld) -> Member | NoPlan:
+    """Plan one member round the standing spots (dropped when they box it in) and, when
+    re-routing, round its ghosts (no plan when they box it in); then round the props that
+    move by re-routing (the crowd times the waits); then its motion."""
+    env, planner = world.env, world.planner
+    radius = world.settings.radius
+    spots = [Obstacle(name, np.asarray(poly, float)) for name, poly in task.spots]
+    mine = np.array([task.ends[0][:2], task.ends[1][:2]], float)
+    extra = [Obstacle(f"{GHOST}{k}", np.asarray(p, float)) for k, p in enumerate(task.ghosts)]
+    extra = [g for g in extra if not g.within(mine, radius).any()]  # not on its own ends
+    try:
+        with without(env, task.own):
+            for ob in spots + extra:  # where the others stand still while this one walks
+                env.place(ob)
+            try:
+                with without(env, world.awake):
+                    try:
+                        plan = planned_path(planner, task.ends, explain=not (spots or extra))
+                    except PlanError:
+                        if not spots or extra:
+                            raise
+                        for spot in spots:  # boxed in by the others: plan past them
+                            env.remove(spot.name)
+                        spots = []
+                        plan = planned_path(planner, task.ends)
+                if world.tracks:
+                    plan, _, left = around_moving(
+                        planner,
+                        world.patch,
+                        plan,
+                        world.tracks,
+                        world.first,
+                        world.scene_fps,
+                        longest_wait=0.0,
+                    )
+                    if left:
+                        text = moving_text(left, world.patch, world.first, world.scene_fps)
+                        return NoPlan(task.entry, "moving", text, "moving", [x.prop for x in left])
+            finally:
+                for ob in spots + extra:
+                    env.remove(ob.name)
+    except PlanError as exc:
+        return no_plan_of(task.entry, exc)
+    return synthesised(task, world, plan)
+
+
+def plan_members(tasks: Sequence[MemberTask], world: MemberWorld) -> list:
+    """:func:`plan_member` of each task, in order."""
+    return [plan_member(t, world) for t in tasks]

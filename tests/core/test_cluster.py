@@ -1,0 +1,195 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""A crowd's members planned anywhere give the same plans: in this process, on a Dask
+LocalCluster of one and of two workers, and on a real `dask scheduler` with two
+`dask worker` processes over TCP of which one is killed mid-run."""
+
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from motion_patches import cluster
+from motion_patches.crowd import crowd, members
+from motion_patches.planning.settings import PlanSettings
+from motion_patches.props.environment import Environment, Obstacle
+
+RADIUS = 0.25
+SPACING = 2 * RADIUS
+
+
+def box(x, y, half=0.3):
+    return np.array(
+        [[x - half, y - half], [x + half, y - half], [x + half, y + half], [x - half, y + half]]
+    )
+
+
+def crossing(patch, per_side=3, seed=5):
+    """A small four-way crossing: ``per_side`` walkers enter from each side of a 10 m
+    square with four pillars in the middle and cross to shuffled goals on the far side."""
+    rng = np.random.default_rng(seed)
+    env = Environment(patch.side, patch.cells, radius=RADIUS)
+    for k, (x, y) in enumerate([(-1.5, -1.5), (1.5, -1.5), (-1.5, 1.5), (1.5, 1.5)]):
+        env.place(Obstacle(f"pillar{k}", box(x, y)))
+    slots = np.linspace(-3.0, 3.0, per_side)
+    ends = []
+    for side, (ax, heading) in enumerate(
+        [((-5, 0), 0.0), ((5, 0), np.pi), ((0, -5), np.pi / 2), ((0, 5), -np.pi / 2)]
+    ):
+        goals = rng.permutation(slots)
+        for s, g in zip(slots, goals):
+            if ax[0]:
+                start, goal = (ax[0], s, heading), (-ax[0], g, heading)
+            else:
+                start, goal = (s, ax[1], heading), (g, -ax[1], heading)
+            ends.append((np.array(start, float), np.array(goal, float)))
+    world = members.MemberWorld(
+        patch, env, [], PlanSettings(radius=RADIUS), scene_fps=patch.gait.fps
+    )
+    tasks = [
+        members.MemberTask(
+            i,
+            (ends[i][0], ends[i][1], None, None),
+            spots=[
+                (f"spot{m}", poly) for m, poly in crowd.standing_spots(ends, i, SPACING, RADIUS)
+            ],
+        )
+        for i in range(len(ends))
+    ]
+    return world, tasks
+
+
+def fingerprint(answers):
+    """What must not depend on where a member was planned: each plan's pieces and cost, its
+    frame bounds and its root track, to the bit."""
+    out = []
+    for a in answers:
+        assert isinstance(a, members.Member), a
+        out.append(
+            (
+                a.entry,
+                round(a.plan.cost, 12),
+                tuple(p.label for p in a.plan.pieces),
+                tuple(int(b) for b in a.bounds),
+                a.root_track.tobytes(),
+            )
+        )
+    return out
+
+
+@pytest.fixture(scope="module")
+def crossing12(walk_patch):
+    return crossing(walk_patch)
+
+
+@pytest.fixture(scope="module")
+def in_process(crossing12):
+    world, tasks = crossing12
+    return fingerprint(cluster.InProcess().map(members.plan_member, tasks, world=world))
+
+
+def test_chunks_cover_every_item_once_in_order():
+    for n in (0, 1, 5, 17, 100):
+        for parts in (1, 2, 3, 8, 200):
+            runs = cluster.chunks(n, parts)
+            assert [i for r in runs for i in r] == list(range(n))
+            assert len(runs) <= max(1, parts)
+            if runs:
+                sizes = [len(r) for r in runs]
+                assert max(sizes) - min(sizes) <= 1
+
+
+def test_members_in_process_are_planned_and_kept_off_the_standing_spots(in_process, crossing12):
+    world, tasks = crossing12
+    assert len(in_process) == len(tasks) == 12
+    assert all(cost > 0 for _, cost, *_ in in_process)
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_a_local_cluster_plans_the_same_members(crossing12, in_process, workers):
+    world, tasks = crossing12
+    with cluster.DaskCluster(workers=workers) as ex:
+        assert ex.workers == workers
+        got = ex.map(members.plan_member, tasks, world=world)
+    assert fingerprint(got) == in_process
+
+
+def _wait_for(path, timeout=60.0):
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout:
+        if path.exists() and path.stat().st_size > 0:
+            return
+        time.sleep(0.1)
+    raise TimeoutError(f"{path} never appeared")
+
+
+def test_a_scheduler_over_tcp_with_a_worker_killed_mid_run_plans_the_same(
+    crossing12, in_process, tmp_path
+):
+    """A `dask scheduler` and two `dask worker` processes (no nanny: a killed worker stays
+    dead) on localhost; one worker is killed when the first task is done. Dask gives its
+    tasks to the other; the plans are the same."""
+    world, tasks = crossing12
+    sched_file = tmp_path / "scheduler.json"
+    py = sys.executable
+    procs = [
+        subprocess.Popen(
+            [
+                py,
+                "-m",
+                "distributed.cli.dask_scheduler",
+                "--host",
+                "127.0.0.1",
+                "--port",
+                "0",
+                "--no-dashboard",
+                "--scheduler-file",
+                str(sched_file),
+            ],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+    ]
+    try:
+        _wait_for(sched_file)
+        for _ in range(2):
+            procs.append(
+                subprocess.Popen(
+                    [
+                        py,
+                        "-m",
+                        "distributed.cli.dask_worker",
+                        "--scheduler-file",
+                        str(sched_file),
+                        "--nthreads",
+                        "1",
+                        "--no-nanny",
+                        "--no-dashboard",
+                    ],
+                    stdout=subprocess.DEVNULL,
+                    stderr=subprocess.DEVNULL,
+                )
+            )
+        import json
+
+        address = json.loads(sched_file.read_text())["address"]
+        assert address.startswith("tcp://127.0.0.1:")
+        with cluster.DaskCluster(scheduler=address) as ex:
+            ex.client.wait_for_workers(2, timeout=60)
+            killed = []
+
+            def kill_one(fraction):
+                if not killed:
+                    procs[1].kill()
+                    killed.append(fraction)
+
+            got = ex.map(members.plan_member, tasks, world=world, chunk=1, progress=kill_one)
+            assert killed and killed[0] < 1.0  # killed with tasks still to do
+            assert procs[1].wait(timeout=30) != 0
+            assert ex.workers == 1
+        assert fingerprint(got) == in_process
+    finally:
+        for p in procs:
+            p.kill()
+            p.wait(timeout=30)
