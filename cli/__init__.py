@@ -30,6 +30,7 @@ from .output import (
     COMMAND_ID,
     FAILED,
     INTERNAL,
+    INTERRUPTED,
     OK,
     BadInput,
     CLIError,
@@ -84,6 +85,10 @@ def main(argv):
         return _fail(FAILED, str(exc), args.json, args.command)
     except api.MotionPatchesError as exc:
         return _fail(BAD_INPUT, str(exc), args.json, args.command)
+    except KeyboardInterrupt:  # Ctrl-C: the API puts back what it had begun to write
+        return _fail(
+            INTERRUPTED, "interrupted: nothing was saved", args.json, args.command
+        )
     except Exception:
         traceback.print_exc()
         return _fail(

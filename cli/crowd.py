@@ -51,7 +51,7 @@ def cmd_crowd(args):
     fps = api.scene_fps(scene)
     moving = list(getattr(res, "moving_conflicts", []))
     ok = not res.failed and not res.conflicts and not moving
-    saved = save_blend(save) if ok else None
+    saved = save_blend(save) if ok or (args.save_anyway and res.plans) else None
     doc = {
         "characters": len(pairs),
         "planned": [plan_doc(p, fps) for p in res.plans],
@@ -94,5 +94,7 @@ def cmd_crowd(args):
     if saved:
         text.append(f"saved {saved}")
     elif save is not None:
-        text.append("not saved: the crowd has failures or conflicts")
+        text.append(
+            "not saved: the crowd has failures or conflicts (--save-anyway saves what was planned)"
+        )
     return Result(doc, OK if ok else FAILED, text)

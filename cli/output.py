@@ -18,6 +18,7 @@ PROG = "blender -c " + COMMAND_ID
 
 OK, FAILED, BAD_INPUT = 0, 1, 2
 INTERNAL = getattr(os, "EX_SOFTWARE", 70)
+INTERRUPTED = 130  # Ctrl-C, as shells report it
 
 
 class CLIError(Exception):

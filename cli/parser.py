@@ -302,6 +302,12 @@ def _crowd_parser(sub, common):
     )
     _cluster_options(p)
     _save_options(p)
+    p.add_argument(
+        "--save-anyway",
+        action="store_true",
+        help="with --save or --save-in-place: save what was planned even when characters "
+        "found no path or conflicts remain (the exit status is still 1)",
+    )
     p.set_defaults(run=cmd_crowd)
 
 

@@ -702,6 +702,36 @@ def test_crowd_on_a_local_dask_cluster_plans_what_it_plans_in_process(
     assert np.array_equal(roots[0], roots[1])
 
 
+def test_crowd_interrupted_exits_130_and_saves_nothing(
+    cli, capsys, crossing, tmp_path, monkeypatch
+):
+    """Ctrl-C while the crowd is planned (raised from its progress): exit 130, the .blend
+    to save is not written, the open file is unchanged on disk."""
+    before = crossing.read_bytes()
+
+    def interrupted(self, fraction):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli.crowd.Progress, "__call__", interrupted)
+    out = tmp_path / "crowd.blend"
+    code, _, err = call(
+        cli,
+        capsys,
+        "crowd",
+        "--blend",
+        crossing,
+        "--pair",
+        "East",
+        "EastGoal",
+        "--frame-start",
+        "1",
+        "--save",
+        out,
+    )
+    assert code == 130 and "interrupted: nothing was saved" in err
+    assert not out.exists() and crossing.read_bytes() == before
+
+
 def test_crowd_with_no_worker_exits_2(cli, capsys, crossing):
     code, doc, err = call_json(
         cli, capsys, "crowd", "--blend", crossing, "--pair", "East", "EastGoal", "--workers", "0"
@@ -730,6 +760,31 @@ def test_crowd_with_an_unreachable_goal_exits_1_and_saves_nothing(cli, capsys, l
     assert [p["character"] for p in doc["planned"]] == ["Walker"]
     assert doc["failed"][0]["character"] == "North"
     assert "no path for 'North'" in doc["failed"][0]["error"]
+
+
+def test_crowd_save_anyway_keeps_what_was_planned_and_still_exits_1(cli, capsys, layout, tmp_path):
+    scene = open_blend(layout)
+    walker_from(scene.motion_patches.source_armature, "North", (1.0, -2.0, 0.0))
+    out = tmp_path / "crowd.blend"
+    code, doc, err = call_json(
+        cli,
+        capsys,
+        "crowd",
+        "--pair",
+        "Walker",
+        "Goal",
+        "--pair",
+        "North",
+        "CageGoal",
+        "--save",
+        out,
+        "--save-anyway",
+    )
+    assert code == 1 and doc["saved"] == str(out.resolve()) and out.exists(), err
+    assert [f["character"] for f in doc["failed"]] == ["North"]
+    open_blend(out)
+    walker = bpy.data.objects["Walker"]
+    assert walker.animation_data and walker.animation_data.nla_tracks, "the planned walk is kept"
 
 
 @pytest.mark.parametrize(
