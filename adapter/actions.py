@@ -360,8 +360,16 @@ class Tolerance:
         self.angle, self.length = float(angle), float(length)
 
 
-COMPACT = Tolerance()  # what every action of a plan is stored within (None: every frame)
-LINEAR_TOL = 1e-5  # the older linear keys' tolerance (metres, radians, components)
+# The root bone's keys are this much finer than the others': the whole body hangs from it,
+# and a planted foot (locked against the planned hips) moves with it, a leg's length away.
+ROOT_FINER = 8.0
+LINEAR_TOL = 1e-5  # linear keys' tolerance (metres, radians, quaternion components)
+CUBIC = Tolerance()  # cubic keys within 0.5 degrees and 1 mm (bench/bench_files.py)
+# What every action of a plan is stored within: a number for linear keys, a Tolerance for
+# cubic keys, None for a key on every frame. Still linear keys: cubic keys shrink a crowd's
+# file by a tenth (30 fps patch) to a third (120 fps), but a planted foot skates more when
+# the patch and scene rates differ (tests/blender/test_skeletons.py).
+COMPACT = LINEAR_TOL
 
 
 def _column_tolerances(curves, tol):
@@ -427,8 +435,9 @@ def key_curves(action, slot, frames, curves, tol=None, stored=None, values=None,
                 if whole and kept.size * key_plan.KEY_BYTES >= frames.size * key_plan.SAMPLE_BYTES:
                     how = "samples"
                 else:
-                    _key_cubic(fc, frames[kept], cubic["values"][kept, c],
-                               cubic["slopes"][kept, c] / step)
+                    _key_cubic(
+                        fc, frames[kept], cubic["values"][kept, c], cubic["slopes"][kept, c] / step
+                    )
                     out.append(fc)
                     continue
         if how == "samples" and not whole:
@@ -536,7 +545,10 @@ def key_pose(action, slot, skel, frames, root_location, rotations, modes=None, t
         columns.append(values.reshape(len(values), -1))  # bone by bone, channels in order
         k = values.shape[-1]
         if isinstance(tol, Tolerance):
-            groups.append(_rotations(mode, start + np.arange(len(joints) * k).reshape(-1, k), tol))
+            cols = start + np.arange(len(joints) * k).reshape(-1, k)
+            is_root = np.array(joints) == skel.root
+            groups.append(_rotations(mode, cols[~is_root], tol.angle))
+            groups.append(_rotations(mode, cols[is_root], tol.angle / ROOT_FINER))
         start += len(joints) * k
         for j in joints:
             name = skel.names[j]
@@ -544,13 +556,15 @@ def key_pose(action, slot, skel, frames, root_location, rotations, modes=None, t
                 (f'pose.bones["{name}"].{path}', i, name, None) for i in range(values.shape[-1])
             ]
     values = np.concatenate(columns, axis=1)
+    if isinstance(tol, Tolerance):  # the root's location: finer too (rotations judged apart)
+        tol = Tolerance(tol.angle, tol.length / ROOT_FINER)
     key_curves(action, slot, frames, curves, tol, values=values, rotations=groups)
 
 
-def _rotations(mode, columns, tol):
+def _rotations(mode, columns, angle):
     """The :class:`~motion_patches.kinematics.keys.Rotations` of a ``mode``'s channel columns
-    (B, 3 or 4), judged within ``tol.angle`` of the rotation they play."""
-    return key_plan.Rotations(columns, lambda v: channels_to_quat(v, mode), tol.angle)
+    (B, 3 or 4), judged within ``angle`` of the rotation they play."""
+    return key_plan.Rotations(columns, lambda v: channels_to_quat(v, mode), angle)
 
 
 def read_channels(action, slot, bone, mode, frames, cache=None):

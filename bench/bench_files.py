@@ -9,7 +9,7 @@ is planned three times from the same saved scene, its actions stored three ways:
   measured against: what the plan plays, as keyed);
 * ``linear``: linear keys within 1e-5, else one sample per frame (the storage before
   cubic keys);
-* ``cubic``: cubic keys within 0.5 degrees and 1 mm (``adapter.actions.COMPACT``).
+* ``cubic``: cubic keys within 0.5 degrees and 1 mm (``adapter.actions.CUBIC``).
 
 For each it prints KB per character-second, the largest rotation error of any bone against
 ``every`` on the evaluated rig (degrees: the bone's rotation relative to its parent, and
@@ -45,9 +45,7 @@ def set_storage(addon, how):
     if how.startswith("cubic "):
         act_io.COMPACT = act_io.Tolerance(np.radians(float(how.split()[1])))
         return
-    act_io.COMPACT = {"every": None, "linear": act_io.LINEAR_TOL, "cubic": act_io.Tolerance()}[
-        how
-    ]
+    act_io.COMPACT = {"every": None, "linear": act_io.LINEAR_TOL, "cubic": act_io.CUBIC}[how]
 
 
 def bake(bpy, api, mocap, patch_fps, path):
@@ -69,8 +67,6 @@ def plan_crowd(bpy, api, baked, scene_fps, n, storage, addon, out):
     scene = bpy.context.scene
     scene.render.fps, scene.render.fps_base = int(scene_fps), 1.0
     src = scene.motion_patches.source_armature
-    base = Path(out).with_suffix(".base.blend")
-    bpy.ops.wm.save_as_mainfile(filepath=str(base), copy=True)
     pairs = []
     for k in range(n):
         y = 1.2 * (k - (n - 1) / 2)
@@ -85,11 +81,14 @@ def plan_crowd(bpy, api, baked, scene_fps, n, storage, addon, out):
         goal.location = (4.5, y + (0.3 if k % 2 else -0.3), 0.0)
         goal.rotation_euler = (0.0, 0.0, np.pi / 2)
         pairs.append((ob, goal, {}))
+    base = Path(out).with_suffix(".base.blend")  # the characters there, not yet planned
+    bpy.ops.wm.save_as_mainfile(filepath=str(base), copy=True)
+    kept = addon.adapter.actions.COMPACT
     set_storage(addon, storage)
     try:
         res = api.plan_crowd(scene, pairs, frame_start=1, radius=0.25, max_wait_seconds=4.0)
     finally:
-        set_storage(addon, "cubic")
+        addon.adapter.actions.COMPACT = kept
     chars = [bpy.data.objects[p.character] for p in res.plans]
     seconds = sum(p.frame_end - p.frame_start for p in res.plans) / scene_fps
     bpy.ops.wm.save_as_mainfile(filepath=str(out), copy=True)

@@ -173,7 +173,10 @@ def hermite(x: ArrayLike, y: ArrayLike, m: ArrayLike, at: ArrayLike) -> np.ndarr
     m0, m1 = m[i] * h, m[i + 1] * h
     t2, t3 = t * t, t * t * t
     cubic = (
-        (2 * t3 - 3 * t2 + 1) * y0 + (t3 - 2 * t2 + t) * m0 + (-2 * t3 + 3 * t2) * y1 + (t3 - t2) * m1
+        (2 * t3 - 3 * t2 + 1) * y0
+        + (t3 - 2 * t2 + t) * m0
+        + (-2 * t3 + 3 * t2) * y1
+        + (t3 - t2) * m1
     )
     return np.where(np.isnan(m[i]), y0 + (y1 - y0) * t, cubic)
 
@@ -202,7 +205,10 @@ def _dense(v: np.ndarray, m: np.ndarray, keep: np.ndarray) -> np.ndarray:
     y0, y1 = v[lo, cols], v[hi, cols]
     m0, m1 = m[lo, cols] * h, m[hi, cols] * h
     return (
-        (2 * t3 - 3 * t2 + 1) * y0 + (t3 - 2 * t2 + t) * m0 + (-2 * t3 + 3 * t2) * y1 + (t3 - t2) * m1
+        (2 * t3 - 3 * t2 + 1) * y0
+        + (t3 - 2 * t2 + t) * m0
+        + (-2 * t3 + 3 * t2) * y1
+        + (t3 - t2) * m1
     )
 
 

@@ -139,7 +139,12 @@ def bezier_as_blender(x0, y0, x1, y1, m0, m1, at):
     py = np.array([y0, y0 + m0 * h / 3, y1 - m1 * h / 3, y1])
 
     def bez(p, t):
-        return (1 - t) ** 3 * p[0] + 3 * (1 - t) ** 2 * t * p[1] + 3 * (1 - t) * t**2 * p[2] + t**3 * p[3]
+        return (
+            (1 - t) ** 3 * p[0]
+            + 3 * (1 - t) ** 2 * t * p[1]
+            + 3 * (1 - t) * t**2 * p[2]
+            + t**3 * p[3]
+        )
 
     lo, hi = np.zeros_like(at), np.ones_like(at)
     for _ in range(60):
@@ -189,11 +194,14 @@ def test_cubic_keys_play_every_bone_within_the_angle(fps):
     fit = keys.cubic_keys(values, tol, (rot,))
     at = np.arange(0, n - 1 + 1e-9, 0.25)
     played = keys.play(values, fit, at)
-    planned = np.stack([np.interp(at, np.arange(n), values[:, c]) for c in range(values.shape[1])], 1)
+    planned = np.stack(
+        [np.interp(at, np.arange(n), values[:, c]) for c in range(values.shape[1])], 1
+    )
     # on frames: the plan itself
     whole = at == np.round(at)
     angle = keys._chord_angle(
-        quat.normalize(played[:, 3:].reshape(-1, j, 4)), quat.normalize(planned[:, 3:].reshape(-1, j, 4))
+        quat.normalize(played[:, 3:].reshape(-1, j, 4)),
+        quat.normalize(planned[:, 3:].reshape(-1, j, 4)),
     )
     assert angle[whole].max() <= keys.ANGLE * (1 + 1e-9)
     assert np.abs(played[whole, :3] - planned[whole, :3]).max() <= keys.LENGTH * (1 + 1e-9)
@@ -201,7 +209,10 @@ def test_cubic_keys_play_every_bone_within_the_angle(fps):
     assert angle.max() <= 2 * keys.ANGLE
     assert fit["constant"][3 + 5 * 4 : 3 + 6 * 4].all()  # the still bone: one key per curve
     assert fit["keep"].sum() < 0.5 * fit["keep"].size
-    assert keys.cubic_bytes(fit) == fit["keep"].sum() * keys.KEY_BYTES + values.shape[1] * keys.CURVE_BYTES
+    assert (
+        keys.cubic_bytes(fit)
+        == fit["keep"].sum() * keys.KEY_BYTES + values.shape[1] * keys.CURVE_BYTES
+    )
 
 
 def test_a_smooth_channel_needs_a_few_keys_a_second():
