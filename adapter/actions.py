@@ -569,7 +569,8 @@ def _rotations(mode, columns, angle):
 
 def read_channels(action, slot, bone, mode, frames, cache=None):
     """Values (F, 3 or 4) an action gives a bone's ``mode`` channel at (action) ``frames``,
-    as Blender plays its keys (linear, samples, or the cubic keys of :func:`key_curves`), the rest value where the channel is not keyed.
+    as Blender plays its keys (linear, samples, or the cubic keys of :func:`key_curves`),
+    the rest value where the channel is not keyed.
     Only that channel's curves are read. ``cache``: a dict kept by the caller, so each
     curve is read once."""
     return read_bones(action, slot, [bone], mode, frames, cache)[:, 0]
@@ -607,7 +608,8 @@ def read_bones(action, slot, bones, mode, frames, cache=None):
 
 
 def _channel_points(action, slot, bone, mode, size, cache=None):
-    """[(N, 3) keys (:func:`curve_keys`) or None] of the curves of a bone's ``mode`` channel in an action."""
+    """[(N, 3) keys (:func:`curve_keys`) or None] of the curves of a bone's ``mode``
+    channel in an action."""
     path = f'pose.bones["{bone}"].{rotation_path(mode)}'
     key = (action.name, slot.handle if slot is not None else None, path)
     points = cache.get(key) if cache is not None else None

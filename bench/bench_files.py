@@ -216,7 +216,10 @@ def main(argv=None):
             )
             print(json.dumps({case: results[case]}), flush=True)
     print(json.dumps(results, indent=1))
-    head = "| patch/scene fps | storage | KB per char-s | bone deg (local / world) | hips mm | skate cm/s | frame_set ms/armature |"
+    head = (
+        "| patch/scene fps | storage | KB per char-s | bone deg (local / world) | hips mm "
+        "| skate cm/s | frame_set ms/armature |"
+    )
     print(head)
     print("|" + "---|" * 7)
     for case, rows in results.items():

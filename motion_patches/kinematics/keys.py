@@ -142,7 +142,7 @@ def plan_columns(values: ArrayLike, tol: float) -> list[tuple[str, np.ndarray | 
 DEGREE = np.pi / 180.0
 ANGLE = 0.5 * DEGREE  # how far a bone's played rotation may be from the plan
 LENGTH = 1e-3  # how far a played location may be from the plan, metres
-CURVE_BYTES = 330  # an F-curve's own blocks in a .blend (struct, path, key array head)
+CURVE_BYTES = 330  # an F-curve's own blocks in a .blend (struct, path, key array head): estimated
 
 
 def slopes(values: ArrayLike) -> np.ndarray:
@@ -278,12 +278,14 @@ def cubic_keys(
 
     Checked on every frame and, with ``between``, every half frame (a strip scaled to
     another scene rate plays the keys between frames): against the values, and between
-    frames against the plan's own cubic there (:func:`_reference`). A unit (one column, or a bone's rotation
-    columns) starts with keys on its first and last frames; each interval that misses
-    anywhere gets a key on its worst frame, until none misses. Then a column whose unit
-    stays within tolerance when it is held at its mid-range is made constant (one key).
+    frames against the plan's own cubic there (:func:`_reference`). A unit (one column,
+    or a bone's rotation columns) starts with keys on its first and last frames; each
+    interval that misses anywhere gets a key on its worst frame, until none misses. Then
+    a column whose unit stays within tolerance when it is held at its mid-range is made
+    constant (one key).
 
-    Returns {"keep": (F, C) bool kept frames, "slopes": (F, C), "constant": (C,) bool,
+    Returns {"keep": (F, C) bool kept frames, "values" and "slopes" (F, C) the keys take
+    on each frame, "constant": (C,) bool,
     "value": (C,) the constant's value}."""
     v = np.asarray(values, float)
     n, c = v.shape

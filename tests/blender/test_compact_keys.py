@@ -9,7 +9,6 @@ import sys
 from pathlib import Path
 
 import bpy
-import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
