@@ -346,28 +346,63 @@ def _continuous_axis_angle(q, first):
     return values
 
 
-LINEAR = 1  # Keyframe.interpolation enum value of 'LINEAR' (4.5 and 5.0)
-COMPACT = 1e-5  # tolerance of compact keys (metres, radians, quaternion components)
+LINEAR = 1  # Keyframe.interpolation enum value of 'LINEAR' (4.5 to 5.2)
+BEZIER = 2  # ... of 'BEZIER'
+FREE = 0  # Keyframe.handle_left_type / handle_right_type enum value of 'FREE'
 
 
-def key_curves(action, slot, frames, curves, tol=None, stored=None, values=None):
+class Tolerance:
+    """How far a compactly stored action may play from the plan: ``angle`` (radians) for
+    a bone's rotation, ``length`` (metres) for a location (cubic keys,
+    :func:`motion_patches.kinematics.keys.cubic_keys`)."""
+
+    def __init__(self, angle=key_plan.ANGLE, length=key_plan.LENGTH):
+        self.angle, self.length = float(angle), float(length)
+
+
+# The root bone's keys are this much finer than the others': the whole body hangs from it,
+# and a planted foot (locked against the planned hips) moves with it, a leg's length away.
+ROOT_FINER = 8.0
+LINEAR_TOL = 1e-5  # linear keys' tolerance (metres, radians, quaternion components)
+CUBIC = Tolerance()  # cubic keys within 0.5 degrees and 1 mm (bench/bench_files.py)
+# What every action of a plan is stored within: a number for linear keys, a Tolerance for
+# cubic keys, None for a key on every frame. Still linear keys: cubic keys shrink a crowd's
+# file by a tenth (30 fps patch) to a third (120 fps), but a planted foot skates more when
+# the patch and scene rates differ (tests/blender/test_skeletons.py).
+COMPACT = LINEAR_TOL
+
+
+def _column_tolerances(curves, tol):
+    """Per-curve tolerance: ``tol.length`` for locations, half ``tol.angle`` for any other
+    channel (a quaternion component off by e turns by about 2 e; an angle by e)."""
+    return np.array(
+        [tol.length if path.endswith("location") else 0.5 * tol.angle for path, *_ in curves]
+    )
+
+
+def key_curves(action, slot, frames, curves, tol=None, stored=None, values=None, rotations=()):
     """Create the F-curves ``curves`` = [(data_path, index, group, values (F,))], all keyed
     at ``frames``, each in one bulk write (``keyframe_points.add`` + ``foreach_set`` of
     float32 arrays, the type Blender stores, so nothing is converted value by value).
 
-    With ``tol`` each curve is stored compactly (:mod:`motion_patches.kinematics.keys`, the
-    choices of
-    all curves made in one vectorised pass): one key when constant, linear keys on the
-    frames that need them, or, when those would cost more, one sample per frame
-    (``convert_to_samples``: 16 bytes a frame in the .blend instead of a keyframe's 72; it
-    plays the same values, linear between frames). ``stored``: those choices made already
-    (:func:`motion_patches.kinematics.keys.plan_columns`). Curves to be sampled get no interpolation
-    or handles: sampling reads a key's own value on its frame, and the keys are dropped.
+    ``tol`` a :class:`Tolerance`: cubic keys (:func:`motion_patches.kinematics.keys.cubic_keys`,
+    all curves in one vectorised pass; ``rotations``: the
+    :class:`~motion_patches.kinematics.keys.Rotations` among the curves, judged by the angle
+    they play): Bezier keys whose handles sit a third of the way to the next key, so Blender
+    plays the Hermite cubic the fit checked, a few keys a second; a constant curve is one
+    key; a curve whose keys would cost more than one sample per frame is sampled
+    (``convert_to_samples``, 16 bytes a frame). ``tol`` a number: the older linear keys
+    within it (:func:`motion_patches.kinematics.keys.plan_columns`; ``stored``: those
+    choices made already). None: a linear key on every frame.
     ``values``: the curves' values as one (F, C) array already (their ``curves`` entries
     are then not read)."""
     frames = np.asarray(frames, float)
     if values is None and curves:
         values = np.column_stack([np.asarray(c[3], float) for c in curves])
+    cubic = None
+    if isinstance(tol, Tolerance) and curves:
+        cubic = key_plan.cubic_keys(values, _column_tolerances(curves, tol), rotations)
+        stored = [("cubic", None)] * len(curves)
     if stored is None:
         stored = (
             key_plan.plan_columns(values, tol)
@@ -376,6 +411,7 @@ def key_curves(action, slot, frames, curves, tol=None, stored=None, values=None)
         )
     # samples sit on whole frames, one apart
     whole = bool(frames.size) and np.all(np.diff(frames) == 1.0) and frames[0] == int(frames[0])
+    step = float(frames[1] - frames[0]) if frames.size > 1 else 1.0
     # every curve's (frame, value) pairs, float32, built at once; a curve takes its row
     rows = np.empty((len(curves), 2 * frames.size), np.float32)
     rows[:, 0::2] = frames
@@ -391,13 +427,26 @@ def key_curves(action, slot, frames, curves, tol=None, stored=None, values=None)
             if grp is None:
                 grp = groups[group] = bag.groups.get(group) or bag.groups.new(group)
             fc.group = grp
+        if how == "cubic":
+            if cubic["constant"][c]:
+                how, co = "constant", np.array([frames[0], cubic["value"][c]], np.float32)
+            else:
+                kept = np.flatnonzero(cubic["keep"][:, c])
+                if whole and kept.size * key_plan.KEY_BYTES >= frames.size * key_plan.SAMPLE_BYTES:
+                    how = "samples"
+                else:
+                    _key_cubic(
+                        fc, frames[kept], cubic["values"][kept, c], cubic["slopes"][kept, c] / step
+                    )
+                    out.append(fc)
+                    continue
         if how == "samples" and not whole:
             how = "all"
         if how == "constant":
-            co = rows[c, :2]
+            co = rows[c, :2] if cubic is None else co
         elif how == "keys":
             co = rows[c].reshape(-1, 2)[kept].ravel()
-        else:
+        elif how != "constant":
             co = rows[c]
         n = co.size // 2
         fc.keyframe_points.add(n)
@@ -409,6 +458,58 @@ def key_curves(action, slot, frames, curves, tol=None, stored=None, values=None)
             fc.update()
         out.append(fc)
     return out
+
+
+def _key_cubic(fc, x, y, m):
+    """Bezier keys on frames ``x`` with values ``y`` and slopes ``m`` (per frame): free
+    handles a third of the way to the neighbouring keys, so that Blender plays the Hermite
+    cubic between keys (:func:`motion_patches.kinematics.keys.hermite`)."""
+    n = x.size
+    gap = np.diff(x)
+    before = np.concatenate((gap[:1], gap)) / 3.0 if n > 1 else np.ones(1)
+    after = np.concatenate((gap, gap[-1:])) / 3.0 if n > 1 else np.ones(1)
+    kp = fc.keyframe_points
+    kp.add(n)
+    kp.foreach_set("co", np.column_stack((x, y)).astype(np.float32).ravel())
+    kp.foreach_set("interpolation", np.full(n, BEZIER, np.int32))
+    kp.foreach_set("handle_left_type", np.full(n, FREE, np.int32))
+    kp.foreach_set("handle_right_type", np.full(n, FREE, np.int32))
+    left = np.column_stack((x - before, y - m * before))
+    right = np.column_stack((x + after, y + m * after))
+    kp.foreach_set("handle_left", left.astype(np.float32).ravel())
+    kp.foreach_set("handle_right", right.astype(np.float32).ravel())
+    fc.update()
+
+
+def curve_keys(fc):
+    """(N, 3) frames, values and slopes (per frame; NaN where the segment a key starts is
+    not Bezier) of an F-curve's keys, or its samples (linear) when it was converted to
+    samples: what :func:`motion_patches.kinematics.keys.hermite` plays as Blender does for
+    keys written by :func:`key_curves`."""
+    kp = fc.keyframe_points
+    if not len(kp):
+        co = np.empty(2 * len(fc.sampled_points), np.float32)
+        fc.sampled_points.foreach_get("co", co)
+        co = co.reshape(-1, 2).astype(float)
+        return np.column_stack((co, np.full(len(co), np.nan)))
+    n = len(kp)
+    co, hl, hr = (np.empty(2 * n, np.float32) for _ in range(3))
+    kp.foreach_get("co", co)
+    kp.foreach_get("handle_left", hl)
+    kp.foreach_get("handle_right", hr)
+    ipo = np.empty(n, np.int32)
+    kp.foreach_get("interpolation", ipo)
+    co, hl, hr = (a.reshape(-1, 2).astype(float) for a in (co, hl, hr))
+    dx = hr[:, 0] - co[:, 0]
+    slope = np.where(dx > 0, (hr[:, 1] - co[:, 1]) / np.where(dx > 0, dx, 1.0), 0.0)
+    # the slope a segment ends with is the end key's left handle's
+    dxl = co[:, 0] - hl[:, 0]
+    slope_in = np.where(dxl > 0, (co[:, 1] - hl[:, 1]) / np.where(dxl > 0, dxl, 1.0), slope)
+    bez = ipo == BEZIER
+    # cubic keys written here have one slope each side; keep the right one where a
+    # segment starts, the left where the last one ends
+    slope[-1] = slope_in[-1]
+    return np.column_stack((co, np.where(bez, slope, np.nan)))
 
 
 def curve_points(fc):
@@ -433,6 +534,7 @@ def key_pose(action, slot, skel, frames, root_location, rotations, modes=None, t
     by_mode = {}
     for j, name in enumerate(skel.names):
         by_mode.setdefault(modes.get(name, "QUATERNION"), []).append(j)
+    groups, start = [], 3
     for mode, joints in by_mode.items():
         path = rotation_path(mode)
         values = (
@@ -441,17 +543,34 @@ def key_pose(action, slot, skel, frames, root_location, rotations, modes=None, t
             else rotation_channels(rotations[:, joints], mode)
         )
         columns.append(values.reshape(len(values), -1))  # bone by bone, channels in order
+        k = values.shape[-1]
+        if isinstance(tol, Tolerance):
+            cols = start + np.arange(len(joints) * k).reshape(-1, k)
+            is_root = np.array(joints) == skel.root
+            groups.append(_rotations(mode, cols[~is_root], tol.angle))
+            groups.append(_rotations(mode, cols[is_root], tol.angle / ROOT_FINER))
+        start += len(joints) * k
         for j in joints:
             name = skel.names[j]
             curves += [
                 (f'pose.bones["{name}"].{path}', i, name, None) for i in range(values.shape[-1])
             ]
-    key_curves(action, slot, frames, curves, tol, values=np.concatenate(columns, axis=1))
+    values = np.concatenate(columns, axis=1)
+    if isinstance(tol, Tolerance):  # the root's location: finer too (rotations judged apart)
+        tol = Tolerance(tol.angle, tol.length / ROOT_FINER)
+    key_curves(action, slot, frames, curves, tol, values=values, rotations=groups)
+
+
+def _rotations(mode, columns, angle):
+    """The :class:`~motion_patches.kinematics.keys.Rotations` of a ``mode``'s channel columns
+    (B, 3 or 4), judged within ``angle`` of the rotation they play."""
+    return key_plan.Rotations(columns, lambda v: channels_to_quat(v, mode), angle)
 
 
 def read_channels(action, slot, bone, mode, frames, cache=None):
     """Values (F, 3 or 4) an action gives a bone's ``mode`` channel at (action) ``frames``,
-    linear between keys (or samples), the rest value where the channel is not keyed.
+    as Blender plays its keys (linear, samples, or the cubic keys of :func:`key_curves`),
+    the rest value where the channel is not keyed.
     Only that channel's curves are read. ``cache``: a dict kept by the caller, so each
     curve is read once."""
     return read_bones(action, slot, [bone], mode, frames, cache)[:, 0]
@@ -484,12 +603,13 @@ def read_bones(action, slot, bones, mode, frames, cache=None):
             out[:, ks, cs] = values[:, pick].T
             continue
         for k, i, co in curves:
-            out[:, k, i] = np.interp(frames, co[:, 0], co[:, 1])
+            out[:, k, i] = key_plan.hermite(co[:, 0], co[:, 1], co[:, 2], frames)
     return out
 
 
 def _channel_points(action, slot, bone, mode, size, cache=None):
-    """[(N, 2) points or None] of the curves of a bone's ``mode`` channel in an action."""
+    """[(N, 3) keys (:func:`curve_keys`) or None] of the curves of a bone's ``mode``
+    channel in an action."""
     path = f'pose.bones["{bone}"].{rotation_path(mode)}'
     key = (action.name, slot.handle if slot is not None else None, path)
     points = cache.get(key) if cache is not None else None
@@ -497,7 +617,7 @@ def _channel_points(action, slot, bone, mode, size, cache=None):
         slot = slot or compat.action_slot(action)
         bag = compat.channelbag(action, slot) if slot is not None else None
         found = [bag.fcurves.find(path, index=i) if bag else None for i in range(size)]
-        points = [None if fc is None else curve_points(fc) for fc in found]
+        points = [None if fc is None else curve_keys(fc) for fc in found]
         if cache is not None:
             cache[key] = points
     return points

@@ -293,7 +293,7 @@ def write_plan(
     else:
         rot_path, rot_values = "rotation_euler", (zero, zero, heading)
     curves += [(rot_path, i, "Object Transforms", v) for i, v in enumerate(rot_values)]
-    act_io.key_curves(root_action, root_slot, frames, curves, act_io.COMPACT)
+    act_io.key_curves(root_action, root_slot, frames, curves, _finer(act_io.COMPACT))
     root_track = ad.nla_tracks.new()
     root_track.name = TRACK_ROOT
     rs = root_track.strips.new(f"{obj.name} root", first, root_action)
@@ -306,6 +306,15 @@ def write_plan(
         owned.append(TRACK_FOOT)
     obj[TRACKS_KEY] = json.dumps(owned)
     return strips, stashed
+
+
+def _finer(tol):
+    """A quarter of ``tol``'s angle for the root and foot-lock curves: each of their
+    channels is judged alone (a quaternion turns by up to four component errors), the
+    heading turns the whole body and the foot lock holds a planted foot; few curves."""
+    if isinstance(tol, act_io.Tolerance):
+        return act_io.Tolerance(tol.angle / 4.0, tol.length)
+    return tol
 
 
 def _played_frames(played, n_frames):
@@ -388,7 +397,7 @@ def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=(
             for c in range(delta.shape[-1])
         ]
     values = np.concatenate(columns, axis=1) if columns else None
-    act_io.key_curves(action, slot, frames, curves, act_io.COMPACT, values=values)
+    act_io.key_curves(action, slot, frames, curves, _finer(act_io.COMPACT), values=values)
     track = obj.animation_data.nla_tracks.new()
     track.name = TRACK_FOOT
     strip = track.strips.new(f"{obj.name} foot lock", int(frame_start), action)

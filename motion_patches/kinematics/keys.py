@@ -127,3 +127,248 @@ def plan_columns(values: ArrayLike, tol: float) -> list[tuple[str, np.ndarray | 
         for c, k, as_keys in zip(cols, keep.T, keyed):
             out[c] = ("keys", np.flatnonzero(k)) if as_keys else ("samples", None)
     return out
+
+
+# --- Cubic keys --------------------------------------------------------------------------
+#
+# A Bezier key whose handles sit a third of the way to its neighbouring keys (in frames)
+# makes Blender's curve between two keys a cubic in the frame itself (the Bezier's x is then
+# linear in its parameter): the Hermite cubic through the two keys' values with the slopes
+# their handles give. So the curve Blender plays is known exactly here, and keys are kept
+# only where that cubic strays from the planned values by more than a tolerance given in
+# what shows (degrees of a bone's rotation, millimetres of the hips). A walk needs a few
+# such keys a second per channel where linear keys need one on most frames.
+
+DEGREE = np.pi / 180.0
+ANGLE = 0.5 * DEGREE  # how far a bone's played rotation may be from the plan
+LENGTH = 1e-3  # how far a played location may be from the plan, metres
+CURVE_BYTES = 330  # an F-curve's own blocks in a .blend (struct, path, key array head): estimated
+
+
+def slopes(values: ArrayLike) -> np.ndarray:
+    """(F, C) per-frame slopes of ``values`` (F, C): central differences, one-sided at the
+    ends. The slope each cubic key takes on its frame."""
+    v = np.asarray(values, float)
+    out = np.zeros_like(v)
+    if len(v) > 1:
+        out[1:-1] = 0.5 * (v[2:] - v[:-2])
+        out[0] = v[1] - v[0]
+        out[-1] = v[-1] - v[-2]
+    return out
+
+
+def hermite(x: ArrayLike, y: ArrayLike, m: ArrayLike, at: ArrayLike) -> np.ndarray:
+    """Values at frames ``at`` of the curve Blender plays through keys on frames ``x`` (K,)
+    with values ``y`` (K,) and slopes ``m`` (K,) per frame (handles at a third of each
+    interval): the Hermite cubic between keys, the end keys' values outside. A NaN slope
+    marks a linear key (the segment it starts is a line)."""
+    x, y, m = (np.asarray(a, float) for a in (x, y, m))
+    at = np.asarray(at, float)
+    if x.size == 1:
+        return np.full(at.shape, y[0])
+    i = np.clip(np.searchsorted(x, at, side="right") - 1, 0, x.size - 2)
+    h = x[i + 1] - x[i]
+    t = np.clip((at - x[i]) / h, 0.0, 1.0)
+    y0, y1 = y[i], y[i + 1]
+    m0, m1 = m[i] * h, m[i + 1] * h
+    t2, t3 = t * t, t * t * t
+    cubic = (
+        (2 * t3 - 3 * t2 + 1) * y0
+        + (t3 - 2 * t2 + t) * m0
+        + (-2 * t3 + 3 * t2) * y1
+        + (t3 - t2) * m1
+    )
+    return np.where(np.isnan(m[i]), y0 + (y1 - y0) * t, cubic)
+
+
+def _around(keep: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(2F - 1, C) the key at or before, and the key after, each frame and half frame
+    (the last key for points on or past it), of the kept frames ``keep`` (F, C)."""
+    n = len(keep)
+    idx = np.arange(n)[:, None]
+    prev = np.maximum.accumulate(np.where(keep, idx, 0), axis=0)
+    nxt = np.minimum.accumulate(np.where(keep, idx, n - 1)[::-1], axis=0)[::-1]
+    f = np.arange(2 * n - 1) // 2  # the frame at or before each point
+    return prev[f], nxt[np.minimum(f + 1, n - 1)]
+
+
+def _dense(v: np.ndarray, m: np.ndarray, keep: np.ndarray) -> np.ndarray:
+    """(2F - 1, C) what the cubic keys ``keep`` (F, C) of ``v`` with slopes ``m`` play on
+    every frame and half frame, all columns at once."""
+    n = len(v)
+    lo, hi = _around(keep)
+    at = np.arange(2 * n - 1)[:, None] / 2.0
+    h = np.maximum(hi - lo, 1)
+    t = np.clip((at - lo) / h, 0.0, 1.0)
+    t2, t3 = t * t, t * t * t
+    cols = np.arange(v.shape[1])
+    y0, y1 = v[lo, cols], v[hi, cols]
+    m0, m1 = m[lo, cols] * h, m[hi, cols] * h
+    return (
+        (2 * t3 - 3 * t2 + 1) * y0
+        + (t3 - 2 * t2 + t) * m0
+        + (-2 * t3 + 3 * t2) * y1
+        + (t3 - t2) * m1
+    )
+
+
+def _reference(v: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """(2F - 1, C) the plan on every frame and half frame: the values, and between frames
+    the cubic through the two frames with the slopes ``m`` (the motion's own smooth
+    course, not the line between frames, which cuts every bend by its curvature)."""
+    out = np.empty((2 * len(v) - 1,) + v.shape[1:])
+    out[0::2] = v
+    out[1::2] = 0.5 * (v[:-1] + v[1:]) + 0.125 * (m[:-1] - m[1:])
+    return out
+
+
+def _chord_angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Rotation angle between unit quaternions ``a`` and ``b`` (..., 4), either sign."""
+    d = np.minimum(np.linalg.norm(a - b, axis=-1), np.linalg.norm(a + b, axis=-1))
+    return 4.0 * np.arcsin(np.minimum(d * 0.5, 1.0))
+
+
+class Rotations:
+    """Columns that are one rotation channel per bone: ``columns`` (B, k) indices of the
+    (F, C) values, ``to_quat`` maps (..., k) channel values to unit quaternions (..., 4)
+    as Blender plays them (a quaternion is normalised, Euler and axis-angle converted).
+    Their error is the angle between the rotations played and planned, within ``angle``."""
+
+    def __init__(self, columns: ArrayLike, to_quat: Any, angle: float = ANGLE):
+        self.columns = np.asarray(columns, int).reshape(-1, np.shape(columns)[-1])
+        self.to_quat = to_quat
+        self.angle = float(angle)
+
+
+def _unit_errors(played, ref, tol, rotations, units, n_units):
+    """(P, U) error of each unit over its tolerance (1: just within) at every point."""
+    err = np.zeros((played.shape[0], n_units))
+    scalar = units < 0
+    if np.any(scalar):
+        err_c = np.abs(played - ref) / tol
+        np.maximum.at(err.T, -units[scalar] - 1, err_c[:, scalar].T)
+    for r in rotations:
+        cols = r.columns
+        a = _chord_angle(r.to_quat(played[:, cols]), r.to_quat(ref[:, cols])) / r.angle
+        err[:, units[cols[:, 0]]] = a
+    return err
+
+
+def _units_of(n_cols, tol, rotations):
+    """Unit index per column: a rotation's k columns share one unit (their keys); every
+    other column is its own. Returned as (units (C,), n): rotation columns hold their
+    unit's index, a lone column ``-(its unit) - 1``."""
+    units = np.full(n_cols, -1)
+    n = 0
+    for r in rotations:
+        for cols in r.columns:
+            units[cols] = n
+            n += 1
+    lone = np.flatnonzero(units == -1)
+    units[lone] = -(n + np.arange(lone.size)) - 1
+    return units, n + lone.size
+
+
+def cubic_keys(
+    values: ArrayLike, tol: ArrayLike, rotations: tuple = (), between: bool = True
+) -> dict:
+    """Cubic keys of every column of ``values`` (F, C) within tolerance: ``tol`` (C,) per
+    column (or one for all) in the column's units, except the columns of ``rotations``
+    (:class:`Rotations`), judged together as the rotation they play, within an angle.
+
+    Checked on every frame and, with ``between``, every half frame (a strip scaled to
+    another scene rate plays the keys between frames): against the values, and between
+    frames against the plan's own cubic there (:func:`_reference`). A unit (one column,
+    or a bone's rotation columns) starts with keys on its first and last frames; each
+    interval that misses anywhere gets a key on its worst frame, until none misses. Then
+    a column whose unit stays within tolerance when it is held at its mid-range is made
+    constant (one key).
+
+    Returns {"keep": (F, C) bool kept frames, "values" and "slopes" (F, C) the keys take
+    on each frame, "constant": (C,) bool,
+    "value": (C,) the constant's value}."""
+    v = np.asarray(values, float)
+    n, c = v.shape
+    tol = np.broadcast_to(np.asarray(tol, float), (c,)).copy()
+    units, n_units = _units_of(c, tol, rotations)
+    col_unit = np.where(units < 0, -units - 1, units)
+    m = slopes(v)
+    v_key = v
+    ref = _reference(v, m)
+    keep_u = np.zeros((n, n_units), bool)
+    keep_u[[0, -1]] = True
+    while n > 2:
+        played = _dense(v_key, m, keep_u[:, col_unit])
+        err = _unit_errors(played, ref, tol, rotations, units, n_units)  # (2F - 1, U)
+        if not between:
+            err[1::2] = 0.0
+        lo, hi = _around(keep_u)
+        # between two keys a frame apart no key can be added: what is played there stays
+        err[hi - lo <= 1] = 0.0
+        # the worst point of each interval between keys, per unit
+        seg = lo + np.arange(n_units) * n  # interval of each point, named by its first key
+        flat_err, flat_seg = err.T.ravel(), seg.T.ravel()
+        worst = np.zeros(n_units * n)
+        np.maximum.at(worst, flat_seg, flat_err)
+        hit = (flat_err > 1.0) & (flat_err == worst[flat_seg])
+        if not hit.any():
+            break
+        _, first = np.unique(flat_seg[hit], return_index=True)
+        unit, point = np.divmod(np.flatnonzero(hit)[first], 2 * n - 1)
+        # a frame, or the half frame's neighbour that is no key yet
+        frame = (point + 1) // 2
+        frame = np.where(keep_u[frame, unit], point // 2, frame)
+        keep_u[frame, unit] = True
+    keep = keep_u[:, col_unit]
+    constant = np.zeros(c, bool)
+    value = 0.5 * (v.max(axis=0) + v.min(axis=0)) if n else np.zeros(c)
+    # columns held at their mid-range, one position of every rotation unit at a time
+    order = [[j] for j in np.flatnonzero(units < 0)]
+    width = max((r.columns.shape[1] for r in rotations), default=0)
+    order += [[r.columns[:, k] for r in rotations if k < r.columns.shape[1]] for k in range(width)]
+    played = _dense(v_key, m, keep) if n else v
+    # points between keys a frame apart keep what those keys play (see above)
+    lo, hi = _around(keep_u) if n else (None, None)
+    excused = hi - lo <= 1 if n else None
+    if n:
+        excused[0::2] = False  # frames themselves are never excused
+    for group in order:
+        cols = np.concatenate([np.ravel(g) for g in group]) if group else np.zeros(0, int)
+        if not cols.size or not n:
+            continue
+        trial = played.copy()
+        trial[:, cols] = value[cols]
+        err = _unit_errors(trial, ref, tol, rotations, units, n_units)
+        err[excused] = 0.0
+        ok = err.max(axis=0) <= 1.0
+        take = cols[ok[col_unit[cols]]]
+        played[:, take] = value[take]
+        constant[take] = True
+    keep[:, constant] = False
+    keep[0, constant] = True
+    return {
+        "keep": keep,
+        "values": v_key,
+        "slopes": m,
+        "constant": constant,
+        "value": value,
+    }
+
+
+def play(values: ArrayLike, fit: dict, at: ArrayLike) -> np.ndarray:
+    """(len(at), C) what the cubic keys ``fit`` (:func:`cubic_keys`) of ``values`` play at
+    frames ``at``, column by column as Blender evaluates them."""
+    v = np.asarray(values, float)
+    out = np.empty((np.size(at), v.shape[1]))
+    for j in range(v.shape[1]):
+        if fit["constant"][j]:
+            out[:, j] = fit["value"][j]
+            continue
+        k = np.flatnonzero(fit["keep"][:, j])
+        out[:, j] = hermite(k, fit["values"][k, j], fit["slopes"][k, j], at)
+    return out
+
+
+def cubic_bytes(fit: dict) -> int:
+    """Bytes the cubic keys ``fit`` add to a .blend: a key each, and each curve's own."""
+    return int(fit["keep"].sum()) * KEY_BYTES + fit["keep"].shape[1] * CURVE_BYTES

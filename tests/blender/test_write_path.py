@@ -81,15 +81,15 @@ def test_curves_keyed_in_bulk_play_their_values(addon_module, clean_scene):
         ("location", 2): np.cumsum(rng.normal(size=t.size)) * 1e-2,  # noise: samples
     }
     curves = [(p, i, "Bone", v) for (p, i), v in values.items()]
-    plans = keys.plan_columns(np.column_stack(list(values.values())), act_io.COMPACT)
+    plans = keys.plan_columns(np.column_stack(list(values.values())), act_io.LINEAR_TOL)
     assert [h for h, _ in plans] == ["constant", "keys", "samples"]
     for frames in (t, t * 0.5 + 0.25):  # the second: not whole frames, every value keyed
         action, slot = compat.new_action("bulk")
-        fcs = act_io.key_curves(action, slot, frames, curves, act_io.COMPACT)
+        fcs = act_io.key_curves(action, slot, frames, curves, act_io.LINEAR_TOL)
         for fc, (p, i, _, v) in zip(fcs, curves):
             assert (fc.data_path, fc.array_index, fc.group.name) == (p, i, "Bone")
             played = np.array([fc.evaluate(f) for f in frames])
-            assert np.allclose(played, v, atol=act_io.COMPACT + 1e-6)
+            assert np.allclose(played, v, atol=act_io.LINEAR_TOL + 1e-6)
         sampled = [len(fc.keyframe_points) == 0 for fc in fcs]
         assert sampled == ([False, False, True] if frames is t else [False] * 3)
         if frames is t:
