@@ -86,9 +86,7 @@ def main(argv):
     except api.MotionPatchesError as exc:
         return _fail(BAD_INPUT, str(exc), args.json, args.command)
     except KeyboardInterrupt:  # Ctrl-C: the API puts back what it had begun to write
-        return _fail(
-            INTERRUPTED, "interrupted: nothing was saved", args.json, args.command
-        )
+        return _fail(INTERRUPTED, "interrupted: nothing was saved", args.json, args.command)
     except Exception:
         traceback.print_exc()
         return _fail(

@@ -328,9 +328,10 @@ def cubic_keys(
     order += [[r.columns[:, k] for r in rotations if k < r.columns.shape[1]] for k in range(width)]
     played = _dense(v_key, m, keep) if n else v
     # points between keys a frame apart keep what those keys play (see above)
-    lo, hi = _around(keep_u) if n else (None, None)
-    excused = hi - lo <= 1 if n else None
+    excused = np.zeros(0, bool)
     if n:
+        lo, hi = _around(keep_u)
+        excused = hi - lo <= 1
         excused[0::2] = False  # frames themselves are never excused
     for group in order:
         cols = np.concatenate([np.ravel(g) for g in group]) if group else np.zeros(0, int)
