@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..kinematics import retime
+from . import path_timing
 
 
 def disc(centre, radius, sides=12):
@@ -94,6 +95,9 @@ class Reservations:
         self.xy = np.empty((0, 2), float)
         self.spot_keys = np.empty(0, np.int64)  # standing spots: sorted cell keys
         self.spots = np.empty((0, 5), float)  # x, y, first frame, end frame (inf), owner
+        self.by_cell = np.empty(0, np.int64)  # moving again, sorted by cell alone
+        self.cell_frame = np.empty(0, np.int64)
+        self.cell_xy = np.empty((0, 2), float)
         self.placed = {}  # index -> (delay, track)
         self.horizon = 0
 
@@ -135,6 +139,43 @@ class Reservations:
         return np.unique(
             np.concatenate([np.arange(a, b) for a, b in zip(lo, hi) if b > a] or [np.empty(0, int)])
         )
+
+    def busy(self, track, frames, margin=0.01):
+        """(len(track), frames) bool: ``track[k]`` closer than the spacing (and ``margin``)
+        to a reserved root on frame ``t`` (walking then, or standing at its start or goal
+        then), for every frame from 0; the last column stands for every frame after it.
+        Found from the cells about the track over all frames at once (the entries sorted by
+        cell), so its cost follows the traffic near the track, not the frames searched."""
+        track = np.asarray(track, float)
+        n, s2 = len(track), (self.spacing + margin) ** 2
+        out = np.zeros((n, frames + 2), np.int32)
+        if self.by_cell.size:
+            c = self._cells(track)[:, None, :] + self._RING[None]
+            q = (c[..., 0] << 21 | c[..., 1]).ravel()
+            lo = np.searchsorted(self.by_cell, q, "left")
+            hi = np.searchsorted(self.by_cell, q, "right")
+            cnt = hi - lo
+            hit = np.nonzero(cnt)[0]
+            if hit.size:
+                cnt = cnt[hit]
+                ent = np.repeat(lo[hit] - np.cumsum(cnt) + cnt, cnt) + np.arange(cnt.sum())
+                rows = np.repeat(hit // len(self._RING), cnt)
+                d = self.cell_xy[ent] - track[rows]
+                close = np.einsum("ij,ij->i", d, d) < s2
+                t = np.minimum(self.cell_frame[ent[close]], frames)
+                np.add.at(out, (rows[close], t), 1)
+                np.add.at(out, (rows[close], t + 1), -1)
+        near = self._spots_near(track)
+        if near.size:  # standing: a span of frames each
+            sp = self.spots[near]
+            d = track[:, None, :] - sp[None, :, :2]
+            k, j = np.nonzero(np.einsum("kjx,kjx->kj", d, d) < s2)
+            lo = np.minimum(sp[j, 2], frames).astype(int)
+            hi = np.minimum(sp[j, 3], frames + 1).astype(int)
+            keep = lo < hi
+            np.add.at(out, (k[keep], lo[keep]), 1)
+            np.add.at(out, (k[keep], hi[keep]), -1)
+        return (np.cumsum(out, axis=1) > 0)[:, : frames + 1]
 
     def check(self, track, delay=0):
         """Conflicts of a character walking ``track`` (frames, 2) from frame ``delay`` on,
@@ -198,6 +239,13 @@ class Reservations:
         self.keys = np.insert(self.keys, at, keys)
         self.owner = np.insert(self.owner, at, np.int32(index))
         self.xy = np.insert(self.xy, at, track, axis=0)
+        c = self._cells(track)
+        ckeys = c[:, 0] << 21 | c[:, 1]
+        order = np.argsort(ckeys, kind="stable")
+        at = np.searchsorted(self.by_cell, ckeys[order])
+        self.by_cell = np.insert(self.by_cell, at, ckeys[order])
+        self.cell_frame = np.insert(self.cell_frame, at, t[order])
+        self.cell_xy = np.insert(self.cell_xy, at, track[order], axis=0)
         spots = np.array([[*track[0], 0, d, index], [*track[-1], d + n, np.inf, index]], float)
         spots = spots[spots[:, 2] < spots[:, 3]]
         c = self._cells(spots[:, :2])
@@ -343,6 +391,31 @@ def _improve(table, s, found, max_delay, max_hold, step, ramp):
     return best[2], best[3]
 
 
+def _timed(table, s, max_delay, max_hold, ramp, found):
+    """``s`` re-timed to its earliest arrival clear of everyone reserved
+    (:func:`path_timing.earliest`: a wait at its start and idle holds on the way), with the
+    conflicts left (none); ``s`` and ``found`` unchanged when no timing within the longest
+    wait and holds clears it. One hold alone is tried first (a walk that stops where it
+    must rather than one that starts late, as :func:`_improve` prefers), then a wait and
+    one hold, then a wait and up to four holds."""
+    timing = None
+    tries = ((0, 1), (max_delay, 1), (max_delay, 4)) if s.holdable is not None else ((max_delay, 0),)
+    busy = table.busy(s.track, max(table.horizon, len(s.track)) + max_delay + max_hold + 1)
+    for wait, holds in tries:
+        timing = path_timing.earliest(s.track, busy, s.holdable, ramp, wait, wait + max_hold, holds)
+        if timing is not None:
+            break
+    if timing is None:
+        return s, found
+    delay, holds = timing
+    track, mask = s.track, s.holdable
+    for k, h in holds:
+        track, mask = held_track(track, k, h, ramp, mask)
+    timed = Schedule(delay, s.holds + holds, s.version, track, mask)
+    left = table.check(track, delay)
+    return (timed, left) if _too_close(left) < _too_close(found) else (s, found)
+
+
 def _resolve_once(
     order,
     tracks,
@@ -369,6 +442,8 @@ def _resolve_once(
         best, reserved = None, []
         for attempt in range(rounds + 1):
             found = table.check(s.track)
+            if found:
+                s, found = _timed(table, s, max_delay, max_hold, ramp, found)
             for _ in range(stages):
                 if not found:
                     break
