@@ -399,7 +399,9 @@ def _timed(table, s, max_delay, max_hold, ramp, found):
     must rather than one that starts late, as :func:`_improve` prefers), then a wait and
     one hold, then a wait and up to four holds."""
     timing = None
-    tries = ((0, 1), (max_delay, 1), (max_delay, 4)) if s.holdable is not None else ((max_delay, 0),)
+    tries = ((0, 1), (max_delay, 1), (max_delay, 4))
+    if s.holdable is None:
+        tries = ((max_delay, 0),)
     busy = table.busy(s.track, max(table.horizon, len(s.track)) + max_delay + max_hold + 1)
     for wait, holds in tries:
         timing = path_timing.earliest(s.track, busy, s.holdable, ramp, wait, wait + max_hold, holds)
