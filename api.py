@@ -22,7 +22,7 @@ from .adapter import compat, evaluate, mocap, nla, props_io, storage, transactio
 from .adapter import moving as moving_io
 from .adapter import rig as rig_io
 from .adapter import scene as scene_io
-from .motion_patches.crowd import crowd
+from .motion_patches.crowd import crowd, held_motion
 from .motion_patches.kinematics import contacts, foot_lock, scene_rate
 from .motion_patches.kinematics.inplace import root_positions
 from .motion_patches.kinematics.motion import Motion, concatenate
@@ -1434,14 +1434,14 @@ def plan_crowd(
                     env.remove(ob.name)
 
     fps = scene_fps(scene)
-    same_rate = abs(fps - patch.gait.fps) < 1e-6
+    rate = fps / patch.gait.fps  # scene frames per patch frame (holds are timed on the scene's)
     ramp = max(2, int(round(CROWD_HOLD_RAMP_SECONDS * fps)) // 2 * 2)
 
     def synthesised(n, plan):
         """(raw piece motions, placed motion, holdable frames or None) of a plan."""
         raw = plan_motions(patch, plan)
         placed = _placed(scene, patch, rigs[n], raw)
-        return raw, placed, (_holdable(plan, placed, ramp) if same_rate else None)
+        return raw, placed, _holdable(plan, placed, ramp)
 
     planned, failed = [], []  # planned: [(n, plan, raw, placed, holdable)] in priority order
     for count, n in enumerate(order):
@@ -1485,8 +1485,8 @@ def plan_crowd(
         if s.holds:  # each hold put in the piece it falls in, as its own strip
             at = []
             for k, h in s.holds:
-                bounds = np.concatenate(([0], np.cumsum([m.frames - 1 for m in p[2]])))
-                p[1], p[2] = _with_hold(p[1], p[2], bounds, k, h, ramp)
+                bounds = scene_rate.piece_bounds([m.frames for m in p[2]], rate)[1]
+                p[1], p[2] = _with_hold(p[1], p[2], bounds, k, h, ramp, rate)
                 at = [(f + h + ramp if f > k else f, n) for f, n in at] + [(k, h)]
             p[3] = _placed(scene, patch, rigs[p[0]], p[2])
             holds[pairs[p[0]][0].name] = sorted(at)
@@ -1876,11 +1876,12 @@ def _holdable(plan, placed, ramp):
     return ok & inside
 
 
-def _with_hold(plan, raw, bounds, at, hold, ramp):
+def _with_hold(plan, raw, bounds, at, hold, ramp, rate=1.0):
     """(plan, raw piece motions) with an idle hold of ``hold`` frames on scene frame ``at``
-    (the scene at the patch's rate): the piece it falls in is time-warped
-    (:func:`motion_patches.kinematics.retime.held`) and becomes a piece of kind "hold", so it is
-    written as its own action, not the shared segment action."""
+    (``bounds``: the pieces' scene frames, ``rate`` scene frames per patch frame): the piece
+    it falls in is time-warped (:func:`motion_patches.kinematics.retime.held`; at another rate
+    :func:`motion_patches.crowd.held_motion.held_piece`) and becomes a piece of kind "hold",
+    so it is written as its own action, not the shared segment action."""
     import dataclasses
 
     from .motion_patches.kinematics import retime
@@ -1889,7 +1890,11 @@ def _with_hold(plan, raw, bounds, at, hold, ramp):
     if i is None:
         raise MotionPatchesError(f"internal: frame {at} is in no walking piece to hold in")
     raw = list(raw)
-    raw[i] = retime.held(raw[i], at - bounds[i], hold, ramp)
+    if abs(rate - 1.0) < 1e-9:
+        raw[i] = retime.held(raw[i], at - bounds[i], hold, ramp)
+    else:
+        span = int(bounds[i + 1] - bounds[i])
+        raw[i] = held_motion.held_piece(raw[i], at - bounds[i], hold, ramp, span, rate)
     pieces = list(plan.pieces)
     pieces[i] = dataclasses.replace(pieces[i], kind="hold")
     return dataclasses.replace(plan, pieces=pieces), raw

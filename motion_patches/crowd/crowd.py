@@ -98,6 +98,7 @@ class Reservations:
         self.by_cell = np.empty(0, np.int64)  # moving again, sorted by cell alone
         self.cell_frame = np.empty(0, np.int64)
         self.cell_xy = np.empty((0, 2), float)
+        self.cell_owner = np.empty(0, np.int32)
         self.placed = {}  # index -> (delay, track)
         self.horizon = 0
 
@@ -246,6 +247,7 @@ class Reservations:
         self.by_cell = np.insert(self.by_cell, at, ckeys[order])
         self.cell_frame = np.insert(self.cell_frame, at, t[order])
         self.cell_xy = np.insert(self.cell_xy, at, track[order], axis=0)
+        self.cell_owner = np.insert(self.cell_owner, at, np.int32(index))
         spots = np.array([[*track[0], 0, d, index], [*track[-1], d + n, np.inf, index]], float)
         spots = spots[spots[:, 2] < spots[:, 3]]
         c = self._cells(spots[:, :2])
@@ -257,6 +259,18 @@ class Reservations:
         self.spots = np.insert(self.spots, at, spots, axis=0)
         self.placed[index] = (d, track)
         self.horizon = max(self.horizon, d + n)
+
+    def remove(self, index):
+        """Free everything ``index`` holds (the others keep their places)."""
+        keep = self.owner != index
+        self.keys, self.owner, self.xy = self.keys[keep], self.owner[keep], self.xy[keep]
+        keep = self.cell_owner != index
+        self.by_cell, self.cell_frame = self.by_cell[keep], self.cell_frame[keep]
+        self.cell_xy, self.cell_owner = self.cell_xy[keep], self.cell_owner[keep]
+        keep = self.spots[:, 4] != index
+        self.spot_keys, self.spots = self.spot_keys[keep], self.spots[keep]
+        del self.placed[index]
+        self.horizon = max((d + len(t) for d, t in self.placed.values()), default=0)
 
     def line(self, index, horizon):
         """(horizon, 2) positions of a reserved character (as :func:`timeline`)."""
@@ -310,6 +324,7 @@ class Schedule:
     track: np.ndarray = None
     holdable: np.ndarray = None
     rank: int = 0
+    base: tuple = None  # (track, holdable) of its version before any wait or hold
 
     @property
     def rerouted(self):
@@ -355,13 +370,13 @@ def _improve(table, s, found, max_delay, max_hold, step, ramp):
     def hold(k, h):
         track, mask = held_track(s.track, k, h, ramp, s.holdable)
         c = table.check(track, s.delay)
-        option = Schedule(s.delay, s.holds + ((k, h),), s.version, track, mask)
+        option = Schedule(s.delay, s.holds + ((k, h),), s.version, track, mask, base=s.base)
         options.append((_too_close(c), h, option, c))
         return not c
 
     def wait(d):
         c = table.check(s.track, s.delay + d)
-        option = Schedule(s.delay + d, s.holds, s.version, s.track, s.holdable)
+        option = Schedule(s.delay + d, s.holds, s.version, s.track, s.holdable, base=s.base)
         options.append((_too_close(c), d, option, c))
         return not c
 
@@ -413,7 +428,7 @@ def _timed(table, s, max_delay, max_hold, ramp, found):
     track, mask = s.track, s.holdable
     for k, h in holds:
         track, mask = held_track(track, k, h, ramp, mask)
-    timed = Schedule(delay, s.holds + holds, s.version, track, mask)
+    timed = Schedule(delay, s.holds + holds, s.version, track, mask, s.rank, s.base)
     left = table.check(track, delay)
     return (timed, left) if _too_close(left) < _too_close(found) else (s, found)
 
@@ -441,6 +456,7 @@ def _resolve_once(
     for i in order:
         track = tracks[i]
         s = Schedule(0, (), 0, np.asarray(track, float)[:, :2], holdable[i])
+        s.base = (s.track, s.holdable)
         best, reserved = None, []
         for attempt in range(rounds + 1):
             found = table.check(s.track)
@@ -465,6 +481,7 @@ def _resolve_once(
                 break
             versions[i] += 1
             s = Schedule(0, (), versions[i], np.asarray(new[0], float)[:, :2], new[1])
+            s.base = (s.track, s.holdable)
         s, found = best
         table.reserve(i, s.track, s.delay)
         schedules[i] = s
@@ -479,7 +496,64 @@ def _resolve_once(
                     "distance_m": dist,
                 }
             )
-    return schedules, conflicts
+    return schedules, conflicts, table
+
+
+def _repair(table, schedules, conflicts, max_delay, max_hold, ramp):
+    """Conflicts left mended locally, cheaper than a restart: a character still too close
+    is freed with those it meets, placed first and re-timed (:func:`_timed`), then they are
+    re-timed round it; kept where all of them come clear, else put back as they were.
+    ``schedules`` and ``table`` are changed in place; the ranks of the group are re-dealt in
+    their new order. Returns how many groups were mended."""
+    mended = 0
+    for b in list(dict.fromkeys(c["b"] for c in conflicts)):
+        if not table.check(schedules[b].track, schedules[b].delay):
+            continue  # mended with another group
+        found = _without(table, b, schedules[b])
+        group = [b] + sorted(found, key=lambda j: schedules[j].rank)
+        old = {i: schedules[i] for i in group}
+        for i in group[1:]:
+            table.remove(i)
+        new = {}
+        for i in group:
+            fresh = Schedule(0, (), old[i].version, *old[i].base, old[i].rank, old[i].base)
+            c = table.check(fresh.track)
+            timed, c = _timed(table, fresh, max_delay, max_hold, ramp, c) if c else (fresh, c)
+            if c:
+                break
+            table.reserve(i, timed.track, timed.delay)
+            new[i] = timed
+        if len(new) < len(group):
+            for i in new:
+                table.remove(i)
+            for i in group:
+                table.reserve(i, old[i].track, old[i].delay)
+            continue
+        for i, rank in zip(group, sorted(old[i].rank for i in group)):
+            new[i].rank = rank
+            schedules[i] = new[i]
+        mended += 1
+    return mended
+
+
+def _without(table, i, s):
+    """The conflicts of ``s`` (character ``i``, reserved) against the others."""
+    table.remove(i)
+    found = table.check(s.track, s.delay)
+    table.reserve(i, s.track, s.delay)
+    return found
+
+
+def _left(schedules, spacing):
+    """The conflicts of ``schedules`` placed in their ranks' order, as :func:`resolve`
+    reports them (indices of ``schedules``)."""
+    ranked = sorted(range(len(schedules)), key=lambda k: schedules[k].rank)
+    out = conflicts_of(
+        [schedules[k].track for k in ranked], [schedules[k].delay for k in ranked], spacing
+    )
+    for c in out:
+        c["a"], c["b"] = ranked[c["a"]], ranked[c["b"]]
+    return out
 
 
 def resolve(
@@ -528,7 +602,7 @@ def resolve(
     holdable = list(holdable) if holdable is not None else [None] * len(tracks)
     order, versions, best = list(range(len(tracks))), [0] * len(tracks), None
     for _ in range(restarts + 1):
-        schedules, conflicts = _resolve_once(
+        schedules, conflicts, table = _resolve_once(
             order,
             tracks,
             replan,
@@ -546,6 +620,8 @@ def resolve(
         )
         for rank, i in enumerate(order):
             schedules[i].rank = rank
+        if conflicts and _repair(table, schedules, conflicts, max_delay, max_hold, ramp):
+            conflicts = _left(schedules, spacing)
         left = sum(c["frames"] for c in conflicts)
         if best is None or left < best[0]:
             best = (left, schedules, conflicts)
