@@ -67,109 +67,110 @@ def earliest(track, busy, holdable, ramp, max_delay, max_extra, max_holds=1):
 
     # the goal: free on every frame from the arrival on (the first frame it stays free)
     goal = busy[n - 1, n - 1 :]
-    if goal[-1]:
+    if goal[-1] or busy[0, 0]:
         return None
     goal_from = n - 1 + (int(np.nonzero(goal)[0][-1]) + 1 if goal.any() else 0)
-    inf = np.iinfo(np.int64).max
-    # per layer e: how each walking / standing state was reached, its value the least
-    # (holds, start wait) of the ways there (:data:`_HOLD`)
-    walk_from, stand_from = {}, {}
-    seeds = {0: {0: (0, ("start",))}} if not busy[0, 0] else {}
-    stand = {}  # e -> {k: (value, how)}
-    for e in range(max_extra + 1):
-        if not seeds and not stand:
-            return None  # nothing left walking or standing
-        s = seeds.pop(e, {})
-        st = stand.pop(e, {})
-        if not s and not st:
+    # dense layers e: the least value (:data:`_HOLD`) of each walking / standing state and
+    # how it was reached (codes of :func:`_way_back`)
+    layers = max_extra + 1
+    seed_v = np.full((layers + half + 2, n), _NONE)
+    seed_how = np.zeros((layers + half + 2, n), np.int8)
+    stand_v = np.full((layers + half + 2, n), _NONE)
+    walk_how = np.zeros((layers, n), np.int8)
+    stand_how = np.zeros((layers + half + 2, n), np.int8)
+    seed_v[0, 0], seed_how[0, 0] = 0, _START
+    rows = np.minimum(k_all[None, :] + np.arange(layers)[:, None], last)
+    for e in range(layers):
+        sv, st = seed_v[e], stand_v[e]
+        live_w, live_s = sv < _NONE, st < _NONE
+        if not live_w.any() and not live_s.any():
+            if not (seed_v[e + 1 :] < _NONE).any() and not (stand_v[e + 1 :] < _NONE).any():
+                return None  # nothing left walking or standing
             continue
-        free = ~busy[k_all, np.minimum(k_all + e, last)]
-        # walking: from each seed forward while free, the least value winning
-        val = np.full(n, inf)
-        par = [None] * n
-        for k in sorted(s):
-            if free[k] and s[k][0] < val[k]:
-                val[k], par[k] = s[k]
-        if s:
-            run_from = min(s)
-            # forward fill while free: the least value of the seeds before in the run
-            for k in range(run_from + 1, n):
-                if free[k] and val[k - 1] < val[k]:
-                    val[k], par[k] = val[k - 1], ("walk",)
-        reach = val < inf
-        walk_from[e] = par
+        free = ~busy[k_all, rows[e]]
+        val = _run_min(np.where(free, sv, _NONE), free)
+        how = np.where(val < _NONE, _WALK, 0).astype(np.int8)
+        seeded = free & (sv == val) & live_w
+        how[seeded] = seed_how[e][seeded]
+        walk_how[e] = how
+        reach = val < _NONE
         if reach[-1] and n - 1 + e >= goal_from:
-            return _way_back(e, n - 1, walk_from, stand_from, ramp)
+            return _way_back(e, n - 1, walk_how, stand_how, ramp)
         # standing on: the start (before leaving) and held frames
-        if reach[0] and e < max_delay and not busy[0, min(e + 1, last)]:
-            seeds.setdefault(e + 1, {})[0] = (e + 1, ("wait",))
-        stand_from[e] = {k: v[1] for k, v in st.items()}
-        if st:
-            ks = np.array(sorted(st), int)
-            vs = np.array([st[int(k)][0] for k in ks])
-            if e + 1 <= max_extra:
-                for k, v in zip(ks, vs):
-                    if not busy[k, min(k + e + 1, last)]:
-                        _offer(stand, e + 1, int(k), (int(v), ("stand",)))
-            if e + half <= max_extra:  # speed up out of a hold
+        if reach[0] and e < max_delay and not busy[0, min(e + 1, last)] and e + 1 < layers:
+            seed_v[e + 1, 0], seed_how[e + 1, 0] = min(seed_v[e + 1, 0], e + 1), _WAIT
+        if live_s.any():
+            ks = np.nonzero(live_s)[0]
+            if e + 1 < layers:
+                ok = ~busy[ks, np.minimum(ks + e + 1, last)]
+                better = ok & (st[ks] < stand_v[e + 1, ks])
+                stand_v[e + 1, ks[better]] = st[ks[better]]
+                stand_how[e + 1, ks[better]] = _STAND
+            if e + half < layers:  # speed up out of a hold
                 t = ks[:, None] + e + 1 + np.arange(ramp)[None]
                 ok = ~at(ks[:, None] + up[None], t).any(1)
-                for k, v in zip(ks[ok], vs[ok]):
-                    layer = seeds.setdefault(e + half, {})
-                    cand = (int(v), ("up", int(k)))
-                    if cand[0] < layer.get(int(k) + half, (inf,))[0]:
-                        layer[int(k) + half] = cand
-        if can_hold.any() and e + half + 1 <= max_extra:  # slow down into a hold
+                k2, v = ks[ok] + half, st[ks[ok]]
+                better = v < seed_v[e + half, k2]
+                seed_v[e + half, k2[better]] = v[better]
+                seed_how[e + half, k2[better]] = _UP
+        if can_hold.any() and e + half + 1 < layers:  # slow down into a hold
             ks = np.nonzero(reach[: n - ramp] & can_hold[half : n - half])[0] + half
             if ks.size:
                 t = (ks - half)[:, None] + e + 1 + np.arange(ramp + 1)[None]
                 ok = ~at((ks - half)[:, None] + down[None], t).any(1)
-                for k in ks[ok]:
-                    v = int(val[k - half]) + _HOLD
-                    if v // _HOLD <= max_holds:
-                        _offer(stand, e + half + 1, int(k), (v, ("down",)))
+                ks = ks[ok]
+                v = val[ks - half] + _HOLD
+                ks, v = ks[v // _HOLD <= max_holds], v[v // _HOLD <= max_holds]
+                better = v < stand_v[e + half + 1, ks]
+                stand_v[e + half + 1, ks[better]] = v[better]
+                stand_how[e + half + 1, ks[better]] = _DOWN
     return None
+
+
+def _run_min(v, free):
+    """Least value so far along runs of ``free`` frames (a walk carries its value forward
+    while the way is free; a busy frame ends the run)."""
+    seg = np.cumsum(~free)
+    off = (seg[-1] + 1 - seg).astype(np.int64) * _SEG
+    return np.minimum.accumulate(v + off) - off
 
 
 _HOLD = 1 << 24  # a state's value: holds * _HOLD + frames waited at the start
 
 
-def _offer(table, e, k, value):
-    layer = table.setdefault(e, {})
-    if k not in layer or value[0] < layer[k][0]:
-        layer[k] = value
+_NONE = 1 << 28  # no state: more than any value
+_SEG = 1 << 29
+_START, _WALK, _WAIT, _UP = 1, 2, 3, 4  # how a walking state was reached
+_STAND, _DOWN = 1, 2  # how a standing state was reached
 
 
-def _way_back(e, k, walk_from, stand_from, ramp):
+def _way_back(e, k, walk_how, stand_how, ramp):
     """(delay, holds) of the state walking on track frame ``k`` with ``e`` frames of delay."""
     half = ramp // 2
-    holds, state = [], ("walk", k, e)
+    holds, walking = [], True
     delay, hold_end = 0, None
     while True:
-        kind, k, e = state
-        if kind == "walk":
-            how = walk_from[e][k]
-            if how[0] == "walk":
-                state = ("walk", k - 1, e)
-            elif how[0] == "start":
+        if walking:
+            how = walk_how[e, k]
+            if how == _WALK:
+                k -= 1
+            elif how == _START:
                 break
-            elif how[0] == "wait":  # stood at the start until here
+            elif how == _WAIT:  # stood at the start until here
                 delay = e
                 break
-            else:  # up: out of a hold on frame how[1]
-                hold_end = e - half
-                state = ("stand", how[1], e - half)
+            else:  # up: out of a hold on frame k - half
+                k, e, walking = k - half, e - half, False
+                hold_end = e
         else:
-            how = stand_from[e][k]
-            if how[0] == "stand":
-                state = ("stand", k, e - 1)
+            if stand_how[e, k] == _STAND:
+                e -= 1
             else:  # down: the hold began here
-                e0 = e - half - 1  # walking layer before the slow-down
-                holds.append((k, hold_end - e + 1, e0))
-                state = ("walk", k - half, e0)
+                holds.append((k, hold_end - e + 1))
+                k, e, walking = k - half, e - half - 1, True
     # holds in track order, each frame shifted by the holds before it
     out, shift = [], 0
-    for k, h, _ in sorted(holds):
+    for k, h in sorted(holds):
         out.append((k + shift, h))
         shift += h + ramp
     return delay, tuple(out)
