@@ -15,7 +15,14 @@ re-routes) and the final check :func:`motion_patches.crowd.crowd.conflicts_of`. 
 into path planning, motion synthesis, resolution and the final check. Memory: the peak
 traced by ``tracemalloc`` over the resolution and check (run a second time, traced), and the
 process's peak resident size after each size (``resource``; it only grows, sizes run in
-increasing order).
+increasing order). Per character, milliseconds of each stage.
+
+Then two dense scenes at a 24 fps scene from the 30 fps patch (``--scenes``, the ones
+tests/core/test_crowd_dense.py checks, built by it): a four-way crossing of 40 among seven
+pillars on a 21 m plaza and a counter-flow of 40 through a 2 m doorway. Each is measured on
+the motion as written (holds laid into the pieces, re-played at the scene's rate): the pairs
+of roots closer than the spacing on some frame, the closest approach and root frames inside
+a prop.
 """
 
 import argparse
@@ -33,11 +40,12 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
-for p in (str(REPO), str(HERE)):
+for p in (str(REPO), str(HERE), str(REPO / "tests" / "core")):
     if p not in sys.path:
         sys.path.insert(0, p)
 
 import bench_core as core  # noqa: E402
+import test_crowd_dense as dense  # noqa: E402
 
 from motion_patches.crowd import crowd
 from motion_patches.kinematics.motion import concatenate
@@ -62,6 +70,11 @@ def parse_args(argv=None):
         default=0,
         metavar="N",
         help="cProfile the crowd of size N and print the top functions",
+    )
+    p.add_argument(
+        "--scenes",
+        default="four-way,doorway",
+        help="dense scenes to run after the sizes (four-way, doorway; empty: none)",
     )
     p.add_argument("--json", type=Path, help="also write the full results here")
     return p.parse_args(argv)
@@ -235,17 +248,75 @@ def run_crowd(patch, n, args):
             "total": t["paths"] + t["synthesis"] + t_resolve + t_check,
         },
         "resolve_ms_per_character": 1000 * t_resolve / max(len(tracks), 1),
+        "ms_per_character": {
+            k: 1000 * v / max(n, 1)
+            for k, v in (
+                ("paths", t["paths"]),
+                ("synthesis", t["synthesis"]),
+                ("resolve", t_resolve),
+                ("check", t_check),
+            )
+        },
         "resolve_peak_mb": peak / 2**20,
         "process_max_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
     }
+
+
+SCENES = {"four-way": (dense.fourway, 4.0), "doorway": (dense.doorway, 15.0)}
+
+
+def run_scene(patch, name):
+    """A dense scene planned as api.plan_crowd does, measured on the motion as written."""
+    build, wait = SCENES[name]
+    env, ends = build(patch)
+    times = {}
+    pieces, schedules, ramp = dense.plan_crowd(patch, env, ends, dense.SCENE_FPS, wait, times=times)
+    t0 = time.perf_counter()
+    roots = dense.written_roots(pieces, schedules, dense.SCENE_FPS / patch.gait.fps, ramp)
+    delays = [s.delay for s in schedules]
+    left = crowd.conflicts_of(roots, delays, dense.SPACING)
+    closest, inside = dense.closest_and_inside(roots, delays, env)
+    times["check"] = time.perf_counter() - t0
+    n = len(ends)
+    return {
+        "scene": name,
+        "characters": n,
+        "planned": len(pieces),
+        "max_wait_s": wait,
+        "holds": sum(len(s.holds) for s in schedules),
+        "waits": sum(s.delay > 0 for s in schedules),
+        "rerouted": sum(s.rerouted for s in schedules),
+        "conflicts_left": len(left),
+        "closest_m": float(closest),
+        "root_frames_in_props": inside,
+        "seconds": {**times, "total": sum(times.values())},
+        "ms_per_character": {k: 1000 * v / n for k, v in times.items()},
+    }
+
+
+def scene_markdown(rows):
+    out = [
+        "| scene | planned | holds | waits | re-routed | conflicts left | closest m | in props "
+        "| seconds | paths ms/ch | synthesis ms/ch | resolve ms/ch | check ms/ch |",
+        "|" + "---|" * 13,
+    ]
+    for r in rows:
+        m = r["ms_per_character"]
+        out.append(
+            f"| {r['scene']} | {r['planned']}/{r['characters']} | {r['holds']} | {r['waits']} "
+            f"| {r['rerouted']} | {r['conflicts_left']} | {r['closest_m']:.3f} "
+            f"| {r['root_frames_in_props']} | {r['seconds']['total']:.1f} | {m['paths']:.0f} "
+            f"| {m['synthesis']:.0f} | {m['resolve']:.0f} | {m['check']:.0f} |"
+        )
+    return "\n".join(out)
 
 
 def markdown(rows):
     out = [
         "| characters | plaza | planned | no path | holds | waits | re-routed | conflicts "
         "left | paths s | synthesis s | resolve s | check s | total s | resolve peak MB "
-        "| max RSS MB |",
-        "|" + "---|" * 15,
+        "| max RSS MB | resolve ms/ch |",
+        "|" + "---|" * 16,
     ]
     for r in rows:
         s = r["seconds"]
@@ -254,7 +325,7 @@ def markdown(rows):
             f"| {r['holds']} | {r['waits']} | {r['rerouted']} | {r['conflicts_left']} "
             f"| {s['paths']:.1f} | {s['synthesis']:.1f} | {s['resolve']:.2f} "
             f"| {s['check']:.2f} | {s['total']:.1f} | {r['resolve_peak_mb']:.1f} "
-            f"| {r['process_max_rss_mb']:.0f} |"
+            f"| {r['process_max_rss_mb']:.0f} | {r['resolve_ms_per_character']:.0f} |"
         )
     return "\n".join(out)
 
@@ -285,10 +356,19 @@ def main(argv=None):
             print(buf.getvalue())
         print(f"  {json.dumps(r)}", flush=True)
         res["crowds"].append(r)
+    res["scenes"] = []
+    for name in [s for s in args.scenes.split(",") if s]:
+        print(f"{name} ...", flush=True)
+        r = run_scene(patch, name)
+        print(f"  {json.dumps(r)}", flush=True)
+        res["scenes"].append(r)
     print()
-    print(json.dumps({"machine": res["machine"], "crowds": res["crowds"]}))
+    print(json.dumps({k: res[k] for k in ("machine", "crowds", "scenes")}))
     print()
     print(markdown(res["crowds"]))
+    if res["scenes"]:
+        print()
+        print(scene_markdown(res["scenes"]))
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps(res, indent=1))

@@ -4,6 +4,8 @@ counter-flow of 40 through a 2 m doorway, planned, resolved and then checked on 
 itself: the pieces re-synthesised with the holds laid in, played at a 24 fps scene from the
 30 fps patch, every root against every other on every frame and against the props."""
 
+import time
+
 import numpy as np
 import pytest
 
@@ -72,22 +74,25 @@ def doorway(patch, per_side=20, gap=2.0, seed=5):
     return env, ends
 
 
-def plan_crowd(patch, env, ends, fps, max_wait):
-    """The crowd as ``api.plan_crowd`` plans it, on the core: [(pieces, plan)] and the
-    schedules. Priority by distance; paths round the props and the others' standing spots;
-    holds, waits and re-routes timed on the scene's frames."""
+def plan_crowd(patch, env, ends, fps, max_wait, times=None):
+    """The crowd as ``api.plan_crowd`` plans it, on the core: ([(pieces, plan)], schedules,
+    ramp). Priority by distance; paths round the props and the others' standing spots;
+    holds, waits and re-routes timed on the scene's frames. ``times`` (a dict) gets the
+    seconds of path planning (re-plans included), synthesis and resolution."""
+    times = {} if times is None else times
+    for k in ("paths", "synthesis", "resolve"):
+        times[k] = 0.0
     ends = sorted(ends, key=lambda e: -np.linalg.norm(e[1][:2] - e[0][:2]))
     planner = SegmentPlanner(patch, env)
     rate = fps / patch.gait.fps
     ramp = max(2, int(round(0.5 * fps)) // 2 * 2)
 
     def solve(i, extra=()):
-        spots = [
-            Obstacle(f"spot{m}", p) for m, p in crowd.standing_spots(ends, i, SPACING, RADIUS)
-        ]
+        spots = [Obstacle(f"spot{m}", p) for m, p in crowd.standing_spots(ends, i, SPACING, RADIUS)]
         ghosts = [Obstacle(f"ghost{k}", p) for k, p in enumerate(extra)]
         mine = np.array([ends[i][0][:2], ends[i][1][:2]])
         ghosts = [g for g in ghosts if not g.within(mine, RADIUS).any()]
+        t0 = time.perf_counter()
         for ob in spots + ghosts:
             env.place(ob)
         try:
@@ -103,8 +108,11 @@ def plan_crowd(patch, env, ends, fps, max_wait):
         finally:
             for ob in spots + ghosts:
                 env.remove(ob.name)
+            t1 = time.perf_counter()
+            times["paths"] += t1 - t0
         raw = plan_motions(patch, plan)
         root, holdable = placed(raw, plan, rate, ramp)
+        times["synthesis"] += time.perf_counter() - t1
         return (raw, plan), root, holdable
 
     versions = [[solve(i)] for i in range(len(ends))]
@@ -116,6 +124,7 @@ def plan_crowd(patch, env, ends, fps, max_wait):
             return None
         return versions[k][-1][1:]
 
+    t0, before = time.perf_counter(), times["paths"] + times["synthesis"]
     schedules, _ = crowd.resolve(
         [v[0][1] for v in versions],
         replan,
@@ -127,6 +136,8 @@ def plan_crowd(patch, env, ends, fps, max_wait):
         ramp=ramp,
         holdable=[v[0][2] for v in versions],
     )
+    re_plans = times["paths"] + times["synthesis"] - before
+    times["resolve"] = time.perf_counter() - t0 - re_plans  # re-plans counted as paths
     return [v[s.version][0] for v, s in zip(versions, schedules)], schedules, ramp
 
 
