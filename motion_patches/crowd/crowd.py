@@ -6,9 +6,10 @@ character), with the spots where the others stand still while it walks as extra
 obstacles: the goals of the characters before it in priority and the starts of those
 after it. The crowd is then resolved in priority order against a space-time reservation
 table (:class:`Reservations`): a character that would come too close to one placed
-before it first tries an idle hold mid-walk (a time warp to a stop on a double-support
-frame, feet planted), then a later start, then a re-route round where the other walks
-then. What none of these clears is reported by pair and frame, not hidden.
+before it is re-timed along its path (:mod:`.path_timing`: idle holds mid-walk, time warps
+to a stop on a double-support frame with feet planted, and a later start), else re-routed
+round where the other walks then; pairs left are mended locally, then by restarts with
+raised priorities. What none of these clears is reported by pair and frame, not hidden.
 """
 
 from dataclasses import dataclass
@@ -573,9 +574,12 @@ def resolve(
 ):
     """Schedules and the conflicts left for ``tracks`` [(frames, 2)] in priority order,
     all starting on frame 0: each character in turn is checked against the
-    :class:`Reservations` of those before it and, while it comes closer than ``spacing``,
-    changed by (at most ``stages`` changes, the first that clears everything, in this
-    order of preference):
+    :class:`Reservations` of those before it and, when it comes closer than ``spacing``,
+    first re-timed to its earliest arrival clear of them all (:func:`_timed`,
+    :func:`path_timing.earliest`: a wait at the start and idle holds anywhere on the way,
+    one hold preferred); when no such timing fits in the longest wait and holds, changed by
+    (at most ``stages`` changes, the first that clears everything, in this order of
+    preference):
 
     1. an idle hold (whole ``step`` frames, all its holds at most ``max_hold``, see
        :func:`_improve` for which lengths are tried) on a
@@ -590,7 +594,9 @@ def resolve(
     discs where the others it meets walk around those frames (:func:`ghosts`), and the
     above is done again, at most ``rounds`` times.
 
-    When conflicts are left, the crowd is resolved again from the start with the
+    When conflicts are left, each character still too close is first mended locally
+    (:func:`_repair`: freed with those it meets, placed before them and all re-timed), and
+    what is still left makes the crowd be resolved again from the start with the
     characters that met them placed first (prioritised planning's restart with raised
     priorities), at most ``restarts`` times, and the pass with the fewest frames too close
     is kept. What is left is reported: [{"a", "b" (indices, ``a`` placed first), "frame"
