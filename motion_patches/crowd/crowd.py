@@ -142,7 +142,7 @@ class Reservations:
             np.concatenate([np.arange(a, b) for a, b in zip(lo, hi) if b > a] or [np.empty(0, int)])
         )
 
-    def busy(self, track, frames, margin=0.01):
+    def busy(self, track: np.ndarray, frames: int, margin: float = 0.01) -> np.ndarray:
         """(len(track), frames) bool: ``track[k]`` closer than the spacing (and ``margin``)
         to a reserved root on frame ``t`` (walking then, or standing at its start or goal
         then), for every frame from 0; the last column stands for every frame after it.
@@ -261,7 +261,7 @@ class Reservations:
         self.placed[index] = (d, track)
         self.horizon = max(self.horizon, d + n)
 
-    def remove(self, index):
+    def remove(self, index: int) -> None:
         """Free everything ``index`` holds (the others keep their places)."""
         keep = self.owner != index
         self.keys, self.owner, self.xy = self.keys[keep], self.owner[keep], self.xy[keep]

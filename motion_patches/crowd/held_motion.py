@@ -12,9 +12,12 @@ played at the scene's rate, stands where and when the crowd saw it stand.
 import numpy as np
 
 from ..kinematics import retime
+from ..kinematics.motion import Motion
 
 
-def held_piece(motion, at, hold, ramp, scene_frames, ratio):
+def held_piece(
+    motion: Motion, at: float, hold: int, ramp: int, scene_frames: int, ratio: float
+) -> Motion:
     """``motion`` (a piece on the patch's frames, ``scene_frames`` + 1 scene frames long when
     played ``ratio`` scene frames per patch frame) with an idle hold of ``hold`` scene frames
     on its scene frame ``at``, slowing down and speeding up over ``ramp`` scene frames each

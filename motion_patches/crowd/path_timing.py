@@ -34,7 +34,15 @@ def _ramps(ramp):
     return down, up
 
 
-def earliest(track, busy, holdable, ramp, max_delay, max_extra, max_holds=1):
+def earliest(
+    track: np.ndarray,
+    busy: np.ndarray,
+    holdable: np.ndarray | None,
+    ramp: int,
+    max_delay: int,
+    max_extra: int,
+    max_holds: int = 1,
+) -> tuple[int, tuple[tuple[int, int], ...]] | None:
     """The earliest timing of ``track`` (frames, 2) that ``busy`` never stops, or None:
     ``(delay, holds)``, ``delay`` frames standing at the start, ``holds`` [(frame, frames)]
     idle holds as :class:`~.crowd.Schedule` keeps them (each frame on the track as the holds
