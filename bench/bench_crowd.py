@@ -48,6 +48,7 @@ import bench_core as core  # noqa: E402
 import test_crowd_dense as dense  # noqa: E402
 
 from motion_patches.crowd import crowd
+from motion_patches.kinematics.inplace import root_positions
 from motion_patches.kinematics.motion import concatenate
 from motion_patches.planning.planner import PlanError, SegmentPlanner, plan_motions
 from motion_patches.props.environment import Environment, Obstacle
@@ -134,7 +135,6 @@ def holdable(patch, plan, world, bounds, ramp):
 def run_crowd(patch, n, args):
     env, ends, side = plaza(patch, n, args)
     planner = SegmentPlanner(patch, env)
-    skel = patch.gait.skeleton
     fps = patch.gait.fps
     ramp = max(2, int(round(0.5 * fps)) // 2 * 2)
     t = {"paths": 0.0, "synthesis": 0.0, "replan": 0.0}
@@ -167,7 +167,7 @@ def run_crowd(patch, n, args):
         ms = plan_motions(patch, plan)
         world = concatenate(ms)
         bounds = np.concatenate(([0], np.cumsum([m.frames - 1 for m in ms])))
-        root = world.world_matrices(skel)[:, skel.root, :2, 3]
+        root = root_positions(world.ground, world.root_local)[:, :2]  # as api._root_track
         mask = holdable(patch, plan, world, bounds, ramp)
         t["synthesis"] += time.perf_counter() - t0
         return root, mask

@@ -38,15 +38,11 @@ def standing_spots(ends, n, spacing, radius):
         return []
     grow = max(spacing - radius, 0.05)
     mine = np.array([ends[n][0][:2], ends[n][1][:2]], float)
-    out = []
-    for m, (start, goal) in enumerate(ends):
-        if m == n:
-            continue
-        where = np.asarray(goal if m < n else start, float)[:2]
-        if np.linalg.norm(mine - where, axis=1).min() < grow + radius:
-            continue
-        out.append((m, disc(where, grow)))
-    return out
+    where = np.array([(g if m < n else s)[:2] for m, (s, g) in enumerate(ends)], float)
+    near = np.linalg.norm(where[:, None, :] - mine[None], axis=2).min(axis=1) < grow + radius
+    keep = np.nonzero(~near & (np.arange(len(ends)) != n))[0]
+    ring = disc((0.0, 0.0), grow)
+    return [(int(m), ring + where[m]) for m in keep]
 
 
 def timeline(track, delay, horizon):
