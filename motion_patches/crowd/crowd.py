@@ -73,6 +73,67 @@ def ghosts(line, frame, spacing, radius, fps, window_seconds=1.5, step_m=0.3):
 _OFF = 1 << 20  # cell indices are shifted by this into a key's 21-bit fields
 
 
+class _Sorted:
+    """Reserved root positions (frame, xy, owner) sorted by an int64 key, in two levels: a
+    large one and a small recent one that each reservation is inserted into and that is
+    merged into the large one once it holds a quarter as much. An insertion then copies the
+    small level, not the whole crowd's, and the merges cost O(N log N) in all."""
+
+    _COLUMNS = ("key", "frame", "xy", "owner")
+
+    def __init__(self):
+        self.levels = [self._empty(), self._empty()]
+
+    @staticmethod
+    def _empty():
+        return {
+            "key": np.empty(0, np.int64),
+            "frame": np.empty(0, np.int64),
+            "xy": np.empty((0, 2), float),
+            "owner": np.empty(0, np.int32),
+        }
+
+    @property
+    def size(self):
+        return sum(lv["key"].size for lv in self.levels)
+
+    def insert(self, key, frame, xy, owner):
+        order = np.argsort(key, kind="stable")
+        new = {"key": key, "frame": frame, "xy": xy, "owner": np.full(key.size, owner, np.int32)}
+        recent = self.levels[1]
+        at = np.searchsorted(recent["key"], key[order])
+        for c in self._COLUMNS:
+            recent[c] = np.insert(recent[c], at, new[c][order], axis=0)
+        main = self.levels[0]
+        if recent["key"].size > max(4096, main["key"].size // 4):
+            both = {c: np.concatenate((main[c], recent[c])) for c in self._COLUMNS}
+            order = np.argsort(both["key"], kind="stable")
+            self.levels = [{c: both[c][order] for c in self._COLUMNS}, self._empty()]
+
+    def remove(self, owner):
+        for lv in self.levels:
+            keep = lv["owner"] != owner
+            for c in self._COLUMNS:
+                lv[c] = lv[c][keep]
+
+    def near(self, q):
+        """(query index, frame, xy, owner) of every entry whose key is one of ``q``."""
+        out = []
+        for lv in self.levels:
+            if not lv["key"].size:
+                continue
+            lo = np.searchsorted(lv["key"], q, "left")
+            n = np.searchsorted(lv["key"], q, "right") - lo
+            hit = np.nonzero(n)[0]
+            if hit.size:
+                n = n[hit]
+                ent = np.repeat(lo[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
+                out.append((np.repeat(hit, n), lv["frame"][ent], lv["xy"][ent], lv["owner"][ent]))
+        if not out:
+            return np.empty(0, int), np.empty(0, np.int64), np.empty((0, 2)), np.empty(0, int)
+        return tuple(np.concatenate(c) for c in zip(*out))
+
+
 class Reservations:
     """A space-time reservation table (prioritised planning: Silver's cooperative
     pathfinding, with frames as time steps): every reserved character holds the cells its
@@ -87,15 +148,10 @@ class Reservations:
     def __init__(self, spacing):
         self.spacing = float(spacing)
         self.cell = max(self.spacing, 1e-6) / np.sqrt(2.0)
-        self.keys = np.empty(0, np.int64)  # moving: sorted (frame, cell) keys
-        self.owner = np.empty(0, np.int32)
-        self.xy = np.empty((0, 2), float)
+        self.moving = _Sorted()  # keyed by (frame, cell)
         self.spot_keys = np.empty(0, np.int64)  # standing spots: sorted cell keys
         self.spots = np.empty((0, 5), float)  # x, y, first frame, end frame (inf), owner
-        self.by_cell = np.empty(0, np.int64)  # moving again, sorted by cell alone
-        self.cell_frame = np.empty(0, np.int64)
-        self.cell_xy = np.empty((0, 2), float)
-        self.cell_owner = np.empty(0, np.int32)
+        self.by_cell = _Sorted()  # moving again, keyed by cell alone
         self.placed = {}  # index -> (delay, track)
         self.horizon = 0
 
@@ -109,22 +165,14 @@ class Reservations:
     _RING = np.array([(i, j) for i in range(-2, 3) for j in range(-2, 3)], np.int64)
 
     def _moving_near(self, t, xy):
-        """(query row, table entry) pairs of moving entries on frame ``t[row]`` within two
-        cells of ``xy[row]``."""
-        if not self.keys.size or not len(t):
-            return np.empty(0, int), np.empty(0, int)
+        """(query row, xy, owner) of moving entries on frame ``t[row]`` within two cells of
+        ``xy[row]``."""
+        if not self.moving.size or not len(t):
+            return np.empty(0, int), np.empty((0, 2)), np.empty(0, int)
         c = self._cells(xy)[:, None, :] + self._RING[None]
         q = self._key(np.repeat(np.asarray(t)[:, None], len(self._RING), 1), c).ravel()
-        lo = np.searchsorted(self.keys, q, "left")
-        hi = np.searchsorted(self.keys, q, "right")
-        n = hi - lo
-        hit = np.nonzero(n)[0]
-        if not hit.size:
-            return np.empty(0, int), np.empty(0, int)
-        n = n[hit]
-        entries = np.repeat(lo[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
-        rows = np.repeat(hit // len(self._RING), n)
-        return rows, entries
+        rows, _, where, owner = self.moving.near(q)
+        return rows // len(self._RING), where, owner
 
     def _spots_near(self, xy):
         """Indices of standing spots within two cells of any of the points ``xy``."""
@@ -149,18 +197,12 @@ class Reservations:
         out = np.zeros((n, frames + 2), np.int32)
         if self.by_cell.size:
             c = self._cells(track)[:, None, :] + self._RING[None]
-            q = (c[..., 0] << 21 | c[..., 1]).ravel()
-            lo = np.searchsorted(self.by_cell, q, "left")
-            hi = np.searchsorted(self.by_cell, q, "right")
-            cnt = hi - lo
-            hit = np.nonzero(cnt)[0]
-            if hit.size:
-                cnt = cnt[hit]
-                ent = np.repeat(lo[hit] - np.cumsum(cnt) + cnt, cnt) + np.arange(cnt.sum())
-                rows = np.repeat(hit // len(self._RING), cnt)
-                d = self.cell_xy[ent] - track[rows]
+            rows, when, where, _ = self.by_cell.near((c[..., 0] << 21 | c[..., 1]).ravel())
+            if rows.size:
+                rows = rows // len(self._RING)
+                d = where - track[rows]
                 close = np.einsum("ij,ij->i", d, d) < s2
-                t = np.minimum(self.cell_frame[ent[close]], frames)
+                t = np.minimum(when[close], frames)
                 np.add.at(out, (rows[close], t), 1)
                 np.add.at(out, (rows[close], t + 1), -1)
         near = self._spots_near(track)
@@ -184,20 +226,22 @@ class Reservations:
         found = []  # (other, frame, distance) arrays
         # walk against walks
         t = np.arange(d, d + n)
-        rows, ent = self._moving_near(t, track)
+        rows, where, owner = self._moving_near(t, track)
         if rows.size:
-            dist = np.linalg.norm(self.xy[ent] - track[rows], axis=1)
+            dist = np.linalg.norm(where - track[rows], axis=1)
             close = dist < s
-            found.append((self.owner[ent[close]], t[rows[close]], dist[close]))
+            found.append((owner[close], t[rows[close]], dist[close]))
         # my start (before I leave) and goal (after I arrive) against the others' walks
         end = max(self.horizon, d + n)
         for frames, xy in ((np.arange(0, d), track[0]), (np.arange(d + n, end), track[-1])):
             if frames.size:
-                rows, ent = self._moving_near(frames, np.broadcast_to(xy, (frames.size, 2)))
+                rows, where, owner = self._moving_near(
+                    frames, np.broadcast_to(xy, (frames.size, 2))
+                )
                 if rows.size:
-                    dist = np.linalg.norm(self.xy[ent] - xy, axis=1)
+                    dist = np.linalg.norm(where - xy, axis=1)
                     close = dist < s
-                    found.append((self.owner[ent[close]], frames[rows[close]], dist[close]))
+                    found.append((owner[close], frames[rows[close]], dist[close]))
         # everything of mine against the others' standing spots
         near = self._spots_near(track)
         if near.size:
@@ -232,19 +276,9 @@ class Reservations:
         track = np.asarray(track, float)
         d, n = int(delay), len(track)
         t = np.arange(d, d + n)
-        keys = self._key(t, self._cells(track))
-        at = np.searchsorted(self.keys, keys)
-        self.keys = np.insert(self.keys, at, keys)
-        self.owner = np.insert(self.owner, at, np.int32(index))
-        self.xy = np.insert(self.xy, at, track, axis=0)
         c = self._cells(track)
-        ckeys = c[:, 0] << 21 | c[:, 1]
-        order = np.argsort(ckeys, kind="stable")
-        at = np.searchsorted(self.by_cell, ckeys[order])
-        self.by_cell = np.insert(self.by_cell, at, ckeys[order])
-        self.cell_frame = np.insert(self.cell_frame, at, t[order])
-        self.cell_xy = np.insert(self.cell_xy, at, track[order], axis=0)
-        self.cell_owner = np.insert(self.cell_owner, at, np.int32(index))
+        self.moving.insert(self._key(t, c), t, track, index)
+        self.by_cell.insert(c[:, 0] << 21 | c[:, 1], t, track, index)
         spots = np.array([[*track[0], 0, d, index], [*track[-1], d + n, np.inf, index]], float)
         spots = spots[spots[:, 2] < spots[:, 3]]
         c = self._cells(spots[:, :2])
@@ -259,11 +293,8 @@ class Reservations:
 
     def remove(self, index: int) -> None:
         """Free everything ``index`` holds (the others keep their places)."""
-        keep = self.owner != index
-        self.keys, self.owner, self.xy = self.keys[keep], self.owner[keep], self.xy[keep]
-        keep = self.cell_owner != index
-        self.by_cell, self.cell_frame = self.by_cell[keep], self.cell_frame[keep]
-        self.cell_xy, self.cell_owner = self.cell_xy[keep], self.cell_owner[keep]
+        self.moving.remove(index)
+        self.by_cell.remove(index)
         keep = self.spots[:, 4] != index
         self.spot_keys, self.spots = self.spot_keys[keep], self.spots[keep]
         del self.placed[index]
