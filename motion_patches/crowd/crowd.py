@@ -441,14 +441,18 @@ def _timed(table, s, max_delay, max_hold, ramp, found):
     wait and holds clears it. One hold alone is tried first (a walk that stops where it
     must rather than one that starts late, as :func:`_improve` prefers), then a wait and
     one hold, then a wait and up to four holds."""
-    timing = None
     tries = ((0, 1), (max_delay, 1), (max_delay, 4))
     if s.holdable is None:
         tries = ((max_delay, 0),)
     busy = table.busy(s.track, max(table.horizon, len(s.track)) + max_delay + max_hold + 1)
-    for wait, holds in tries:
-        timing = path_timing.earliest(s.track, busy, s.holdable, ramp, wait, wait + max_hold, holds)
-        if timing is not None:
+    # the widest search (the last) first: when it finds nothing, none of the others will
+    timing = path_timing.earliest(
+        s.track, busy, s.holdable, ramp, tries[-1][0], tries[-1][0] + max_hold, tries[-1][1]
+    )
+    for wait, holds in tries[:-1] if timing is not None else ():
+        first = path_timing.earliest(s.track, busy, s.holdable, ramp, wait, wait + max_hold, holds)
+        if first is not None:
+            timing = first
             break
     if timing is None:
         return s, found
