@@ -18,6 +18,7 @@ from ..adapter import scene as scene_io
 from ..adapter import transaction
 from ..motion_patches import cluster
 from ..motion_patches.crowd import crowd, members
+from ..motion_patches.kinematics import scene_rate
 from ..motion_patches.planning import moving_props
 from ..motion_patches.planning.settings import PlanSettings
 from ..motion_patches.props.environment import Obstacle
@@ -275,10 +276,6 @@ class _Crowd:
     def ramp(self) -> int:
         return max(2, int(round(CROWD_HOLD_RAMP_SECONDS * self.fps)) // 2 * 2)
 
-    @property
-    def same_rate(self) -> bool:
-        return abs(self.fps - self.patch.gait.fps) < 1e-6
-
 
 def _request(scene, pairs, patch_name, settings, frame_start, context, max_wait_seconds, spacing):
     """The crowd request checked (:class:`MotionPatchesError` before anything is written):
@@ -469,10 +466,10 @@ def _task(c, n, ghosts=()):
     )
 
 
-def _entry(member):
-    """[n, plan, raw piece motions, placed motion, holdable frames or None] of a member."""
+def _entry(c, member):
+    """[n, plan, raw piece motions, placed motion, holdable frames] of a member."""
     m = member
-    return [m.entry, m.plan, m.raw, (m.motions, m.bounds, m.world), m.holdable]
+    return [m.entry, m.plan, m.raw, _placed(c.scene, c.patch, c.rigs[m.entry], m.raw), m.holdable]
 
 
 def _plan_each(c, progress):
@@ -496,7 +493,7 @@ def _plan_each(c, progress):
         if isinstance(a, members.NoPlan):
             failed.append((c.pairs[n][0].name, str(_not_found(c.pairs[n][0].name, a))))
         else:
-            planned.append(_entry(a))
+            planned.append(_entry(c, a))
     return planned, failed
 
 
@@ -507,7 +504,7 @@ def _replan(c, versions, k, ghosts):
     a = members.plan_member(_task(c, n, ghosts), _world_of(c, c.sizes[n]).members)
     if isinstance(a, members.NoPlan):
         return None
-    versions[k].append(_entry(a))
+    versions[k].append(_entry(c, a))
     return _root_track(versions[k][-1][3]), versions[k][-1][4]
 
 
@@ -539,8 +536,9 @@ def _lay_holds(c, planned, schedules):
         if s.holds:
             at = []
             for k, h in s.holds:
-                bounds = np.concatenate(([0], np.cumsum([m.frames - 1 for m in p[2]])))
-                p[1], p[2] = _with_hold(p[1], p[2], bounds, k, h, c.ramp)
+                rate = c.fps / c.patch.gait.fps  # scene frames per patch frame
+                bounds = scene_rate.piece_bounds([m.frames for m in p[2]], rate)[1]
+                p[1], p[2] = _with_hold(p[1], p[2], bounds, k, h, c.ramp, rate)
                 at = [(f + h + c.ramp if f > k else f, n) for f, n in at] + [(k, h)]
             p[3] = _placed(c.scene, c.patch, c.rigs[p[0]], p[2])
             holds[c.pairs[p[0]][0].name] = sorted(at)

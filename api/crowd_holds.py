@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from ..motion_patches.crowd import members
+from ..motion_patches.crowd import held_motion, members
 from ..motion_patches.kinematics import retime
 from .errors import MotionPatchesError
 
@@ -29,16 +29,21 @@ def _holdable(plan, placed, ramp):
     return members.holdable(plan, placed[1], placed[2], ramp)
 
 
-def _with_hold(plan, raw, bounds, at, hold, ramp):
+def _with_hold(plan, raw, bounds, at, hold, ramp, rate=1.0):
     """(plan, raw piece motions) with an idle hold of ``hold`` frames on scene frame ``at``
-    (the scene at the patch's rate): the piece it falls in is time-warped
-    (:func:`motion_patches.kinematics.retime.held`) and becomes a piece of kind "hold", so it is
-    written as its own action, not the shared segment action."""
+    (``bounds``: the pieces' scene frames, ``rate`` scene frames per patch frame): the piece
+    it falls in is time-warped (:func:`motion_patches.kinematics.retime.held`; at another rate
+    :func:`motion_patches.crowd.held_motion.held_piece`) and becomes a piece of kind "hold",
+    so it is written as its own action, not the shared segment action."""
     i = _piece_holding(plan, bounds, at, ramp)
     if i is None:
         raise MotionPatchesError(f"internal: frame {at} is in no walking piece to hold in")
     raw = list(raw)
-    raw[i] = retime.held(raw[i], at - bounds[i], hold, ramp)
+    if abs(rate - 1.0) < 1e-9:
+        raw[i] = retime.held(raw[i], at - bounds[i], hold, ramp)
+    else:
+        span = int(bounds[i + 1] - bounds[i])
+        raw[i] = held_motion.held_piece(raw[i], at - bounds[i], hold, ramp, span, rate)
     pieces = list(plan.pieces)
     pieces[i] = dataclasses.replace(pieces[i], kind="hold")
     return dataclasses.replace(plan, pieces=pieces), raw

@@ -15,7 +15,14 @@ re-routes) and the final check :func:`motion_patches.crowd.crowd.conflicts_of`. 
 into path planning, motion synthesis, resolution and the final check. Memory: the peak
 traced by ``tracemalloc`` over the resolution and check (run a second time, traced), and the
 process's peak resident size after each size (``resource``; it only grows, sizes run in
-increasing order).
+increasing order). Per character, milliseconds of each stage.
+
+Then two dense scenes at a 24 fps scene from the 30 fps patch (``--scenes``, the ones
+tests/core/test_crowd_dense.py checks, built by it): a four-way crossing of 40 among seven
+pillars on a 21 m plaza and a counter-flow of 40 through a 2 m doorway. Each is measured on
+the motion as written (holds laid into the pieces, re-played at the scene's rate): the pairs
+of roots closer than the spacing on some frame, the closest approach and root frames inside
+a prop.
 """
 
 import argparse
@@ -33,15 +40,16 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
-for p in (str(REPO), str(HERE)):
+for p in (str(REPO), str(HERE), str(REPO / "tests" / "core")):
     if p not in sys.path:
         sys.path.insert(0, p)
 
 import bench_core as core  # noqa: E402
+import test_crowd_dense as dense  # noqa: E402
 
-from motion_patches.crowd import crowd
-from motion_patches.kinematics.motion import concatenate
-from motion_patches.planning.planner import PlanError, SegmentPlanner, plan_motions
+from motion_patches import cluster
+from motion_patches.crowd import crowd, members
+from motion_patches.planning.settings import PlanSettings
 from motion_patches.props.environment import Environment, Obstacle
 
 RADIUS = 0.25
@@ -63,8 +71,21 @@ def parse_args(argv=None):
         metavar="N",
         help="cProfile the crowd of size N and print the top functions",
     )
+    p.add_argument(
+        "--scenes",
+        default="four-way,doorway",
+        help="dense scenes to run after the sizes (four-way, doorway; empty: none)",
+    )
+    p.add_argument(
+        "--workers",
+        default="1,2",
+        help="the members planned on Dask LocalClusters of these many worker processes, "
+        "each in turn (0: in this process); the crowd is resolved once",
+    )
     p.add_argument("--json", type=Path, help="also write the full results here")
-    return p.parse_args(argv)
+    args = p.parse_args(argv)
+    args.workers = [int(w) for w in args.workers.split(",")]
+    return args
 
 
 def plaza(patch, n, args):
@@ -107,77 +128,68 @@ def plaza(patch, n, args):
     return env, ends, side
 
 
-def holdable(patch, plan, world, bounds, ramp):
-    """As ``api._holdable``: double support inside a walking piece with room for ramps."""
-    c = world.contacts
-    ok = c[:, :2].any(axis=1) & c[:, 2:].any(axis=1)
-    inside = np.zeros_like(ok)
-    for i, p in enumerate(plan.pieces):
-        if p.kind not in CLIPS:
-            inside[bounds[i] + ramp // 2 : bounds[i + 1] - ramp // 2 + 1] = True
-    return ok & inside
+def member_world(patch, env):
+    """The world every member of a bench crowd is planned in (the planner's defaults)."""
+    return members.MemberWorld(
+        patch, env, [], PlanSettings(radius=RADIUS), scene_fps=patch.gait.fps
+    )
+
+
+def member_task(ends, i, ghosts=()):
+    """Member i: round the spots where the others stand still (and ``ghosts``)."""
+    spots = [(f"spot{m}", poly) for m, poly in crowd.standing_spots(ends, i, SPACING, RADIUS)]
+    return members.MemberTask(i, (ends[i][0], ends[i][1], None, None), spots=spots, ghosts=ghosts)
+
+
+def fingerprint(answers):
+    """What must not depend on where the members were planned."""
+    return [
+        (a.entry, a.plan.cost, a.root_track.tobytes())
+        if isinstance(a, members.Member)
+        else (a.entry, a.kind)
+        for a in answers
+    ]
+
+
+def plan_members(patch, env, ends, workers):
+    """(answers, seconds, cluster start seconds) of every member planned on ``workers``
+    Dask worker processes (0: in this process)."""
+    t0 = time.perf_counter()
+    ex = cluster.executor(workers or None)
+    started = time.perf_counter() - t0
+    try:
+        t0 = time.perf_counter()
+        tasks = [member_task(ends, i) for i in range(len(ends))]
+        answers = ex.map(members.plan_member, tasks, world=member_world(patch, env))
+        return answers, time.perf_counter() - t0, started
+    finally:
+        ex.close()
 
 
 def run_crowd(patch, n, args):
     env, ends, side = plaza(patch, n, args)
-    planner = SegmentPlanner(patch, env)
-    skel = patch.gait.skeleton
     fps = patch.gait.fps
-    ramp = max(2, int(round(0.5 * fps)) // 2 * 2)
-    t = {"paths": 0.0, "synthesis": 0.0, "replan": 0.0}
-
-    def solve(i, extra=()):
-        spots = [
-            Obstacle(f"spot{m}", poly) for m, poly in crowd.standing_spots(ends, i, SPACING, RADIUS)
-        ]
-        ghosts = [Obstacle(f"ghost{k}", poly) for k, poly in enumerate(extra)]
-        mine = np.array([ends[i][0][:2], ends[i][1][:2]])
-        ghosts = [g for g in ghosts if not g.within(mine, RADIUS).any()]
-        t0 = time.perf_counter()
-        for ob in spots + ghosts:
-            env.place(ob)
-        try:
-            try:
-                plan = planner.plan(*ends[i])
-            except PlanError:
-                if not spots or ghosts:
-                    raise
-                for ob in spots:
-                    env.remove(ob.name)
-                spots = []
-                plan = planner.plan(*ends[i])
-        finally:
-            for ob in spots + ghosts:
-                env.remove(ob.name)
-            t["paths"] += time.perf_counter() - t0
-        t0 = time.perf_counter()
-        ms = plan_motions(patch, plan)
-        world = concatenate(ms)
-        bounds = np.concatenate(([0], np.cumsum([m.frames - 1 for m in ms])))
-        root = world.world_matrices(skel)[:, skel.root, :2, 3]
-        mask = holdable(patch, plan, world, bounds, ramp)
-        t["synthesis"] += time.perf_counter() - t0
-        return root, mask
-
-    tracks, masks, index, failed = [], [], [], 0
-    for i in range(n):
-        try:
-            root, mask = solve(i)
-        except PlanError:
-            failed += 1
-            continue
-        tracks.append(root)
-        masks.append(mask)
-        index.append(i)
+    ramp = members.MemberWorld(patch, env, [], PlanSettings(), scene_fps=fps).ramp
+    by_workers, answers = {}, None
+    for w in args.workers:
+        got, secs, started = plan_members(patch, env, ends, w)
+        by_workers[w] = {"members_s": secs, "cluster_start_s": started}
+        if answers is None:
+            answers = got
+        elif fingerprint(got) != fingerprint(answers):
+            raise SystemExit(f"{w} workers planned other members than {args.workers[0]}")
+    planned = [a for a in answers if isinstance(a, members.Member)]
+    tracks = [a.root_track for a in planned]
+    masks = [a.holdable for a in planned]
+    index = [a.entry for a in planned]
+    world = member_world(patch, env)
+    t = {"replan": 0.0}
 
     def replan(k, discs):
         t0 = time.perf_counter()
-        try:
-            return solve(index[k], discs)
-        except PlanError:
-            return None
-        finally:
-            t["replan"] += time.perf_counter() - t0
+        a = members.plan_member(member_task(ends, index[k], discs), world)
+        t["replan"] += time.perf_counter() - t0
+        return None if isinstance(a, members.NoPlan) else (a.root_track, a.holdable)
 
     wait = round(args.max_wait * fps)
     t0 = time.perf_counter()
@@ -192,7 +204,7 @@ def run_crowd(patch, n, args):
         ramp=ramp,
         holdable=masks,
     )
-    t_resolve = time.perf_counter() - t0 - t["replan"]  # re-plans count as paths
+    t_resolve = time.perf_counter() - t0 - t["replan"]  # re-plans counted apart
     finals = [s.track for s in schedules]
     delays = [s.delay for s in schedules]
     t0 = time.perf_counter()
@@ -215,46 +227,100 @@ def run_crowd(patch, n, args):
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
     frames = [len(s.track) + s.delay for s in schedules]
+    last = by_workers[args.workers[-1]]["members_s"]
+    rest = {"replans": t["replan"], "resolve": t_resolve, "check": t_check}
     return {
         "characters": n,
         "plaza_m": round(side, 1),
         "props": len(env.obstacles),
-        "planned": len(tracks),
-        "no_path": failed,
+        "planned": len(planned),
+        "no_path": n - len(planned),
         "holds": sum(bool(s.holds) for s in schedules),
         "waits": sum(s.delay > 0 for s in schedules),
         "rerouted": sum(s.rerouted for s in schedules),
         "conflicts_left": len(final),
         "conflicts_resolve": len(left),
         "frames_max": int(max(frames)) if frames else 0,
-        "seconds": {
-            "paths": t["paths"],
-            "synthesis": t["synthesis"],
-            "resolve": t_resolve,
-            "check": t_check,
-            "total": t["paths"] + t["synthesis"] + t_resolve + t_check,
-        },
+        "members_by_workers": {str(w): v for w, v in by_workers.items()},
+        "seconds": {"members": last, **rest, "total": last + sum(rest.values())},
         "resolve_ms_per_character": 1000 * t_resolve / max(len(tracks), 1),
+        "ms_per_character": {
+            k: 1000 * v / max(n, 1) for k, v in (("members", last), *rest.items())
+        },
         "resolve_peak_mb": peak / 2**20,
         "process_max_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
     }
 
 
-def markdown(rows):
+SCENES = {"four-way": (dense.fourway, 4.0), "doorway": (dense.doorway, 15.0)}
+
+
+def run_scene(patch, name):
+    """A dense scene planned as api.plan_crowd does, measured on the motion as written."""
+    build, wait = SCENES[name]
+    env, ends = build(patch)
+    times = {}
+    pieces, schedules, ramp = dense.plan_crowd(patch, env, ends, dense.SCENE_FPS, wait, times=times)
+    t0 = time.perf_counter()
+    roots = dense.written_roots(pieces, schedules, dense.SCENE_FPS / patch.gait.fps, ramp)
+    delays = [s.delay for s in schedules]
+    left = crowd.conflicts_of(roots, delays, dense.SPACING)
+    closest, inside = dense.closest_and_inside(roots, delays, env)
+    times["check"] = time.perf_counter() - t0
+    n = len(ends)
+    return {
+        "scene": name,
+        "characters": n,
+        "planned": len(pieces),
+        "max_wait_s": wait,
+        "holds": sum(len(s.holds) for s in schedules),
+        "waits": sum(s.delay > 0 for s in schedules),
+        "rerouted": sum(s.rerouted for s in schedules),
+        "conflicts_left": len(left),
+        "closest_m": float(closest),
+        "root_frames_in_props": inside,
+        "seconds": {**times, "total": sum(times.values())},
+        "ms_per_character": {k: 1000 * v / n for k, v in times.items()},
+    }
+
+
+def scene_markdown(rows):
     out = [
-        "| characters | plaza | planned | no path | holds | waits | re-routed | conflicts "
-        "left | paths s | synthesis s | resolve s | check s | total s | resolve peak MB "
-        "| max RSS MB |",
-        "|" + "---|" * 15,
+        "| scene | planned | holds | waits | re-routed | conflicts left | closest m | in props "
+        "| seconds | paths ms/ch | synthesis ms/ch | resolve ms/ch | check ms/ch |",
+        "|" + "---|" * 13,
     ]
     for r in rows:
-        s = r["seconds"]
+        m = r["ms_per_character"]
+        out.append(
+            f"| {r['scene']} | {r['planned']}/{r['characters']} | {r['holds']} | {r['waits']} "
+            f"| {r['rerouted']} | {r['conflicts_left']} | {r['closest_m']:.3f} "
+            f"| {r['root_frames_in_props']} | {r['seconds']['total']:.1f} | {m['paths']:.0f} "
+            f"| {m['synthesis']:.0f} | {m['resolve']:.0f} | {m['check']:.0f} |"
+        )
+    return "\n".join(out)
+
+
+def markdown(rows):
+    workers = list(rows[0]["members_by_workers"]) if rows else []
+    label = {"0": "in process", "1": "1 worker"}
+    cols = [f"members s, {label.get(w, w + ' workers')}" for w in workers]
+    out = [
+        "| characters | plaza | planned | no path | holds | waits | re-routed | conflicts left | "
+        + " | ".join(cols)
+        + " | re-plans s | resolve s | check s | total s | ms per character | resolve ms/ch "
+        "| resolve peak MB | max RSS MB |",
+        "|" + "---|" * (16 + len(cols)),
+    ]
+    for r in rows:
+        s, by = r["seconds"], r["members_by_workers"]
         out.append(
             f"| {r['characters']} | {r['plaza_m']} m | {r['planned']} | {r['no_path']} "
-            f"| {r['holds']} | {r['waits']} | {r['rerouted']} | {r['conflicts_left']} "
-            f"| {s['paths']:.1f} | {s['synthesis']:.1f} | {s['resolve']:.2f} "
-            f"| {s['check']:.2f} | {s['total']:.1f} | {r['resolve_peak_mb']:.1f} "
-            f"| {r['process_max_rss_mb']:.0f} |"
+            f"| {r['holds']} | {r['waits']} | {r['rerouted']} | {r['conflicts_left']} | "
+            + " | ".join(f"{by[w]['members_s']:.1f}" for w in workers)
+            + f" | {s['replans']:.1f} | {s['resolve']:.2f} | {s['check']:.2f} | {s['total']:.1f} "
+            f"| {1000 * s['total'] / r['characters']:.0f} | {r['resolve_ms_per_character']:.0f} "
+            f"| {r['resolve_peak_mb']:.1f} | {r['process_max_rss_mb']:.0f} |"
         )
     return "\n".join(out)
 
@@ -285,10 +351,19 @@ def main(argv=None):
             print(buf.getvalue())
         print(f"  {json.dumps(r)}", flush=True)
         res["crowds"].append(r)
+    res["scenes"] = []
+    for name in [s for s in args.scenes.split(",") if s]:
+        print(f"{name} ...", flush=True)
+        r = run_scene(patch, name)
+        print(f"  {json.dumps(r)}", flush=True)
+        res["scenes"].append(r)
     print()
-    print(json.dumps({"machine": res["machine"], "crowds": res["crowds"]}))
+    print(json.dumps({k: res[k] for k in ("machine", "crowds", "scenes")}))
     print()
     print(markdown(res["crowds"]))
+    if res["scenes"]:
+        print()
+        print(scene_markdown(res["scenes"]))
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps(res, indent=1))

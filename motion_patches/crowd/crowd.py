@@ -6,9 +6,10 @@ character), with the spots where the others stand still while it walks as extra
 obstacles: the goals of the characters before it in priority and the starts of those
 after it. The crowd is then resolved in priority order against a space-time reservation
 table (:class:`Reservations`): a character that would come too close to one placed
-before it first tries an idle hold mid-walk (a time warp to a stop on a double-support
-frame, feet planted), then a later start, then a re-route round where the other walks
-then. What none of these clears is reported by pair and frame, not hidden.
+before it is re-timed along its path (:mod:`.path_timing`: idle holds mid-walk, time warps
+to a stop on a double-support frame with feet planted, and a later start), else re-routed
+round where the other walks then; pairs left are mended locally, then by restarts with
+raised priorities. What none of these clears is reported by pair and frame, not hidden.
 """
 
 from collections.abc import Callable, Sequence
@@ -19,6 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..kinematics import retime
+from . import path_timing
 
 
 def disc(centre: Sequence[float] | np.ndarray, radius: float, sides: int = 12) -> np.ndarray:
@@ -41,15 +43,11 @@ def standing_spots(
         return []
     grow = max(spacing - radius, 0.05)
     mine = np.array([ends[n][0][:2], ends[n][1][:2]], float)
-    out = []
-    for m, (start, goal) in enumerate(ends):
-        if m == n:
-            continue
-        where = np.asarray(goal if m < n else start, float)[:2]
-        if np.linalg.norm(mine - where, axis=1).min() < grow + radius:
-            continue
-        out.append((m, disc(where, grow)))
-    return out
+    where = np.array([(g if m < n else s)[:2] for m, (s, g) in enumerate(ends)], float)
+    near = np.linalg.norm(where[:, None, :] - mine[None], axis=2).min(axis=1) < grow + radius
+    keep = np.nonzero(~near & (np.arange(len(ends)) != n))[0]
+    ring = disc((0.0, 0.0), grow)
+    return [(int(m), ring + where[m]) for m in keep]
 
 
 def timeline(track: np.ndarray, delay: int, horizon: int) -> np.ndarray:
@@ -88,6 +86,67 @@ def ghosts(
 _OFF = 1 << 20  # cell indices are shifted by this into a key's 21-bit fields
 
 
+class _Sorted:
+    """Reserved root positions (frame, xy, owner) sorted by an int64 key, in two levels: a
+    large one and a small recent one that each reservation is inserted into and that is
+    merged into the large one once it holds a quarter as much. An insertion then copies the
+    small level, not the whole crowd's, and the merges cost O(N log N) in all."""
+
+    _COLUMNS = ("key", "frame", "xy", "owner")
+
+    def __init__(self):
+        self.levels = [self._empty(), self._empty()]
+
+    @staticmethod
+    def _empty():
+        return {
+            "key": np.empty(0, np.int64),
+            "frame": np.empty(0, np.int64),
+            "xy": np.empty((0, 2), float),
+            "owner": np.empty(0, np.int32),
+        }
+
+    @property
+    def size(self):
+        return sum(lv["key"].size for lv in self.levels)
+
+    def insert(self, key, frame, xy, owner):
+        order = np.argsort(key, kind="stable")
+        new = {"key": key, "frame": frame, "xy": xy, "owner": np.full(key.size, owner, np.int32)}
+        recent = self.levels[1]
+        at = np.searchsorted(recent["key"], key[order])
+        for c in self._COLUMNS:
+            recent[c] = np.insert(recent[c], at, new[c][order], axis=0)
+        main = self.levels[0]
+        if recent["key"].size > max(4096, main["key"].size // 4):
+            both = {c: np.concatenate((main[c], recent[c])) for c in self._COLUMNS}
+            order = np.argsort(both["key"], kind="stable")
+            self.levels = [{c: both[c][order] for c in self._COLUMNS}, self._empty()]
+
+    def remove(self, owner):
+        for lv in self.levels:
+            keep = lv["owner"] != owner
+            for c in self._COLUMNS:
+                lv[c] = lv[c][keep]
+
+    def near(self, q):
+        """(query index, frame, xy, owner) of every entry whose key is one of ``q``."""
+        out = []
+        for lv in self.levels:
+            if not lv["key"].size:
+                continue
+            lo = np.searchsorted(lv["key"], q, "left")
+            n = np.searchsorted(lv["key"], q, "right") - lo
+            hit = np.nonzero(n)[0]
+            if hit.size:
+                n = n[hit]
+                ent = np.repeat(lo[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
+                out.append((np.repeat(hit, n), lv["frame"][ent], lv["xy"][ent], lv["owner"][ent]))
+        if not out:
+            return np.empty(0, int), np.empty(0, np.int64), np.empty((0, 2)), np.empty(0, int)
+        return tuple(np.concatenate(c) for c in zip(*out))
+
+
 class Reservations:
     """A space-time reservation table (prioritised planning: Silver's cooperative
     pathfinding, with frames as time steps): every reserved character holds the cells its
@@ -102,11 +161,10 @@ class Reservations:
     def __init__(self, spacing):
         self.spacing = float(spacing)
         self.cell = max(self.spacing, 1e-6) / np.sqrt(2.0)
-        self.keys = np.empty(0, np.int64)  # moving: sorted (frame, cell) keys
-        self.owner = np.empty(0, np.int32)
-        self.xy = np.empty((0, 2), float)
+        self.moving = _Sorted()  # keyed by (frame, cell)
         self.spot_keys = np.empty(0, np.int64)  # standing spots: sorted cell keys
         self.spots = np.empty((0, 5), float)  # x, y, first frame, end frame (inf), owner
+        self.by_cell = _Sorted()  # moving again, keyed by cell alone
         self.placed = {}  # index -> (delay, track)
         self.horizon = 0
 
@@ -120,22 +178,14 @@ class Reservations:
     _RING = np.array([(i, j) for i in range(-2, 3) for j in range(-2, 3)], np.int64)
 
     def _moving_near(self, t, xy):
-        """(query row, table entry) pairs of moving entries on frame ``t[row]`` within two
-        cells of ``xy[row]``."""
-        if not self.keys.size or not len(t):
-            return np.empty(0, int), np.empty(0, int)
+        """(query row, xy, owner) of moving entries on frame ``t[row]`` within two cells of
+        ``xy[row]``."""
+        if not self.moving.size or not len(t):
+            return np.empty(0, int), np.empty((0, 2)), np.empty(0, int)
         c = self._cells(xy)[:, None, :] + self._RING[None]
         q = self._key(np.repeat(np.asarray(t)[:, None], len(self._RING), 1), c).ravel()
-        lo = np.searchsorted(self.keys, q, "left")
-        hi = np.searchsorted(self.keys, q, "right")
-        n = hi - lo
-        hit = np.nonzero(n)[0]
-        if not hit.size:
-            return np.empty(0, int), np.empty(0, int)
-        n = n[hit]
-        entries = np.repeat(lo[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
-        rows = np.repeat(hit // len(self._RING), n)
-        return rows, entries
+        rows, _, where, owner = self.moving.near(q)
+        return rows // len(self._RING), where, owner
 
     def _spots_near(self, xy):
         """Indices of standing spots within two cells of any of the points ``xy``."""
@@ -149,6 +199,37 @@ class Reservations:
             np.concatenate([np.arange(a, b) for a, b in zip(lo, hi) if b > a] or [np.empty(0, int)])
         )
 
+    def busy(self, track: np.ndarray, frames: int, margin: float = 0.01) -> np.ndarray:
+        """(len(track), frames) bool: ``track[k]`` closer than the spacing (and ``margin``)
+        to a reserved root on frame ``t`` (walking then, or standing at its start or goal
+        then), for every frame from 0; the last column stands for every frame after it.
+        Found from the cells about the track over all frames at once (the entries sorted by
+        cell), so its cost follows the traffic near the track, not the frames searched."""
+        track = np.asarray(track, float)
+        n, s2 = len(track), (self.spacing + margin) ** 2
+        out = np.zeros((n, frames + 2), np.int32)
+        if self.by_cell.size:
+            c = self._cells(track)[:, None, :] + self._RING[None]
+            rows, when, where, _ = self.by_cell.near((c[..., 0] << 21 | c[..., 1]).ravel())
+            if rows.size:
+                rows = rows // len(self._RING)
+                d = where - track[rows]
+                close = np.einsum("ij,ij->i", d, d) < s2
+                t = np.minimum(when[close], frames)
+                np.add.at(out, (rows[close], t), 1)
+                np.add.at(out, (rows[close], t + 1), -1)
+        near = self._spots_near(track)
+        if near.size:  # standing: a span of frames each
+            sp = self.spots[near]
+            d = track[:, None, :] - sp[None, :, :2]
+            k, j = np.nonzero(np.einsum("kjx,kjx->kj", d, d) < s2)
+            lo = np.minimum(sp[j, 2], frames).astype(int)
+            hi = np.minimum(sp[j, 3], frames + 1).astype(int)
+            keep = lo < hi
+            np.add.at(out, (k[keep], lo[keep]), 1)
+            np.add.at(out, (k[keep], hi[keep]), -1)
+        return (np.cumsum(out, axis=1) > 0)[:, : frames + 1]
+
     def check(self, track: ArrayLike, delay: int = 0) -> dict[int, tuple[np.ndarray, int, float]]:
         """Conflicts of a character walking ``track`` (frames, 2) from frame ``delay`` on,
         standing at its first point before and at its last point after: {other index:
@@ -158,20 +239,22 @@ class Reservations:
         found = []  # (other, frame, distance) arrays
         # walk against walks
         t = np.arange(d, d + n)
-        rows, ent = self._moving_near(t, track)
+        rows, where, owner = self._moving_near(t, track)
         if rows.size:
-            dist = np.linalg.norm(self.xy[ent] - track[rows], axis=1)
+            dist = np.linalg.norm(where - track[rows], axis=1)
             close = dist < s
-            found.append((self.owner[ent[close]], t[rows[close]], dist[close]))
+            found.append((owner[close], t[rows[close]], dist[close]))
         # my start (before I leave) and goal (after I arrive) against the others' walks
         end = max(self.horizon, d + n)
         for frames, xy in ((np.arange(0, d), track[0]), (np.arange(d + n, end), track[-1])):
             if frames.size:
-                rows, ent = self._moving_near(frames, np.broadcast_to(xy, (frames.size, 2)))
+                rows, where, owner = self._moving_near(
+                    frames, np.broadcast_to(xy, (frames.size, 2))
+                )
                 if rows.size:
-                    dist = np.linalg.norm(self.xy[ent] - xy, axis=1)
+                    dist = np.linalg.norm(where - xy, axis=1)
                     close = dist < s
-                    found.append((self.owner[ent[close]], frames[rows[close]], dist[close]))
+                    found.append((owner[close], frames[rows[close]], dist[close]))
         # everything of mine against the others' standing spots
         near = self._spots_near(track)
         if near.size:
@@ -206,11 +289,9 @@ class Reservations:
         track = np.asarray(track, float)
         d, n = int(delay), len(track)
         t = np.arange(d, d + n)
-        keys = self._key(t, self._cells(track))
-        at = np.searchsorted(self.keys, keys)
-        self.keys = np.insert(self.keys, at, keys)
-        self.owner = np.insert(self.owner, at, np.int32(index))
-        self.xy = np.insert(self.xy, at, track, axis=0)
+        c = self._cells(track)
+        self.moving.insert(self._key(t, c), t, track, index)
+        self.by_cell.insert(c[:, 0] << 21 | c[:, 1], t, track, index)
         spots = np.array([[*track[0], 0, d, index], [*track[-1], d + n, np.inf, index]], float)
         spots = spots[spots[:, 2] < spots[:, 3]]
         c = self._cells(spots[:, :2])
@@ -222,6 +303,15 @@ class Reservations:
         self.spots = np.insert(self.spots, at, spots, axis=0)
         self.placed[index] = (d, track)
         self.horizon = max(self.horizon, d + n)
+
+    def remove(self, index: int) -> None:
+        """Free everything ``index`` holds (the others keep their places)."""
+        self.moving.remove(index)
+        self.by_cell.remove(index)
+        keep = self.spots[:, 4] != index
+        self.spot_keys, self.spots = self.spot_keys[keep], self.spots[keep]
+        del self.placed[index]
+        self.horizon = max((d + len(t) for d, t in self.placed.values()), default=0)
 
     def line(self, index: int, horizon: int) -> np.ndarray:
         """(horizon, 2) positions of a reserved character (as :func:`timeline`)."""
@@ -277,6 +367,7 @@ class Schedule:
     track: np.ndarray | None = None
     holdable: np.ndarray | None = None
     rank: int = 0
+    base: tuple = None  # (track, holdable) of its version before any wait or hold
 
     @property
     def rerouted(self) -> bool:
@@ -322,13 +413,13 @@ def _improve(table, s, found, max_delay, max_hold, step, ramp):
     def hold(k, h):
         track, mask = held_track(s.track, k, h, ramp, s.holdable)
         c = table.check(track, s.delay)
-        option = Schedule(s.delay, s.holds + ((k, h),), s.version, track, mask)
+        option = Schedule(s.delay, s.holds + ((k, h),), s.version, track, mask, base=s.base)
         options.append((_too_close(c), h, option, c))
         return not c
 
     def wait(d):
         c = table.check(s.track, s.delay + d)
-        option = Schedule(s.delay + d, s.holds, s.version, s.track, s.holdable)
+        option = Schedule(s.delay + d, s.holds, s.version, s.track, s.holdable, base=s.base)
         options.append((_too_close(c), d, option, c))
         return not c
 
@@ -358,6 +449,37 @@ def _improve(table, s, found, max_delay, max_hold, step, ramp):
     return best[2], best[3]
 
 
+def _timed(table, s, max_delay, max_hold, ramp, found):
+    """``s`` re-timed to its earliest arrival clear of everyone reserved
+    (:func:`path_timing.earliest`: a wait at its start and idle holds on the way), with the
+    conflicts left (none); ``s`` and ``found`` unchanged when no timing within the longest
+    wait and holds clears it. One hold alone is tried first (a walk that stops where it
+    must rather than one that starts late, as :func:`_improve` prefers), then a wait and
+    one hold, then a wait and up to four holds."""
+    tries = ((0, 1), (max_delay, 1), (max_delay, 4))
+    if s.holdable is None:
+        tries = ((max_delay, 0),)
+    busy = table.busy(s.track, max(table.horizon, len(s.track)) + max_delay + max_hold + 1)
+    # the widest search (the last) first: when it finds nothing, none of the others will
+    timing = path_timing.earliest(
+        s.track, busy, s.holdable, ramp, tries[-1][0], tries[-1][0] + max_hold, tries[-1][1]
+    )
+    for wait, holds in tries[:-1] if timing is not None else ():
+        first = path_timing.earliest(s.track, busy, s.holdable, ramp, wait, wait + max_hold, holds)
+        if first is not None:
+            timing = first
+            break
+    if timing is None:
+        return s, found
+    delay, holds = timing
+    track, mask = s.track, s.holdable
+    for k, h in holds:
+        track, mask = held_track(track, k, h, ramp, mask)
+    timed = Schedule(delay, s.holds + holds, s.version, track, mask, s.rank, s.base)
+    left = table.check(track, delay)
+    return (timed, left) if _too_close(left) < _too_close(found) else (s, found)
+
+
 def _resolve_once(
     order,
     tracks,
@@ -381,9 +503,12 @@ def _resolve_once(
     for i in order:
         track = tracks[i]
         s = Schedule(0, (), 0, np.asarray(track, float)[:, :2], holdable[i])
+        s.base = (s.track, s.holdable)
         best, reserved = None, []
         for attempt in range(rounds + 1):
             found = table.check(s.track)
+            if found:
+                s, found = _timed(table, s, max_delay, max_hold, ramp, found)
             for _ in range(stages):
                 if not found:
                     break
@@ -403,6 +528,7 @@ def _resolve_once(
                 break
             versions[i] += 1
             s = Schedule(0, (), versions[i], np.asarray(new[0], float)[:, :2], new[1])
+            s.base = (s.track, s.holdable)
         s, found = best
         table.reserve(i, s.track, s.delay)
         schedules[i] = s
@@ -417,7 +543,64 @@ def _resolve_once(
                     "distance_m": dist,
                 }
             )
-    return schedules, conflicts
+    return schedules, conflicts, table
+
+
+def _repair(table, schedules, conflicts, max_delay, max_hold, ramp):
+    """Conflicts left mended locally, cheaper than a restart: a character still too close
+    is freed with those it meets, placed first and re-timed (:func:`_timed`), then they are
+    re-timed round it; kept where all of them come clear, else put back as they were.
+    ``schedules`` and ``table`` are changed in place; the ranks of the group are re-dealt in
+    their new order. Returns how many groups were mended."""
+    mended = 0
+    for b in list(dict.fromkeys(c["b"] for c in conflicts)):
+        if not table.check(schedules[b].track, schedules[b].delay):
+            continue  # mended with another group
+        found = _without(table, b, schedules[b])
+        group = [b] + sorted(found, key=lambda j: schedules[j].rank)
+        old = {i: schedules[i] for i in group}
+        for i in group[1:]:
+            table.remove(i)
+        new = {}
+        for i in group:
+            fresh = Schedule(0, (), old[i].version, *old[i].base, old[i].rank, old[i].base)
+            c = table.check(fresh.track)
+            timed, c = _timed(table, fresh, max_delay, max_hold, ramp, c) if c else (fresh, c)
+            if c:
+                break
+            table.reserve(i, timed.track, timed.delay)
+            new[i] = timed
+        if len(new) < len(group):
+            for i in new:
+                table.remove(i)
+            for i in group:
+                table.reserve(i, old[i].track, old[i].delay)
+            continue
+        for i, rank in zip(group, sorted(old[i].rank for i in group)):
+            new[i].rank = rank
+            schedules[i] = new[i]
+        mended += 1
+    return mended
+
+
+def _without(table, i, s):
+    """The conflicts of ``s`` (character ``i``, reserved) against the others."""
+    table.remove(i)
+    found = table.check(s.track, s.delay)
+    table.reserve(i, s.track, s.delay)
+    return found
+
+
+def _left(schedules, spacing):
+    """The conflicts of ``schedules`` placed in their ranks' order, as :func:`resolve`
+    reports them (indices of ``schedules``)."""
+    ranked = sorted(range(len(schedules)), key=lambda k: schedules[k].rank)
+    out = conflicts_of(
+        [schedules[k].track for k in ranked], [schedules[k].delay for k in ranked], spacing
+    )
+    for c in out:
+        c["a"], c["b"] = ranked[c["a"]], ranked[c["b"]]
+    return out
 
 
 def resolve(
@@ -437,9 +620,12 @@ def resolve(
 ) -> tuple[list[Schedule], list[dict[str, Any]]]:
     """Schedules and the conflicts left for ``tracks`` [(frames, 2)] in priority order,
     all starting on frame 0: each character in turn is checked against the
-    :class:`Reservations` of those before it and, while it comes closer than ``spacing``,
-    changed by (at most ``stages`` changes, the first that clears everything, in this
-    order of preference):
+    :class:`Reservations` of those before it and, when it comes closer than ``spacing``,
+    first re-timed to its earliest arrival clear of them all (:func:`_timed`,
+    :func:`path_timing.earliest`: a wait at the start and idle holds anywhere on the way,
+    one hold preferred); when no such timing fits in the longest wait and holds, changed by
+    (at most ``stages`` changes, the first that clears everything, in this order of
+    preference):
 
     1. an idle hold (whole ``step`` frames, all its holds at most ``max_hold``, see
        :func:`_improve` for which lengths are tried) on a
@@ -454,7 +640,9 @@ def resolve(
     discs where the others it meets walk around those frames (:func:`ghosts`), and the
     above is done again, at most ``rounds`` times.
 
-    When conflicts are left, the crowd is resolved again from the start with the
+    When conflicts are left, each character still too close is first mended locally
+    (:func:`_repair`: freed with those it meets, placed before them and all re-timed), and
+    what is still left makes the crowd be resolved again from the start with the
     characters that met them placed first (prioritised planning's restart with raised
     priorities), at most ``restarts`` times, and the pass with the fewest frames too close
     is kept. What is left is reported: [{"a", "b" (indices, ``a`` placed first), "frame"
@@ -466,7 +654,7 @@ def resolve(
     holdable = list(holdable) if holdable is not None else [None] * len(tracks)
     order, versions, best = list(range(len(tracks))), [0] * len(tracks), None
     for _ in range(restarts + 1):
-        schedules, conflicts = _resolve_once(
+        schedules, conflicts, table = _resolve_once(
             order,
             tracks,
             replan,
@@ -484,6 +672,8 @@ def resolve(
         )
         for rank, i in enumerate(order):
             schedules[i].rank = rank
+        if conflicts and _repair(table, schedules, conflicts, max_delay, max_hold, ramp):
+            conflicts = _left(schedules, spacing)
         left = sum(c["frames"] for c in conflicts)
         if best is None or left < best[0]:
             best = (left, schedules, conflicts)

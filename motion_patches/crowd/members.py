@@ -70,10 +70,6 @@ class MemberWorld:
         """Frames of a hold's slow-down and speed-up together (even)."""
         return max(2, int(round(HOLD_RAMP_SECONDS * self.scene_fps)) // 2 * 2)
 
-    @property
-    def same_rate(self) -> bool:
-        return abs(self.scene_fps - self.patch.gait.fps) < 1e-6
-
     def __getstate__(self) -> dict:
         state = dict(self.__dict__)
         state["_planner"] = None  # made again where it is used
@@ -112,21 +108,17 @@ class NoPlan:
 @dataclass
 class Member:
     """A member planned: its plan, the plan's piece motions at the patch's rate (``raw``),
-    those put on its rig (``motions``) with the scene frames where the pieces start and the
-    last ends (``bounds``) and the whole on the scene's frames (``world``), and the scene
-    frames it may hold on (None when the scene plays at another rate than the patch)."""
+    the scene frames where the pieces start and the last ends (``bounds``), its root's ground
+    track on the scene's frames and the scene frames it may hold on. The motion on its rig
+    at the scene's rate is :func:`placed` again from ``raw`` where it is written: cheap to
+    redo, and half of what would travel back from a worker."""
 
     entry: int
     plan: Plan
     raw: list
-    motions: list
     bounds: np.ndarray
-    world: Motion
-    holdable: np.ndarray | None
-
-    @property
-    def root_track(self) -> np.ndarray:
-        return root_track(self.world)
+    root_track: np.ndarray
+    holdable: np.ndarray
 
 
 def no_plan_of(entry: int, exc: PlanError) -> NoPlan:
@@ -217,9 +209,9 @@ def without(env: Environment, names: Sequence[str]) -> Iterator[Environment]:
 def synthesised(task: MemberTask, world: MemberWorld, plan: Plan) -> Member:
     """The member's motion for ``plan``: synthesised, on its rig, at the scene's rate."""
     raw = plan_motions(world.patch, plan)
-    motions, bounds, whole = placed(world.patch, task.rig, raw, world.scene_fps)
-    hold = holdable(plan, bounds, whole, world.ramp) if world.same_rate else None
-    return Member(task.entry, plan, raw, motions, bounds, whole, hold)
+    _, bounds, whole = placed(world.patch, task.rig, raw, world.scene_fps)
+    hold = holdable(plan, bounds, whole, world.ramp)  # holds are timed on the scene's frames
+    return Member(task.entry, plan, raw, bounds, root_track(whole), hold)
 
 
 def plan_member(task: MemberTask, world: MemberWorld) -> Member | NoPlan:

@@ -223,3 +223,28 @@ def test_what_resolve_reports_is_exactly_what_is_left():
             assert m[k]
             t, m = crowd.held_track(t, k, h, 12, m)
         assert np.allclose(t, s.track)
+
+
+def test_the_earliest_timing_is_clear_and_no_earlier_one_is():
+    """path_timing.earliest on a crossing: without holds it is the shortest wait at the
+    start that clears (one frame less does not); with holds it arrives no later than that
+    and its holds, laid into the track, clear too."""
+    from motion_patches.crowd import path_timing
+
+    rng = np.random.default_rng(11)
+    table = crowd.Reservations(0.5)
+    for i in range(6):  # walkers streaming across b's way, one every 12 frames
+        table.reserve(i, line((-5.0, 0.0), (5.0, 0.0), 101), delay=12 * i)
+    b = line((0.0, -5.0), (0.0, 5.0), 101) + rng.normal(0, 0.005, (101, 2))
+    assert table.check(b)
+    busy = table.busy(b, 400)
+    delay, holds = path_timing.earliest(b, busy, None, 10, 300, 300)
+    assert holds == () and not table.check(b, delay) and table.check(b, delay - 1)
+    mask = (np.arange(101) % 7) == 0
+    delay2, holds2 = path_timing.earliest(b, busy, mask, 10, 300, 300, max_holds=2)
+    track, m = b, mask
+    for k, h in holds2:
+        assert m[k]
+        track, m = crowd.held_track(track, k, h, 10, m)
+    assert not table.check(track, delay2)
+    assert delay2 + len(track) <= delay + len(b)  # arrives no later
