@@ -43,6 +43,7 @@ from .solve import (
     _frame_start,
     _goal,
     _not_found,
+    _obstacle_names,
     _without,
     _writable,
 )
@@ -443,12 +444,6 @@ def _place_ends(c):
     )
     c.rank_ends = [world_ends[n] for n in c.order]
     c.rank = {n: i for i, n in enumerate(c.order)}
-
-
-def _obstacle_names(env, names):
-    """Names of ``env``'s obstacles that are, or are parts of, the objects ``names``."""
-    names = set(names)
-    return [n for n in env.obstacles if n in names or scene_io.owner(n) in names]
 
 
 def _task(c, n, ghosts=()):

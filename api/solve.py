@@ -4,7 +4,6 @@ goal states, the checks before searching, the search and its refusals."""
 
 from __future__ import annotations
 
-import contextlib
 import math
 
 import bpy
@@ -76,19 +75,16 @@ def _endpoints(character, goal, start_prop, by_name, skel, goal_facing="exact", 
     )
 
 
-@contextlib.contextmanager
-def _without(env, names):
-    """``env`` with the named obstacles (and their parts, :func:`adapter.scene.part_name`)
-    taken out for the block (put back after)."""
+def _obstacle_names(env, names):
+    """Names of ``env``'s obstacles that are, or are parts of
+    (:func:`adapter.scene.part_name`), the objects ``names``."""
     names = set(names)
-    saved = [ob for n, ob in env.obstacles.items() if n in names or scene_io.owner(n) in names]
-    for ob in saved:
-        env.remove(ob.name)
-    try:
-        yield env
-    finally:
-        for ob in saved:
-            env.place(ob)
+    return [n for n in env.obstacles if n in names or scene_io.owner(n) in names]
+
+
+def _without(env, names):
+    """``env`` with the named objects' obstacles taken out for the block (put back after)."""
+    return members.without(env, _obstacle_names(env, names))
 
 
 def _check_clear(env, character, endpoints, by_name):
