@@ -10,9 +10,11 @@ Each size is a plaza of pillars and benches (boxes), its area growing with the c
 10-14 m, starts and goals at least a metre from every other. The crowd is planned the way
 ``api.plan_crowd`` does it, on the core alone: priority by distance, each path planned
 round the props and the others' standing spots (:func:`motion_patches.crowd.crowd.standing_spots`),
-its motion synthesised, then :func:`motion_patches.crowd.crowd.resolve` (idle holds, waits,
-re-routes) and the final check :func:`motion_patches.crowd.crowd.conflicts_of`. Times are split
-into path planning, motion synthesis, resolution and the final check. Memory: the peak
+its motion synthesised (each a task of :func:`motion_patches.crowd.members.plan_member`, run in
+this process or on Dask LocalClusters: ``--workers``, the same members checked), then
+:func:`motion_patches.crowd.crowd.resolve` (idle holds, waits, re-routes) and the final check
+:func:`motion_patches.crowd.crowd.conflicts_of`. Times are split into the members (path and
+motion), the re-plans while resolving, resolution and the final check. Memory: the peak
 traced by ``tracemalloc`` over the resolution and check (run a second time, traced), and the
 process's peak resident size after each size (``resource``; it only grows, sizes run in
 increasing order). Per character, milliseconds of each stage.
@@ -54,7 +56,6 @@ from motion_patches.props.environment import Environment, Obstacle
 
 RADIUS = 0.25
 SPACING = 2 * RADIUS
-CLIPS = ("traversal", "interaction")
 
 
 def parse_args(argv=None):
@@ -287,16 +288,16 @@ def run_scene(patch, name):
 def scene_markdown(rows):
     out = [
         "| scene | planned | holds | waits | re-routed | conflicts left | closest m | in props "
-        "| seconds | paths ms/ch | synthesis ms/ch | resolve ms/ch | check ms/ch |",
-        "|" + "---|" * 13,
+        "| seconds | members ms/ch | resolve ms/ch | check ms/ch |",
+        "|" + "---|" * 12,
     ]
     for r in rows:
         m = r["ms_per_character"]
         out.append(
             f"| {r['scene']} | {r['planned']}/{r['characters']} | {r['holds']} | {r['waits']} "
             f"| {r['rerouted']} | {r['conflicts_left']} | {r['closest_m']:.3f} "
-            f"| {r['root_frames_in_props']} | {r['seconds']['total']:.1f} | {m['paths']:.0f} "
-            f"| {m['synthesis']:.0f} | {m['resolve']:.0f} | {m['check']:.0f} |"
+            f"| {r['root_frames_in_props']} | {r['seconds']['total']:.1f} | {m['members']:.0f} "
+            f"| {m['resolve']:.0f} | {m['check']:.0f} |"
         )
     return "\n".join(out)
 

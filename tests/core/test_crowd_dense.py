@@ -9,18 +9,18 @@ import time
 import numpy as np
 import pytest
 
-from motion_patches.crowd import crowd, held_motion
+from motion_patches.crowd import crowd, held_motion, members
 from motion_patches.kinematics import retime, scene_rate
 from motion_patches.kinematics.inplace import root_positions
 from motion_patches.kinematics.motion import concatenate
-from motion_patches.planning.planner import PlanError, SegmentPlanner, plan_motions
+from motion_patches.planning.pieces import PlanError
+from motion_patches.planning.settings import PlanSettings
 from motion_patches.props.environment import Environment, Obstacle
 
 RADIUS = 0.25
 SPACING = 2 * RADIUS
 SLACK = 0.05  # resolved this much wider than checked (as api.plan_crowd does)
 SCENE_FPS = 24.0
-CLIPS = ("traversal", "interaction")
 
 
 def pillar(name, x, y, r=0.35, sides=12):
@@ -76,44 +76,28 @@ def doorway(patch, per_side=20, gap=2.0, seed=5):
 
 def plan_crowd(patch, env, ends, fps, max_wait, times=None):
     """The crowd as ``api.plan_crowd`` plans it, on the core: ([(pieces, plan)], schedules,
-    ramp). Priority by distance; paths round the props and the others' standing spots;
-    holds, waits and re-routes timed on the scene's frames. ``times`` (a dict) gets the
-    seconds of path planning (re-plans included), synthesis and resolution."""
+    ramp). Priority by distance; each member planned by the core
+    (:func:`motion_patches.crowd.members.plan_member`: round the props and the others'
+    standing spots, its motion at the scene's rate); holds, waits and re-routes timed on the
+    scene's frames. ``times`` (a dict) gets the seconds of the members (re-plans included)
+    and of resolution."""
     times = {} if times is None else times
-    for k in ("paths", "synthesis", "resolve"):
+    for k in ("members", "resolve"):
         times[k] = 0.0
     ends = sorted(ends, key=lambda e: -np.linalg.norm(e[1][:2] - e[0][:2]))
-    planner = SegmentPlanner(patch, env)
-    rate = fps / patch.gait.fps
-    ramp = max(2, int(round(0.5 * fps)) // 2 * 2)
+    world = members.MemberWorld(patch, env, [], PlanSettings(radius=RADIUS), scene_fps=fps)
+    ramp = world.ramp
 
     def solve(i, extra=()):
-        spots = [Obstacle(f"spot{m}", p) for m, p in crowd.standing_spots(ends, i, SPACING, RADIUS)]
-        ghosts = [Obstacle(f"ghost{k}", p) for k, p in enumerate(extra)]
-        mine = np.array([ends[i][0][:2], ends[i][1][:2]])
-        ghosts = [g for g in ghosts if not g.within(mine, RADIUS).any()]
+        spots = [(f"spot{m}", p) for m, p in crowd.standing_spots(ends, i, SPACING, RADIUS)]
+        ends_i = (ends[i][0], ends[i][1], None, None)
+        task = members.MemberTask(i, ends_i, spots=spots, ghosts=list(extra))
         t0 = time.perf_counter()
-        for ob in spots + ghosts:
-            env.place(ob)
-        try:
-            try:
-                plan = planner.plan(*ends[i])
-            except PlanError:
-                if not spots or ghosts:
-                    raise
-                for ob in spots:
-                    env.remove(ob.name)
-                spots = []
-                plan = planner.plan(*ends[i])
-        finally:
-            for ob in spots + ghosts:
-                env.remove(ob.name)
-            t1 = time.perf_counter()
-            times["paths"] += t1 - t0
-        raw = plan_motions(patch, plan)
-        root, holdable = placed(raw, plan, rate, ramp)
-        times["synthesis"] += time.perf_counter() - t1
-        return (raw, plan), root, holdable
+        a = members.plan_member(task, world)
+        times["members"] += time.perf_counter() - t0
+        if isinstance(a, members.NoPlan):
+            raise PlanError(a.text)
+        return (a.raw, a.plan), a.root_track, a.holdable
 
     versions = [[solve(i)] for i in range(len(ends))]
 
@@ -124,7 +108,7 @@ def plan_crowd(patch, env, ends, fps, max_wait, times=None):
             return None
         return versions[k][-1][1:]
 
-    t0, before = time.perf_counter(), times["paths"] + times["synthesis"]
+    t0, before = time.perf_counter(), times["members"]
     schedules, _ = crowd.resolve(
         [v[0][1] for v in versions],
         replan,
@@ -136,23 +120,9 @@ def plan_crowd(patch, env, ends, fps, max_wait, times=None):
         ramp=ramp,
         holdable=[v[0][2] for v in versions],
     )
-    re_plans = times["paths"] + times["synthesis"] - before
-    times["resolve"] = time.perf_counter() - t0 - re_plans  # re-plans counted as paths
+    re_plans = times["members"] - before
+    times["resolve"] = time.perf_counter() - t0 - re_plans  # re-plans counted as members
     return [v[s.version][0] for v, s in zip(versions, schedules)], schedules, ramp
-
-
-def placed(raw, plan, rate, ramp):
-    """(root track on the scene's frames, holdable frames) of piece motions, as the add-on
-    places them (:mod:`motion_patches.kinematics.scene_rate`)."""
-    pb, sb = scene_rate.piece_bounds([m.frames for m in raw], rate)
-    world = scene_rate.at_scene_rate(concatenate(raw), pb, sb)
-    c = world.contacts
-    ok = c[:, :2].any(axis=1) & c[:, 2:].any(axis=1)
-    inside = np.zeros_like(ok)
-    for i, p in enumerate(plan.pieces):
-        if p.kind not in CLIPS:
-            inside[sb[i] + ramp // 2 : sb[i + 1] - ramp // 2 + 1] = True
-    return root_positions(world.ground, world.root_local)[:, :2], ok & inside
 
 
 def written_roots(pieces, schedules, rate, ramp):
