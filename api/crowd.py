@@ -444,20 +444,20 @@ def _place_ends(c):
     )
     c.rank_ends = [world_ends[n] for n in c.order]
     c.rank = {n: i for i, n in enumerate(c.order)}
+    names = [f"{CROWD_SPOT}{c.pairs[n][0].name}" for n in c.order]
+    for w in c.worlds.values():  # where each stands still, found where each is planned
+        w.members.rank_ends, w.members.spot_names = c.rank_ends, names
+        w.members.spacing = c.spacing
 
 
 def _task(c, n, ghosts=()):
     """Entry n as the core plans it: its ends, what is no obstacle for it, where the others
     stand still while it walks (:func:`motion_patches.crowd.crowd.standing_spots`) and,
     when re-routing, ``ghosts`` (world polygons) in its world."""
-    size, radius = c.sizes[n], c.settings.radius
-    spots = [
-        (f"{CROWD_SPOT}{c.pairs[c.order[m]][0].name}", polygon / size)
-        for m, polygon in crowd.standing_spots(c.rank_ends, c.rank[n], c.spacing, radius)
-    ]
+    size = c.sizes[n]
     own = _obstacle_names(_world_of(c, size).env, c.own[n])
     return members.MemberTask(
-        n, c.ends[n], tuple(own), spots, [p / size for p in ghosts], c.rigs[n]
+        n, c.ends[n], tuple(own), c.rank[n], [p / size for p in ghosts], c.rigs[n], size
     )
 
 

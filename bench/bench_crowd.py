@@ -129,17 +129,23 @@ def plaza(patch, n, args):
     return env, ends, side
 
 
-def member_world(patch, env):
+def member_world(patch, env, ends):
     """The world every member of a bench crowd is planned in (the planner's defaults)."""
     return members.MemberWorld(
-        patch, env, [], PlanSettings(radius=RADIUS), scene_fps=patch.gait.fps
+        patch,
+        env,
+        [],
+        PlanSettings(radius=RADIUS),
+        scene_fps=patch.gait.fps,
+        rank_ends=ends,
+        spot_names=[f"spot{m}" for m in range(len(ends))],
+        spacing=SPACING,
     )
 
 
 def member_task(ends, i, ghosts=()):
     """Member i: round the spots where the others stand still (and ``ghosts``)."""
-    spots = [(f"spot{m}", poly) for m, poly in crowd.standing_spots(ends, i, SPACING, RADIUS)]
-    return members.MemberTask(i, (ends[i][0], ends[i][1], None, None), spots=spots, ghosts=ghosts)
+    return members.MemberTask(i, (ends[i][0], ends[i][1], None, None), rank=i, ghosts=ghosts)
 
 
 def fingerprint(answers):
@@ -161,7 +167,7 @@ def plan_members(patch, env, ends, workers):
     try:
         t0 = time.perf_counter()
         tasks = [member_task(ends, i) for i in range(len(ends))]
-        answers = ex.map(members.plan_member, tasks, world=member_world(patch, env))
+        answers = ex.map(members.plan_member, tasks, world=member_world(patch, env, ends))
         return answers, time.perf_counter() - t0, started
     finally:
         ex.close()
@@ -183,7 +189,7 @@ def run_crowd(patch, n, args):
     tracks = [a.root_track for a in planned]
     masks = [a.holdable for a in planned]
     index = [a.entry for a in planned]
-    world = member_world(patch, env)
+    world = member_world(patch, env, ends)
     t = {"replan": 0.0}
 
     def replan(k, discs):

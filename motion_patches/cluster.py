@@ -147,6 +147,10 @@ class DaskCluster:
             else [range(a, min(a + chunk, len(items))) for a in range(0, len(items), chunk)]
         )
         tag = uuid.uuid4().hex[:8]
+        # Dealt round the workers: left to itself the scheduler put the tasks where the
+        # shared inputs were first scattered and ran a 1,000-member crowd on one worker.
+        # A task may still move when its worker is lost (allow_other_workers).
+        addresses = sorted(self.client.scheduler_info().get("workers", {})) or [None]
         futures = [
             self.client.submit(
                 run_chunk,
@@ -155,6 +159,8 @@ class DaskCluster:
                 scattered,
                 key=f"{getattr(fn, '__name__', 'task')}-{tag}-{k}",
                 pure=False,
+                workers=None if addresses[0] is None else [addresses[k % len(addresses)]],
+                allow_other_workers=True,
             )
             for k, r in enumerate(parts)
         ]

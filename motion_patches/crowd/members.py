@@ -26,6 +26,7 @@ from ..planning.pieces import Plan, PlanError
 from ..planning.planner import SegmentPlanner, plan_motions, with_interactions
 from ..planning.settings import PlanSettings
 from ..props.environment import Environment, Obstacle
+from .crowd import standing_spots
 
 HOLD_RAMP_SECONDS = 0.5  # slowing to an idle hold and walking on again, each
 CLIPS = ("traversal", "interaction")
@@ -37,7 +38,9 @@ class MemberWorld:
     """What the members of one character size share: the patch, the props as the planner sees
     them (``env``, the object patches ``props``), the settings, the props that move
     (``tracks``; ``awake``: obstacle names of those moving on the first frame), the scene's
-    first frame and rate. Its planner is made where it is first used, once per process."""
+    first frame and rate, and every member's (start, goal) in priority order (``rank_ends``,
+    in the world of size 1) with the names its standing spots take (``spot_names``) and the
+    ``spacing`` they keep. Its planner is made where it is first used, once per process."""
 
     patch: Any
     env: Environment
@@ -47,6 +50,9 @@ class MemberWorld:
     awake: tuple = ()
     first: int = 1
     scene_fps: float = 30.0
+    rank_ends: Sequence = ()
+    spot_names: Sequence = ()
+    spacing: float = 0.0
     _planner: SegmentPlanner | None = field(default=None, repr=False, compare=False)
 
     @property
@@ -78,17 +84,21 @@ class MemberWorld:
 
 @dataclass
 class MemberTask:
-    """One member to plan: ``ends`` = (start, goal, start clip, goal clip) in its world;
-    ``own``: obstacle names that are no obstacle for it (its goal, its seat); ``spots``:
-    (name, polygon) where the others stand still while it walks; ``ghosts``: polygons of
-    where others walk when it meets them (re-routing); ``rig``: its rig map or None."""
+    """One member to plan: ``ends`` = (start, goal, start clip, goal clip) in its world (of
+    ``size``: the world is shrunk by a rig's size); ``own``: obstacle names that are no
+    obstacle for it (its goal, its seat); ``rank``: its place in the world's ``rank_ends``,
+    whose others' standing spots it walks round (None: none); ``ghosts``: polygons of where
+    others walk when it meets them (re-routing); ``rig``: its rig map or None. The spots are
+    found where it is planned (:func:`spots_of`): a few numbers travel, not a polygon for
+    everyone else in the crowd."""
 
     entry: int
     ends: tuple
     own: tuple = ()
-    spots: Sequence = ()
+    rank: int | None = None
     ghosts: Sequence = ()
     rig: RigMap | None = None
+    size: float = 1.0
 
 
 @dataclass
@@ -214,13 +224,23 @@ def synthesised(task: MemberTask, world: MemberWorld, plan: Plan) -> Member:
     return Member(task.entry, plan, raw, bounds, root_track(whole), hold)
 
 
+def spots_of(task: MemberTask, world: MemberWorld) -> list[Obstacle]:
+    """Where the others stand still while the member walks
+    (:func:`~.crowd.standing_spots` of its rank), as obstacles in its world."""
+    if task.rank is None or not world.rank_ends:
+        return []
+    radius = world.settings.radius
+    found = standing_spots(world.rank_ends, task.rank, world.spacing, radius)
+    return [Obstacle(world.spot_names[m], poly / task.size) for m, poly in found]
+
+
 def plan_member(task: MemberTask, world: MemberWorld) -> Member | NoPlan:
     """Plan one member round the standing spots (dropped when they box it in) and, when
     re-routing, round its ghosts (no plan when they box it in); then round the props that
     move by re-routing (the crowd times the waits); then its motion."""
     env, planner = world.env, world.planner
     radius = world.settings.radius
-    spots = [Obstacle(name, np.asarray(poly, float)) for name, poly in task.spots]
+    spots = spots_of(task, world)
     mine = np.array([task.ends[0][:2], task.ends[1][:2]], float)
     extra = [Obstacle(f"{GHOST}{k}", np.asarray(p, float)) for k, p in enumerate(task.ghosts)]
     extra = [g for g in extra if not g.within(mine, radius).any()]  # not on its own ends

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from motion_patches import cluster
-from motion_patches.crowd import crowd, members
+from motion_patches.crowd import members
 from motion_patches.planning.settings import PlanSettings
 from motion_patches.props.environment import Environment, Obstacle
 
@@ -45,16 +45,17 @@ def crossing(patch, per_side=3, seed=5):
                 start, goal = (s, ax[1], heading), (g, -ax[1], heading)
             ends.append((np.array(start, float), np.array(goal, float)))
     world = members.MemberWorld(
-        patch, env, [], PlanSettings(radius=RADIUS), scene_fps=patch.gait.fps
+        patch,
+        env,
+        [],
+        PlanSettings(radius=RADIUS),
+        scene_fps=patch.gait.fps,
+        rank_ends=ends,
+        spot_names=[f"spot{m}" for m in range(len(ends))],
+        spacing=SPACING,
     )
     tasks = [
-        members.MemberTask(
-            i,
-            (ends[i][0], ends[i][1], None, None),
-            spots=[
-                (f"spot{m}", poly) for m, poly in crowd.standing_spots(ends, i, SPACING, RADIUS)
-            ],
-        )
+        members.MemberTask(i, (ends[i][0], ends[i][1], None, None), rank=i)
         for i in range(len(ends))
     ]
     return world, tasks

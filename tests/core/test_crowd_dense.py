@@ -85,13 +85,21 @@ def plan_crowd(patch, env, ends, fps, max_wait, times=None):
     for k in ("members", "resolve"):
         times[k] = 0.0
     ends = sorted(ends, key=lambda e: -np.linalg.norm(e[1][:2] - e[0][:2]))
-    world = members.MemberWorld(patch, env, [], PlanSettings(radius=RADIUS), scene_fps=fps)
+    world = members.MemberWorld(
+        patch,
+        env,
+        [],
+        PlanSettings(radius=RADIUS),
+        scene_fps=fps,
+        rank_ends=ends,
+        spot_names=[f"spot{m}" for m in range(len(ends))],
+        spacing=SPACING,
+    )
     ramp = world.ramp
 
     def solve(i, extra=()):
-        spots = [(f"spot{m}", p) for m, p in crowd.standing_spots(ends, i, SPACING, RADIUS)]
         ends_i = (ends[i][0], ends[i][1], None, None)
-        task = members.MemberTask(i, ends_i, spots=spots, ghosts=list(extra))
+        task = members.MemberTask(i, ends_i, rank=i, ghosts=list(extra))
         t0 = time.perf_counter()
         a = members.plan_member(task, world)
         times["members"] += time.perf_counter() - t0
