@@ -32,7 +32,7 @@ from .common import (
     object_patches,
     scene_fps,
 )
-from .crowd_holds import CROWD_HOLD_RAMP_SECONDS, _root_track, _with_hold
+from .crowd_holds import _root_track, _with_hold
 from .errors import MotionPatchesError
 from .results import CrowdResult, CrowdSchedule
 from .settings import plan_settings
@@ -275,7 +275,7 @@ class _Crowd:
 
     @property
     def ramp(self) -> int:
-        return max(2, int(round(CROWD_HOLD_RAMP_SECONDS * self.fps)) // 2 * 2)
+        return members.hold_ramp(self.fps)
 
 
 def _request(scene, pairs, patch_name, settings, frame_start, context, max_wait_seconds, spacing):

@@ -18,6 +18,7 @@ from ..motion_patches.planning.planner import (
     SegmentPlanner,
     interaction_states,
     plan_motions,
+    planner_for,
     with_interactions,
 )
 from ..motion_patches.planning.settings import PlanSettings
@@ -114,17 +115,8 @@ def _check_clear(env, character, endpoints, by_name):
 
 def _planner(patch, env, settings: PlanSettings, props) -> SegmentPlanner:
     """The core planner of one world, its keyword arguments taken from the request's
-    settings (weights, stitching, turns on the spot)."""
-    return SegmentPlanner(
-        patch,
-        env,
-        settings.alpha,
-        settings.beta,
-        settings.gamma,
-        props=props,
-        mode=settings.stitching,
-        turn_in_place=settings.turn_in_place,
-    )
+    settings (:func:`motion_patches.planning.planner.planner_for`)."""
+    return planner_for(patch, env, settings, props)
 
 
 def _solve(planner, character, endpoints, explain=True):

@@ -23,7 +23,7 @@ from ..kinematics.retarget import RigMap
 from ..kinematics.scene_rate import placed
 from ..planning import causes, moving_props
 from ..planning.pieces import Plan, PlanError
-from ..planning.planner import SegmentPlanner, plan_motions, with_interactions
+from ..planning.planner import SegmentPlanner, plan_motions, planner_for, with_interactions
 from ..planning.settings import PlanSettings
 from ..props.environment import Environment, Obstacle
 from .crowd import standing_spots
@@ -31,6 +31,11 @@ from .crowd import standing_spots
 HOLD_RAMP_SECONDS = 0.5  # slowing to an idle hold and walking on again, each
 CLIPS = ("traversal", "interaction")
 GHOST = "\x00crowd ghost "  # obstacle names of where another member walks when two would meet
+
+
+def hold_ramp(fps: float) -> int:
+    """Scene frames of a hold's slow-down and speed-up together (even, at least 2)."""
+    return max(2, int(round(HOLD_RAMP_SECONDS * fps)) // 2 * 2)
 
 
 @dataclass
@@ -58,23 +63,13 @@ class MemberWorld:
     @property
     def planner(self) -> SegmentPlanner:
         if self._planner is None:
-            s = self.settings
-            self._planner = SegmentPlanner(
-                self.patch,
-                self.env,
-                s.alpha,
-                s.beta,
-                s.gamma,
-                props=self.props,
-                mode=s.stitching,
-                turn_in_place=s.turn_in_place,
-            )
+            self._planner = planner_for(self.patch, self.env, self.settings, self.props)
         return self._planner
 
     @property
     def ramp(self) -> int:
         """Frames of a hold's slow-down and speed-up together (even)."""
-        return max(2, int(round(HOLD_RAMP_SECONDS * self.scene_fps)) // 2 * 2)
+        return hold_ramp(self.scene_fps)
 
     def __getstate__(self) -> dict:
         state = dict(self.__dict__)

@@ -497,3 +497,23 @@ class SegmentPlanner(ConnectedGraph):
                 "traversals_used": sum(p.kind == "traversal" for p in pieces),
             },
         )
+
+
+def planner_for(
+    patch: LocomotionPatch,
+    env: Environment,
+    settings: PlanSettings,
+    props: Iterable[ObjectPatch] = (),
+) -> SegmentPlanner:
+    """The planner of a request's settings (weights, stitching, turns on the spot) in
+    ``env`` with the object patches ``props``: one mapping for every door and the crowd."""
+    return SegmentPlanner(
+        patch,
+        env,
+        settings.alpha,
+        settings.beta,
+        settings.gamma,
+        props=props,
+        mode=settings.stitching,
+        turn_in_place=settings.turn_in_place,
+    )
