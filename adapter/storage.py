@@ -98,10 +98,21 @@ def export_patch(scene, name, path):
         fh.write(serialize.patch_to_bytes(patch))
 
 
-def import_patch(scene, path, name=None):
+def read_patch_file(path):
+    """The patch in a .mpatch file, checked (ValueError naming what is wrong)."""
     with open(path, "rb") as fh:
-        patch = serialize.patch_from_bytes(fh.read())
-    return store_patch(scene, patch, name or patch.layer)
+        return serialize.patch_from_bytes(fh.read())
+
+
+def free_patch_name(scene, base):
+    """``base``, or Blender's way of naming a copy (``base.001``, ...) when it is taken."""
+    items = patch_items(scene)
+    if items.get(base) is None:
+        return base
+    n = 1
+    while items.get(f"{base}.{n:03d}") is not None:
+        n += 1
+    return f"{base}.{n:03d}"
 
 
 # --- plan records ---------------------------------------------------------------------------

@@ -34,18 +34,50 @@ def export_patch(
     return name
 
 
-def import_patch(scene: bpy.types.Scene, path: str | os.PathLike, name: str | None = None) -> str:
+class ImportedPatch(str):
+    """The name a patch file was stored under (a str), with what happened to a patch
+    already in the way: ``kept`` (its name, left as it was) or ``replaced``."""
+
+    kept: str | None = None
+    replaced: bool = False
+
+
+def import_patch(
+    scene: bpy.types.Scene,
+    path: str | os.PathLike,
+    name: str | None = None,
+    replace: bool = False,
+) -> ImportedPatch:
     """Store a patch file written by :func:`export_patch` in ``scene`` and make it the
-    active patch (the one planning uses next); returns its name."""
+    active patch (the one planning uses next); returns the name it is stored under.
+
+    A patch already in the scene is never overwritten unless ``replace``: without a
+    ``name`` the file's patch takes its own name, or Blender's next free copy name
+    (``walk.001``) when that is taken; a ``name`` that is taken is refused."""
     path = Path(path).expanduser()
     if not path.is_file():
         raise MotionPatchesError(f"patch file not found: {path}")
+    if name is not None and not name.strip():
+        raise MotionPatchesError("the patch name is empty")
+    taken = name is not None and storage.patch_items(scene).get(name) is not None
+    if taken and not replace:
+        raise MotionPatchesError(
+            f"this scene already has a patch '{name}': import under another name, or "
+            "replace it (replace=True, the CLI's --replace)"
+        )
     try:
-        stored = storage.import_patch(scene, path, name).name
+        patch = storage.read_patch_file(path)
     except OSError as exc:
         raise MotionPatchesError(f"cannot read {path}: {exc.strerror or exc}") from None
     except ValueError as exc:
         raise MotionPatchesError(f"{path}: {exc}") from None
+    wanted = patch.layer if name is None else name
+    if name is None and not replace:
+        name = storage.free_patch_name(scene, patch.layer)
+    replaced = storage.patch_items(scene).get(name or wanted) is not None
+    stored = ImportedPatch(storage.store_patch(scene, patch, name or wanted).name)
+    stored.kept = wanted if stored != wanted else None
+    stored.replaced = replaced
     storage.make_active(scene, stored)
     return stored
 

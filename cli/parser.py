@@ -352,10 +352,17 @@ def _import_parser(sub, common):
         epilog=INVOCATION,
         help="store a patch file in the .blend",
         description="Store a locomotion patch file written by 'export' in the "
-        "open .blend (replacing a patch of the same name).",
+        "open .blend. A patch already there is kept: without --name the file's patch "
+        "takes its layer's name or the next free copy name (walk.001); a --name that is "
+        "taken is refused unless --replace.",
     )
     p.add_argument("file", metavar="FILE", help="patch file to read")
     p.add_argument("--name", help="name to store it under (default: its layer)")
+    p.add_argument(
+        "--replace",
+        action="store_true",
+        help="replace a patch of the same name instead of keeping both",
+    )
     _save_options(p)
     p.set_defaults(run=cmd_import)
 

@@ -67,7 +67,13 @@ def cmd_export(args):
 def cmd_import(args):
     src = Path(args.file).expanduser()
     save = save_target(args)
-    name = api.import_patch(bpy.context.scene, src, args.name)  # and makes it the active one
+    name = api.import_patch(bpy.context.scene, src, args.name, replace=args.replace)
     saved = save_blend(save)
-    text = [f"imported '{name}' from {src}"] + ([f"saved {saved}"] if saved else [])
-    return Result({"patch": name, "file": str(src.resolve()), "saved": saved}, OK, text)
+    text = [f"imported '{name}' from {src}"]
+    if name.kept:
+        text.append(f"  the scene's own '{name.kept}' is kept (--replace replaces it)")
+    elif name.replaced:
+        text.append(f"  replaced the scene's '{name}'")
+    text += [f"saved {saved}"] if saved else []
+    doc = {"patch": str(name), "kept": name.kept, "replaced": name.replaced}
+    return Result({**doc, "file": str(src.resolve()), "saved": saved}, OK, text)

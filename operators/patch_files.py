@@ -2,7 +2,7 @@
 """Baked patches to and from files: bake once on the farm, use the patch in every shot."""
 
 import bpy
-from bpy.props import StringProperty
+from bpy.props import BoolProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper, ImportHelper
 
 from .. import api
@@ -35,7 +35,8 @@ class MOTION_PATCHES_OT_export_patch(bpy.types.Operator, ExportHelper):
 
 
 class MOTION_PATCHES_OT_import_patch(bpy.types.Operator, ImportHelper):
-    """Store a locomotion patch file in this .blend (replacing a patch of the same name)"""
+    """Store a locomotion patch file in this .blend (a patch of the same name is kept: the
+    import takes the next free name, walk.001, unless Replace is ticked)"""
 
     bl_idname = "motion_patches.import_patch"
     bl_label = "Import Patch"
@@ -44,13 +45,22 @@ class MOTION_PATCHES_OT_import_patch(bpy.types.Operator, ImportHelper):
     filename_ext = EXT
     filter_glob: StringProperty(default="*" + EXT, options={"HIDDEN"})
 
+    replace: BoolProperty(
+        name="Replace",
+        description="Replace a patch of the same name instead of importing under a new name",
+        default=False,
+    )
+
     def execute(self, context):
         try:
-            name = api.import_patch(context.scene, self.filepath)
+            name = api.import_patch(context.scene, self.filepath, replace=self.replace)
         except api.MotionPatchesError as exc:
             self.report({"ERROR"}, str(exc))
             return {"CANCELLED"}
-        self.report({"INFO"}, f"Imported '{name}'")
+        if name.kept:
+            self.report({"WARNING"}, f"Imported as '{name}': the scene's '{name.kept}' is kept")
+        else:
+            self.report({"INFO"}, f"Imported '{name}'")
         return {"FINISHED"}
 
 

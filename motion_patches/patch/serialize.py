@@ -15,8 +15,18 @@ from typing import Any
 
 import numpy as np
 
+from ..kinematics.skeleton import Skeleton, forward_kinematics
+from . import curves
 from .gait import Gait
-from .locomotion_patch import DIRECTIONS, EDGES, SEGMENT_ARRAYS, LocomotionPatch
+from .locomotion_patch import (
+    DIRECTIONS,
+    EDGES,
+    SEGMENT_ARRAYS,
+    LocomotionPatch,
+    cell_mask,
+    node_position,
+    split_node_id,
+)
 
 _KIND_NAMES = dict(f="float", i="integer", u="uint64", b="bool", U="text")  # dtype kinds
 
@@ -71,6 +81,13 @@ def patch_from_bytes(data: bytes) -> LocomotionPatch:
 MAX_CELLS = 8  # a segment's cell mask is one 64-bit word: cells x cells <= 64
 MAX_NODES = 8  # local node ids: EDGES x nodes x DIRECTIONS <= 256 (node_keys.LOCAL)
 MAX_LOOPS = 64
+MAX_EXTENT = 100.0  # metres: a rest bone or a loop's root further out is not a character
+MIN_CYCLE = 0.01  # metres a locomotion cycle travels at least
+MAX_SPEED = 15.0  # m/s: faster than any sprint; a loop moving faster has a wrong rate
+MAX_EFFORT_RATE = 1000.0  # effort per second of motion
+UNIT_TOL = 1e-3  # rotations must be unit quaternions, rest rotations orthonormal
+MAX_FLOOR_GAP = 0.25  # metres: a loop's lowest joint stays this near the floor (z = 0)
+MATCH_TOL = 0.02  # a stored segment length or turn may differ this much from its curve's
 
 
 def _fail(what):
@@ -111,8 +128,12 @@ def _number(header, key, integer=False, lo=None, hi=None, above=None):
     v = header.get(key)
     if isinstance(v, bool) or not isinstance(v, int if integer else (int, float)):
         _fail(f"header field '{key}' is {v!r}, not {'a whole number' if integer else 'a number'}")
+    try:
+        finite = bool(np.isfinite(float(v)))
+    except OverflowError:  # a whole number past any float
+        finite = False
     if (
-        not np.isfinite(v)
+        not finite
         or (lo is not None and v < lo)
         or (hi is not None and v > hi)
         or (above is not None and v <= above)
@@ -141,7 +162,7 @@ def validate(d: Mapping[str, np.ndarray]) -> dict[str, Any]:
     version = header.get("version")
     if isinstance(version, int) and not isinstance(version, bool) and version > VERSION:
         raise ValueError(
-            f"locomotion patch format {version} is newer than this add-on "
+            f"locomotion patch format version {version} is newer than this add-on "
             f"reads ({VERSION}); update the add-on"
         )
     _number(header, "version", integer=True, lo=1)
@@ -179,14 +200,131 @@ def validate(d: Mapping[str, np.ndarray]) -> dict[str, Any]:
     if (parents == np.arange(j)).any():
         _fail("array 'skel_parents' makes a bone its own parent")
     _array(d, "skel_rest", "f", (j, 4, 4), finite=True)
+    _skeleton_sense(d, parents)
+    fps = float(d["gait_fps"])
+    frames = []
     for i in range(loops):
         p = f"loop{i}_"
         n = _array(d, p + "root_local", "f", (None, 3), finite=True).shape[0]
         if n < 2:
             _fail(f"array '{p}root_local' has {n} frames, fewer than 2")
-        _array(d, p + "rotations", "f", (n, j, 4), finite=True)
-        _array(d, p + "distance", "f", (n + 1,), finite=True)
-        _array(d, p + "contacts", "b", (n, 4))
-        _array(d, p + "scalars", "f", (2,), finite=True)
+        frames.append(n)
+        _array(d, p + "root_local", "f", (n, 3), lo=-MAX_EXTENT, hi=MAX_EXTENT)
+        q = _array(d, p + "rotations", "f", (n, j, 4), finite=True)
+        with np.errstate(over="ignore"):
+            off = float(np.abs(np.linalg.norm(q, axis=-1) - 1.0).max())
+        if off > UNIT_TOL:
+            _fail(f"array '{p}rotations' holds quaternions of length {1.0 + off:.4g}, not 1")
+        dist = _array(d, p + "distance", "f", (n + 1,), finite=True, lo=0.0)
+        if (np.diff(dist) < -1e-9).any():
+            _fail(f"array '{p}distance' goes backwards (it is the distance travelled)")
+        if dist[-1] < MIN_CYCLE:
+            _fail(f"array '{p}distance' travels {dist[-1]:.3g} m a cycle, under {MIN_CYCLE:g} m")
+        speed = float(dist[-1]) * fps / n
+        if speed > MAX_SPEED:
+            _fail(
+                f"array '{p}distance' with 'gait_fps' {fps:g} moves {speed:.3g} m/s, "
+                f"faster than {MAX_SPEED:g} m/s"
+            )
+        if not _array(d, p + "contacts", "b", (n, 4)).any():
+            _fail(f"array '{p}contacts' never puts a foot down")
+        low = _lowest_joint(d, p)
+        if abs(low) > MAX_FLOOR_GAP:
+            _fail(
+                f"array '{p}root_local' with 'skel_rest' and '{p}rotations' puts the feet "
+                f"{low:+.3g} m from the floor, not within {MAX_FLOOR_GAP:g} m"
+            )
+        turn, seam = _array(d, p + "scalars", "f", (2,), finite=True)
+        if abs(turn) > 4 * np.pi or not 0.0 <= seam <= 180.0:
+            _fail(f"array '{p}scalars' (turn {turn:.3g} rad, seam {seam:.3g} deg) is out of range")
         _array(d, p + "name", "U", ())
+    _array(d, "gait_turn_range", "f", (2,), lo=-4 * np.pi, hi=4 * np.pi)
+    _array(d, "pose_centres", "f", (k, None), lo=-1e3, hi=1e3)
+    _segment_sense(d, header, fps, frames)
     return header
+
+
+def _skeleton_sense(d, parents):
+    """Rest matrices that are rigid placements within reach, and parents that lead to a root."""
+    rest = d["skel_rest"]
+    rot = rest[:, :3, :3]
+    with np.errstate(over="ignore", invalid="ignore"):
+        ortho = np.abs(rot @ rot.transpose(0, 2, 1) - np.eye(3)).max()
+    if ortho > UNIT_TOL or (np.linalg.det(rot) < 0).any():
+        _fail("array 'skel_rest' holds matrices that are not rotations (scaled or mirrored)")
+    if np.abs(rest[:, 3] - (0.0, 0.0, 0.0, 1.0)).max() > UNIT_TOL:
+        _fail("array 'skel_rest' holds matrices whose last row is not (0, 0, 0, 1)")
+    reach = np.linalg.norm(rest[:, :3, 3], axis=1)
+    if reach.max() > MAX_EXTENT:
+        _fail(f"array 'skel_rest' places a bone {reach.max():.3g} m out, over {MAX_EXTENT:g} m")
+    if np.ptp(rest[:, :3, 3], axis=0).max() < 1e-3:
+        _fail("array 'skel_rest' puts every bone at one point (no bone has a length)")
+    up = parents.copy()
+    for _ in range(parents.size):  # after j steps up every bone must have reached a root
+        up = np.where(up >= 0, parents[np.maximum(up, 0)], -1)
+    if (up >= 0).any():
+        _fail("array 'skel_parents' has a loop (a bone is its own ancestor)")
+    top = np.arange(parents.size)
+    for _ in range(parents.size):
+        top = np.where(parents[top] >= 0, parents[top], top)
+    if np.unique(top).size != 1:
+        _fail("array 'skel_parents' has several roots (bones the walking root would not carry)")
+
+
+def _lowest_joint(d, prefix):
+    """Height of the lowest joint over a loop, by forward kinematics of its frames."""
+    skel = Skeleton.from_dict({k[5:]: d[k] for k in d if k.startswith("skel_")})
+    local = d[prefix + "root_local"]
+    root = np.column_stack((np.zeros((local.shape[0], 2)), local[:, 2]))
+    with np.errstate(all="ignore"):
+        return float(forward_kinematics(skel, root, d[prefix + "rotations"])[..., 2, 3].min())
+
+
+def _segment_sense(d, header, fps, frames):
+    """Each segment's stored length, turn, cells and effort are what its curve gives."""
+    side, nodes = float(header["side"]), int(header["nodes"])
+    e0, k0, h0 = split_node_id(d["seg_entry"], nodes)
+    e1, k1, h1 = split_node_id(d["seg_exit"], nodes)
+    p0, p1 = node_position(e0, k0, side, nodes), node_position(e1, k1, side, nodes)
+    scale = d["seg_scale"]
+    if scale.max() > 100.0:
+        _fail(f"array 'seg_scale' holds {scale.max():.3g}, above 100")
+    pos, vel, _ = curves.hermite(
+        p0,
+        curves.unit(h0 * np.pi / 4),
+        p1,
+        curves.unit(h1 * np.pi / 4),
+        scale,
+        np.linspace(0.0, 1.0, 257),
+    )
+    length = curves.arc_lengths(pos)[:, -1]
+    heading = np.unwrap(np.arctan2(vel[..., 1], vel[..., 0]), axis=1)
+    turn = np.abs(np.diff(heading, axis=1)).sum(axis=1)
+    for key, stored, want, slack in (
+        ("seg_length", d["seg_length"], length, 1e-6),
+        ("seg_turn", d["seg_turn"], turn, 0.05),
+    ):
+        bad = np.abs(stored - want) > MATCH_TOL * want + slack
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            _fail(
+                f"array '{key}' says {stored[i]:.4g} for segment {i}, whose curve (header "
+                f"'side' {side:g}, 'seg_entry', 'seg_exit', 'seg_scale') gives {want[i]:.4g}"
+            )
+    visited = cell_mask(pos[:, ::8], side, int(header["cells"]))
+    if ((visited & d["seg_mask"]) != visited).any():
+        _fail("array 'seg_mask' leaves out cells its segments' curves cross")
+    rate = float(header["effort_rate"])
+    if rate > MAX_EFFORT_RATE:
+        _fail(f"header field 'effort_rate' is {rate:g}, above {MAX_EFFORT_RATE:g}")
+    per_cycle = np.array([min(frames), max(frames)]) / fps * rate
+    effort, cycles = d["seg_effort"], d["seg_cycles"]
+    low = effort < cycles * per_cycle[0] * (1 - MATCH_TOL) - 1e-9
+    high = effort > cycles * per_cycle[1] * (1 + MATCH_TOL) + 1e-9
+    if (low | high).any():
+        i = int(np.flatnonzero(low | high)[0])
+        _fail(
+            f"array 'seg_effort' says {effort[i]:.4g} for segment {i}: {cycles[i]} cycles at "
+            f"'effort_rate' {rate:g} take {cycles[i] * per_cycle[0]:.4g}-"
+            f"{cycles[i] * per_cycle[1]:.4g}"
+        )

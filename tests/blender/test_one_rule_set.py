@@ -235,7 +235,7 @@ def test_an_imported_patch_is_the_active_one_through_every_door(scene, mp, cli, 
     assert api.import_patch(scene, patch_file, "by api") == "by api"
     assert api.active_patch_name(scene) == "by api" == s.patches[s.active_patch_index].name
     assert bpy.ops.motion_patches.import_patch(filepath=str(patch_file)) == {"FINISHED"}
-    assert api.active_patch_name(scene) == "walk"  # stored under its layer's name
+    assert api.active_patch_name(scene) == "walk.001"  # the scene's 'walk' is kept
     path = tmp_path / "with two.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(path))
     out = tmp_path / "imported.blend"
@@ -287,7 +287,7 @@ def test_file_import_offers_mocap_and_patch_files_and_both_import(scene, mp, moc
     patch_file = tmp_path / "walk.mpatch"
     mp.api.export_patch(scene, patch_file)
     assert bpy.ops.motion_patches.import_patch(filepath=str(patch_file)) == {"FINISHED"}
-    assert mp.api.active_patch_name(scene) == "walk"
+    assert mp.api.active_patch_name(scene) == "walk.001"  # beside the scene's own 'walk'
     with pytest.raises(RuntimeError, match="patch file not found"):
         bpy.ops.motion_patches.import_patch(filepath=str(tmp_path / "missing.mpatch"))
 

@@ -153,7 +153,7 @@ def test_crafted_arrays_are_refused_naming_the_array(good, case):
         ({"version": None}, "'version' is None"),
         ({"version": 0}, "'version' is 0"),
         ({"version": "1"}, "'version' is '1'"),
-        ({"version": 99}, "format 99 is newer"),
+        ({"version": 99}, "format version 99 is newer"),
         ({"format": "something else"}, "wrong format tag"),
     ],
 )
