@@ -79,6 +79,17 @@ def check_rig(obj, skel, floor=0.0):
     return rig_io.rig_for(obj, skel, floor)
 
 
+def drives_root(obj):
+    """Whether the add-on's root track (unmuted) places ``obj``: its location and facing
+    at any frame are then the plan's, not where the user put it."""
+    ad = obj.animation_data
+    names = json.loads(obj.get(TRACKS_KEY, "[]"))
+    if ad is None or TRACK_ROOT not in names:
+        return False
+    track = ad.nla_tracks.get(TRACK_ROOT)
+    return track is not None and not track.mute
+
+
 def remove_owned(obj):
     """Remove the NLA tracks this add-on made on ``obj`` (and nothing else)."""
     ad = obj.animation_data

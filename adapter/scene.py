@@ -95,12 +95,12 @@ def ground_state(obj):
     return np.array([m[0, 3], m[1, 3], np.arctan2(fwd[1], fwd[0])])
 
 
-def character_state(obj, skel):
+def character_state(obj, skel, matrix=None):
     """(x, y, heading) of a character: its root's ground position and its rest facing
-    turned by the object's rotation."""
+    turned by the object's rotation (``matrix``: its world matrix, default the current)."""
     from ..motion_patches.kinematics.inplace import rest_facing
 
-    m = np.array(obj.matrix_world)
+    m = np.array(obj.matrix_world if matrix is None else matrix)
     f = m[:3, :3] @ rest_facing(skel)
     root = m @ np.append(skel.rest[skel.root, :3, 3], 1.0)
     return np.array([root[0], root[1], np.arctan2(f[1], f[0])])

@@ -136,6 +136,16 @@ def has_plan(obj):
     return obj is not None and PLAN_KEY in obj
 
 
+def stood(obj):
+    """The 4x4 world matrix ``obj`` had where its plans start (kept in its plan record by
+    every write), or None for a record without one."""
+    try:
+        m = plan_meta(obj).get("stood")
+    except ValueError:
+        return None
+    return None if m is None else np.array(m, float).reshape(4, 4)
+
+
 def plan_meta(obj):
     """The JSON part of ``obj``'s plan record (no arrays decoded); ValueError when none."""
     raw = obj.get(PLAN_KEY)

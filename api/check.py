@@ -32,6 +32,7 @@ from .common import (
 )
 from .errors import MotionPatchesError
 from .settings import plan_settings
+from .solve import _start_matrix
 
 
 def analyse(context: bpy.types.Context, character: bpy.types.Object, keep: bool = False) -> dict:
@@ -123,7 +124,8 @@ def _resolve(scene, place, what, patch):
         )
     if what == "character" or (what == "start" and ob.type == "ARMATURE"):
         rig = _check_character(ob, patch)  # the rule plan_path applies to its character
-        return scene_io.character_state(ob, rig.target if rig else patch.gait.skeleton), ob
+        skel = rig.target if rig else patch.gait.skeleton
+        return scene_io.character_state(ob, skel, _start_matrix(ob)), ob
     return scene_io.ground_state(ob), ob
 
 
@@ -213,6 +215,14 @@ def check_layout(
             if ob is not None:
                 for o in (ob, *ob.children_recursive):
                     exclude[o.name] = o
+        # Coordinates no plan can take are bad input (the spec's), not a failed pair.
+        facing_goal = goal if p["goal_facing"] != "any" else np.array([*goal[:2], np.nan])
+        try:
+            _check_far(
+                _shrunk(start, size), _shrunk(facing_goal, size), f"pair '{p['name']}'", size
+            )
+        except MotionPatchesError as exc:
+            raise MotionPatchesError(f"layout spec: {exc}") from None
         jobs.append((p, start, sob, goal, gob, exclude, size))
     envs, results, props = {}, [], {}
     for p, start, sob, goal, gob, exclude, size in jobs:
@@ -262,11 +272,8 @@ def check_layout(
             goal = np.array([goal[0], goal[1], np.nan])
         start, goal = _shrunk(start, size), _shrunk(goal, size)
         try:
-            _check_far(start, goal, "start", size)
             with causes.counted(planner) as expanded:
                 plan = planner.plan(start, goal, margin_tiles=margin)
-        except MotionPatchesError as exc:
-            r["error"], r["blocked_reason"] = str(exc), "refused"
         except PlanError as exc:
             if expanded[0] >= causes.SEARCH_LIMIT:
                 r["error"], r["blocked_reason"] = _limit_text(expanded[0]), "search limit"

@@ -147,7 +147,13 @@ def _check_far(start, goal, who, scale=1.0):
     goal farther apart than ``MAX_DISTANCE`` (planner-world states of a character ``scale``
     times the patch's size), and a goal where the start is (same place, same facing)."""
     for what, state in (("start", start), ("goal", goal)):
-        far = float(np.abs(np.asarray(state[:2], float)).max()) * scale
+        xy = np.asarray(state[:2], float)
+        if not np.isfinite(xy).all() or not np.isfinite(state[2]) and what == "start":
+            raise MotionPatchesError(
+                f"the {what} of {who} has a coordinate or facing that is not a number "
+                f"({', '.join(f'{v:g}' for v in np.asarray(state, float))}): check its transform"
+            )
+        far = float(np.abs(xy).max()) * scale
         if not far <= MAX_COORDINATE:
             raise MotionPatchesError(
                 f"the {what} of {who} lies {far:.3g} m from the origin; "

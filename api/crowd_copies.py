@@ -16,6 +16,9 @@ from .errors import MotionPatchesError
 CROWD_COLLECTION = "MP Crowd"
 
 
+MAX_COPIES = 10_000  # copies one Duplicate Crowd makes (each an object and a goal)
+
+
 def duplicate_crowd(
     scene: bpy.types.Scene,
     source: bpy.types.Object,
@@ -50,12 +53,28 @@ def duplicate_crowd(
         ) from None
     if count < 1:
         raise MotionPatchesError("a crowd needs at least one character")
+    if count > MAX_COPIES:
+        raise MotionPatchesError(
+            f"a crowd of {count:,} copies is more than Duplicate Crowd makes at once "
+            f"({MAX_COPIES:,}): duplicate it in parts"
+        )
+    spacing = 2 * radius if spacing is None else float(spacing)
     for what, r in (("region", corners), ("goal region", goal_corners)):
-        if not np.isfinite(r).all() or (r[1] <= r[0]).any():
+        if not np.isfinite(r).all():
+            raise MotionPatchesError(f"the {what}'s corners must be numbers, not {r.tolist()}")
+        if (r[1] <= r[0]).any():
             raise MotionPatchesError(
                 f"the {what} must have its second corner above and right of its first"
             )
-    spacing = 2 * radius if spacing is None else float(spacing)
+        # Discs of diameter `spacing + radius` packed as tightly as discs go (hexagonal):
+        # a region smaller than that cannot hold the crowd, however long it is tried.
+        holds = np.prod(r[1] - r[0] + spacing + radius) / (0.866 * (spacing + radius) ** 2)
+        if holds < count:
+            raise MotionPatchesError(
+                f"the {what} ({(r[1] - r[0])[0]:g} x {(r[1] - r[0])[1]:g} m) cannot hold "
+                f"{count:,} characters {spacing + radius:.2f} m apart (at most about "
+                f"{int(holds):,}): make it larger or the crowd smaller"
+            )
     context.view_layer.update()
     depsgraph = context.evaluated_depsgraph_get()
     env = scene_io.environment(scene, depsgraph, patch, radius, _not_obstacles([source]), 1.0)
@@ -63,16 +82,16 @@ def duplicate_crowd(
     gap = spacing + radius
 
     def scatter(r, what):
-        pts = np.empty((0, 2))
+        pts, n = np.empty((count, 2)), 0
         for _ in range(200 * count):
             p = rng.uniform(r[0], r[1])
-            if env.near(p) or (len(pts) and np.linalg.norm(pts - p, axis=1).min() < gap):
+            if env.near(p) or (n and np.linalg.norm(pts[:n] - p, axis=1).min() < gap):
                 continue
-            pts = np.vstack((pts, p))
-            if len(pts) == count:
+            pts[n], n = p, n + 1
+            if n == count:
                 return pts
         raise MotionPatchesError(
-            f"the {what} holds only {len(pts)} of {count} characters {gap:.2f} m apart and "
+            f"the {what} holds only {n} of {count} characters {gap:.2f} m apart and "
             f"clear of the props: make it larger or the crowd smaller"
         )
 

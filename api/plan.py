@@ -58,6 +58,7 @@ def plan_path(
     goal_facing: str | None = None,
     gait: str | None = None,
     turn_in_place: bool | None = None,
+    from_here: bool = False,
 ) -> PlanResult:
     """Plan ``character`` to ``goal`` (an object or (x, y, heading); None: the scene's goal)
     and write it as NLA. Settings left None are the scene's (:func:`planning_settings`).
@@ -77,7 +78,9 @@ def plan_path(
     cheapest Eq. 5 cost of the motion played (``stats["cost_shortened"]``;
     ``stats["layers"]`` gives each one's, "walk+run" the change's), None takes the
     scene's Gait (Planning panel), whose default plans with ``patch_name`` (or the active
-    patch). Raises
+    patch). A character planned before starts again where it stood then, whatever frame
+    the timeline shows; ``from_here`` starts it where it is at the current frame instead
+    (continue from here). Raises
     :class:`PathNotFound` when the props leave no way, and
     :class:`MotionPatchesError` for bad input; either way the scene is unchanged."""
     settings = plan_settings(
@@ -120,6 +123,7 @@ def plan_path(
                     frame_start,
                     context,
                     start_prop,
+                    from_here,
                 )
                 + (name,)
             )
@@ -169,6 +173,7 @@ def plan_path(
             settings,
             rig,
             layer_keys=layer_keys,
+            from_here=from_here,
         )
 
 
@@ -257,6 +262,7 @@ def _plan_in_layer(
     frame_start,
     context,
     start_prop,
+    from_here=False,
 ):
     """(patch, rig map, planner world, plan, piece motions, first frame, {planner, ends,
     moving: whether props move}) of one character planned in the layer of ``patch``; its
@@ -281,6 +287,7 @@ def _plan_in_layer(
         rig.target if rig else patch.gait.skeleton,
         settings.goal_facing,
         scale,
+        from_here,
     )
     _check_ends(character, ends, scale)
     tracks = moving_io.tracks(scene, depsgraph, list(env.obstacles), frame_start, scale)

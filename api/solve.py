@@ -9,7 +9,7 @@ import math
 import bpy
 import numpy as np
 
-from ..adapter import props_io, transaction
+from ..adapter import nla, props_io, storage, transaction
 from ..adapter import scene as scene_io
 from ..motion_patches.crowd import members
 from ..motion_patches.planning import body_clearance, causes, moving_props
@@ -40,15 +40,45 @@ def _goal(goal):
     return state
 
 
-def _endpoints(character, goal, start_prop, by_name, skel, goal_facing="exact", scale=1.0):
+def _start_matrix(character, from_here=False):
+    """The world matrix a plan of ``character`` starts from. While the add-on's root track
+    places it, where it stood before it was planned (kept in its plan record), whatever
+    frame the timeline shows: re-planning from frame 200 must not start mid-walk. Its place
+    at the current frame when ``from_here`` (continue from here) or when nothing of the
+    add-on animates it."""
+    if not from_here and nla.drives_root(character):
+        m = storage.stood(character)
+        if m is not None:
+            return m
+    return np.array(character.matrix_world)
+
+
+def _endpoints(
+    character,
+    goal,
+    start_prop,
+    by_name,
+    skel,
+    goal_facing="exact",
+    scale=1.0,
+    from_here=False,
+):
     """Start and goal states with the interaction clips that begin / end the path there;
     ``goal_facing`` "any" leaves the goal heading free (NaN) unless a clip fixes it.
     ``skel``: the character's own skeleton; the states are in the planner's world of a
-    character ``scale`` times the patch's size (:func:`_size`)."""
+    character ``scale`` times the patch's size (:func:`_size`). ``from_here``: start where
+    the character is at the current frame (:func:`_start_matrix`)."""
     if goal_facing not in ("exact", "any"):
         raise MotionPatchesError(f"goal facing must be 'exact' or 'any', not {goal_facing!r}")
-    start_state = _shrunk(scene_io.character_state(character, skel), scale)
+    matrix = _start_matrix(character, from_here)
+    start_state = _shrunk(scene_io.character_state(character, skel, matrix), scale)
     goal_state = _shrunk(_goal(goal), scale)
+    if goal_facing == "exact" and isinstance(goal, bpy.types.Object):
+        if np.linalg.norm(np.array(goal.matrix_world)[:2, 1]) < 1e-9:
+            raise MotionPatchesError(
+                f"the goal '{goal.name}' has no facing (its -Y axis is flattened by a zero "
+                "scale or a tilt): give it a scale, or plan with goal facing 'any'"
+            )
     if goal_facing == "any":
         goal_state = np.array([goal_state[0], goal_state[1], np.nan])
     start_ref = goal_ref = None
@@ -181,6 +211,8 @@ def _frame_start(scene, frame_start):
         f = float(frame_start)
     except (TypeError, ValueError):
         raise MotionPatchesError(f"the start frame must be a number, not {frame_start!r}") from None
+    if isinstance(frame_start, bool) or (math.isfinite(f) and f != round(f)):
+        raise MotionPatchesError(f"the start frame must be a whole number, not {frame_start!r}")
     if not (math.isfinite(f) and lo <= f <= hi):
         raise MotionPatchesError(
             f"the start frame {frame_start} is outside what Blender holds ({lo} to {hi})"

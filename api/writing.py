@@ -16,6 +16,7 @@ from ..motion_patches.planning import transitions
 from ..motion_patches.planning.settings import PlanSettings
 from .common import _shrunk, _size, path_length, scene_fps
 from .results import PlanResult
+from .solve import _start_matrix
 
 
 def _placed(scene, patch, rig, motions):
@@ -71,12 +72,15 @@ def _write(
     rig=None,
     fit=True,
     layer_keys=None,
+    from_here=False,
 ):
     """NLA strips and the plan record of one planned character (``placed``: its motion,
     :func:`_placed`; ``env``: the planner's world, shrunk by the character's size; ``settings``: the
     request's, whose radius and foot lock it records and applies).
     ``fit``: fit the scene's frame range now (a crowd fits it once, after every write).
-    ``layer_keys``: {layer: patch key} of a plan that changes layer (:func:`_gait_change`)."""
+    ``layer_keys``: {layer: patch key} of a plan that changes layer (:func:`_gait_change`).
+    ``from_here``: the plan started where the character is now, not where it stood."""
+    stood = _start_matrix(character, from_here)  # read before the record is replaced
     scale = _size(rig)
     goal_state = _shrunk(plan.goal, 1.0 / scale)  # the facing reached when any would do
     skel = rig.target if rig is not None else patch.gait.skeleton
@@ -126,6 +130,7 @@ def _write(
             "frame_start": frame_start,
             "frame_end": frame_end,
             "goal": goal_state.tolist(),
+            "stood": stood.tolist(),
             "boundaries": [s["start"] for s in strips[1:]],
             "radius": settings.radius,
             "facing": nla.facing_angle(skel),

@@ -194,6 +194,12 @@ def _plan_parser(sub, common):
         metavar="N",
         help="first frame of the motion (default: the current frame)",
     )
+    p.add_argument(
+        "--from-here",
+        action="store_true",
+        help="start where the character is at the current frame (continue from here), not "
+        "where it stood before it was planned",
+    )
     _save_options(p)
     p.set_defaults(run=cmd_plan)
 

@@ -64,6 +64,7 @@ def cmd_plan(args):
             patch_name=args.patch,
             frame_start=args.frame_start,
             gait=args.gait,
+            from_here=args.from_here,
             **w,
         )
     except api.PathNotFound as exc:

@@ -3,7 +3,7 @@
 reset the scene's planning settings to the animator's defaults from the preferences."""
 
 import bpy
-from bpy.props import StringProperty
+from bpy.props import BoolProperty, StringProperty
 
 from .. import api, props
 from .common import progress, report_conflicts
@@ -17,6 +17,12 @@ class MOTION_PATCHES_OT_plan_path(bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
 
     patch: StringProperty(name="Patch", description="Locomotion patch (default: the active one)")
+    from_here: BoolProperty(
+        name="From Current Frame",
+        description="Start where the character is at the current frame (continue from here) "
+        "instead of where it stood before it was planned",
+        default=False,
+    )
 
     @classmethod
     def poll(cls, context):
@@ -30,6 +36,7 @@ class MOTION_PATCHES_OT_plan_path(bpy.types.Operator):
                 context.scene.motion_patches.goal,
                 patch_name=self.patch or None,
                 context=context,
+                from_here=self.from_here,
             )
         except api.MotionPatchesError as exc:
             self.report({"ERROR"}, str(exc))

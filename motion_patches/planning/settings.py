@@ -174,6 +174,15 @@ class PlanSettings:
     goal_facing: str = _default("goal_facing", str)
     turn_in_place: bool = _default("turn_in_place", bool)
 
+    def __post_init__(self) -> None:
+        # With every weight 0 every path costs nothing: the search has nothing to prefer
+        # and wanders (a cost-0 plan of any length).
+        if self.alpha == self.beta == self.gamma == 0.0:
+            raise ValueError(
+                "the weights alpha, beta and gamma are all 0: every path would cost nothing; "
+                "give at least one a positive weight"
+            )
+
     @classmethod
     def checked(cls, where: str = "", **values: object) -> "PlanSettings":
         """Settings from ``values`` (defaults for those left out), each checked by its

@@ -534,6 +534,10 @@ def test_check_without_spec_rechecks_planned_characters(cli, capsys, layout, tmp
         ),
         ('{"pairs": [{"start": [0, 0], "goal": "Goal"}]}', "[x, y, heading_deg]"),
         ('{"pairs": []}', "non-empty list"),
+        (  # a goal no plan can reach is bad input, not a failed pair (exit 1)
+            '{"pairs": [{"character": "Walker", "goal": [1e12, 0, 0]}]}',
+            "lies 1e+12 m from the origin",
+        ),
     ],
 )
 def test_check_bad_spec_exits_2(cli, capsys, layout, tmp_path, content, needle):

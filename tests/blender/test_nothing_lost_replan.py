@@ -1,0 +1,96 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Re-planning from another frame keeps the start: a character planned once and re-planned
+with the timeline mid-walk starts again where it stood before it was planned (its evaluated
+position on the first frame), through the operator and the API with ``frame_start=1``;
+"from here" (the operator's From Current Frame, the CLI's --from-here) starts where it is."""
+
+import sys
+
+import bpy
+import numpy as np
+import pytest
+
+from scene_helpers import empty, walker_from
+
+START = (0.4, 0.3, 0.0)
+
+
+@pytest.fixture
+def mp(addon_module_name):
+    return sys.modules[addon_module_name]
+
+
+@pytest.fixture
+def planned(mp, walk_blend):
+    """Walker planned from START at frame 1 to a goal 6 m away; the timeline then at 100."""
+    bpy.ops.wm.open_mainfile(filepath=str(walk_blend))
+    scene = bpy.context.scene
+    scene.frame_set(1)
+    walker = walker_from(scene.motion_patches.source_armature, location=START)
+    goal = empty("Goal", 6.0, 0.3, -90.0)
+    scene.motion_patches.goal = goal
+    res = mp.api.plan_path(scene, walker, goal, frame_start=1)
+    scene.frame_set(res.frame_start + (res.frame_end - res.frame_start) // 2)
+    return scene, walker, goal
+
+
+def hips_at(scene, walker, frame):
+    """World (x, y) of the evaluated root bone's head at ``frame``."""
+    scene.frame_set(frame)
+    ev = walker.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    root = ev.pose.bones[0]
+    return np.array(ev.matrix_world @ root.head)[:2]
+
+
+def first_ground(mp, walker):
+    return np.array(mp.api.load_plan_record(walker)[1]["ground"][0][:2])
+
+
+def test_replanning_mid_walk_with_the_api_starts_where_it_stood(mp, planned):
+    scene, walker, goal = planned
+    before = hips_at(scene, walker, 1)
+    start = first_ground(mp, walker)
+    scene.frame_set(120)
+    mid = hips_at(scene, walker, 120)
+    assert np.linalg.norm(mid - before) > 1.0  # the timeline is mid-walk
+    mp.api.plan_path(scene, walker, goal, frame_start=1)
+    assert np.allclose(first_ground(mp, walker), start, atol=1e-6)
+    assert np.linalg.norm(hips_at(scene, walker, 1) - before) < 0.001
+
+
+def test_replanning_mid_walk_with_the_operator_starts_where_it_stood(mp, planned):
+    scene, walker, goal = planned
+    before = hips_at(scene, walker, 1)
+    scene.frame_set(120)
+    bpy.context.view_layer.objects.active = walker
+    assert bpy.ops.motion_patches.plan_path() == {"FINISHED"}
+    # The plan starts at the current frame, from where the character stood.
+    rec = mp.api.load_plan_record(walker)[0]
+    assert rec["frame_start"] == 120
+    assert np.linalg.norm(hips_at(scene, walker, 120) - before) < 0.001
+    assert np.linalg.norm(hips_at(scene, walker, 1) - before) < 0.001  # held before it
+
+
+def test_from_here_continues_from_the_current_frame(mp, planned):
+    scene, walker, goal = planned
+    scene.frame_set(120)
+    mid = hips_at(scene, walker, 120)
+    bpy.context.view_layer.objects.active = walker
+    assert bpy.ops.motion_patches.plan_path(from_here=True) == {"FINISHED"}
+    assert np.linalg.norm(hips_at(scene, walker, 120) - mid) < 0.05
+
+
+def test_the_cli_has_from_here(mp, planned, capsys):
+    scene, walker, goal = planned
+    scene.frame_set(120)
+    mid = hips_at(scene, walker, 120)
+    code = mp.cli.main(["plan", "--character", "Walker", "--goal", "Goal", "--from-here"])
+    assert code == 0, capsys.readouterr()
+    assert np.linalg.norm(hips_at(scene, walker, 120) - mid) < 0.05
+
+
+@pytest.mark.parametrize("frame", [1.5, True])
+def test_a_start_frame_that_is_not_a_whole_number_is_refused(mp, planned, frame):
+    scene, walker, goal = planned
+    with pytest.raises(mp.api.MotionPatchesError, match="whole number"):
+        mp.api.plan_path(scene, walker, goal, frame_start=frame)
