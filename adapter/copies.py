@@ -22,7 +22,7 @@ def make_copies(scene, source, starts, goals, facing, collection):
         ob = source.copy()  # object copy, armature data shared
         ob.name = f"{source.name}.crowd{k:03d}"
         ob.animation_data_clear()
-        for key in (storage.PLAN_KEY, nla.TRACKS_KEY):
+        for key in (storage.PLAN_KEY, nla.TRACKS_KEY, nla.ACTIONS_KEY):
             if key in ob:
                 del ob[key]
         coll.objects.link(ob)
@@ -40,19 +40,19 @@ def make_copies(scene, source, starts, goals, facing, collection):
 
 def remove_copies(pairs, collection):
     """Remove the copies and goals of :func:`make_copies`, the actions planning made for
-    them (:data:`nla.CHARACTER_KEY`) and their collections (named from ``collection``) when
+    them (:func:`nla.made_for`) and their collections (named from ``collection``) when
     left empty."""
     colls = set()
     for ob, goal in pairs:
         for o in (ob, goal):
             colls.update(c for c in o.users_collection if c.name.startswith(collection))
-        names = {ob.name}
+        made = [a for a in bpy.data.actions if nla.made_for(a, ob)]
         if ob.animation_data is not None:
             ob.animation_data_clear()
         bpy.data.objects.remove(ob)
         bpy.data.objects.remove(goal)
-        for a in list(bpy.data.actions):
-            if a.get(nla.CHARACTER_KEY) in names and a.users == 0:
+        for a in made:
+            if a.users == 0:
                 bpy.data.actions.remove(a)
     for c in colls:
         if not c.objects and not c.children:

@@ -12,6 +12,7 @@ of the bone (or object) it drives: a bone plays only the channel of its own mode
 
 import hashlib
 import json
+import uuid
 
 import numpy as np
 
@@ -29,6 +30,8 @@ TRACK_FOOT = TRACK_PREFIX + "foot lock"
 TRACKS_KEY = "motion_patches_tracks"
 SEGMENT_KEY = "motion_patches_segment"
 CHARACTER_KEY = "motion_patches_character"
+ACTIONS_KEY = "motion_patches_actions"  # object: {action id: name} of what planning made for it
+ACTION_ID = "motion_patches_id"  # action: its id, kept by its character under ACTIONS_KEY
 STASH_PREFIX = TRACK_PREFIX + "stash: "
 
 
@@ -90,6 +93,46 @@ def drives_root(obj):
     return track is not None and not track.mute
 
 
+def owned_actions(obj):
+    """{action id: action name} of the actions planning made for ``obj``; None for a
+    character planned before ids were kept."""
+    raw = obj.get(ACTIONS_KEY)
+    if raw is None:
+        return None
+    try:
+        owned = json.loads(raw)
+    except (TypeError, ValueError):
+        return {}
+    return owned if isinstance(owned, dict) else {}
+
+
+def made_for(action, obj):
+    """Whether planning made ``action`` for ``obj`` and may replace it: its id is one
+    ``obj`` keeps, under the name it was made with. A user's copy (the id copied, another
+    name) is the user's, and so is an action of the add-on the user renamed; a character
+    renamed keeps its actions. Characters planned before ids were kept: the name tag."""
+    if action is None:
+        return False
+    owned = owned_actions(obj)
+    if owned is None:
+        return action.get(CHARACTER_KEY) == obj.name
+    return owned.get(action.get(ACTION_ID)) == action.name
+
+
+def _claim_actions(obj, ad, tracks):
+    """Give the character's own actions on ``tracks`` (not the shared segment actions) ids
+    and keep them on ``obj``: what a later plan may replace."""
+    made = {}
+    for name in tracks:
+        tr = ad.nla_tracks.get(name)
+        for st in tr.strips if tr is not None else ():
+            a = st.action
+            if a is not None and a.get(SEGMENT_KEY) is None and a.get(ACTION_ID) is None:
+                a[ACTION_ID] = uuid.uuid4().hex
+                made[a[ACTION_ID]] = a.name
+    obj[ACTIONS_KEY] = json.dumps(made)
+
+
 def remove_owned(obj):
     """Remove the NLA tracks this add-on made on ``obj`` (and nothing else)."""
     ad = obj.animation_data
@@ -101,9 +144,9 @@ def remove_owned(obj):
             ad.nla_tracks.remove(tr)
 
 
-def _orphan_connectors(bpy, character_name):
+def _orphan_connectors(bpy, obj):
     for a in list(bpy.data.actions):
-        if a.get(CHARACTER_KEY) == character_name and a.users == 0:
+        if a.users == 0 and made_for(a, obj):
             bpy.data.actions.remove(a)
 
 
@@ -239,7 +282,7 @@ def write_plan(
     ad = obj.animation_data or obj.animation_data_create()
     stashed = stash_active_action(obj)
     remove_owned(obj)
-    _orphan_connectors(bpy, obj.name)
+    _orphan_connectors(bpy, obj)
 
     motion_track = ad.nla_tracks.new()
     motion_track.name = TRACK_MOTION
@@ -316,6 +359,7 @@ def write_plan(
         _write_foot_lock(obj, skel, world, locked, frame_start, modes, played)
         owned.append(TRACK_FOOT)
     obj[TRACKS_KEY] = json.dumps(owned)
+    _claim_actions(obj, ad, owned)
     return strips, stashed
 
 

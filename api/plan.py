@@ -177,6 +177,14 @@ def plan_path(
         )
 
 
+def _too_low(prop, clip, clears, height, scale=1.0):
+    """A sentence: a traversal clip not offered because it does not clear its prop."""
+    return (
+        f"{clip} clears {clears * scale:.2f} m over '{prop.name}', which is "
+        f"{height * scale:.2f} m high: not offered"
+    )
+
+
 def _gait_change(tried):
     """((plan, piece motions), None) of the cheapest plan that walks, runs through the run
     layer's traversals and walks again (:func:`motion_patches.planning.transitions.compose`), from
@@ -307,5 +315,8 @@ def _plan_in_layer(
         frame_start += int(round(wait * scene_fps(scene)))
         motions = plan_motions(patch, plan)
     plan.stats["glitches"] = validate.count(validate.plan_glitches(patch, plan, motions))
+    low = [_too_low(p, *t, scale) for p in props for t in p.too_low]
+    if low:  # why the walk goes round a tagged prop
+        plan.stats["traversals_too_low"] = low
     layer = {"planner": planner, "ends": ends, "moving": bool(tracks)}  # for _gait_change
     return patch, rig, env, plan, motions, frame_start, layer

@@ -115,7 +115,8 @@ def cmd_analyse(args):
         f"{f['goal_heading_error_deg']:.1f} deg "
         f"(hips {f['goal_root_position_error_cm']:.1f} cm)",
         f"  root from plan: max {f['root_from_plan_cm']['max']:.2f} cm; frames inside an "
-        f"obstacle: {f['frames_root_inside_obstacle']}",
+        f"obstacle: root {f['frames_root_inside_obstacle']}, any bone "
+        f"{f['frames_body_inside_prop']}",
         f"  largest joint jump at a strip boundary: "
         f"{f['boundary_pop'].get('max_boundary_jump_deg', float('nan')):.1f} deg",
     ]

@@ -321,7 +321,7 @@ def test_analyse_keeps_the_figures_on_the_character(scene, addon_module):
     assert (
         f"Foot skate: {sk['mean_cm_per_frame']:.2f} cm/frame ({sk['mean_cm_per_s']:.1f} cm/s)"
     ) in lines
-    assert "Frames inside props: 0" in lines
+    assert "Frames inside props: root 0, body 0" in lines
     assert any(t.startswith("Boundary pop: ") for t in lines)
     activate("Walker.B")  # not analysed: the panel says what to do
     lines = [t for k, t in draw_panels(addon_module)["Analysis"] if k == "label"]
