@@ -23,6 +23,7 @@ from ..motion_patches.planning import moving_props
 from ..motion_patches.planning.settings import PlanSettings
 from ..motion_patches.props.environment import Obstacle
 from .common import (
+    ANALYSIS_KEY,
     PLAN_KEY,
     _check_character,
     _not_obstacles,
@@ -570,7 +571,10 @@ def _write_all(c, planned, schedules):
     for (n, plan, _, placed, _), s in zip(planned, schedules):
         _writable(c.pairs[n][0], c.first + s.delay, placed[2].frames)
     with transaction.kept(
-        bpy, c.scene, [c.pairs[n][0] for n, *_ in planned], (PLAN_KEY, FRAME_RANGE_KEY)
+        bpy,
+        c.scene,
+        [c.pairs[n][0] for n, *_ in planned],
+        (PLAN_KEY, ANALYSIS_KEY, FRAME_RANGE_KEY),
     ):
         for (n, plan, _, placed, _), s in zip(planned, schedules):
             env = _world_of(c, c.sizes[n]).env

@@ -15,6 +15,7 @@ from ..motion_patches.planning.settings import PlanSettings
 from ..motion_patches.props.environment import Obstacle
 from ..motion_patches.quality import validate
 from .common import (
+    ANALYSIS_KEY,
     PLAN_KEY,
     _check_character,
     _not_obstacles,
@@ -160,7 +161,7 @@ def plan_path(
             plan.stats["gait_change"] = why
     placed = _placed(scene, patch, rig, motions)
     _writable(character, start_frame, placed[2].frames)
-    with transaction.kept(bpy, scene, [character], (PLAN_KEY, FRAME_RANGE_KEY)):
+    with transaction.kept(bpy, scene, [character], (PLAN_KEY, ANALYSIS_KEY, FRAME_RANGE_KEY)):
         return _write(
             scene,
             character,

@@ -144,6 +144,7 @@ def _write(
             "obstacles": {o.name: (o.polygon * scale).tolist() for o in env.obstacles.values()},
         },
     )
+    storage.forget_analysis(character)  # the Analysis panel must not show the last plan's
     if fit:
         _fit_frame_range(scene)
     return PlanResult(

@@ -270,18 +270,26 @@ def _switch(on):
     enable() if on else disable()
 
 
+# Undo and redo put the setting back without its update callback: sync after them too.
+_HANDLERS = ("load_post", "undo_post", "redo_post")
+
+
 def register_handlers():
     props.overlay_switch = _switch  # Show Planner Overlay ticked or unticked
-    if _on_load not in bpy.app.handlers.load_post:
-        bpy.app.handlers.load_post.append(_on_load)
+    for name in _HANDLERS:
+        handlers = getattr(bpy.app.handlers, name)
+        if _on_load not in handlers:
+            handlers.append(_on_load)
     if sync() is not None:
         bpy.app.timers.register(sync, first_interval=0.1)
 
 
 def unregister_handlers():
     props.overlay_switch = None
-    if _on_load in bpy.app.handlers.load_post:
-        bpy.app.handlers.load_post.remove(_on_load)
+    for name in _HANDLERS:
+        handlers = getattr(bpy.app.handlers, name)
+        if _on_load in handlers:
+            handlers.remove(_on_load)
     if bpy.app.timers.is_registered(sync):
         bpy.app.timers.unregister(sync)
     disable()  # never leave a draw handler behind

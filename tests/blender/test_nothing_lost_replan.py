@@ -134,3 +134,12 @@ def test_a_renamed_character_is_planned_again_over_its_own_strips(mp, planned):
     res = mp.api.plan_path(scene, walker, goal, frame_start=1)
     assert res.frame_end > res.frame_start
     assert not old & {a.name for a in bpy.data.actions}  # replaced, none left behind
+
+
+def test_a_re_plan_drops_the_last_plan_s_analysis(mp, planned):
+    """The Analysis panel must not show the figures of a plan that is gone."""
+    scene, walker, goal = planned
+    mp.api.analyse(bpy.context, walker, keep=True)
+    assert mp.api.last_analysis(walker) is not None
+    mp.api.plan_path(scene, walker, goal, frame_start=1)
+    assert mp.api.last_analysis(walker) is None
