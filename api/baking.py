@@ -13,7 +13,7 @@ import numpy as np
 
 from ..adapter import actions as act_io
 from ..adapter import compat, mocap, storage, transaction
-from ..motion_patches.patch import layers
+from ..motion_patches.patch import layers, serialize
 from ..motion_patches.patch.gait import MIN_TURN, build_gait
 from ..motion_patches.patch.locomotion_patch import bake
 from .common import _some_names, scene_fps
@@ -71,6 +71,16 @@ def bake_locomotion_patch(
     for what, v in (("cells", cells), ("nodes per edge", nodes)):
         if not (isinstance(v, int) and 2 <= v <= 8):
             raise MotionPatchesError(f"{what} must be a whole number from 2 to 8, not {v!r}")
+    top = serialize.MAX_EFFORT_RATE
+    if effort_rate is not None and not (
+        isinstance(effort_rate, (int, float))
+        and not isinstance(effort_rate, bool)
+        and 0.0 <= effort_rate <= top
+    ):
+        raise MotionPatchesError(
+            f"the effort rate (effort T per second of motion) must be a number from 0 to "
+            f"{top:g}, not {effort_rate!r}"
+        )
     files = [Path(f).expanduser() for f in bvh_files]
     armature = _bake_armature(scene, armature, bool(files))
     stems = {f.stem for f in files}

@@ -262,7 +262,8 @@ def sync():
 
 
 @bpy.app.handlers.persistent
-def _on_load(_file=None):
+def _on_load(*_args):
+    # load_post, undo_post, redo_post: whatever Blender passes (a file path, a scene...).
     sync()
 
 
