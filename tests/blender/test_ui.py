@@ -40,7 +40,8 @@ def ui_blend(addon_module, mocap_dir, tmp_path_factory):
     assert bpy.ops.motion_patches.turn_add() == {"FINISHED"}
     s.turn_actions[s.active_turn_index].action = acts[1]
     assert bpy.ops.motion_patches.bake_locomotion_patch(layer="walk") == {"FINISHED"}
-    bpy.context.view_layer.objects.active = prop_box("Chair", 4.0, 0.3)
+    # A chair-sized footprint 15 cm high: the standing jump 16_06 clears it.
+    bpy.context.view_layer.objects.active = prop_box("Chair", 4.0, 0.3, size=(0.4, 0.44, 0.15))
     assert bpy.ops.motion_patches.tag_object_patch(action="16_06", kind="TRAVERSAL") == {"FINISHED"}
     for name, y in (("Walker", 0.3), ("Walker.B", -2.5)):
         walker = walker_from(arm, name=name, location=(1.0, y, 0))
