@@ -160,6 +160,13 @@ class MOTION_PATCHES_PG_character(bpy.types.PropertyGroup):
         "crowd (empty: the scene's goal; a character with "
         "neither is refused, named)",
     )
+    start_prop: PointerProperty(
+        type=bpy.types.Object,
+        name="Start Prop",
+        description="A prop tagged with a stand-up clip this character starts seated on "
+        "when Plan Path plans it (empty: where it stands)",
+        poll=lambda self, ob: ob.type == "MESH",
+    )
 
 
 class MOTION_PATCHES_PG_rig(bpy.types.PropertyGroup):

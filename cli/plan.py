@@ -65,6 +65,7 @@ def cmd_plan(args):
             frame_start=args.frame_start,
             gait=args.gait,
             from_here=args.from_here,
+            start_prop=args.start_prop and object_named(args.start_prop, "start prop", {"MESH"}),
             **w,
         )
     except api.PathNotFound as exc:

@@ -36,6 +36,7 @@ class MOTION_PATCHES_OT_plan_path(bpy.types.Operator):
                 context.scene.motion_patches.goal,
                 patch_name=self.patch or None,
                 context=context,
+                start_prop=context.active_object.motion_patches_character.start_prop,
                 from_here=self.from_here,
             )
         except api.MotionPatchesError as exc:

@@ -22,6 +22,7 @@ class MOTION_PATCHES_PT_planning(SidebarPanel, bpy.types.Panel):
             col = layout.column(align=True)
             wrapped_label(col, context, f"{ob.name}'s Own Goal (crowds)")
             col.prop(ob.motion_patches_character, "goal", text="")
+            layout.prop(ob.motion_patches_character, "start_prop")
             draw_bone_map(layout, context, ob)
         col = layout.column(align=True)
         col.prop(s, "alpha")

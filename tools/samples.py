@@ -10,7 +10,8 @@ from, not a result.
   turns); a line of low hurdles tagged with the standing jump 16_06 (which clears them); two
   chairs tagged with subject 13's sit-down and stand-up (13_05, retargeted onto subject 16);
   pillars; ``Walker`` with ``Goal`` across the hurdles; ``Sitter`` on ``Chair A`` whose goal is
-  ``Chair B`` (plan it with Start Prop ``Chair A``: stand up, walk, sit down).
+  ``Chair B`` and whose Start Prop is ``Chair A`` (set the Goal to ``Chair B``, Plan Path: it
+  stands up, walks and sits down).
 * ``samples/crowd.blend``: the same patch, a plaza of pillars and twelve walkers crossing it
   in two groups, each with its own goal (select them all, Plan Crowd).
 """
@@ -114,6 +115,7 @@ def props_scene(bpy, api, mocap, out):
     api.tag_object_patch(b, [(acts["13_05"], "INTERACTION", 2.0, 0.0)])
     sitter = character(bpy, arm, "Sitter", 1.0, -5.0, -math.pi / 2)
     sitter.motion_patches_character.goal = b
+    sitter.motion_patches_character.start_prop = a
     bpy.context.view_layer.objects.active = walker
     return save(bpy, out / "props.blend")
 

@@ -60,10 +60,14 @@ def test_the_walker_crosses_the_hurdles_to_its_goal(mp):
 def test_the_sitter_stands_up_walks_and_sits_down(mp):
     scene = open_sample("props.blend")
     sitter, a, b = (bpy.data.objects[n] for n in ("Sitter", "Chair A", "Chair B"))
-    res = mp.api.plan_path(scene, sitter, b, start_prop=a)
-    seated = hips(sitter, res.frame_end)
+    assert sitter.motion_patches_character.start_prop == a
+    scene.motion_patches.goal = b
+    bpy.context.view_layer.objects.active = sitter
+    assert bpy.ops.motion_patches.plan_path() == {"FINISHED"}
+    rec = mp.api.load_plan_record(sitter)[0]
+    seated = hips(sitter, rec["frame_end"])
     assert seated[2] < 0.75 and np.hypot(seated[0] - b.location.x, seated[1] - b.location.y) < 0.3
-    start = hips(sitter, res.frame_start)
+    start = hips(sitter, rec["frame_start"])
     assert start[2] < 0.75 and np.hypot(start[0] - a.location.x, start[1] - a.location.y) < 0.3
 
 
