@@ -235,6 +235,12 @@ class MOTION_PATCHES_PG_scene(bpy.types.PropertyGroup):
         "the props' clips start and end",
         update=lambda self, context: _overlay_toggle(self.show_overlay),
     )
+    overlay_all_lattices: BoolProperty(
+        name="Every Character's Grid",
+        default=False,
+        description="Draw the tile grid, occluded cells and props walked round of every "
+        "visible planned character, not only the active one's (a crowd's grids overlap)",
+    )
 
 
 class MOTION_PATCHES_AP_preferences(bpy.types.AddonPreferences):

@@ -471,3 +471,36 @@ def test_importing_a_file_that_is_not_a_patch_reports_and_changes_nothing(scene,
     with pytest.raises(RuntimeError, match="not a stored locomotion patch"):
         bpy.ops.motion_patches.import_patch(filepath=str(junk))
     assert len(scene.motion_patches.patches) == n
+
+
+def test_the_overlay_draws_paths_of_visible_characters_and_the_active_one_s_grid(
+    scene, addon_module
+):
+    """A crowd's tile grids drawn on top of each other are unreadable: the grid, occluded
+    cells and props walked round are the active character's (or, by the Overlay panel's
+    toggle, every one's); a hidden character's path is not drawn."""
+    overlay, api = addon_module.panels.overlay, addon_module.api
+    for name in ("Walker", "Walker.B"):
+        activate(name)
+        assert bpy.ops.motion_patches.plan_path() == {"FINISHED"}
+    activate("Walker")
+
+    def drawn():
+        return {
+            len(d.ground): bool(d.grid)
+            for d in api.plan_drawings(scene, overlay._lattice_of(scene))
+        }
+
+    frames = {
+        n: api.load_plan_record(bpy.data.objects[n])[1]["ground"].shape[0]
+        for n in ("Walker", "Walker.B")
+    }
+    assert frames["Walker"] != frames["Walker.B"]
+    assert drawn() == {frames["Walker"]: True, frames["Walker.B"]: False}
+    scene.motion_patches.overlay_all_lattices = True
+    assert drawn() == {frames["Walker"]: True, frames["Walker.B"]: True}
+    key = overlay._plans_key(scene)
+    bpy.data.objects["Walker.B"].hide_set(True)
+    assert overlay._plans_key(scene) != key  # the overlay is rebuilt
+    assert drawn() == {frames["Walker"]: True}
+    assert "overlay_all_lattices" in [p for k, p in draw_panels(addon_module)["Overlay"]]
