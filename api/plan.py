@@ -10,6 +10,7 @@ from ..adapter import scene as scene_io
 from ..adapter import storage, transaction
 from ..motion_patches.patch import layers
 from ..motion_patches.planning import body_clearance, transitions
+from ..motion_patches.planning.motions import stand_note
 from ..motion_patches.planning.planner import PlanError, plan_motions
 from ..motion_patches.planning.settings import PlanSettings
 from ..motion_patches.props.environment import Obstacle
@@ -300,5 +301,6 @@ def _plan_in_layer(
         frame_start += int(round(wait * scene_fps(scene)))
         motions = plan_motions(patch, plan)
     plan.stats["glitches"] = validate.count(validate.plan_glitches(patch, plan, motions))
+    plan.stats["stand"] = stand_note(patch, plan)
     layer = {"planner": planner, "ends": ends, "moving": bool(tracks)}  # for _gait_change
     return patch, rig, env, plan, motions, frame_start, layer

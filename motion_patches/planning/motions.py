@@ -58,6 +58,26 @@ def plan_motions(patch: LocomotionPatch, plan: Plan, standing: bool = True) -> l
     return ms
 
 
+def stand_note(patch: LocomotionPatch, plan: Plan) -> str | None:
+    """What :func:`plan_motions` derives at the plan's ends, in words (None: nothing, the
+    plan starts and ends in clips or its gait has no double support, as a run)."""
+    if has_flight(patch.gait) or not plan.pieces:
+        return None
+    clips = ("traversal", "interaction")
+    ends = [
+        word
+        for word, piece in (("start", plan.pieces[0]), ("stop", plan.pieces[-1]))
+        if piece.kind not in clips
+    ]
+    if not ends:
+        return None
+    return (
+        " and ".join(f"{e} (derived)" for e in ends)
+        + ": a stand made from the walk's double-support frame, both feet put down flat"
+        " (no start, stop or idle is recorded for the walking subject)"
+    )
+
+
 def flat_feet(gait: Gait) -> stand.FlatFeet:
     """The gait's feet standing flat (:func:`.stand.flat_feet` of its straight loop;
     cached on the loop)."""

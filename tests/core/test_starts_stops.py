@@ -9,6 +9,7 @@ import pytest
 from motion_patches.kinematics import foot_lock
 from motion_patches.kinematics.contacts import foot_joints
 from motion_patches.kinematics.motion import Motion, concatenate
+from motion_patches.planning.motions import stand_note
 from motion_patches.planning.planner import SegmentPlanner, plan_motions
 from motion_patches.props.environment import Environment, Obstacle
 
@@ -76,6 +77,7 @@ def test_a_plan_starts_and_ends_standing_on_both_feet(walk_patch, name):
     plan = SegmentPlanner(walk_patch, env).plan(start, goal)
     if name.startswith("turn"):
         assert "turn" in [p.kind for p in plan.pieces]
+    assert stand_note(walk_patch, plan).startswith("start (derived) and stop (derived)")
     p, planted = written(walk_patch, plan)
     standing = flat_heights(walk_patch.gait)
     for frame in (0, -1):
