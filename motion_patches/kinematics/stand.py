@@ -25,7 +25,7 @@ from .skeleton import Skeleton
 
 @dataclass
 class FlatFeet:
-    """Per foot (left, right): standing heights of the ankle and the toe (F,) and the
+    """Per foot (left, right): standing heights of the ankle and the toe (2,) and the
     foot bone's world rotation on flat ground facing +X (2, 3, 3), from a walk loop."""
 
     ankle: np.ndarray  # (2,) metres above the floor

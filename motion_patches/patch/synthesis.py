@@ -96,7 +96,7 @@ def double_support(gait: Gait) -> np.ndarray:
     rolled = np.roll(both, -shift)
     d = np.diff(np.concatenate(([0], rolled.astype(int), [0])))
     starts, ends = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
-    return np.sort((starts + ends - 1) // 2 + shift) % n
+    return np.sort(((starts + ends - 1) // 2 + shift) % n)
 
 
 def frame_arclengths(
