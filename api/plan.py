@@ -10,6 +10,7 @@ from ..adapter import scene as scene_io
 from ..adapter import storage, transaction
 from ..motion_patches.patch import layers
 from ..motion_patches.planning import body_clearance, transitions
+from ..motion_patches.planning.motions import stand_note
 from ..motion_patches.planning.planner import PlanError, plan_motions
 from ..motion_patches.planning.settings import PlanSettings
 from ..motion_patches.props.environment import Obstacle
@@ -319,5 +320,6 @@ def _plan_in_layer(
     low = [_too_low(p, *t, scale) for p in props for t in p.too_low]
     if low:  # why the walk goes round a tagged prop
         plan.stats["traversals_too_low"] = low
+    plan.stats["stand"] = stand_note(patch, plan)
     layer = {"planner": planner, "ends": ends, "moving": bool(tracks)}  # for _gait_change
     return patch, rig, env, plan, motions, frame_start, layer
