@@ -317,7 +317,7 @@ def _plan_in_layer(
         frame_start += int(round(wait * scene_fps(scene)))
         motions = plan_motions(patch, plan)
     plan.stats["glitches"] = validate.count(validate.plan_glitches(patch, plan, motions))
-    low = [_too_low(p, *t, scale) for p in props for t in p.too_low]
+    low = [_too_low(p, n, h, top, scale) for p in props for n, h, top in p.too_low]
     if low:  # why the walk goes round a tagged prop
         plan.stats["traversals_too_low"] = low
     plan.stats["stand"] = stand_note(patch, plan)

@@ -215,8 +215,9 @@ class ObjectPatch:
         :attr:`too_low` with its best clearance. ``floor``: the clips' floor height."""
         if self.height <= 0.0:
             return
-        kept, best = [], {}
-        points = {}
+        kept: list[PatchClip] = []
+        best: dict[str, float] = {}
+        points: dict[str, np.ndarray] = {}
         for c in self.clips:
             if c.kind != TRAVERSAL:
                 kept.append(c)
