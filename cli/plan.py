@@ -8,7 +8,7 @@ import bpy
 
 from .. import api
 from .lookup import object_named, save_blend, save_target, settings_given
-from .output import OK, BadInput, Failed, Result
+from .output import OK, BadInput, Failed, Heartbeat, Result
 
 
 def _goal_of(args, scene):
@@ -56,18 +56,20 @@ def cmd_plan(args):
     # What is used: the flags over the scene's.
     w = api.planning_settings(scene, **settings_given(args))
     save = save_target(args)
+    seat = args.start_prop and object_named(args.start_prop, "start prop", {"MESH"})
     try:
-        res = api.plan_path(
-            scene,
-            char,
-            goal,
-            patch_name=args.patch,
-            frame_start=args.frame_start,
-            gait=args.gait,
-            from_here=args.from_here,
-            start_prop=args.start_prop and object_named(args.start_prop, "start prop", {"MESH"}),
-            **w,
-        )
+        with Heartbeat(f"plan '{char.name}'", enabled=not args.json):
+            res = api.plan_path(
+                scene,
+                char,
+                goal,
+                patch_name=args.patch,
+                frame_start=args.frame_start,
+                gait=args.gait,
+                from_here=args.from_here,
+                start_prop=seat or None,
+                **w,
+            )
     except api.PathNotFound as exc:
         raise Failed(str(exc)) from None
     fps = api.scene_fps(scene)

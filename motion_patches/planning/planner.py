@@ -415,7 +415,7 @@ class SegmentPlanner(ConnectedGraph):
             raise self.refused("goal", goal, f"no {self.way} into the goal: ")
         if not result.found:
             raise (SearchLimit if result.expansions >= max_expansions else Unreachable)(
-                f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is unreachable: obstacles "
+                "the goal is unreachable: obstacles "
                 f"close every path within {margin_tiles} tiles of start and goal "
                 f"({result.expansions} nodes searched)"
             )

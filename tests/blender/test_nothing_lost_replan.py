@@ -143,3 +143,25 @@ def test_a_re_plan_drops_the_last_plan_s_analysis(mp, planned):
     assert mp.api.last_analysis(walker) is not None
     mp.api.plan_path(scene, walker, goal, frame_start=1)
     assert mp.api.last_analysis(walker) is None
+
+
+def test_a_long_plan_on_the_command_line_says_it_still_works(mp, planned, capsys, monkeypatch):
+    """A 2 km plan took minutes without a word: the CLI says every few seconds that it still
+    plans (here every 0.05 s, the plan slowed to 0.3 s)."""
+    import time as _time
+
+    plan_path = mp.api.plan_path
+
+    def slow(*a, **kw):
+        _time.sleep(0.3)
+        return plan_path(*a, **kw)
+
+    monkeypatch.setattr(mp.cli.output, "HEARTBEAT_S", 0.05)
+    monkeypatch.setattr(mp.api, "plan_path", slow)
+    code = mp.cli.main(["plan", "--character", "Walker", "--goal", "Goal", "--frame-start", "1"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    assert "plan 'Walker': still working" in err
+    code = mp.cli.main(["plan", "--character", "Walker", "--goal", "Goal", "--json"])
+    out, err = capsys.readouterr()
+    assert code == 0 and "still working" not in err  # --json: stdout and stderr stay quiet
