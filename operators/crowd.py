@@ -1,5 +1,6 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""Duplicate the active armature into a crowd scattered over a region and plan it."""
+"""Duplicate the active armature into a crowd scattered over a region and plan it; select
+the characters of a crowd that still come too close."""
 
 import bpy
 from bpy.props import FloatVectorProperty, IntProperty, StringProperty
@@ -81,4 +82,30 @@ class MOTION_PATCHES_OT_duplicate_crowd(bpy.types.Operator):
         return {"FINISHED"}
 
 
-classes = (MOTION_PATCHES_OT_duplicate_crowd,)
+class MOTION_PATCHES_OT_select_crowd_conflicts(bpy.types.Operator):
+    """Select the characters that still come too close in the crowds planned here (and the
+    moving props they meet), and go to the first frame where it happens"""
+
+    bl_idname = "motion_patches.select_crowd_conflicts"
+    bl_label = "Select Conflicts"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        return api.has_crowd_conflicts(context.scene)
+
+    def execute(self, context):
+        try:
+            conflicts = api.select_crowd_conflicts(context.scene, context.view_layer)
+        except api.MotionPatchesError as exc:
+            self.report({"ERROR"}, str(exc))
+            return {"CANCELLED"}
+        self.report(
+            {"INFO"},
+            f"{len(context.selected_objects)} selected, {len(conflicts)} conflict(s); "
+            f"the first at frame {conflicts[0]['frame']}",
+        )
+        return {"FINISHED"}
+
+
+classes = (MOTION_PATCHES_OT_duplicate_crowd, MOTION_PATCHES_OT_select_crowd_conflicts)
