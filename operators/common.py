@@ -150,25 +150,28 @@ class LongWork:
 
     def modal(self, context, event):
         stepper = self._stepper
-        if event.type == "ESC" and event.value == "PRESS":
-            stepper.cancel()
-        elif event.type == "TIMER" and event.timer == self._timer:
-            stepper.step()
-            self._status(context)
+        try:
+            if event.type == "ESC" and event.value == "PRESS":
+                stepper.cancel()
+            elif event.type == "TIMER":  # ours, or another's: a step either way
+                stepper.step()
+                self._status(context)
+        except Exception as exc:  # a bug here: stop the work, the scene put back
+            stepper.error = stepper.error or exc
+            if not stepper.done:
+                stepper.cancel()
         if not stepper.done:
             return {"RUNNING_MODAL"}  # the rest of the input waits: the scene is in use
         self._end(context)
-        if isinstance(stepper.error, api.Cancelled):
+        error = stepper.error
+        if error is not None:
             self.undo(context)
-            self.report({"INFO"}, str(stepper.error))
-            return {"CANCELLED"}
-        if isinstance(stepper.error, api.MotionPatchesError):
-            self.undo(context)
-            self.report({"ERROR"}, str(stepper.error))
-            return {"CANCELLED"}
-        if stepper.error is not None:
-            self.undo(context)
-            report_bug(self, stepper.error)
+            if isinstance(error, api.Cancelled):
+                self.report({"INFO"}, str(error))
+            elif isinstance(error, api.MotionPatchesError):
+                self.report({"ERROR"}, str(error))
+            else:
+                report_bug(self, error)
             return {"CANCELLED"}
         try:
             return self.finish(context, stepper.result)

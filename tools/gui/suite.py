@@ -257,9 +257,25 @@ class Suite:
         since = len(self.log_lines())
         self.s.click(x, y)
         self.s.wait_idle(timeout=timeout)  # a long operator blocks Blender's loop until done
+        self.wait_modal(timeout)  # or runs a step at a time (bake, crowd) until done
         if kind == "op":
             self.operator_ran(ident, since)
         return x, y
+
+    def running(self):
+        """The add-on's operators running a step at a time (modal) in the window."""
+        return self.s.py(
+            "result = [op.bl_idname for op in window().modal_operators "
+            "if op.bl_idname.startswith('MOTION_PATCHES_OT')]"
+        )
+
+    def wait_modal(self, timeout=300):
+        t0 = time.monotonic()
+        while self.running():
+            if time.monotonic() - t0 > timeout:
+                raise GuiError(f"{self.running()} still running after {timeout} s")
+            time.sleep(0.2)
+        return time.monotonic() - t0
 
     def grab_checked(self, name, crop=None, min_colours=24):
         """A screenshot (the screen or a crop) saved as ``name``.png; fails when blank."""
@@ -360,6 +376,7 @@ result = text.splitlines()""")
             ("Analysis: Analyse Motion", self.analyse),
             ("Overlay: Show Planner Overlay, top view", self.overlay_top),
             ("Overlay: perspective view, depth", self.overlay_perspective),
+            ("Planning: Plan Crowd, Esc, then to its end", self.crowd),
             ("Preferences: the add-on's defaults", self.preferences),
         ]
 
@@ -750,6 +767,75 @@ result = 1""")
         return self.overlay_pair("08-overlay-perspective")
 
     # --- preferences --------------------------------------------------------------------
+
+    # --- a crowd: progress, Esc --------------------------------------------------------
+
+    CROWD_STATE = """
+import json
+def state(ob):
+    ad = ob.animation_data
+    return [ob.name, ob.get(mp.api.PLAN_KEY, ""),
+            [[t.name, [[s.name, s.frame_start, s.frame_end] for s in t.strips]]
+             for t in ad.nla_tracks] if ad else None]
+crowd = sorted((o for o in bpy.data.objects if o.name.startswith("Walker")), key=lambda o: o.name)
+result = [json.dumps([state(o) for o in crowd]), sorted(a.name for a in bpy.data.actions)]"""
+
+    def crowd(self):
+        """Plan Crowd from its button on the Walker and seven more: it runs with a bar in the
+        status bar while Blender's loop goes on; Esc stops it with every walker as it was;
+        clicked again, it plans them all."""
+        self.s.py("""
+import numpy as np
+src = bpy.data.objects["Walker"]
+for ob in bpy.context.scene.objects:
+    ob.select_set(False)
+src.select_set(True)
+bpy.context.view_layer.objects.active = src
+for k in range(1, 8):
+    w = src.copy()
+    w.name = f"Walker{k}"
+    w.animation_data_clear()
+    bpy.context.scene.collection.objects.link(w)
+    w.location = (0.5, 1.5 - 1.2 * k, 0.0)
+    g = bpy.data.objects.new(f"Goal{k}", None)
+    bpy.context.scene.collection.objects.link(g)
+    g.location = (6.5, 1.5 - 1.2 * ((k * 3) % 8 + 1), 0.0)  # crossing the others
+    g.rotation_euler = (0, 0, np.pi / 2)
+    w.motion_patches_character.goal = g
+    w.select_set(True)
+result = 1""")
+        self.settle()
+        before = self.s.py(self.CROWD_STATE)
+        x, y = self.find(
+            "motion_patches.plan_crowd", cols=(0.75,), below="motion_patches.plan_path"
+        )
+        view = self.s.py('result = rect(region("VIEW_3D", "WINDOW"))')
+        self.s.move(view[0] + view[2] // 2, view[1] + view[3] // 2)
+        self.s.click(x, y)
+        time.sleep(1.0)
+        self.grab_checked("10-plan-crowd-progress", crop=(0, 1160, 1920, 40), min_colours=8)
+        self.s.key("Escape", at=(view[0] + view[2] // 2, view[1] + view[3] // 2))
+        self.wait_modal(timeout=60)
+        after = self.s.py(self.CROWD_STATE)
+        self.check(after == before, "Esc left the walkers or the actions changed")
+        said = self.reports()
+        self.check(
+            any("cancelled; the scene was left as it was" in r for r in said[-3:]),
+            f"Esc did not report the cancel: {said[-3:]}",
+        )
+        self.s.click(x, y)
+        time.sleep(0.3)
+        secs = self.wait_modal()
+        planned = self.s.py("""
+crowd = [o for o in bpy.data.objects if o.name.startswith("Walker")]
+result = [o.name for o in crowd if mp.api.PLAN_KEY in o and o.animation_data
+          and len(o.animation_data.nla_tracks)]""")
+        self.check(len(planned) == 8, f"Plan Crowd planned only {planned}")
+        said = self.reports()
+        self.check(
+            any(r.startswith("Planned 8 of 8") for r in said[-12:]), f"no summary: {said[-12:]}"
+        )
+        return f"cancelled by Esc, the scene kept; then 8 walkers planned in {secs:.1f} s"
 
     def preferences(self):
         self.s.py("""

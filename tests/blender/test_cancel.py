@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""A crowd run cancelled part way (Esc in Blender) leaves the scene as it was, whether it
-is stopped while its members are planned or after some were written; the conflicts a crowd
-is written with can be selected again."""
+"""Long work cancelled part way (Esc in Blender) leaves the scene as it was: a crowd
+stopped while its members are planned or after some were written, a bake stopped half way;
+the conflicts a crowd is written with can be selected again."""
 
 import bpy
 import numpy as np
@@ -132,3 +132,20 @@ def test_the_conflicts_left_are_written_and_can_be_selected(walk_blend, addon_mo
     assert api.crowd_conflicts(scene) == []
     with pytest.raises(RuntimeError, match="no crowd conflicts"):
         bpy.ops.motion_patches.select_crowd_conflicts()
+
+
+def test_a_bake_cancelled_half_way_leaves_the_scene_as_it_was(walk_blend, addon_module):
+    api = addon_module.api
+    bpy.ops.wm.open_mainfile(filepath=str(walk_blend))
+    scene = bpy.context.scene
+    src = scene.motion_patches.source_armature
+    patches = [p.name for p in scene.motion_patches.patches]
+    before = scene_state()
+    progress, cancelled, seen = stop_after(2)
+    with pytest.raises(api.Cancelled, match="the bake was cancelled"):
+        api.bake_locomotion_patch(
+            scene, src, "16_15", ["16_18"], layer="again", progress=progress, cancelled=cancelled
+        )
+    assert len(seen) == 2 and seen[-1] < 1.0
+    assert [p.name for p in scene.motion_patches.patches] == patches
+    assert_same(before, scene_state())
