@@ -138,6 +138,7 @@ class LongWork:
 
         def draw(header, _context):
             row = header.layout.row(align=True)
+            row.ui_units_x = 16  # the label and the percentage in full
             row.progress(
                 factor=stepper.fraction,
                 type="BAR",
