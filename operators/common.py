@@ -126,6 +126,10 @@ class LongWork:
             self.undo(context)
             self.report({"ERROR"}, str(exc))
             return {"CANCELLED"}
+        except Exception as exc:
+            self.undo(context)
+            report_bug(self, exc)
+            return {"CANCELLED"}
         self._stepper = Stepper(run)
         wm = context.window_manager
         self._timer = wm.event_timer_add(0.02, window=context.window)

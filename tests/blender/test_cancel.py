@@ -7,6 +7,7 @@ import bpy
 import numpy as np
 import pytest
 from test_nothing_lost_writes import assert_same, scene_state
+from test_ui import draw_panels
 
 from scene_helpers import empty, walker_from
 
@@ -115,6 +116,8 @@ def test_the_conflicts_left_are_written_and_can_be_selected(walk_blend, addon_mo
     left = api.crowd_conflicts(scene)
     assert left and {(x["a"], x["b"]) for x in left} <= {("A", "B"), ("B", "A")}
     first = min(x["frame"] for x in left)
+    button = ("operator", "motion_patches.select_crowd_conflicts")
+    assert button in draw_panels(addon_module)["Planning"]
     scene.frame_set(first + 40)
     for ob in bpy.context.view_layer.objects:
         ob.select_set(ob == c)

@@ -378,6 +378,7 @@ result = text.splitlines()""")
             ("Overlay: Show Planner Overlay, top view", self.overlay_top),
             ("Overlay: perspective view, depth", self.overlay_perspective),
             ("Planning: Plan Crowd, Esc, then to its end", self.crowd),
+            ("Planning: Duplicate Crowd, Return in its dialog", self.duplicate),
             ("Preferences: the add-on's defaults", self.preferences),
         ]
 
@@ -845,6 +846,39 @@ result = [o.name for o in crowd if mp.api.PLAN_KEY in o and o.animation_data
             any(r.startswith("Planned 8 of 8") for r in said[-12:]), f"no summary: {said[-12:]}"
         )
         return f"cancelled by Esc, the scene kept; then 8 walkers planned in {secs:.1f} s"
+
+    def duplicate(self):
+        """Duplicate Crowd from its button: the dialog (its values set beforehand as the
+        operator's last ones), Return, then the copies planned a step at a time."""
+        self.s.py("""
+last = bpy.context.window_manager.operator_properties_last("motion_patches.duplicate_crowd")
+last.count = 4
+last.region_min, last.region_max = (-6.0, 4.0), (-3.0, 8.0)  # clear of the walkers
+last.goal_min, last.goal_max = (8.0, 4.0), (11.0, 8.0)
+for ob in bpy.context.scene.objects:
+    ob.select_set(False)
+w = bpy.data.objects["Walker"]
+w.select_set(True)
+bpy.context.view_layer.objects.active = w
+result = 1""")
+        self.settle()
+        x, y = self.find("motion_patches.duplicate_crowd", below="motion_patches.plan_crowd")
+        self.s.click(x, y)
+        time.sleep(1.0)
+        self.s.key("Return")
+        time.sleep(0.5)
+        secs = self.wait_modal()
+        made = self.s.py("""
+coll = bpy.data.collections.get(mp.api.CROWD_COLLECTION)
+obs = [o for o in coll.objects if o.type == "ARMATURE"] if coll else []
+result = [len(obs), sum(1 for o in obs if mp.api.PLAN_KEY in o)]""")
+        self.check(made == [4, 4], f"Duplicate Crowd made / planned {made} (want 4 and 4)")
+        said = self.reports()
+        self.check(
+            any(r.startswith("Crowd of 4: 4 planned") for r in said[-8:]),
+            f"no summary: {said[-8:]}",
+        )
+        return f"4 copies planned in {secs:.1f} s after the dialog"
 
     def preferences(self):
         self.s.py("""
