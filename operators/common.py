@@ -200,7 +200,7 @@ class LongWork:
 
 def report_conflicts(op, result):
     """A warning per pair of a crowd that still comes too close, and per walk meeting a prop
-    that moves (Plan Crowd, Duplicate Crowd)."""
+    that moves (Plan Crowd, Duplicate Crowd), then where to find them again."""
     for c in result.conflicts:
         op.report(
             {"WARNING"},
@@ -211,6 +211,12 @@ def report_conflicts(op, result):
             {"WARNING"},
             f"'{c['character']}' meets the moving prop '{c['prop']}' at frame {c['frame']} "
             f"({c['distance_m']:.2f} m from its footprint)",
+        )
+    if result.conflicts or getattr(result, "moving_conflicts", ()):
+        op.report(
+            {"WARNING"},
+            "What was planned is written; Select Conflicts (Planning panel) selects the "
+            "characters and goes to the first frame",
         )
 
 

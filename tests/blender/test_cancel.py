@@ -96,7 +96,7 @@ def test_the_operators_stepper_runs_the_crowd_in_turns_and_cancels_it(crowd, add
     assert steps >= 5 and stepper.fraction == 1.0
 
 
-def test_the_conflicts_left_are_written_and_can_be_selected(walk_blend, addon_module):
+def test_the_conflicts_left_are_written_and_can_be_selected(walk_blend, addon_module, capfd):
     api = addon_module.api
     bpy.ops.wm.open_mainfile(filepath=str(walk_blend))
     scene = bpy.context.scene
@@ -116,6 +116,11 @@ def test_the_conflicts_left_are_written_and_can_be_selected(walk_blend, addon_mo
     left = api.crowd_conflicts(scene)
     assert left and {(x["a"], x["b"]) for x in left} <= {("A", "B"), ("B", "A")}
     first = min(x["frame"] for x in left)
+    said = capfd.readouterr().out  # the operator's reports (printed in background Blender)
+    for x in left:  # each pair and frame
+        pair, d, f = f"'{x['a']}' and '{x['b']}'", x["distance_m"], x["frame"]
+        assert f"{pair} come within {d:.2f} m at frame {f}\n" in said
+    assert "Select Conflicts (Planning panel) selects the characters" in said
     button = ("operator", "motion_patches.select_crowd_conflicts")
     assert button in draw_panels(addon_module)["Planning"]
     scene.frame_set(first + 40)
