@@ -867,6 +867,8 @@ result = 1""")
         time.sleep(1.0)
         self.s.key("Return")
         time.sleep(0.5)
+        running = self.running()  # the window answers while the copies are planned
+        self.check(running, "Duplicate Crowd did not run a step at a time after its dialog")
         secs = self.wait_modal()
         made = self.s.py("""
 coll = bpy.data.collections.get(mp.api.CROWD_COLLECTION)
