@@ -9,7 +9,8 @@ and drives one scene through the sidebar:
 * real input (xdotool): open the sidebar (N), pick the Motion Patches tab (a click on it),
   + on the turn list, Bake, collapse the Locomotion panel (a click on its header), + on the
   prop's clip list, Tag Object Patch, Plan Path, Analyse Motion, Show Planner Overlay, top
-  view (numpad 7), Plan Crowd with Esc while it runs, then to its end;
+  view (numpad 7), Plan Crowd with Esc while it runs, then to its end, Duplicate Crowd
+  (Return in its dialog);
 * Python, where input cannot reach (tools/gui/agent.py): importing the mocap (a file
   browser), making the walker, the goal and the chair, choosing actions in the lists,
   placing the perspective view, opening the preferences at the add-on.
