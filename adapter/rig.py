@@ -14,7 +14,38 @@ changed), or from Python with :func:`set_bone_map`.
 import numpy as np
 
 from ..motion_patches.kinematics.retarget import rig_map, same_skeleton
+from ..motion_patches.kinematics.skeleton import Skeleton
 from . import actions as act_io
+
+
+def world_scale(obj):
+    """The armature's uniform scale in the world (object and parents: an FBX import's 0.01
+    over centimetre bones): its bone units per metre are ``1 / world_scale``. ValueError
+    naming the object when the scale differs between axes or mirrors it (a pose then
+    stretches or flips the planned motion)."""
+    m = np.array(obj.matrix_world)[:3, :3]
+    axes = np.linalg.norm(m, axis=0)
+    s = float(axes.mean())
+    if s <= 1e-9 or np.ptp(axes) > 1e-4 * s or np.linalg.det(m) < 0:
+        raise ValueError(
+            f"armature '{obj.name}' is scaled {tuple(round(v, 4) for v in obj.scale)}, not the "
+            f"same on every axis; apply its scale first (Object > Apply > Scale)"
+        )
+    return s
+
+
+def skeleton_in_metres(obj):
+    """The armature's skeleton with its rest positions in world metres (bone lengths times
+    :func:`world_scale`): what the planned motion, which is in metres, is put on. Rotations
+    are those of its bones; only root locations are keyed back in its own units
+    (:func:`motion_patches.adapter.nla.inplace_channels`)."""
+    own = act_io.skeleton_of(obj)
+    s = world_scale(obj)
+    if abs(s - 1.0) < 1e-9:
+        return own
+    rest = own.rest.copy()
+    rest[:, :3, 3] *= s
+    return Skeleton(own.names, own.parents, rest)
 
 
 def bone_map(obj):
@@ -52,8 +83,9 @@ def rig_for(obj, skel, floor=0.0):
     """The RigMap that puts motion of skeleton ``skel`` on armature ``obj``, or None when
     the armature holds that skeleton itself (and its bone map changes nothing). Raises
     ValueError (a :class:`~motion_patches.kinematics.retarget.RetargetError`) naming the patch bones
-    that cannot be mapped."""
-    own = act_io.skeleton_of(obj)
+    that cannot be mapped. The armature's skeleton is taken in metres
+    (:func:`skeleton_in_metres`), whatever its object scale."""
+    own = skeleton_in_metres(obj)
     stored = {p: r for p, r in bone_map(obj).items() if p in skel.names}
     if _plays_itself(skel, own) and all(r == p for p, r in stored.items()):
         return None

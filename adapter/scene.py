@@ -97,10 +97,12 @@ def ground_state(obj):
 
 def character_state(obj, skel):
     """(x, y, heading) of a character: its root's ground position and its rest facing
-    turned by the object's rotation."""
+    turned by the object's rotation (``skel`` in metres, :func:`.rig.skeleton_in_metres`:
+    the object's own scale is not applied again)."""
     from ..motion_patches.kinematics.inplace import rest_facing
 
     m = np.array(obj.matrix_world)
-    f = m[:3, :3] @ rest_facing(skel)
-    root = m @ np.append(skel.rest[skel.root, :3, 3], 1.0)
+    turn = m[:3, :3] / np.linalg.norm(m[:3, :3], axis=0).mean()  # ``skel`` is in metres
+    f = turn @ rest_facing(skel)
+    root = m[:3, 3] + turn @ skel.rest[skel.root, :3, 3]
     return np.array([root[0], root[1], np.arctan2(f[1], f[0])])

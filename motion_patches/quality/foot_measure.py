@@ -24,6 +24,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..kinematics.clip import Clip
 from ..kinematics.contacts import foot_joints, runs
 from ..kinematics.retarget import roles
 from ..kinematics.skeleton import Skeleton
@@ -40,12 +41,30 @@ SWING_SECONDS = 0.1
 def foot_bones(skel: Skeleton) -> tuple[list[int], list[int]]:
     """([left ankle, right ankle], [left toe, right toe]) bone indices of ``skel`` by bone
     role (the foot and toe of any naming convention :func:`roles` knows; the patch's names
-    otherwise). The ankle is the foot bone's head, the toe the toe bone's head."""
+    otherwise). The ankle is the foot bone's head, the toe the toe bone's head. ValueError
+    when neither finds them."""
     found = roles(skel)[1]
     if all(r in found for r in ("foot.L", "foot.R", "toe.L", "toe.R")):
         return [found["foot.L"], found["foot.R"]], [found["toe.L"], found["toe.R"]]
-    fj = [int(i) for i in foot_joints(skel)]
-    return [fj[0], fj[2]], [fj[1], fj[3]]
+    fj = list(foot_joints(skel))
+    if any(i is None for i in fj):
+        raise ValueError("the skeleton has no foot and toe bones of a known naming")
+    return [int(fj[0]), int(fj[2])], [int(fj[1]), int(fj[3])]
+
+
+def standing_heights(skel: Skeleton) -> np.ndarray:
+    """(2,) each ankle's height above its toe in the rest pose (a character standing)."""
+    ankles, toes = foot_bones(skel)
+    z = skel.rest[:, 2, 3]
+    return z[ankles] - z[toes]
+
+
+def of_clip(clip: Clip) -> dict:
+    """:func:`measure` of a clip's own feet (a source recording, the floor a synthesised
+    motion is held against), its standing heights from its rest pose."""
+    ankles, toes = foot_bones(clip.skeleton)
+    p = clip.joint_positions()
+    return measure(p[:, toes], p[:, ankles], clip.fps, standing_heights(clip.skeleton))
 
 
 def _long_runs(flags: np.ndarray, min_frames: int) -> np.ndarray:

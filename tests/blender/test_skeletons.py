@@ -372,3 +372,94 @@ def test_a_30_second_walk_at_120_fps_adds_under_5_mb(s2_blend, addon_module, tmp
     )
     assert seconds > 28
     assert grown < 5.0
+
+
+def fbx_like_mixamo(mocap_dir, name, scale=(0.01, 0.01, 0.01), units=100.0):
+    """Subject 16 named as Mixamo names its bones, as Blender's FBX importer leaves a
+    Mixamo character: centimetre bones (``units`` per metre: the BVH read at 100 times its
+    metre scale), bones in quaternion mode, the armature object scaled by 0.01."""
+    before = set(bpy.data.objects)
+    assert bpy.ops.import_anim.bvh(
+        filepath=str(mocap_dir / "cmu/16_15.bvh"),
+        global_scale=CMU_SCALE * units,
+        update_scene_fps=False,
+    ) == {"FINISHED"}
+    (ob,) = [o for o in bpy.data.objects if o not in before]
+    ob.name = name
+    ob.animation_data_clear()
+    for old, new in MIXAMO.items():
+        ob.data.bones[old].name = new
+    for pb in ob.pose.bones:
+        pb.rotation_mode = "QUATERNION"
+    ob.location = (0.4, 0.3, 0.0)
+    ob.scale = scale
+    return ob
+
+
+def evaluated_feet(addon_module, rig, ankles, toes):
+    """The label-free foot figures of the rig's evaluated toes and ankles."""
+    fm = import_module(addon_module.__name__ + ".motion_patches.quality.foot_measure")
+    pos = world_positions(addon_module, rig, ankles + toes)
+    return fm.measure(pos[:, 2:], pos[:, :2], bpy.context.scene.render.fps), pos
+
+
+@pytest.mark.parametrize("pillars", [False, True], ids=["open-ground", "pillars"])
+def test_a_centimetre_mixamo_rig_under_a_hundredth_scale_plans(
+    s2_blend, addon_module, mocap_dir, pillars
+):
+    """An FBX-imported Mixamo character (object scale 0.01, centimetre bones) plans as the
+    same character in metres does: its evaluated hips follow the plan within 1 cm, its feet
+    plant by the label-free measure, it reaches the goal; the same world motion as the
+    metre rig's, its root keys in centimetres."""
+    api = addon_module.api
+    bpy.ops.wm.open_mainfile(filepath=str(s2_blend))
+    goal = scene_with_pillars() if pillars else empty("Goal", 6.0, -1.5, -0.2)
+    cm = fbx_like_mixamo(mocap_dir, "Mixamo cm")
+    metres = fbx_like_mixamo(mocap_dir, "Mixamo m", scale=(1.0, 1.0, 1.0), units=1.0)
+    scene = bpy.context.scene
+    res = {ob.name: api.plan_path(scene, ob, goal, frame_start=1) for ob in (cm, metres)}
+    assert res["Mixamo cm"].pieces == res["Mixamo m"].pieces
+    assert "onto Mixamo naming" in res["Mixamo cm"].stats["retarget"]
+    ankles = ["mixamorig:LeftFoot", "mixamorig:RightFoot"]
+    toes = ["mixamorig:LeftToeBase", "mixamorig:RightToeBase"]
+    f = api.analyse(bpy.context, cm)
+    assert f["root_from_plan_cm"]["max"] < 1.0
+    assert f["goal_position_error_cm"] < 10 and f["goal_root_position_error_cm"] < 10
+    assert f["goal_heading_error_deg"] < 10
+    assert f["frames_root_inside_obstacle"] == 0
+    feet, pos = evaluated_feet(addon_module, cm, ankles, toes)
+    ref, ref_pos = evaluated_feet(addon_module, metres, ankles, toes)
+    assert np.abs(pos - ref_pos).max() < 0.001  # the same world motion
+    assert feet["planted_fraction"] > 0.3 and feet["pops"] == 0
+    assert feet["skate"]["mean_cm_per_s"] < 10.0 and feet["min_swing_clearance_cm"] > 0.0
+    assert feet["skate"]["mean_cm_per_s"] == pytest.approx(ref["skate"]["mean_cm_per_s"], abs=0.1)
+    assert f["feet"]["skate"]["mean_cm_per_s"] == pytest.approx(
+        feet["skate"]["mean_cm_per_s"], abs=0.1
+    )
+    # the root's location keys are in the armature's centimetres
+    hips = "mixamorig:Hips"
+    z = [
+        fc
+        for s in cm.animation_data.nla_tracks["MP motion"].strips
+        for fc in addon_module.adapter.compat.fcurves(s.action)
+        if fc.data_path == f'pose.bones["{hips}"].location'
+    ]
+    assert z and max(abs(k.co[1]) for fc in z for k in fc.keyframe_points) > 1.0
+    print(
+        f"\nscaled Mixamo rig ({'pillars' if pillars else 'open ground'}): hips within "
+        f"{f['root_from_plan_cm']['max']:.2f} cm of the plan, goal "
+        f"{f['goal_position_error_cm']:.1f} cm; feet: "
+        + addon_module.motion_patches.quality.foot_measure.summary(feet)
+    )
+
+
+def test_a_non_uniform_scale_is_refused_naming_the_object(s2_blend, addon_module, mocap_dir):
+    api = addon_module.api
+    bpy.ops.wm.open_mainfile(filepath=str(s2_blend))
+    goal = empty("Goal", 5.0, 2.0, 0.0)
+    rig = fbx_like_mixamo(mocap_dir, "Stretched", scale=(0.01, 0.01, 0.012))
+    actions = set(bpy.data.actions)
+    with pytest.raises(api.MotionPatchesError, match="'Stretched'.*same on every axis"):
+        api.plan_path(bpy.context.scene, rig, goal)
+    assert rig.animation_data is None and set(bpy.data.actions) == actions
+    assert tuple(rig.scale) == pytest.approx((0.01, 0.01, 0.012))
