@@ -195,7 +195,7 @@ def _inplace_action(name, skel, motion, tags, modes=None, unit=1.0):
     for k, v in tags.items():
         action[k] = v
     frames = np.arange(motion.frames, dtype=float)
-    act_io.key_pose(action, slot, skel, frames, loc, rot, modes, tol=act_io.COMPACT)
+    act_io.key_pose(action, slot, skel, frames, loc, rot, modes, tol=_in_units(act_io.COMPACT, unit))
     return action, slot
 
 
@@ -317,6 +317,14 @@ def write_plan(
         owned.append(TRACK_FOOT)
     obj[TRACKS_KEY] = json.dumps(owned)
     return strips, stashed
+
+
+def _in_units(tol, unit):
+    """``tol`` for locations keyed in the armature's units (``unit`` metres each): its
+    length, in metres, divided by it, so a centimetre rig is held as a metre rig is."""
+    if isinstance(tol, act_io.Tolerance) and unit != 1.0:
+        return act_io.Tolerance(tol.angle, tol.length / unit)
+    return tol
 
 
 def _finer(tol):

@@ -48,7 +48,7 @@ def _analyse(context, character):
     meta, arrays = load_plan_record(character)
     frames = np.arange(meta["frame_start"], meta["frame_end"] + 1)
     nf = len(meta["foot_names"])
-    ankles, toes, standing = _foot_bones(character, meta)
+    ankles, toes = _foot_bones(character, meta)
     bones = [meta["root_name"]] + list(meta["foot_names"]) + ankles + toes
     pos, ground, rot, _ = evaluate.sample_armature(context, character, frames, bones)
     fps = scene_fps(context.scene)
@@ -73,7 +73,7 @@ def _analyse(context, character):
         "frames": int(frames.size),
         "seconds": float((frames.size - 1) / fps),
         "foot_skate": skate,
-        "feet": foot_measure.measure(t, a, fps, standing),
+        "feet": foot_measure.measure(t, a, fps),
         **({"foot_skate_by_layer": by_layer} if by_layer else {}),
         "root_from_plan_cm": {
             "mean": float(root_err.mean() * 100),
@@ -93,9 +93,9 @@ def _analyse(context, character):
 
 
 def _foot_bones(character, meta):
-    """([ankle bones], [toe bones], standing ankle heights) of the character by bone role
-    (its own armature's names: the label-free measure reads no plan), the plan's foot
-    bones when its names follow no convention; heights in metres (world scale applied)."""
+    """([ankle bones], [toe bones]) of the character by bone role (its own armature's
+    names: the label-free measure reads no plan), the plan's foot bones when its names
+    follow no convention."""
     skel = rig_io.skeleton_in_metres(character)
     try:
         ankles, toes = foot_measure.foot_bones(skel)
@@ -104,9 +104,7 @@ def _foot_bones(character, meta):
         ankles, toes = [skel.names.index(n) for n in names[0::2]], [
             skel.names.index(n) for n in names[1::2]
         ]
-    z = skel.rest[:, 2, 3]
-    standing = z[ankles] - z[toes]
-    return [skel.names[i] for i in ankles], [skel.names[i] for i in toes], standing
+    return [skel.names[i] for i in ankles], [skel.names[i] for i in toes]
 
 
 def _skate_by_layer(meta, frames, feet, fps, planted):

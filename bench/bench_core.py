@@ -212,10 +212,10 @@ def pooled_skate(records, key="skate"):
 
 def feet(motion, skel, fps):
     """The label-free foot figures (:mod:`motion_patches.quality.foot_measure`) of a motion:
-    its toes and ankles (by bone role) in the world, standing heights from the rest pose."""
+    its toes and ankles (by bone role) in the world."""
     ankles, toes = foot_measure.foot_bones(skel)
     w = motion.world_matrices(skel)[..., :3, 3]
-    return foot_measure.measure(w[:, toes], w[:, ankles], fps, foot_measure.standing_heights(skel))
+    return foot_measure.measure(w[:, toes], w[:, ankles], fps)
 
 
 def pooled_feet(figures):

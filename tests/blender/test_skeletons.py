@@ -436,15 +436,22 @@ def test_a_centimetre_mixamo_rig_under_a_hundredth_scale_plans(
     assert f["feet"]["skate"]["mean_cm_per_s"] == pytest.approx(
         feet["skate"]["mean_cm_per_s"], abs=0.1
     )
-    # the root's location keys are in the armature's centimetres
-    hips = "mixamorig:Hips"
-    z = [
-        fc
-        for s in cm.animation_data.nla_tracks["MP motion"].strips
-        for fc in addon_module.adapter.compat.fcurves(s.action)
-        if fc.data_path == f'pose.bones["{hips}"].location'
-    ]
-    assert z and max(abs(k.co[1]) for fc in z for k in fc.keyframe_points) > 1.0
+    # the root's location keys are in the armature's centimetres: a hundred times the
+    # metre rig's, on every strip
+    hips = 'pose.bones["mixamorig:Hips"].location'
+    played = []
+    for rig in (cm, metres):
+        values = []
+        for st in rig.animation_data.nla_tracks["MP motion"].strips:
+            first, last = (int(round(v)) for v in st.action.frame_range)
+            values += [
+                [fc.evaluate(f) for f in range(first, last + 1)]
+                for fc in addon_module.adapter.compat.fcurves(st.action)
+                if fc.data_path == hips
+            ]
+        played.append(np.concatenate(values))
+    assert np.abs(played[0]).max() > 1.0
+    assert np.abs(played[0] - 100.0 * played[1]).max() < 0.1
     print(
         f"\nscaled Mixamo rig ({'pillars' if pillars else 'open ground'}): hips within "
         f"{f['root_from_plan_cm']['max']:.2f} cm of the plan, goal "
