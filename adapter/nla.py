@@ -132,9 +132,7 @@ def rotation_signature(skel, modes):
     return "mixed-" + hashlib.sha1(text.encode()).hexdigest()[:10]
 
 
-def segment_action(
-    bpy, patch, patch_key, seg, skel, modes=None, rig=None, index=None, unit=1.0
-):
+def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None, index=None, unit=1.0):
     """The shared in-place action of a patch segment for a rig whose bones have rotation
     ``modes`` ({bone: rotation_mode}; default all quaternion), created on first use;
     ``rig`` (a :class:`~motion_patches.kinematics.retarget.RigMap`) when the rig is another skeleton
@@ -195,7 +193,9 @@ def _inplace_action(name, skel, motion, tags, modes=None, unit=1.0):
     for k, v in tags.items():
         action[k] = v
     frames = np.arange(motion.frames, dtype=float)
-    act_io.key_pose(action, slot, skel, frames, loc, rot, modes, tol=_in_units(act_io.COMPACT, unit))
+    act_io.key_pose(
+        action, slot, skel, frames, loc, rot, modes, tol=_in_units(act_io.COMPACT, unit)
+    )
     return action, slot
 
 

@@ -101,9 +101,10 @@ def _foot_bones(character, meta):
         ankles, toes = foot_measure.foot_bones(skel)
     except ValueError:
         names = list(meta["foot_names"])
-        ankles, toes = [skel.names.index(n) for n in names[0::2]], [
-            skel.names.index(n) for n in names[1::2]
-        ]
+        ankles, toes = (
+            [skel.names.index(n) for n in names[0::2]],
+            [skel.names.index(n) for n in names[1::2]],
+        )
     return [skel.names[i] for i in ankles], [skel.names[i] for i in toes]
 
 

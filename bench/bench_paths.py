@@ -943,9 +943,7 @@ def markdown(records, summary, source=None):
         cells.append(f"{sk['mean_cm_per_s']:.1f} cm/s" if sk else "–")
     src = f" (source clip {source['skate']['mean_cm_per_s']:.1f} cm/s)" if source else ""
     out.append(
-        f"| foot skate the planner labels planted, foot locked{src} | | "
-        + " | ".join(cells)
-        + " |"
+        f"| foot skate the planner labels planted, foot locked{src} | | " + " | ".join(cells) + " |"
     )
     cells = []
     for gname in groups:

@@ -5,8 +5,8 @@ trajectory, and each fails when the fault it looks for is put in."""
 import numpy as np
 import pytest
 
-from motion_patches.quality import foot_measure as fm
 from motion_patches.kinematics.skeleton import Skeleton
+from motion_patches.quality import foot_measure as fm
 
 from conftest import cmu
 from rig_names import MIXAMO
