@@ -53,7 +53,7 @@ def _analyse(context, character):
     pos, ground, rot, _ = evaluate.sample_armature(context, character, frames, bones)
     fps = scene_fps(context.scene)
     root, feet = pos[:, 0], pos[:, 1 : 1 + nf]
-    a, t = pos[:, 1 + nf : 1 + nf + len(ankles)], pos[:, 1 + nf + len(ankles) :]
+    ankle_pos, toe_pos = pos[:, 1 + nf : 1 + nf + len(ankles)], pos[:, 1 + nf + len(ankles) :]
     skate = metrics.foot_skate(feet, fps, arrays["contacts"])
     by_layer = _skate_by_layer(meta, frames, feet, fps, arrays["contacts"])
     goal = np.array(meta["goal"])
@@ -73,7 +73,7 @@ def _analyse(context, character):
         "frames": int(frames.size),
         "seconds": float((frames.size - 1) / fps),
         "foot_skate": skate,
-        "feet": foot_measure.measure(t, a, fps),
+        "feet": foot_measure.measure(toe_pos, ankle_pos, fps),
         **({"foot_skate_by_layer": by_layer} if by_layer else {}),
         "root_from_plan_cm": {
             "mean": float(root_err.mean() * 100),
