@@ -157,7 +157,7 @@ def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None, index
     sig = rotation_signature(skel, modes or {})
     rig_sig = rig.signature() if rig is not None else ""
     key = f"{patch_key}:{seg}" + (f":rig-{rig_sig}" if rig_sig else "") + (f":{sig}" if sig else "")
-    if abs(unit - 1.0) > 1e-9:
+    if unit != 1.0:
         key += f":unit-{unit:.6g}"
     found = (segment_index(bpy) if index is None else index).get(key)
     if found is not None:
@@ -169,7 +169,7 @@ def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None, index
         f"MP {patch.layer} seg{seg:04d}"
         + (f" rig-{rig_sig[:6]}" if rig_sig else "")
         + (f" {sig}" if sig else "")
-        + (f" x{unit:.4g}" if abs(unit - 1.0) > 1e-9 else "")
+        + (f" x{unit:.4g}" if unit != 1.0 else "")
     )
     action, slot = _inplace_action(name, skel, motion, {SEGMENT_KEY: key}, modes, unit)
     if index is not None:

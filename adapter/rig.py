@@ -28,10 +28,12 @@ def world_scale(obj):
     s = float(axes.mean())
     if s <= 1e-9 or np.ptp(axes) > 1e-4 * s or np.linalg.det(m) < 0:
         raise ValueError(
-            f"armature '{obj.name}' is scaled {tuple(round(v, 4) for v in obj.scale)}, not the "
-            f"same on every axis; apply its scale first (Object > Apply > Scale)"
+            f"armature '{obj.name}' is scaled {tuple(round(v, 4) for v in obj.scale)}: not the "
+            f"same on every axis, or mirrored; apply its scale first (Object > Apply > Scale)"
         )
-    return s
+    # an unscaled rig is exactly 1 (a turned one's float32 axes are 1 within 1e-7): its
+    # skeleton, keys and shared actions stay those of before
+    return 1.0 if abs(s - 1.0) < 1e-6 else s
 
 
 def skeleton_in_metres(obj):
@@ -41,7 +43,7 @@ def skeleton_in_metres(obj):
     (:func:`motion_patches.adapter.nla.inplace_channels`)."""
     own = act_io.skeleton_of(obj)
     s = world_scale(obj)
-    if abs(s - 1.0) < 1e-9:
+    if s == 1.0:
         return own
     rest = own.rest.copy()
     rest[:, :3, 3] *= s
