@@ -466,7 +466,7 @@ def test_a_non_uniform_scale_is_refused_naming_the_object(s2_blend, addon_module
     goal = empty("Goal", 5.0, 2.0, 0.0)
     rig = fbx_like_mixamo(mocap_dir, "Stretched", scale=(0.01, 0.01, 0.012))
     actions = set(bpy.data.actions)
-    with pytest.raises(api.MotionPatchesError, match="'Stretched' is scaled .*not the same on every axis"):
+    with pytest.raises(api.MotionPatchesError, match="'Stretched' is scaled .*not the same"):
         api.plan_path(bpy.context.scene, rig, goal)
     assert rig.animation_data is None and set(bpy.data.actions) == actions
     assert tuple(rig.scale) == pytest.approx((0.01, 0.01, 0.012))
