@@ -68,16 +68,12 @@ def check_rig(obj, skel, floor=0.0):
     """The :class:`~motion_patches.kinematics.retarget.RigMap` that puts the patch skeleton ``skel``
     on the armature ``obj`` (None: the armature holds that skeleton itself). Raises
     ValueError for an object that is no armature, is scaled unevenly (:func:`~.rig.world_scale`:
-    any uniform scale plans) or tilted, or whose bones cannot play the patch's hips, legs,
-    feet and toes (naming those patch bones)."""
+    any uniform scale plans; a tilted armature, an FBX import's Y-up bones under a 90
+    degree X rotation, plans stood up, :func:`~.rig.world_tilt`), or whose bones cannot
+    play the patch's hips, legs, feet and toes (naming those patch bones)."""
     if obj is None or obj.type != "ARMATURE":
         raise ValueError("the character must be an armature object")
-    unit = rig_io.world_scale(obj)
-    m = np.array(obj.matrix_world)
-    if abs(m[2, 2] / unit - 1.0) > 1e-6:
-        raise ValueError(
-            f"armature '{obj.name}' is tilted (X/Y rotation); the planned root turns about Z only"
-        )
+    rig_io.world_scale(obj)
     return rig_io.rig_for(obj, skel, floor)
 
 
@@ -296,7 +292,10 @@ def write_plan(
     # A turn about Z only: (0, 0, heading) is that turn in every Euler order, (heading, +Z)
     # in axis-angle; the heading is unwrapped, so no channel jumps by a turn.
     zero = np.zeros(world.frames)
-    if obj.rotation_mode == "QUATERNION":
+    tilt = rig_io.world_tilt(obj)
+    if tilt is not None:  # the turn over the armature's own tilt
+        rot_path, rot_values = _tilted_rotation(obj.rotation_mode, heading, tilt)
+    elif obj.rotation_mode == "QUATERNION":
         q = quat.make_continuous(quat.about_z(heading), axis=0)
         rot_path, rot_values = "rotation_quaternion", q.T
     elif obj.rotation_mode == "AXIS_ANGLE":
@@ -317,6 +316,21 @@ def write_plan(
         owned.append(TRACK_FOOT)
     obj[TRACKS_KEY] = json.dumps(owned)
     return strips, stashed
+
+
+def _tilted_rotation(mode, heading, tilt):
+    """(property, channel rows) of the object rotation ``Rz(heading) @ tilt`` per frame in
+    rotation ``mode``, each frame's channels the ones nearest the frame before (no jump by a
+    turn; the first nearest the tilt's own)."""
+    q = quat.mul(quat.about_z(heading), quat.from_matrix(tilt)[None])
+    q = quat.make_continuous(q, axis=0)
+    if mode == "QUATERNION":
+        return "rotation_quaternion", q.T
+    out = np.empty((len(q), act_io.rest_channels(mode).size))
+    prev = act_io.closest_channels(q[:1], mode, act_io.rest_channels(mode)[None])[0]
+    for f in range(len(q)):
+        prev = out[f] = act_io.closest_channels(q[f : f + 1], mode, prev[None])[0]
+    return act_io.rotation_path(mode), out.T
 
 
 def _in_units(tol, unit):

@@ -36,17 +36,33 @@ def world_scale(obj):
     return 1.0 if abs(s - 1.0) < 1e-6 else s
 
 
+def world_tilt(obj):
+    """The armature's world rotation with its turn about Z taken out (3, 3), or None when
+    it only turns about Z: what stands its bones up when its armature space is not Z-up
+    (an FBX import's Y-up bones under a 90 degree X rotation). The turn taken out is the
+    heading of its X axis, so the tilt is the same whichever way the rig faces."""
+    m = np.array(obj.matrix_world)[:3, :3]
+    r = m / np.linalg.norm(m, axis=0)
+    psi = np.arctan2(r[1, 0], r[0, 0]) if np.hypot(r[0, 0], r[1, 0]) > 1e-6 else 0.0
+    c, s = np.cos(psi), np.sin(psi)
+    tilt = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]]) @ r
+    return None if np.allclose(tilt, np.eye(3), atol=1e-6) else tilt
+
+
 def skeleton_in_metres(obj):
     """The armature's skeleton with its rest positions in world metres (bone lengths times
-    :func:`world_scale`): what the planned motion, which is in metres, is put on. Rotations
-    are those of its bones; only root locations are keyed back in its own units
+    :func:`world_scale`) and stood up by :func:`world_tilt`: what the planned motion, which
+    is in metres with Z up, is put on. Bone rotation channels are the same in either space;
+    only root locations are keyed back in the armature's units
     (:func:`motion_patches.adapter.nla.inplace_channels`)."""
     own = act_io.skeleton_of(obj)
-    s = world_scale(obj)
-    if s == 1.0:
+    s, tilt = world_scale(obj), world_tilt(obj)
+    if s == 1.0 and tilt is None:
         return own
     rest = own.rest.copy()
     rest[:, :3, 3] *= s
+    if tilt is not None:  # stood up: Z is up, the object then turns it about Z only
+        rest[:, :3, :] = tilt @ rest[:, :3, :]
     return Skeleton(own.names, own.parents, rest)
 
 

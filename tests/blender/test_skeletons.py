@@ -374,10 +374,11 @@ def test_a_30_second_walk_at_120_fps_adds_under_5_mb(s2_blend, addon_module, tmp
     assert grown < 5.0
 
 
-def fbx_like_mixamo(mocap_dir, name, scale=(0.01, 0.01, 0.01), units=100.0):
+def fbx_like_mixamo(mocap_dir, name, scale=(0.01, 0.01, 0.01), units=100.0, y_up=True):
     """Subject 16 named as Mixamo names its bones, as Blender's FBX importer leaves a
     Mixamo character: centimetre bones (``units`` per metre: the BVH read at 100 times its
-    metre scale), bones in quaternion mode, the armature object scaled by 0.01."""
+    metre scale), bones in quaternion mode, the armature's data Y-up under a 90 degree X
+    rotation of the object (``y_up``), the object scaled by 0.01."""
     before = set(bpy.data.objects)
     assert bpy.ops.import_anim.bvh(
         filepath=str(mocap_dir / "cmu/16_15.bvh"),
@@ -391,6 +392,14 @@ def fbx_like_mixamo(mocap_dir, name, scale=(0.01, 0.01, 0.01), units=100.0):
         ob.data.bones[old].name = new
     for pb in ob.pose.bones:
         pb.rotation_mode = "QUATERNION"
+    if y_up:  # the data turned Y-up, the object turned back upright
+        bpy.context.view_layer.objects.active = ob
+        for o in bpy.context.selected_objects:
+            o.select_set(False)
+        ob.select_set(True)
+        ob.rotation_euler = (-np.pi / 2, 0.0, 0.0)
+        bpy.ops.object.transform_apply(location=False, rotation=True, scale=False)
+        ob.rotation_euler = (np.pi / 2, 0.0, 0.0)
     ob.location = (0.4, 0.3, 0.0)
     ob.scale = scale
     return ob
@@ -407,17 +416,21 @@ def evaluated_feet(addon_module, rig, ankles, toes):
 def test_a_centimetre_mixamo_rig_under_a_hundredth_scale_plans(
     s2_blend, addon_module, mocap_dir, pillars
 ):
-    """An FBX-imported Mixamo character (object scale 0.01, centimetre bones) plans as the
-    same character in metres does: its evaluated hips follow the plan within 1 cm, its feet
-    plant by the label-free measure, it reaches the goal; the same world motion as the
-    metre rig's, its root keys in centimetres."""
+    """An FBX-imported Mixamo character (object scale 0.01 and a 90 degree X rotation over
+    Y-up centimetre bones) plans as the same character in metres, Z-up and unrotated, does:
+    its evaluated hips follow the plan within 1 cm, its feet plant by the label-free
+    measure, it reaches the goal; the same world motion as the metre rig's, its root keys
+    in centimetres."""
     api = addon_module.api
     bpy.ops.wm.open_mainfile(filepath=str(s2_blend))
     goal = scene_with_pillars() if pillars else empty("Goal", 6.0, -1.5, -0.2)
     cm = fbx_like_mixamo(mocap_dir, "Mixamo cm")
-    metres = fbx_like_mixamo(mocap_dir, "Mixamo m", scale=(1.0, 1.0, 1.0), units=1.0)
+    metres = fbx_like_mixamo(mocap_dir, "Mixamo m", (1.0, 1.0, 1.0), units=1.0, y_up=False)
+    assert abs(cm.data.bones["mixamorig:LeftFoot"].head_local[1]) > 50  # Y-up centimetres
     scene = bpy.context.scene
     res = {ob.name: api.plan_path(scene, ob, goal, frame_start=1) for ob in (cm, metres)}
+    scene.frame_set(res["Mixamo cm"].frame_end)
+    assert np.degrees(cm.matrix_world.to_euler("XYZ")[0]) == pytest.approx(90.0, abs=1e-3)
     assert res["Mixamo cm"].pieces == res["Mixamo m"].pieces
     assert "onto Mixamo naming" in res["Mixamo cm"].stats["retarget"]
     ankles = ["mixamorig:LeftFoot", "mixamorig:RightFoot"]
