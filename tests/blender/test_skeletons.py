@@ -402,6 +402,7 @@ def fbx_like_mixamo(mocap_dir, name, scale=(0.01, 0.01, 0.01), units=100.0, y_up
         ob.rotation_euler = (np.pi / 2, 0.0, 0.0)
     ob.location = (0.4, 0.3, 0.0)
     ob.scale = scale
+    bpy.context.view_layer.update()  # as an import leaves it: its world matrix current
     return ob
 
 
@@ -483,3 +484,26 @@ def test_a_non_uniform_scale_is_refused_naming_the_object(s2_blend, addon_module
         api.plan_path(bpy.context.scene, rig, goal)
     assert rig.animation_data is None and set(bpy.data.actions) == actions
     assert tuple(rig.scale) == pytest.approx((0.01, 0.01, 0.012))
+
+
+def test_a_crowd_of_copies_of_a_scaled_mixamo_rig(s2_blend, addon_module, mocap_dir):
+    """Copies of the FBX-like rig stand as it does (its tilt and scale kept, turned to their
+    goals) and plan as a crowd: hips on their plans, goals reached."""
+    api = addon_module.api
+    bpy.ops.wm.open_mainfile(filepath=str(s2_blend))
+    scene = bpy.context.scene
+    source = fbx_like_mixamo(mocap_dir, "Mixamo cm")
+    pairs = api.duplicate_crowd(scene, source, 2, ((-1, -3), (0, 3)), ((6, -3), (7, 3)))
+    assert len(pairs) == 2
+    bpy.context.view_layer.update()
+    up = np.array(source.matrix_world)[:3, 1]  # its Y-up bones' up, in the world
+    assert up @ [0, 0, 1] == pytest.approx(0.01, rel=1e-4)
+    for ob, _ in pairs:
+        m = np.array(ob.matrix_world)[:3, :3]
+        assert m[:, 1] @ [0, 0, 1] == pytest.approx(0.01, rel=1e-4), ob.name
+    res = api.plan_crowd(scene, pairs, frame_start=1)
+    assert not res.failed and len(res.plans) == 2
+    for ob, _ in pairs:
+        f = api.analyse(bpy.context, ob)
+        assert f["root_from_plan_cm"]["max"] < 1.0, ob.name
+        assert f["goal_position_error_cm"] < 10 and f["goal_heading_error_deg"] < 10, ob.name
