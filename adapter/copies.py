@@ -5,7 +5,10 @@ crowd made from one character), and their removal."""
 import bpy
 import numpy as np
 
+from ..motion_patches.kinematics import quat
+from . import actions as act_io
 from . import nla, storage
+from . import rig as rig_io
 
 
 def make_copies(scene, source, starts, goals, facing, collection):
@@ -16,6 +19,7 @@ def make_copies(scene, source, starts, goals, facing, collection):
     under the scene's."""
     coll = bpy.data.collections.new(collection)
     scene.collection.children.link(coll)
+    tilt = rig_io.world_tilt(source)
     pairs = []
     for k, (s, g) in enumerate(zip(starts, goals)):
         heading = float(np.arctan2(g[1] - s[1], g[0] - s[0]))
@@ -28,7 +32,7 @@ def make_copies(scene, source, starts, goals, facing, collection):
         coll.objects.link(ob)
         ob.location = (s[0], s[1], source.location[2])
         ob.rotation_mode = "XYZ"
-        ob.rotation_euler = (0.0, 0.0, heading - facing)
+        ob.rotation_euler = _facing(tilt, heading - facing)
         goal = bpy.data.objects.new(f"{ob.name} goal", None)
         coll.objects.link(goal)
         goal.location = (g[0], g[1], 0.0)
@@ -36,6 +40,15 @@ def make_copies(scene, source, starts, goals, facing, collection):
         ob.motion_patches_character.goal = goal
         pairs.append((ob, goal))
     return pairs
+
+
+def _facing(tilt, turn):
+    """XYZ Euler angles of the turn about Z ``turn`` over the source's ``tilt``
+    (:func:`rig.world_tilt`, None: none): a copy of an FBX import stands as it does."""
+    if tilt is None:
+        return (0.0, 0.0, turn)
+    q = quat.mul(quat.about_z(np.array(turn)), quat.from_matrix(tilt))
+    return tuple(act_io.closest_channels(q[None], "XYZ", np.zeros((1, 3)))[0])
 
 
 def remove_copies(pairs, collection):

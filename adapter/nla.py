@@ -43,9 +43,11 @@ def facing_angle(skel):
     return float(np.arctan2(f[1], f[0]))
 
 
-def inplace_channels(skel, motion):
+def inplace_channels(skel, motion, unit=1.0):
     """Root location channels (F, 3) and rotations (F, J, 4) for an object whose Z rotation
-    is the ground heading minus the rig's rest facing.
+    is the ground heading minus the rig's rest facing. ``unit``: the armature's world
+    scale (:func:`~.rig.world_scale`; ``skel`` and ``motion`` are in metres, the root's
+    location channel in the armature's own units, so it is divided by it).
 
     That object is the motion's ground frame turned by -facing, so the body relative to it
     is the motion's own in-place channels turned by +facing: the root's position about Z,
@@ -59,26 +61,22 @@ def inplace_channels(skel, motion):
     rot = np.array(motion.rotations, float)
     r = skel.root
     rot[:, r] = root_channel_to_ground(skel, rot[:, r], -facing)
-    return root_position_to_location(skel, local), quat.make_continuous(rot, axis=0)
+    loc = root_position_to_location(skel, local)
+    if unit != 1.0:
+        loc = loc / unit
+    return loc, quat.make_continuous(rot, axis=0)
 
 
 def check_rig(obj, skel, floor=0.0):
     """The :class:`~motion_patches.kinematics.retarget.RigMap` that puts the patch skeleton ``skel``
     on the armature ``obj`` (None: the armature holds that skeleton itself). Raises
-    ValueError for an object that is no armature, is scaled or tilted, or whose bones
-    cannot play the patch's hips, legs, feet and toes (naming those patch bones)."""
+    ValueError for an object that is no armature, is scaled unevenly (:func:`~.rig.world_scale`:
+    any uniform scale plans; a tilted armature, an FBX import's Y-up bones under a 90
+    degree X rotation, plans stood up, :func:`~.rig.world_tilt`), or whose bones cannot
+    play the patch's hips, legs, feet and toes (naming those patch bones)."""
     if obj is None or obj.type != "ARMATURE":
         raise ValueError("the character must be an armature object")
-    if not np.allclose(np.array(obj.scale), 1.0, atol=1e-4):
-        raise ValueError(
-            f"armature '{obj.name}' is scaled {tuple(round(s, 3) for s in obj.scale)}; "
-            f"apply its scale first (the patch is in metres)"
-        )
-    m = np.array(obj.matrix_world)
-    if abs(m[2, 2] - 1.0) > 1e-6:
-        raise ValueError(
-            f"armature '{obj.name}' is tilted (X/Y rotation); the planned root turns about Z only"
-        )
+    rig_io.world_scale(obj)
     return rig_io.rig_for(obj, skel, floor)
 
 
@@ -184,7 +182,7 @@ def rotation_signature(skel, modes):
     return "mixed-" + hashlib.sha1(text.encode()).hexdigest()[:10]
 
 
-def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None, index=None):
+def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None, index=None, unit=1.0):
     """The shared in-place action of a patch segment for a rig whose bones have rotation
     ``modes`` ({bone: rotation_mode}; default all quaternion), created on first use;
     ``rig`` (a :class:`~motion_patches.kinematics.retarget.RigMap`) when the rig is another skeleton
@@ -203,10 +201,14 @@ def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None, index
     key ``patch:seg``, so segment actions of earlier saved files are reused. Keys sit on
     the patch's frames whatever the scene's rate (strips are scaled, :func:`write_plan`).
     ``index``: {key: action} of the segment actions (:func:`segment_index`), so a plan of
-    many strips does not search every action of the file for each."""
+    many strips does not search every action of the file for each. ``unit``: the rig's
+    world scale (:func:`~.rig.world_scale`), in which its root locations are keyed: rigs of
+    another scale get their own actions."""
     sig = rotation_signature(skel, modes or {})
     rig_sig = rig.signature() if rig is not None else ""
     key = f"{patch_key}:{seg}" + (f":rig-{rig_sig}" if rig_sig else "") + (f":{sig}" if sig else "")
+    if unit != 1.0:
+        key += f":unit-{unit:.6g}"
     found = (segment_index(bpy) if index is None else index).get(key)
     if found is not None:
         return found, compat.action_slot(found)
@@ -217,8 +219,9 @@ def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None, index
         f"MP {patch.layer} seg{seg:04d}"
         + (f" rig-{rig_sig[:6]}" if rig_sig else "")
         + (f" {sig}" if sig else "")
+        + (f" x{unit:.4g}" if unit != 1.0 else "")
     )
-    action, slot = _inplace_action(name, skel, motion, {SEGMENT_KEY: key}, modes)
+    action, slot = _inplace_action(name, skel, motion, {SEGMENT_KEY: key}, modes, unit)
     if index is not None:
         index[key] = action
     return action, slot
@@ -234,13 +237,15 @@ def segment_index(bpy):
     return out
 
 
-def _inplace_action(name, skel, motion, tags, modes=None):
-    loc, rot = inplace_channels(skel, motion)
+def _inplace_action(name, skel, motion, tags, modes=None, unit=1.0):
+    loc, rot = inplace_channels(skel, motion, unit)
     action, slot = compat.new_action(name)
     for k, v in tags.items():
         action[k] = v
     frames = np.arange(motion.frames, dtype=float)
-    act_io.key_pose(action, slot, skel, frames, loc, rot, modes, tol=act_io.COMPACT)
+    act_io.key_pose(
+        action, slot, skel, frames, loc, rot, modes, tol=_in_units(act_io.COMPACT, unit)
+    )
     return action, slot
 
 
@@ -276,6 +281,7 @@ def write_plan(
     play that patch's shared segment actions, on the one motion track."""
     skel = rig.target if rig is not None else patch.gait.skeleton
     modes = rig_rotation_modes(obj, skel)
+    unit = rig_io.world_scale(obj)
     if bounds is None:
         bounds = np.concatenate(([0], np.cumsum([m.frames - 1 for m in motions])))
     bounds = np.asarray(bounds, int)
@@ -301,10 +307,11 @@ def write_plan(
                 modes,
                 rig,
                 index,
+                unit,
             )
         else:
             action, slot = _inplace_action(
-                f"MP {obj.name} {piece.kind}", skel, m, {CHARACTER_KEY: obj.name}, modes
+                f"MP {obj.name} {piece.kind}", skel, m, {CHARACTER_KEY: obj.name}, modes, unit
             )
         start, end = first + int(bounds[n]), first + int(bounds[n + 1])
         scale = (end - start) / float(max(m.frames - 1, 1))
@@ -339,7 +346,10 @@ def write_plan(
     # A turn about Z only: (0, 0, heading) is that turn in every Euler order, (heading, +Z)
     # in axis-angle; the heading is unwrapped, so no channel jumps by a turn.
     zero = np.zeros(world.frames)
-    if obj.rotation_mode == "QUATERNION":
+    tilt = rig_io.world_tilt(obj)
+    if tilt is not None:  # the turn over the armature's own tilt
+        rot_path, rot_values = _tilted_rotation(obj.rotation_mode, heading, tilt)
+    elif obj.rotation_mode == "QUATERNION":
         q = quat.make_continuous(quat.about_z(heading), axis=0)
         rot_path, rot_values = "rotation_quaternion", q.T
     elif obj.rotation_mode == "AXIS_ANGLE":
@@ -361,6 +371,29 @@ def write_plan(
     obj[TRACKS_KEY] = json.dumps(owned)
     _claim_actions(obj, ad, owned)
     return strips, stashed
+
+
+def _tilted_rotation(mode, heading, tilt):
+    """(property, channel rows) of the object rotation ``Rz(heading) @ tilt`` per frame in
+    rotation ``mode``, each frame's channels the ones nearest the frame before (no jump by a
+    turn; the first nearest the tilt's own)."""
+    q = quat.mul(quat.about_z(heading), quat.from_matrix(tilt)[None])
+    q = quat.make_continuous(q, axis=0)
+    if mode == "QUATERNION":
+        return "rotation_quaternion", q.T
+    out = np.empty((len(q), act_io.rest_channels(mode).size))
+    prev = act_io.closest_channels(q[:1], mode, act_io.rest_channels(mode)[None])[0]
+    for f in range(len(q)):
+        prev = out[f] = act_io.closest_channels(q[f : f + 1], mode, prev[None])[0]
+    return act_io.rotation_path(mode), out.T
+
+
+def _in_units(tol, unit):
+    """``tol`` for locations keyed in the armature's units (``unit`` metres each): its
+    length, in metres, divided by it, so a centimetre rig is held as a metre rig is."""
+    if isinstance(tol, act_io.Tolerance) and unit != 1.0:
+        return act_io.Tolerance(tol.angle, tol.length / unit)
+    return tol
 
 
 def _finer(tol):

@@ -11,13 +11,14 @@ import bpy
 import numpy as np
 
 from ..adapter import evaluate, props_io, storage
+from ..adapter import rig as rig_io
 from ..adapter import scene as scene_io
 from ..motion_patches.kinematics.motion import concatenate
 from ..motion_patches.planning import causes
 from ..motion_patches.planning.planner import PlanError, SegmentPlanner, plan_motions
 from ..motion_patches.props import blocking
 from ..motion_patches.props.environment import inside_convex
-from ..motion_patches.quality import layout_spec, metrics
+from ..motion_patches.quality import foot_measure, layout_spec, metrics
 from .common import (
     _check_character,
     _check_far,
@@ -48,12 +49,15 @@ def analyse(context: bpy.types.Context, character: bpy.types.Object, keep: bool 
 def _analyse(context, character):
     meta, arrays = load_plan_record(character)
     frames = np.arange(meta["frame_start"], meta["frame_end"] + 1)
+    nf = len(meta["foot_names"])
+    ankles, toes = _foot_bones(character, meta)
     names = [pb.name for pb in character.pose.bones]
-    bones = [meta["root_name"]] + list(meta["foot_names"])
+    bones = [meta["root_name"]] + list(meta["foot_names"]) + ankles + toes
     body, ground, rot, _ = evaluate.sample_armature(context, character, frames, names)
     pos = body[:, [names.index(b) for b in bones]]
     fps = scene_fps(context.scene)
-    root, feet = pos[:, 0], pos[:, 1:]
+    root, feet = pos[:, 0], pos[:, 1 : 1 + nf]
+    ankle_pos, toe_pos = pos[:, 1 + nf : 1 + nf + len(ankles)], pos[:, 1 + nf + len(ankles) :]
     skate = metrics.foot_skate(feet, fps, arrays["contacts"])
     by_layer = _skate_by_layer(meta, frames, feet, fps, arrays["contacts"])
     goal = np.array(meta["goal"])
@@ -73,6 +77,7 @@ def _analyse(context, character):
         "frames": int(frames.size),
         "seconds": float((frames.size - 1) / fps),
         "foot_skate": skate,
+        "feet": foot_measure.measure(toe_pos, ankle_pos, fps),
         **({"foot_skate_by_layer": by_layer} if by_layer else {}),
         "root_from_plan_cm": {
             "mean": float(root_err.mean() * 100),
@@ -110,6 +115,22 @@ def _body_inside_props(context, character, heads):
         hit = inside_convex(flat[:, :2], ob.polygon) & (flat[:, 2] < top - 0.01)
         inside |= hit.reshape(points.shape[:2]).any(axis=1)
     return int(inside.sum())
+
+
+def _foot_bones(character, meta):
+    """([ankle bones], [toe bones]) of the character by bone role (its own armature's
+    names: the label-free measure reads no plan), the plan's foot bones when its names
+    follow no convention."""
+    skel = rig_io.skeleton_in_metres(character)
+    try:
+        ankles, toes = foot_measure.foot_bones(skel)
+    except ValueError:
+        names = list(meta["foot_names"])
+        ankles, toes = (
+            [skel.names.index(n) for n in names[0::2]],
+            [skel.names.index(n) for n in names[1::2]],
+        )
+    return [skel.names[i] for i in ankles], [skel.names[i] for i in toes]
 
 
 def _skate_by_layer(meta, frames, feet, fps, planted):

@@ -159,6 +159,47 @@ def crowd_crossing(bpy, api, evaluate, source):
     }
 
 
+def source_feet(bpy, addon, arm, action):
+    """The label-free foot figures of the source armature playing its recorded ``action``,
+    evaluated through the depsgraph frame by frame as the planned walker is (api.analyse):
+    the floor the walker's feet are held against, by the same measure."""
+    import numpy as np
+
+    compat, fm = addon.adapter.compat, addon.motion_patches.quality.foot_measure
+    skel = addon.adapter.rig.skeleton_in_metres(arm)
+    ankles, toes = fm.foot_bones(skel)
+    ad = arm.animation_data or arm.animation_data_create()
+    keep = ad.action, ad.action_slot
+    compat.assign_action(arm, action, compat.action_slot(action))
+    try:
+        first, last = (int(round(f)) for f in action.frame_range)
+        names = [skel.names[i] for i in ankles + toes]
+        pos, _, _, _ = addon.adapter.evaluate.sample_armature(
+            bpy.context, arm, np.arange(first, last + 1), names
+        )
+    finally:
+        ad.action = keep[0]
+        if keep[0] is not None and keep[1] is not None:
+            ad.action_slot = keep[1]
+    fps = bpy.context.scene.render.fps / bpy.context.scene.render.fps_base
+    return fm.measure(pos[:, 2:], pos[:, :2], fps)
+
+
+def feet_text(m):
+    """The label-free figures in one line (motion_patches.quality.foot_measure)."""
+    return (
+        "skate %.1f cm/s (height-weighted %.1f), %d one-frame pops, swing clearance %.1f cm,"
+        " end ankles within %.1f cm of standing"
+        % (
+            m["skate"]["mean_cm_per_s"],
+            m["weighted_skate"]["mean_cm_per_s"],
+            m["pops"],
+            m["min_swing_clearance_cm"],
+            m["max_end_ankle_off_cm"],
+        )
+    )
+
+
 def main(argv):
     args = parse_args(argv)
     mocap = Path(args.mocap)
@@ -211,7 +252,8 @@ def main(argv):
     # The same plan without foot locking first: the skate the synthesis alone leaves. The
     # weights and radius are the scene's Planning settings, which the API fills in itself.
     api.plan_path(scene, walker, goal_ob, frame_start=1, foot_lock=False)
-    unlocked = api.analyse(bpy.context, walker)["foot_skate"]
+    unlocked_figures = api.analyse(bpy.context, walker)
+    unlocked, unlocked_feet = unlocked_figures["foot_skate"], unlocked_figures["feet"]
     plan = api.plan_path(scene, walker, goal_ob, frame_start=1)
     scene.frame_start, scene.frame_end = plan.frame_start, plan.frame_end
     figures = api.analyse(bpy.context, walker)
@@ -224,6 +266,7 @@ def main(argv):
     con, _, _ = from_core.kinematics.contacts.foot_contacts(src30)
     fj = from_core.kinematics.contacts.foot_joints(src30.skeleton)
     floor = from_core.quality.metrics.foot_skate(src30.joint_positions()[:, fj], 30.0, con)
+    floor_feet = source_feet(bpy, addon, arm, acts[0])
 
     out = Path(args.output)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -249,7 +292,9 @@ def main(argv):
         },
         "evaluated": figures,
         "source_clip_skate": floor,
+        "source_clip_feet": floor_feet,
         "skate_without_foot_lock": unlocked,
+        "feet_without_foot_lock": unlocked_feet,
         "chair_lines": chairs,
         "crowd": crowd,
         "saved": str(out),
@@ -295,6 +340,10 @@ def main(argv):
             unlocked["mean_cm_per_s"],
         )
     )
+    print("    feet by the label-free measure (toe within 3 cm of its lowest for 0.2 s):")
+    print("      walker:              " + feet_text(f["feet"]))
+    print("      without foot lock:   " + feet_text(unlocked_feet))
+    print("      source clip 16_15:   " + feet_text(floor_feet))
     print(
         "    goal error: root motion %.1f cm, %.1f deg; hips %.1f cm from the goal point"
         % (
