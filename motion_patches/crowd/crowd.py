@@ -32,21 +32,30 @@ def disc(centre: Sequence[float] | np.ndarray, radius: float, sides: int = 12) -
 
 
 def standing_spots(
-    ends: Sequence[tuple[Sequence[float], Sequence[float]]], n: int, spacing: float, radius: float
+    ends: Sequence[tuple[Sequence[float], Sequence[float]]],
+    n: int,
+    spacing: float,
+    radius: float,
+    box: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> list[tuple[int, np.ndarray]]:
     """[(index, polygon)] of the spots character ``n`` walks around: the goals of the
     characters before it and the starts of those after it, as discs that keep ``spacing``
     between roots once grown by the planner's ``radius``. ``ends`` [(start, goal)] are
     (x, y, heading) states; a spot within that distance of ``n``'s own start or goal is
-    left out (it could not start or arrive at all)."""
+    left out (it could not start or arrive at all), and so is one whose disc lies wholly
+    outside ``box`` (lo, hi) when given: where its plan never looks."""
     if spacing <= 0:
         return []
     grow = max(spacing - radius, 0.05)
     mine = np.array([ends[n][0][:2], ends[n][1][:2]], float)
     where = np.array([(g if m < n else s)[:2] for m, (s, g) in enumerate(ends)], float)
     near = np.linalg.norm(where[:, None, :] - mine[None], axis=2).min(axis=1) < grow + radius
-    keep = np.nonzero(~near & (np.arange(len(ends)) != n))[0]
+    keep = ~near & (np.arange(len(ends)) != n)
     ring = disc((0.0, 0.0), grow)
+    if box is not None:
+        reach = float(np.abs(ring).max())
+        keep &= ((where + reach >= box[0]) & (where - reach <= box[1])).all(axis=1)
+    keep = np.nonzero(keep)[0]
     return [(int(m), ring + where[m]) for m in keep]
 
 
@@ -87,61 +96,58 @@ _OFF = 1 << 20  # cell indices are shifted by this into a key's 21-bit fields
 
 
 class _Sorted:
-    """Reserved root positions (frame, xy, owner) sorted by an int64 key, in two levels: a
-    large one and a small recent one that each reservation is inserted into and that is
-    merged into the large one once it holds a quarter as much. An insertion then copies the
-    small level, not the whole crowd's, and the merges cost O(N log N) in all."""
+    """Reserved root positions (frame, xy, owner) sorted by an int64 key, in runs: each
+    reservation is a run of its own, and the newest run is merged into the one before
+    while that one holds at most four times as much (a log-structured merge). Runs grow
+    geometrically, so there are O(log N) of them to look through and every entry is
+    copied O(log N) times in all, whatever the size of the crowd. An owner's entries
+    always lie in one run (in key order), so what a look-up finds of one owner comes in
+    the order of the queries."""
 
     _COLUMNS = ("key", "frame", "xy", "owner")
 
     def __init__(self):
-        self.levels = [self._empty(), self._empty()]
-
-    @staticmethod
-    def _empty():
-        return {
-            "key": np.empty(0, np.int64),
-            "frame": np.empty(0, np.int64),
-            "xy": np.empty((0, 2), float),
-            "owner": np.empty(0, np.int32),
-        }
+        self.runs = []
 
     @property
     def size(self):
-        return sum(lv["key"].size for lv in self.levels)
+        return sum(run["key"].size for run in self.runs)
 
     def insert(self, key, frame, xy, owner):
         order = np.argsort(key, kind="stable")
-        new = {"key": key, "frame": frame, "xy": xy, "owner": np.full(key.size, owner, np.int32)}
-        recent = self.levels[1]
-        at = np.searchsorted(recent["key"], key[order])
-        for c in self._COLUMNS:
-            recent[c] = np.insert(recent[c], at, new[c][order], axis=0)
-        main = self.levels[0]
-        if recent["key"].size > max(4096, main["key"].size // 4):
-            both = {c: np.concatenate((main[c], recent[c])) for c in self._COLUMNS}
+        run = {
+            "key": key[order],
+            "frame": frame[order],
+            "xy": xy[order],
+            "owner": np.full(key.size, owner, np.int32),
+        }
+        self.runs.append(run)
+        while len(self.runs) > 1 and self.runs[-2]["key"].size <= 4 * self.runs[-1]["key"].size:
+            new = self.runs.pop()
+            old = self.runs.pop()
+            both = {c: np.concatenate((old[c], new[c])) for c in self._COLUMNS}
             order = np.argsort(both["key"], kind="stable")
-            self.levels = [{c: both[c][order] for c in self._COLUMNS}, self._empty()]
+            self.runs.append({c: both[c][order] for c in self._COLUMNS})
 
     def remove(self, owner):
-        for lv in self.levels:
-            keep = lv["owner"] != owner
-            for c in self._COLUMNS:
-                lv[c] = lv[c][keep]
+        for i, run in enumerate(self.runs):
+            keep = run["owner"] != owner
+            if not keep.all():
+                self.runs[i] = {c: run[c][keep] for c in self._COLUMNS}
+        self.runs = [run for run in self.runs if run["key"].size]
 
     def near(self, q):
         """(query index, frame, xy, owner) of every entry whose key is one of ``q``."""
         out = []
-        for lv in self.levels:
-            if not lv["key"].size:
-                continue
-            lo = np.searchsorted(lv["key"], q, "left")
-            n = np.searchsorted(lv["key"], q, "right") - lo
+        for run in self.runs:
+            lo = np.searchsorted(run["key"], q, "left")
+            n = np.searchsorted(run["key"], q, "right") - lo
             hit = np.nonzero(n)[0]
             if hit.size:
                 n = n[hit]
                 ent = np.repeat(lo[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
-                out.append((np.repeat(hit, n), lv["frame"][ent], lv["xy"][ent], lv["owner"][ent]))
+                got = (run["frame"][ent], run["xy"][ent], run["owner"][ent])
+                out.append((np.repeat(hit, n), *got))
         if not out:
             return np.empty(0, int), np.empty(0, np.int64), np.empty((0, 2)), np.empty(0, int)
         return tuple(np.concatenate(c) for c in zip(*out))
@@ -176,6 +182,7 @@ class Reservations:
         return (np.asarray(t, np.int64) << 42) | (c[..., 0] << 21) | c[..., 1]
 
     _RING = np.array([(i, j) for i in range(-2, 3) for j in range(-2, 3)], np.int64)
+    _RING_KEYS = (_RING[:, 0] << 21) + _RING[:, 1]  # added to a cell key: the cells round it
 
     def _moving_near(self, t, xy):
         """(query row, xy, owner) of moving entries on frame ``t[row]`` within two cells of
@@ -191,13 +198,16 @@ class Reservations:
         """Indices of standing spots within two cells of any of the points ``xy``."""
         if not self.spot_keys.size:
             return np.empty(0, int)
-        c = np.unique(self._cells(xy), axis=0)[:, None, :] + self._RING[None]
-        q = np.unique((c[..., 0] << 21 | c[..., 1]).ravel())
+        c = self._cells(xy)
+        c = np.unique(c[:, 0] << 21 | c[:, 1])  # the cells of the points, once each
+        q = np.unique((c[:, None] + self._RING_KEYS[None]).ravel())
         lo = np.searchsorted(self.spot_keys, q, "left")
-        hi = np.searchsorted(self.spot_keys, q, "right")
-        return np.unique(
-            np.concatenate([np.arange(a, b) for a, b in zip(lo, hi) if b > a] or [np.empty(0, int)])
-        )
+        n = np.searchsorted(self.spot_keys, q, "right") - lo
+        hit = np.nonzero(n)[0]
+        if not hit.size:
+            return np.empty(0, int)
+        n = n[hit]  # disjoint ranges of the sorted keys, in order: already sorted and unique
+        return np.repeat(lo[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
 
     def busy(self, track: np.ndarray, frames: int, margin: float = 0.01) -> np.ndarray:
         """(len(track), frames) bool: ``track[k]`` closer than the spacing (and ``margin``)
