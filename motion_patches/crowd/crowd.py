@@ -459,6 +459,18 @@ def _improve(table, s, found, max_delay, max_hold, step, ramp):
     return best[2], best[3]
 
 
+def _found_by(timing, max_delay, max_extra, max_holds, ramp):
+    """Whether :func:`path_timing.earliest` within ``max_delay``, ``max_extra`` and
+    ``max_holds`` finds ``timing`` (delay, holds), the answer of a search allowing more.
+    It does when ``timing`` fits in it: the earliest arrival of the wider search is then
+    one it can reach, and of those the wider one took the fewest holds, then the shortest
+    wait, which it prefers alike (states are kept by that value, ties broken in the same
+    order of moves); so the narrower search need not be run."""
+    delay, holds = timing
+    extra = delay + sum(h + ramp for _, h in holds)
+    return delay <= max_delay and len(holds) <= max_holds and extra <= max_extra
+
+
 def _timed(table, s, max_delay, max_hold, ramp, found):
     """``s`` re-timed to its earliest arrival clear of everyone reserved
     (:func:`path_timing.earliest`: a wait at its start and idle holds on the way), with the
@@ -475,6 +487,8 @@ def _timed(table, s, max_delay, max_hold, ramp, found):
         s.track, busy, s.holdable, ramp, tries[-1][0], tries[-1][0] + max_hold, tries[-1][1]
     )
     for wait, holds in tries[:-1] if timing is not None else ():
+        if _found_by(timing, wait, wait + max_hold, holds, ramp):
+            break  # the earliest of all is one this search allows: it finds that one too
         first = path_timing.earliest(s.track, busy, s.holdable, ramp, wait, wait + max_hold, holds)
         if first is not None:
             timing = first
