@@ -160,13 +160,14 @@ class Reservations:
     it leaves and its goal from its arrival on. A character placed later is checked against
     them all: its walk against the others' walks and spots, its own spots against both.
 
-    Cells are ``spacing / sqrt(2)`` wide, so two roots closer than ``spacing`` are at most
-    two cells apart; a sparse table (sorted int64 keys of frame and cell) keeps memory to
-    the frames walked, whatever the size of the plaza. Lookups are vectorised over frames."""
+    Cells are ``spacing`` and :attr:`SLACK` wide, so two roots closer than that are in the
+    same cell or neighbours (nine cells to look in); a sparse table (sorted int64 keys of
+    frame and cell) keeps memory to the frames walked, whatever the size of the plaza.
+    Lookups are vectorised over frames."""
 
     def __init__(self, spacing):
         self.spacing = float(spacing)
-        self.cell = max(self.spacing, 1e-6) / np.sqrt(2.0)
+        self.cell = self.spacing + self.SLACK
         self.moving = _Sorted()  # keyed by (frame, cell)
         self.spot_keys = np.empty(0, np.int64)  # standing spots: sorted cell keys
         self.spots = np.empty((0, 5), float)  # x, y, first frame, end frame (inf), owner
@@ -181,12 +182,13 @@ class Reservations:
     def _key(t, c):
         return (np.asarray(t, np.int64) << 42) | (c[..., 0] << 21) | c[..., 1]
 
-    _RING = np.array([(i, j) for i in range(-2, 3) for j in range(-2, 3)], np.int64)
+    SLACK = 0.05  # metres cells are wider than the spacing: the most :meth:`busy` adds
+    _RING = np.array([(i, j) for i in range(-1, 2) for j in range(-1, 2)], np.int64)
     _RING_KEYS = (_RING[:, 0] << 21) + _RING[:, 1]  # added to a cell key: the cells round it
 
     def _moving_near(self, t, xy):
-        """(query row, xy, owner) of moving entries on frame ``t[row]`` within two cells of
-        ``xy[row]``."""
+        """(query row, xy, owner) of moving entries on frame ``t[row]`` in the cell of
+        ``xy[row]`` or next to it."""
         if not self.moving.size or not len(t):
             return np.empty(0, int), np.empty((0, 2)), np.empty(0, int)
         c = self._cells(xy)[:, None, :] + self._RING[None]
@@ -195,7 +197,7 @@ class Reservations:
         return rows // len(self._RING), where, owner
 
     def _spots_near(self, xy):
-        """Indices of standing spots within two cells of any of the points ``xy``."""
+        """Indices of standing spots in the cells of the points ``xy`` or next to them."""
         if not self.spot_keys.size:
             return np.empty(0, int)
         c = self._cells(xy)
@@ -215,6 +217,8 @@ class Reservations:
         then), for every frame from 0; the last column stands for every frame after it.
         Found from the cells about the track over all frames at once (the entries sorted by
         cell), so its cost follows the traffic near the track, not the frames searched."""
+        if margin > self.SLACK:
+            raise ValueError(f"a margin of at most {self.SLACK} m, not {margin}")
         track = np.asarray(track, float)
         n, s2 = len(track), (self.spacing + margin) ** 2
         out = np.zeros((n, frames + 2), np.int32)
