@@ -91,9 +91,12 @@ def remove_owned(obj):
 
 
 def _orphan_connectors(bpy, character_name):
-    for a in list(bpy.data.actions):
-        if a.get(CHARACTER_KEY) == character_name and a.users == 0:
-            bpy.data.actions.remove(a)
+    # users first: a crowd's actions are mostly in use, and reading users is far cheaper
+    # than looking up a custom property (this runs once per character written)
+    for a in [
+        a for a in bpy.data.actions if a.users == 0 and a.get(CHARACTER_KEY) == character_name
+    ]:
+        bpy.data.actions.remove(a)
 
 
 def stash_active_action(obj):

@@ -425,16 +425,21 @@ def _place_ends(c):
     world_ends = [
         (_shrunk(e[0], 1.0 / sz), _shrunk(e[1], 1.0 / sz)) for e, sz in zip(c.ends, c.sizes)
     ]
-    goals = np.array([g[1][:2] for g in world_ends])
-    for i in range(len(c.pairs)):
-        for j in range(i):
-            gap = float(np.linalg.norm(goals[i] - goals[j]))
-            if gap < c.spacing:
-                raise MotionPatchesError(
-                    f"the goals of '{c.pairs[j][0].name}' and '{c.pairs[i][0].name}' are "
-                    f"{gap:.2f} m apart, closer than the spacing ({c.spacing:.2f} m): the one "
-                    f"arriving second would never find its goal free; move one of them"
-                )
+    goals = np.array([g[1][:2] for g in world_ends]).reshape(-1, 2)
+    for lo in range(0, len(goals), 512):  # the first pair (i, then j < i) too close
+        d = np.linalg.norm(goals[lo : lo + 512, None] - goals[None], axis=2)
+        close = (d < c.spacing) & (
+            np.arange(len(goals))[None] < np.arange(lo, lo + len(d))[:, None]
+        )
+        if close.any():
+            i = int(np.nonzero(close.any(axis=1))[0][0])
+            j = int(np.nonzero(close[i])[0][0])
+            gap, i = float(d[i, j]), lo + i
+            raise MotionPatchesError(
+                f"the goals of '{c.pairs[j][0].name}' and '{c.pairs[i][0].name}' are "
+                f"{gap:.2f} m apart, closer than the spacing ({c.spacing:.2f} m): the one "
+                f"arriving second would never find its goal free; move one of them"
+            )
     c.order = sorted(
         range(len(c.pairs)),
         key=lambda n: (
