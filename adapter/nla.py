@@ -206,6 +206,7 @@ def write_plan(
     rig=None,
     bounds=None,
     layer_keys=None,
+    segments=None,
 ):
     """Write a plan's strips and root trajectory on ``obj``; returns strip records.
 
@@ -222,7 +223,8 @@ def write_plan(
     per-character correction on its own track, added over the shared segment actions.
     ``layer_keys``: {layer: patch key} of a plan that changes layer, whose segment pieces
     name their own patch (:class:`motion_patches.planning.transitions.LayerPiece`): their strips
-    play that patch's shared segment actions, on the one motion track."""
+    play that patch's shared segment actions, on the one motion track. ``segments``:
+    :func:`segment_index` of the file, kept up to date here (one for many writes)."""
     skel = rig.target if rig is not None else patch.gait.skeleton
     modes = rig_rotation_modes(obj, skel)
     if bounds is None:
@@ -237,7 +239,7 @@ def write_plan(
     motion_track.name = TRACK_MOTION
     strips, played = [], []
     first = int(frame_start)
-    index = segment_index(bpy)
+    index = segment_index(bpy) if segments is None else segments
     for n, (piece, m) in enumerate(zip(plan.pieces, motions)):
         if piece.kind == "segment":
             own = getattr(piece, "patch", None) if layer_keys else None

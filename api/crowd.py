@@ -14,8 +14,8 @@ import bpy
 import numpy as np
 
 from ..adapter import moving as moving_io
+from ..adapter import nla, transaction
 from ..adapter import scene as scene_io
-from ..adapter import transaction
 from ..motion_patches import cluster
 from ..motion_patches.crowd import crowd, members
 from ..motion_patches.kinematics import scene_rate
@@ -577,6 +577,7 @@ def _write_all(c, planned, schedules):
     with transaction.kept(
         bpy, c.scene, [c.pairs[n][0] for n, *_ in planned], (PLAN_KEY, FRAME_RANGE_KEY)
     ):
+        segments = nla.segment_index(bpy)  # the shared segment actions, found once
         for (n, plan, _, placed, _), s in zip(planned, schedules):
             env = _world_of(c, c.sizes[n]).env
             with _without(env, c.own[n]):  # the plan record lists what it walked around
@@ -592,6 +593,7 @@ def _write_all(c, planned, schedules):
                     c.settings,
                     c.rigs[n],
                     fit=False,
+                    segments=segments,
                 )
         if written:
             _fit_frame_range(c.scene)  # once: it reads every character's plan record

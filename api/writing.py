@@ -71,12 +71,15 @@ def _write(
     rig=None,
     fit=True,
     layer_keys=None,
+    segments=None,
 ):
     """NLA strips and the plan record of one planned character (``placed``: its motion,
     :func:`_placed`; ``env``: the planner's world, shrunk by the character's size; ``settings``: the
     request's, whose radius and foot lock it records and applies).
     ``fit``: fit the scene's frame range now (a crowd fits it once, after every write).
-    ``layer_keys``: {layer: patch key} of a plan that changes layer (:func:`_gait_change`)."""
+    ``layer_keys``: {layer: patch key} of a plan that changes layer (:func:`_gait_change`).
+    ``segments``: the file's shared segment actions (:func:`nla.segment_index`) when several
+    characters are written in a row (a crowd): found once, not once per character."""
     scale = _size(rig)
     goal_state = _shrunk(plan.goal, 1.0 / scale)  # the facing reached when any would do
     skel = rig.target if rig is not None else patch.gait.skeleton
@@ -104,6 +107,7 @@ def _write(
         rig,
         bounds,
         layer_keys,
+        segments,
     )
     root = root_positions(world.ground, world.root_local)  # the hips
     foot = contacts.foot_joints(skel)
