@@ -75,9 +75,9 @@ def earliest(
 
     def at(points, k, t):
         """Busy at the ramp ``points`` from track frames ``k`` on frames ``t``."""
-        lo, hi, between = (a[k] for a in points)
+        lo, hi, between = points
         t = np.minimum(t, last)
-        return busy[lo, t] | (between & busy[hi, t])
+        return busy[lo[k], t] | (between[k] & busy[hi[k], t])
 
     # the goal: free on every frame from the arrival on (the first frame it stays free)
     goal = busy[n - 1, n - 1 :]
