@@ -143,9 +143,10 @@ def remove_owned(obj):
 
 
 def _orphan_connectors(bpy, obj):
-    for a in list(bpy.data.actions):
-        if a.users == 0 and made_for(a, obj):
-            bpy.data.actions.remove(a)
+    # users first: a crowd's actions are mostly in use, and reading users is far cheaper
+    # than looking up custom properties (this runs once per character written)
+    for a in [a for a in bpy.data.actions if a.users == 0 and made_for(a, obj)]:
+        bpy.data.actions.remove(a)
 
 
 def stash_active_action(obj):
@@ -262,6 +263,7 @@ def write_plan(
     rig=None,
     bounds=None,
     layer_keys=None,
+    segments=None,
 ):
     """Write a plan's strips and root trajectory on ``obj``; returns strip records.
 
@@ -278,7 +280,8 @@ def write_plan(
     per-character correction on its own track, added over the shared segment actions.
     ``layer_keys``: {layer: patch key} of a plan that changes layer, whose segment pieces
     name their own patch (:class:`motion_patches.planning.transitions.LayerPiece`): their strips
-    play that patch's shared segment actions, on the one motion track."""
+    play that patch's shared segment actions, on the one motion track. ``segments``:
+    :func:`segment_index` of the file, kept up to date here (one for many writes)."""
     skel = rig.target if rig is not None else patch.gait.skeleton
     modes = rig_rotation_modes(obj, skel)
     unit = rig_io.world_scale(obj)
@@ -294,7 +297,7 @@ def write_plan(
     motion_track.name = TRACK_MOTION
     strips, played = [], []
     first = int(frame_start)
-    index = segment_index(bpy)
+    index = segment_index(bpy) if segments is None else segments
     for n, (piece, m) in enumerate(zip(plan.pieces, motions)):
         if piece.kind == "segment":
             own = getattr(piece, "patch", None) if layer_keys else None

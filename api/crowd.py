@@ -14,8 +14,8 @@ import bpy
 import numpy as np
 
 from ..adapter import moving as moving_io
+from ..adapter import nla, transaction
 from ..adapter import scene as scene_io
-from ..adapter import transaction
 from ..motion_patches import cluster
 from ..motion_patches.crowd import crowd, members
 from ..motion_patches.kinematics import scene_rate
@@ -438,16 +438,21 @@ def _place_ends(c):
     world_ends = [
         (_shrunk(e[0], 1.0 / sz), _shrunk(e[1], 1.0 / sz)) for e, sz in zip(c.ends, c.sizes)
     ]
-    goals = np.array([g[1][:2] for g in world_ends])
-    for i in range(len(c.pairs)):
-        for j in range(i):
-            gap = float(np.linalg.norm(goals[i] - goals[j]))
-            if gap < c.spacing:
-                raise MotionPatchesError(
-                    f"the goals of '{c.pairs[j][0].name}' and '{c.pairs[i][0].name}' are "
-                    f"{gap:.2f} m apart, closer than the spacing ({c.spacing:.2f} m): the one "
-                    f"arriving second would never find its goal free; move one of them"
-                )
+    goals = np.array([g[1][:2] for g in world_ends]).reshape(-1, 2)
+    for lo in range(0, len(goals), 512):  # the first pair (i, then j < i) too close
+        d = np.linalg.norm(goals[lo : lo + 512, None] - goals[None], axis=2)
+        close = (d < c.spacing) & (
+            np.arange(len(goals))[None] < np.arange(lo, lo + len(d))[:, None]
+        )
+        if close.any():
+            i = int(np.nonzero(close.any(axis=1))[0][0])
+            j = int(np.nonzero(close[i])[0][0])
+            gap, i = float(d[i, j]), lo + i
+            raise MotionPatchesError(
+                f"the goals of '{c.pairs[j][0].name}' and '{c.pairs[i][0].name}' are "
+                f"{gap:.2f} m apart, closer than the spacing ({c.spacing:.2f} m): the one "
+                f"arriving second would never find its goal free; move one of them"
+            )
     c.order = sorted(
         range(len(c.pairs)),
         key=lambda n: (
@@ -596,6 +601,7 @@ def _write_all(c, planned, schedules, progress=None):
         [c.pairs[n][0] for n, *_ in planned],
         (PLAN_KEY, ANALYSIS_KEY, FRAME_RANGE_KEY),
     ):
+        segments = nla.segment_index(bpy)  # the shared segment actions, found once
         for k, ((n, plan, _, placed, _), s) in enumerate(zip(planned, schedules)):
             check_cancelled(c.cancelled, CANCELLED)
             env = _world_of(c, c.sizes[n]).env
@@ -612,6 +618,7 @@ def _write_all(c, planned, schedules, progress=None):
                     c.settings,
                     c.rigs[n],
                     fit=False,
+                    segments=segments,
                 )
             if progress is not None:
                 progress(0.9 + 0.1 * (k + 1) / len(planned))

@@ -95,9 +95,20 @@ class Gait:
         return w
 
     def floor(self) -> float:
-        """Floor height under the straight loop (where interaction clips are put down)."""
+        """Floor height under the straight loop (where interaction clips are put down).
+        Kept once found (every character of a crowd is checked against it; it takes the
+        loop's forward kinematics), for as long as the loop and skeleton are the same."""
         lp = self.straight
-        return floor_level(Clip("loop", self.skeleton, self.fps, lp.root_local, lp.rotations))
+        key = (lp, lp.root_local, lp.rotations, self.skeleton, self.fps)
+        cached = self.__dict__.get("_floor")
+        if (
+            cached is None
+            or any(a is not b for a, b in zip(cached[0][:4], key))
+            or (cached[0][4] != self.fps)
+        ):
+            clip = Clip("loop", self.skeleton, self.fps, lp.root_local, lp.rotations)
+            cached = self.__dict__["_floor"] = (key, float(floor_level(clip)))
+        return cached[1]
 
     def cycle_distances(self) -> np.ndarray:
         return np.array([lp.cycle_distance for lp in self.loops])
