@@ -151,6 +151,22 @@ def errors(ref, got, chars):
     return local, world, hips
 
 
+def planted_offsets(api, ref, got, chars, names, frames):
+    """Largest offset (mm) of a planted foot joint of ``got`` from ``ref`` (:func:`evaluate`)
+    on the frames the plan labels it planted: the foot lock holds where it held."""
+    out = 0.0
+    for c in chars:
+        meta, arrays = api.load_plan_record(c)
+        feet = [names.index(n) for n in meta["foot_names"]]
+        mine = np.flatnonzero((frames >= meta["frame_start"]) & (frames <= meta["frame_end"]))
+        n = min(len(mine), len(arrays["contacts"]))
+        a = ref[c.name][mine[:n]][:, feet, :3, 3]
+        b = got[c.name][mine[:n]][:, feet, :3, 3]
+        off = np.linalg.norm(a - b, axis=-1)[np.asarray(arrays["contacts"][:n], bool)]
+        out = max(out, 1000.0 * float(off.max(initial=0.0)))
+    return out
+
+
 def skate(api, metrics, scene, chars, mats, names, frames):
     """Mean planted-foot skate (cm/s) over the characters, from the evaluated rig."""
     fps = api.scene_fps(scene)
@@ -184,6 +200,7 @@ def measure_case(bpy, addon, baked, scene_fps, n, tmp, angles=()):
         if ref is None:
             ref = mats
         row["local_deg"], row["world_deg"], row["hips_mm"] = errors(ref, mats, chars)
+        row["planted_mm"] = planted_offsets(api, ref, mats, chars, names, frames)
         rows[how] = row
     return rows
 
