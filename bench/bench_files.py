@@ -160,8 +160,8 @@ def planted_offsets(api, ref, got, chars, names, frames):
         feet = [names.index(n) for n in meta["foot_names"]]
         mine = np.flatnonzero((frames >= meta["frame_start"]) & (frames <= meta["frame_end"]))
         n = min(len(mine), len(arrays["contacts"]))
-        a = ref[c.name][mine[:n]][:, feet, :3, 3]
-        b = got[c.name][mine[:n]][:, feet, :3, 3]
+        a = ref[c.name][mine[:n]][:, feet][..., :3, 3]
+        b = got[c.name][mine[:n]][:, feet][..., :3, 3]
         off = np.linalg.norm(a - b, axis=-1)[np.asarray(arrays["contacts"][:n], bool)]
         out = max(out, 1000.0 * float(off.max(initial=0.0)))
     return out
