@@ -270,7 +270,9 @@ def planned(request, baked, addon_module, mocap_dir):
     BVH import at its defaults (ZYX bones, XYZ object). Mixed: bones in all eight modes,
     axis-angle object. AxisAngle: axis-angle bones, ZXY object. ``expected``: the bone
     world matrices of the plan itself (the motion, and the locked rotations with the foot
-    lock), computed in float64 from what api.plan_path hands to nla.write_plan."""
+    lock), computed in float64 from what api.plan_path hands to nla.write_plan. Stored with
+    linear keys within 1e-5, so every mode plays the plan to float32 (cubic keys, the
+    default, play it within their tolerance in each mode: test_compact_keys.py)."""
     api, nla = addon_module.api, addon_module.adapter.nla
     bpy.ops.wm.open_mainfile(filepath=str(baked))
     scene = bpy.context.scene
@@ -300,6 +302,7 @@ def planned(request, baked, addon_module, mocap_dir):
 
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(nla, "write_plan", spy)
+        mp.setattr(addon_module.adapter.actions, "COMPACT", addon_module.adapter.actions.LINEAR_TOL)
         results = {
             r.name: api.plan_path(scene, r, goal, frame_start=1, foot_lock=request.param)
             for r in rigs
