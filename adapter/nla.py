@@ -4,8 +4,9 @@
 Tracks the add-on makes are named with ``TRACK_PREFIX`` and listed on the object, so a
 re-plan removes exactly those; user tracks and actions are never touched. Segment actions
 are shared between strips and characters (keyed by patch, segment and the rig's bone
-rotation modes, :func:`segment_action`); connector actions belong to one character and are
-replaced with its plan. The armature object carries the ground trajectory; its bones carry
+rotation modes, :func:`segment_action`); the other pieces (start, stop, connectors, turns,
+clips) play one body action of the character (:func:`_body_action`), replaced with its
+plan. The armature object carries the ground trajectory; its bones carry
 in-place motion facing the rig's rest facing. Every channel is written in the rotation mode
 of the bone (or object) it drives: a bone plays only the channel of its own mode.
 """
