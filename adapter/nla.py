@@ -4,8 +4,9 @@
 Tracks the add-on makes are named with ``TRACK_PREFIX`` and listed on the object, so a
 re-plan removes exactly those; user tracks and actions are never touched. Segment actions
 are shared between strips and characters (keyed by patch, segment and the rig's bone
-rotation modes, :func:`segment_action`); connector actions belong to one character and are
-replaced with its plan. The armature object carries the ground trajectory; its bones carry
+rotation modes, :func:`segment_action`); the other pieces (start, stop, connectors, turns,
+clips) play one body action of the character (:func:`_body_action`), replaced with its
+plan. The armature object carries the ground trajectory; its bones carry
 in-place motion facing the rig's rest facing. Every channel is written in the rotation mode
 of the bone (or object) it drives: a bone plays only the channel of its own mode.
 """
@@ -18,6 +19,7 @@ import numpy as np
 
 from ..motion_patches.kinematics import foot_lock, quat
 from ..motion_patches.kinematics.inplace import rest_facing, root_channel_to_ground
+from ..motion_patches.kinematics.motion import Motion
 from ..motion_patches.kinematics.skeleton import per_skeleton, root_position_to_location
 from . import actions as act_io
 from . import compat
@@ -298,13 +300,18 @@ def write_plan(
     strips, played = [], []
     first = int(frame_start)
     index = segment_index(bpy) if segments is None else segments
+    own = [n for n, p in enumerate(plan.pieces) if p.kind != "segment"]
+    body = (
+        _body_action(obj, skel, world, locked, bounds, own, motions, modes, unit) if own else None
+    )
     for n, (piece, m) in enumerate(zip(plan.pieces, motions)):
+        start, end = first + int(bounds[n]), first + int(bounds[n + 1])
         if piece.kind == "segment":
-            own = getattr(piece, "patch", None) if layer_keys else None
+            layer_patch = getattr(piece, "patch", None) if layer_keys else None
             action, slot = segment_action(
                 bpy,
-                own or patch,
-                layer_keys[own.layer] if own is not None else patch_key,
+                layer_patch or patch,
+                layer_keys[layer_patch.layer] if layer_patch is not None else patch_key,
                 piece.segment,
                 skel,
                 modes,
@@ -312,15 +319,17 @@ def write_plan(
                 index,
                 unit,
             )
+            scale = (end - start) / float(max(m.frames - 1, 1))
+            at = None
         else:
-            action, slot = _inplace_action(
-                f"MP {obj.name} {piece.kind}", skel, m, {CHARACTER_KEY: obj.name}, modes, unit
-            )
-        start, end = first + int(bounds[n]), first + int(bounds[n + 1])
-        scale = (end - start) / float(max(m.frames - 1, 1))
-        played.append((action, slot, int(bounds[n]), end - start + 1, scale))
+            action, slot, ranges, _ = body
+            at, scale, _ = ranges[n]
+        played.append((action, slot, int(bounds[n]), end - start + 1, scale, at))
         strip = motion_track.strips.new(f"{n:02d} {piece.label}", start, action)
         compat.set_strip_slot(strip, slot)
+        if at is not None:  # its own frames of the character's body action
+            strip.action_frame_end = at + ranges[n][2] - 1
+            strip.action_frame_start = at
         if abs(scale - 1.0) > 1e-9:
             strip.scale = scale
         strip.extrapolation = (
@@ -369,7 +378,7 @@ def write_plan(
     rs.blend_in = rs.blend_out = 0.0
     owned = [TRACK_MOTION, TRACK_ROOT]
     if locked is not None:
-        _write_foot_lock(obj, skel, world, locked, frame_start, modes, played)
+        _write_foot_lock(obj, skel, world, locked, frame_start, modes, played, body)
         owned.append(TRACK_FOOT)
     obj[TRACKS_KEY] = json.dumps(owned)
     _claim_actions(obj, ad, owned)
@@ -399,18 +408,65 @@ def _in_units(tol, unit):
     return tol
 
 
+def _body_action(obj, skel, world, locked, bounds, own, motions, modes, unit=1.0):
+    """One action of the character's own pieces (connectors, turns, clips: the pieces no
+    other character plays): one set of curves serves them all (an F-curve costs a few
+    hundred bytes before any key), piece after piece, each strip playing its own frames.
+
+    Keyed at the lower of the scene's and the patch's rates, so no piece has more keys
+    than frames played or planned: at the scene's (not above the patch's) from ``world``
+    with the feet already locked (``locked``; these frames then need no foot-lock
+    correction, and no scaled strip plays keys between frames); above the patch's rate from
+    the pieces' own ``motions`` at the patch's, their strips scaled as segments' are.
+    Returns (action, slot, {piece: (first action frame, strip scale, frames)}, whether keyed
+    at the scene's rate)."""
+    scene_keys = sum(int(bounds[n + 1] - bounds[n]) for n in own) <= sum(
+        motions[n].frames - 1 for n in own
+    )
+    if scene_keys:
+        rot = world.rotations if locked is None else locked
+        pose = Motion(world.ground, world.root_local, rot, world.contacts)
+        loc, rot = inplace_channels(skel, pose, unit)
+        rows = [np.arange(int(bounds[n]), int(bounds[n + 1]) + 1) for n in own]
+        loc = np.concatenate([loc[r] for r in rows])
+        rot = np.concatenate([rot[r] for r in rows])
+    else:
+        parts = [inplace_channels(skel, motions[n], unit) for n in own]
+        rows = [p[0] for p in parts]
+        loc = np.concatenate(rows)
+        rot = np.concatenate([p[1] for p in parts])
+    ranges, at = {}, 0
+    for n, r in zip(own, rows):
+        span = int(bounds[n + 1] - bounds[n])
+        ranges[n] = (at, 1.0 if scene_keys else span / float(max(len(r) - 1, 1)), len(r))
+        at += len(r)
+    action, slot = compat.new_action(f"MP {obj.name} body")
+    action[CHARACTER_KEY] = obj.name
+    frames = np.arange(len(loc), dtype=float)
+    rot = quat.make_continuous(rot, axis=0)
+    tol = _in_units(act_io.COMPACT, unit)
+    act_io.key_pose(action, slot, skel, frames, loc, rot, modes, tol=tol)
+    return action, slot, ranges, scene_keys
+
+
+FINER = 16.0  # the root's and foot lock's angle tolerance is this much finer (lengths: 4)
+
+
 def _finer(tol):
-    """A quarter of ``tol``'s angle for the root and foot-lock curves: each of their
-    channels is judged alone (a quaternion turns by up to four component errors), the
-    heading turns the whole body and the foot lock holds a planted foot; few curves."""
+    """A finer ``tol`` for the root and foot-lock curves: each of their channels is judged
+    alone (a quaternion turns by up to four component errors), the heading turns the whole
+    body, the ground track carries a planted foot with the hips and the foot lock holds it
+    (at a quarter of the angle the feet drifted 2 mm from the plan; at a sixteenth 0.5 mm,
+    bench_files); few curves."""
     if isinstance(tol, act_io.Tolerance):
-        return act_io.Tolerance(tol.angle / 4.0, tol.length)
+        return act_io.Tolerance(tol.angle / FINER, tol.length / 4.0)
     return tol
 
 
 def _played_frames(played, n_frames):
     """Which strip plays each plan frame and the action frame it plays there: ``played`` =
-    [(action, slot, first plan frame, scene frames it spans, strip scale)] in track order;
+    [(action, slot, first plan frame, scene frames it spans, strip scale, first action
+    frame or None: the action's own start)] in track order;
     where two strips meet on a frame the earlier one plays (Blender takes the first strip
     whose range holds the frame). A scaled strip plays action frame
     ``(frame - start) / scale``. Returns {(action, slot): (plan frames, action frames)},
@@ -418,11 +474,11 @@ def _played_frames(played, n_frames):
     action (a plan plays one segment action on many strips)."""
     owner = np.full(n_frames, -1)
     at = np.zeros(n_frames)
-    for s, (_, _, start, frames, scale) in enumerate(played):
+    for s, (_, _, start, frames, scale, first) in enumerate(played):
         idx = np.arange(start, min(start + frames, n_frames))
         idx = idx[owner[idx] < 0]
         owner[idx] = s
-        at[idx] = (idx - start) / scale
+        at[idx] = (idx - start) / scale + (first or 0)
     keys = {}  # (action, slot) -> its number, in the order strips first play them
     which = np.array([keys.setdefault((a, sl), len(keys)) for a, sl, *_ in played] + [-1])
     playing = which[owner]  # the action on each frame (-1: none; owner -1 picks the last)
@@ -445,7 +501,7 @@ def _lower_channels(frames_of, bones, mode, n_frames, cache=None):
     return out
 
 
-def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=()):
+def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=(), body=None):
     """The foot lock as an Add strip above the motion, so segment actions stay shared.
 
     Blender's Add blend (influence 1) adds each channel value, ``lower + delta``, in every
@@ -459,19 +515,23 @@ def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=(
     Blender takes the strip quaternion's angle as acos of its float32 w: corrections under
     ~0.0005 rad were lost on quaternion bones, 1.3e-3 off the plan; checked in
     tests/blender/test_rotation_modes.py.) On the frames where the lock leaves a bone alone
-    its delta is exactly zero (the motion plays unchanged; the curve stays compact)."""
+    its delta is exactly zero (the motion plays unchanged; the curve stays compact), and so
+    on the frames the character's ``body`` action plays (:func:`_body_action`: it holds the
+    locked rotations itself)."""
     modes = modes or {}
     # of the bones the lock may turn (the legs), those it turned, and on which frames
     legs = foot_lock.locked_bones(skel)
     dots = np.einsum("fjc,fjc->fj", world.rotations[:, legs], locked[:, legs])
     moved = np.abs(np.abs(dots) - 1.0) > 1e-9  # (F, legs)
+    frames_of = _played_frames(played, world.frames)
+    if body is not None and body[3] and (body[0], body[1]) in frames_of:
+        moved[frames_of.pop((body[0], body[1]))[0]] = False
     turned = moved.any(axis=0)
     changed, moved = legs[turned], moved[:, turned]
     action, slot = compat.new_action(f"MP {obj.name} foot lock")
     action[CHARACTER_KEY] = obj.name
     frames = np.arange(world.frames, dtype=float)
     cache, curves, columns = {}, [], []
-    frames_of = _played_frames(played, world.frames)
     by_mode = {}
     for k, j in enumerate(changed):
         by_mode.setdefault(modes.get(skel.names[j], "QUATERNION"), []).append(k)
