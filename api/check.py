@@ -264,7 +264,11 @@ def check_layout(
         facing_goal = goal if p["goal_facing"] != "any" else np.array([*goal[:2], np.nan])
         try:
             _check_far(
-                _shrunk(start, size), _shrunk(facing_goal, size), f"pair '{p['name']}'", size
+                _shrunk(start, size),
+                _shrunk(facing_goal, size),
+                f"pair '{p['name']}'",
+                size,
+                same_place=False,  # a goal where it stands: that pair fails, reported
             )
         except MotionPatchesError as exc:
             raise MotionPatchesError(f"layout spec: {exc}") from None
@@ -317,8 +321,11 @@ def check_layout(
             goal = np.array([goal[0], goal[1], np.nan])
         start, goal = _shrunk(start, size), _shrunk(goal, size)
         try:
+            _check_far(start, goal, "start", size)
             with causes.counted(planner) as expanded:
                 plan = planner.plan(start, goal, margin_tiles=margin)
+        except MotionPatchesError as exc:
+            r["error"], r["blocked_reason"] = str(exc), "refused"
         except PlanError as exc:
             if expanded[0] >= causes.SEARCH_LIMIT:
                 r["error"], r["blocked_reason"] = _limit_text(expanded[0]), "search limit"

@@ -143,10 +143,11 @@ SAME_PLACE = 0.05  # metres: a goal this near the start, facing the same way, is
 SAME_FACING = np.radians(2.0)
 
 
-def _check_far(start, goal, who, scale=1.0):
+def _check_far(start, goal, who, scale=1.0, same_place=True):
     """Refuse a start or goal farther from the origin than ``MAX_COORDINATE`` or start and
     goal farther apart than ``MAX_DISTANCE`` (planner-world states of a character ``scale``
-    times the patch's size), and a goal where the start is (same place, same facing)."""
+    times the patch's size), and (``same_place``) a goal where the start is (same place,
+    same facing)."""
     for what, state in (("start", start), ("goal", goal)):
         xy = np.asarray(state[:2], float)
         if not np.isfinite(xy).all() or not np.isfinite(state[2]) and what == "start":
@@ -167,7 +168,7 @@ def _check_far(start, goal, who, scale=1.0):
             f"walks at most {MAX_DISTANCE:,.0f} m: plan the walk in legs"
         )
     turn = abs((float(goal[2]) - float(start[2]) + np.pi) % (2 * np.pi) - np.pi)
-    if d < SAME_PLACE and (np.isnan(goal[2]) or turn < SAME_FACING):
+    if same_place and d < SAME_PLACE and (np.isnan(goal[2]) or turn < SAME_FACING):
         raise MotionPatchesError(
             f"the goal of {who} is where it stands ({d * 100:.0f} cm away, "
             f"facing the same way): there is nothing to plan"
