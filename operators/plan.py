@@ -50,17 +50,20 @@ class MOTION_PATCHES_OT_plan_path(bpy.types.Operator):
         except api.MotionPatchesError as exc:
             self.report({"ERROR"}, str(exc))
             return {"CANCELLED"}
-        self.report(
-            {"INFO"},
-            f"Planned {len(res.pieces)} pieces, frames {res.frame_start}-"
-            f"{res.frame_end}, cost {res.cost:.2f} in {res.seconds * 1000:.0f} ms",
+        n = len(res.pieces)
+        text = (
+            f"Planned {n} piece{'' if n == 1 else 's'}, frames {res.frame_start}-"
+            f"{res.frame_end}, cost {res.cost:.2f} in {res.seconds * 1000:.0f} ms"
         )
+        notes = list(res.stats.get("traversals_too_low", []))
         if res.stashed_action_track:
-            self.report(
-                {"WARNING"},
-                f"The active action was moved to the muted track "
-                f"'{res.stashed_action_track}' so the plan can play",
+            notes.insert(
+                0, f"the active action was moved to the muted track '{res.stashed_action_track}'"
             )
+        for note in notes[1:]:  # the Info log has them all
+            self.report({"INFO"}, note)
+        # The result last and first in its line: the status bar shows the last report.
+        self.report({"WARNING"} if notes else {"INFO"}, text + (f" ({notes[0]})" if notes else ""))
         return {"FINISHED"}
 
 

@@ -71,7 +71,9 @@ def test_hurried_character_hurdles_a_chair(chairs_blend, addon_module):
     assert f["root_from_plan_cm"]["max"] < 5
 
 
-def test_a_jump_that_does_not_clear_its_prop_is_not_planned_over_it(chairs_blend, addon_module):
+def test_a_jump_that_does_not_clear_its_prop_is_not_planned_over_it(
+    chairs_blend, addon_module, capfd
+):
     """A 1 x 3 x 0.5 m box tagged with 16_06: the tag warns naming both heights, and even a
     hurried walker (who hurdles the low ones) walks round it: no bone enters the box."""
     api = addon_module.api
@@ -84,8 +86,12 @@ def test_a_jump_that_does_not_clear_its_prop_is_not_planned_over_it(chairs_blend
     assert len(notes) == 1 and "'Box', which is 0.50 m high" in notes[0], notes
     clears = float(notes[0].split(" clears ")[1].split(" m")[0])
     assert 0.0 < clears < 0.5
+    capfd.readouterr()
     walker = plan(4.0, 0.5, 0.1)
     assert not any("16_06" in n for n in strip_names(walker))
+    # Plan Path's report: the result first, and why it walked round (what the status bar shows)
+    out = capfd.readouterr().out
+    assert "Planned " in out and "(16_06 clears " in out and "'Box', which is 0.50 m high" in out
     rec = api.load_plan_record(walker)[0]
     f = api.analyse(bpy.context, walker)
     assert f["traversals"] == 0 and f["frames_body_inside_prop"] == 0
