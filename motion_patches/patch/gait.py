@@ -34,6 +34,8 @@ class Gait:
     notes: list = field(default_factory=list)  # provenance, e.g. "right turn mirrored from 16_18"
     turn_range: tuple | None = None  # sharpest (right, left) curvature: turn clips' one-cycle
     # windows, at least the straight stride's bend
+    floor_height: float | None = None  # :meth:`floor`, stored with the patch (None: not yet
+    # derived; it is then derived once, by forward kinematics of the straight loop)
 
     @property
     def frames(self) -> int:
@@ -95,9 +97,14 @@ class Gait:
         return w
 
     def floor(self) -> float:
-        """Floor height under the straight loop (where interaction clips are put down)."""
-        lp = self.straight
-        return floor_level(Clip("loop", self.skeleton, self.fps, lp.root_local, lp.rotations))
+        """Floor height under the straight loop (where interaction clips are put down).
+        Derived once (forward kinematics of the loop's frames) and kept: every plan, check
+        and redraw of the sidebar asks for it, and the loops never change once built."""
+        if self.floor_height is None:
+            lp = self.straight
+            clip = Clip("loop", self.skeleton, self.fps, lp.root_local, lp.rotations)
+            self.floor_height = floor_level(clip)
+        return self.floor_height
 
     def cycle_distances(self) -> np.ndarray:
         return np.array([lp.cycle_distance for lp in self.loops])
@@ -143,6 +150,7 @@ class Gait:
             "gait_turn_range": np.array(self.turn_range if self.turn_range else (0.0, 0.0)),
             "gait_count": np.array(len(self.loops)),
             "gait_notes": np.array(self.notes, dtype=str),
+            "gait_floor": np.array(self.floor()),
         }
         d.update({"skel_" + k: v for k, v in self.skeleton.to_dict().items()})
         for i, lp in enumerate(self.loops):
@@ -161,6 +169,7 @@ class Gait:
             loops,
             [str(n) for n in d["gait_notes"]],
             tr if tr and any(tr) else None,
+            float(d["gait_floor"]) if "gait_floor" in d else None,  # older files: derived
         )
 
 
