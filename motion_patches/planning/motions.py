@@ -18,18 +18,30 @@ from .plan_frame import IDENTITY
 from .stitching import BLEND_FRAMES
 
 
-def plan_motions(patch: LocomotionPatch, plan: Plan, standing: bool = True) -> list[Motion]:
+def plan_motions(
+    patch: LocomotionPatch, plan: Plan, standing: bool = True, poses: bool = True
+) -> list[Motion]:
     """World-space motion of every piece, eased across stitches into and out of clips;
     with ``standing`` a plan that starts (ends) walking starts from (ends in) standing:
     its first (last) piece is time-warped (:mod:`.retime`), ramps one gait cycle long. A
     turn on the spot continues from the pose the walk before it stopped in; the walk
-    slows to a stop at the goal and the turn eases in and out."""
+    slows to a stop at the goal and the turn eases in and out.
+
+    ``poses`` False: the same frames, ground and root, without the body (one joint stands
+    in for it), for what only measures the motion (a layout check's seconds and metres).
+    A turn still starts from the full pose before it, as it picks its phase by that pose."""
     ms: list[Motion] = []
+    full = None  # the last piece's motion with its body (poses False: for a turn after it)
     for i, p in enumerate(plan.pieces):
         if p.kind == "turn":
-            ms.append(turn_motion(patch, p, ms[-1] if ms else None))
+            if not poses and ms and full is None:
+                full = piece_motion(patch, plan.pieces[i - 1])
+            m = turn_motion(patch, p, (full if not poses else ms[-1]) if ms else None)
+            full = m
         else:
-            ms.append(piece_motion(patch, p))
+            m = piece_motion(patch, p, poses)
+            full = None
+        ms.append(m if poses else _bodiless(m))
     clips = ("traversal", "interaction")
     kinds = [p.kind for p in plan.pieces]
     if standing:
@@ -128,24 +140,32 @@ def interaction_states(
     return s, g
 
 
-def piece_motion(patch: LocomotionPatch, piece: Piece) -> Motion:
-    """World-space motion of one planned piece (not eased; see :func:`plan_motions`)."""
+def _bodiless(m: Motion) -> Motion:
+    """``m`` with its first joint alone (:func:`plan_motions` without poses)."""
+    if m.rotations.shape[1] == 1:
+        return m
+    return Motion(m.ground, m.root_local, m.rotations[:, :1], m.contacts)
+
+
+def piece_motion(patch: LocomotionPatch, piece: Piece, poses: bool = True) -> Motion:
+    """World-space motion of one planned piece (not eased; see :func:`plan_motions`;
+    ``poses`` False: walking pieces without their body, :func:`..patch.synthesis.follow`)."""
     if piece.kind == "turn":
         return turn_motion(patch, piece)
-    m = _local_piece_motion(patch, piece)
+    m = _local_piece_motion(patch, piece, poses)
     return m if piece.frame == IDENTITY else m.transformed(*piece.frame)
 
 
-def _local_piece_motion(patch, piece):
+def _local_piece_motion(patch, piece, poses=True):
     if piece.kind in ("segment", "part"):
-        m = patch.motion(piece.segment)
+        m = patch.motion(piece.segment, poses)
         if piece.kind == "part":
             m = sliced(m, *piece.frames)
         return m.transformed(piece.tile[0] * patch.side, piece.tile[1] * patch.side)
     if piece.kind in ("traversal", "interaction"):
         return piece.prop.world_clip(piece.prop.clips[piece.clip_index])
     if piece.kind == "start":
-        return follow(patch.gait, piece.curve, cycles="to node")
+        return follow(patch.gait, piece.curve, cycles="to node", poses=poses)
     if piece.kind == "shortcut":
-        return follow(patch.gait, piece.curve, cycles=piece.cycles)
-    return follow(patch.gait, piece.curve, cycles=None, eased=(True, False))
+        return follow(patch.gait, piece.curve, cycles=piece.cycles, poses=poses)
+    return follow(patch.gait, piece.curve, cycles=None, eased=(True, False), poses=poses)
