@@ -21,9 +21,11 @@ the planner's own seconds of its pairs (``plan_seconds``); the ratio is check / 
 first call is the first after the file is opened (the patch itself is already loaded: one
 file's patch is decoded once per process, as before); the second is the same call again.
 
-``batch``: ``blender -c motion_patches check`` run over N copies of those files in one
-process (the CLI's handler with every ``--blend``) against N processes each checking one
-file (``python -c`` starting bpy and the add-on, as a CI job running N commands would).
+``batch``: ``blender -c motion_patches check`` over N distinct layouts (the four scenes in
+turn, their goals moved 10 cm more each round, so no pair is answered from another file's
+plan), each with its spec beside it, in one process (the CLI's handler given every file)
+against N processes each checking one file (``python -c`` starting bpy and the add-on, as a
+CI job running N commands would). Both count the start of Python, bpy and the add-on.
 """
 
 import argparse
@@ -67,9 +69,9 @@ def box(bpy, name, x, y, sx, sy, h=2.0):
     return ob
 
 
-def build(bpy, api, kind, source, path):
-    """Scene ``kind`` on the baked file: props, a walker, goals as empties; saved to ``path``.
-    Returns its layout spec."""
+def build(bpy, api, kind, source, path, shift=0.0):
+    """Scene ``kind`` on the baked file: props, a walker, goals as empties (moved ``shift``
+    metres along y: the batch's files differ); saved to ``path``. Returns its layout spec."""
     import math
 
     import numpy as np
@@ -107,6 +109,9 @@ def build(bpy, api, kind, source, path):
         goal_empty(bpy, "Goal", 5.0, 0.0, math.pi)
         goal_empty(bpy, "Goal2", 5.0, 2.0, 0.0)
         pairs = [("Walker", "Goal"), ([0.0, 2.0, 0.0], "Goal2")]
+    for ob in scene.objects:
+        if ob.type == "EMPTY":
+            ob.location.y += shift
     bpy.ops.wm.save_as_mainfile(filepath=str(path))
     spec = {"radius": 0.25, "pairs": []}
     for n, (start, goal) in enumerate(pairs):
@@ -171,36 +176,43 @@ sys.exit(addon.cli.main(sys.argv[1:]))
 """
 
 
-def section_batch(args, files, tmp):
-    """N files checked in one process against N processes of one file each."""
+def batch_files(bpy, api, args, base, tmp):
+    """``args.files`` distinct layouts (the four scenes in turn, goals moved 10 cm more each
+    round), each with its spec beside it (NAME.layout.json)."""
     blends = []
-    kinds = list(files)
     for n in range(args.files):
-        path, spec = files[kinds[n % len(kinds)]]
-        specfile = tmp / f"spec_{n:02d}.json"
-        specfile.write_text(json.dumps(spec))
-        copy = tmp / f"layout_{n:02d}.blend"
-        copy.write_bytes(Path(path).read_bytes())
-        blends.append((copy, specfile))
+        kind = SCENES[n % len(SCENES)]
+        bpy.ops.wm.open_mainfile(filepath=str(base))
+        path = tmp / f"layout_{n:02d}.blend"
+        spec = build(bpy, api, kind, bpy.data.objects["Source"], path, 0.1 * (n // len(SCENES)))
+        (tmp / f"layout_{n:02d}.layout.json").write_text(json.dumps(spec))
+        blends.append(path)
+    return blends
+
+
+def section_batch(blends):
+    """N files checked in one process against N processes of one file each."""
     child = CHILD.format(tools=str(REPO / "tools"))
-    argv = ["check"]
-    for b, s in blends:
-        argv += ["--blend", str(b), "--spec", str(s)]
     t0 = time.perf_counter()
-    one = subprocess.run([sys.executable, "-c", child, *argv], capture_output=True, text=True)
+    one = subprocess.run(
+        [sys.executable, "-c", child, "check", *map(str, blends), "--json"],
+        capture_output=True,
+        text=True,
+    )
     one_s = time.perf_counter() - t0
+    doc = json.loads(one.stdout) if one.stdout.strip() else {}
     t0 = time.perf_counter()
     codes = []
-    for b, s in blends:
+    for b in blends:
         r = subprocess.run(
-            [sys.executable, "-c", child, "check", "--blend", str(b), "--spec", str(s)],
-            capture_output=True,
-            text=True,
+            [sys.executable, "-c", child, "check", str(b)], capture_output=True, text=True
         )
         codes.append(r.returncode)
     many_s = time.perf_counter() - t0
     return {
         "files": len(blends),
+        "pairs": len(doc.get("pairs", [])),
+        "reused": sum(p["reused"] for p in doc.get("pairs", [])),
         "one_process_s": one_s,
         "one_process_exit": one.returncode,
         "separate_processes_s": many_s,
@@ -231,9 +243,10 @@ def table(rows, batch):
     )
     if batch:
         out.append(
-            f"check over {batch['files']} .blend files: one process {batch['one_process_s']:.1f} s "
-            f"(exit {batch['one_process_exit']}), {batch['files']} processes "
-            f"{batch['separate_processes_s']:.1f} s ({batch['speedup']:.1f}x)"
+            f"check over {batch['files']} .blend files ({batch['pairs']} pairs): one process "
+            f"{batch['one_process_s']:.1f} s (exit {batch['one_process_exit']}), "
+            f"{batch['files']} processes {batch['separate_processes_s']:.1f} s "
+            f"(exits {batch['separate_exits']}): {batch['speedup']:.1f}x"
         )
     return "\n".join(out), m1, m2
 
@@ -255,7 +268,7 @@ def main(argv=None):
         path = tmp / f"{kind}.blend"
         files[kind] = (path, build(bpy, api, kind, src, path))
     rows = section_scenes(bpy, api, args, files)
-    batch = section_batch(args, files, tmp) if args.files else None
+    batch = section_batch(batch_files(bpy, api, args, base, tmp)) if args.files else None
     text, m1, m2 = table(rows, batch)
     doc = {
         "scenes": rows,
