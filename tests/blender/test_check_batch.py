@@ -230,3 +230,65 @@ def test_a_second_check_reuses_and_an_edit_is_seen(api, files):
     crate.data.update()
     (edited,) = api.check_layout(scene, spec)
     assert not edited["reachable"] and edited["blocked_by"] == ["Crate"]
+
+
+WRAPPER = """
+import sys
+sys.path.insert(0, {tools!r})
+args = sys.argv[1:]
+assert args[:3] == ["-b", "-c", "motion_patches"], args  # what the plugin runs Blender with
+import blender_session
+bpy, addon = blender_session.start()
+sys.exit(addon.cli.main(args[3:]))
+"""
+
+
+def test_the_pytest_plugin_collects_the_specs_beside_blend_files(files, tmp_path):
+    """tools/pytest-motion-patches: each pair of NAME.layout.* beside NAME.blend is a test
+    (Blender started the way the plugin starts it: here bpy as a module behind a wrapper)."""
+    import subprocess
+    import tomllib
+    from pathlib import Path
+
+    from junitparser import JUnitXml
+
+    repo = Path(__file__).resolve().parents[2]
+    plugin = repo / "tools" / "pytest-motion-patches"
+    meta = tomllib.loads((plugin / "pyproject.toml").read_text())
+    assert meta["project"]["entry-points"]["pytest11"] == {
+        "motion_patches_layout": "pytest_motion_patches"
+    }
+    (files["dir"] / "office.layout.toml").write_text(
+        '[[pairs]]\nname = "walker to goal"\ncharacter = "Walker"\ngoal = "Goal"\n'
+    )
+    wrapper = tmp_path / "blender.py"
+    wrapper.write_text(WRAPPER.format(tools=str(repo / "tools")))
+    report = tmp_path / "pytest.xml"
+    run = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pytest",
+            "-p",
+            "pytest_motion_patches",
+            "-p",
+            "no:cacheprovider",
+            "--rootdir",
+            str(files["dir"]),
+            "--motion-patches-blender",
+            f"{sys.executable} {wrapper}",
+            f"--junitxml={report}",
+            str(files["dir"]),
+        ],
+        capture_output=True,
+        text=True,
+        cwd=files["dir"],
+        env={**__import__("os").environ, "PYTHONPATH": str(plugin)},
+    )
+    assert run.returncode == 1, run.stdout + run.stderr  # the cage's pair fails
+    cases = {c.name: c for s in JUnitXml.fromfile(str(report)) for c in s}
+    assert set(cases) == {"walker to goal", "into the cage"}
+    assert cases["walker to goal"].is_passed
+    (failure,) = cases["into the cage"].result
+    assert "blocked by Ring" in failure.message or "blocked by Ring" in (failure.text or "")
+    assert "1 failed, 1 passed" in run.stdout
