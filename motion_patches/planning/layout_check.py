@@ -58,20 +58,26 @@ def world(
     gamma: float,
     turn_in_place: bool,
     props: Sequence[ObjectPatch] = (),
-    props_key: str = "",
 ) -> World:
     """A :class:`World` with its key: a digest of the obstacles' names and footprints, the
-    radius and weights, and ``props_key`` (the caller's digest of the props; props without
-    one give a world whose planner is not shared)."""
+    radius and weights, and the props (each one's name, pose, footprint and clips: names,
+    kinds, efforts, layers, angles and every frame of their motion)."""
     obstacles = tuple(obstacles)
     h = hashlib.blake2b(digest_size=20)
     for ob in obstacles:
         h.update(ob.name.encode() + b"\0")
         h.update(np.ascontiguousarray(ob.polygon, float).tobytes())
     h.update(np.array([radius, alpha, beta, gamma, float(turn_in_place)], float).tobytes())
-    if props and not props_key:
-        props_key = f"unshared-{id(props)}"
-    h.update(props_key.encode())
+    for pr in props:
+        h.update(f"prop {pr.name}\0".encode())
+        h.update(np.array([*pr.pose], float).tobytes())
+        h.update(np.ascontiguousarray(pr.footprint, float).tobytes())
+        for c in pr.clips:
+            h.update(f"{c.name}\0{c.kind}\0{c.layer_in}\0{c.layer_out}\0".encode())
+            h.update(np.array([c.effort, c.angle], float).tobytes())
+            m = c.motion
+            for a in (m.ground, m.root_local, m.rotations, m.contacts):
+                h.update(np.ascontiguousarray(a).tobytes())
     return World(
         h.hexdigest(),
         obstacles,

@@ -96,3 +96,23 @@ def test_a_closed_goal_names_its_props(walk_patch):
     got = layout_check.plan_pair(tasks[0], walk_patch, worlds)
     assert not got["reachable"] and got["error"]
     assert got["blocked"] and all(n.startswith("C") for n in got["blocked"])
+
+
+def test_a_world_s_key_follows_its_props_clips():
+    from motion_patches.kinematics.motion import Motion
+    from motion_patches.props.object_patch import ObjectPatch, PatchClip
+
+    def prop(effort=1.0, lift=0.0):
+        n = 5
+        ground = np.column_stack((np.linspace(-1, 1, n), np.zeros(n), np.zeros(n)))
+        root = np.tile([0.0, 0.0, 1.0 + lift], (n, 1))
+        motion = Motion(ground, root, np.tile([1.0, 0, 0, 0], (n, 2, 1)), np.zeros((n, 4), bool))
+        square = np.array([[-0.3, -0.3], [0.3, -0.3], [0.3, 0.3], [-0.3, 0.3]])
+        clip = PatchClip("hop", "traversal", motion, effort)
+        return ObjectPatch("Bench", square, [clip], (2.0, 0.0, 0.0))
+
+    def key(*props):
+        return layout_check.world(PILLARS, 0.25, 1.0, 0.0, 0.0, True, props).key
+
+    assert key(prop()) == key(prop())  # the same content, other objects: one planner
+    assert len({key(), key(prop()), key(prop(effort=2.0)), key(prop(lift=0.1))}) == 4
