@@ -64,8 +64,8 @@ def sidecar(blend):
 
 
 def _inputs(args):
-    """(.blend paths, spec paths): the files named after ``check``, sorted by their
-    suffix, then --blend first and every --spec."""
+    """(.blend paths, spec paths): --blend first, then the files named after ``check``,
+    told apart by their suffix; every --spec first among the specs."""
     blends, specs = [], list(args.spec or [])
     for f in args.files or []:
         suffix = Path(f).suffix.lower()
@@ -75,7 +75,7 @@ def _inputs(args):
             specs.append(f)
         else:
             raise BadInput(f"{f}: check takes .blend files and layout specs (.json, .toml)")
-    if args.blend and blends:
+    if args.blend:  # already open (main opened it): checked first, its own spec found
         blends.insert(0, args.blend)
     return blends, specs
 
