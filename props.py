@@ -160,6 +160,13 @@ class MOTION_PATCHES_PG_character(bpy.types.PropertyGroup):
         "crowd (empty: the scene's goal; a character with "
         "neither is refused, named)",
     )
+    start_prop: PointerProperty(
+        type=bpy.types.Object,
+        name="Start Prop",
+        description="A prop tagged with a stand-up clip this character starts seated on "
+        "when Plan Path plans it (empty: where it stands)",
+        poll=lambda self, ob: ob.type == "MESH",
+    )
 
 
 class MOTION_PATCHES_PG_rig(bpy.types.PropertyGroup):
@@ -227,6 +234,12 @@ class MOTION_PATCHES_PG_scene(bpy.types.PropertyGroup):
         description="Draw the tile grid, occluded cells, planned paths, stitches and where "
         "the props' clips start and end",
         update=lambda self, context: _overlay_toggle(self.show_overlay),
+    )
+    overlay_all_lattices: BoolProperty(
+        name="Every Character's Grid",
+        default=False,
+        description="Draw the tile grid, occluded cells and props walked round of every "
+        "visible planned character, not only the active one's (a crowd's grids overlap)",
     )
 
 

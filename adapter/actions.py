@@ -16,8 +16,8 @@ import re
 
 import numpy as np
 
+from ..motion_patches.kinematics import foot_lock, quat
 from ..motion_patches.kinematics import keys as key_plan
-from ..motion_patches.kinematics import quat
 from ..motion_patches.kinematics.clip import Clip
 from ..motion_patches.kinematics.skeleton import Skeleton, root_location_to_position
 from . import compat
@@ -363,13 +363,18 @@ class Tolerance:
 # The root bone's keys are this much finer than the others': the whole body hangs from it,
 # and a planted foot (locked against the planned hips) moves with it, a leg's length away.
 ROOT_FINER = 8.0
+# The legs' (the bones the foot lock turns) this much finer: a planted foot hangs from the
+# hips by them, so their errors add up a leg's length away; it stays within a millimetre or
+# two of the plan. Most of their curves are samples at any tolerance (stepping bones).
+LEG_FINER = 4.0
 LINEAR_TOL = 1e-5  # linear keys' tolerance (metres, radians, quaternion components)
 CUBIC = Tolerance()  # cubic keys within 0.5 degrees and 1 mm (bench/bench_files.py)
 # What every action of a plan is stored within: a number for linear keys, a Tolerance for
-# cubic keys, None for a key on every frame. Still linear keys: cubic keys shrink a crowd's
-# file by a tenth (30 fps patch) to a third (120 fps), but a planted foot skates more when
-# the patch and scene rates differ (tests/blender/test_skeletons.py).
-COMPACT = LINEAR_TOL
+# cubic keys, None for a key on every frame. Cubic keys: every bone within 0.5 degrees of
+# the plan, the hips within a millimetre and planted feet within one of where linear keys
+# put them (a character's own pieces keyed on the scene's frames with the feet locked, the
+# foot lock and the root keyed finer: adapter/nla.py), a sixth smaller than linear keys.
+COMPACT = CUBIC
 
 
 def _column_tolerances(curves, tol):
@@ -547,7 +552,10 @@ def key_pose(action, slot, skel, frames, root_location, rotations, modes=None, t
         if isinstance(tol, Tolerance):
             cols = start + np.arange(len(joints) * k).reshape(-1, k)
             is_root = np.array(joints) == skel.root
-            groups.append(_rotations(mode, cols[~is_root], tol.angle))
+            is_leg = np.isin(joints, foot_lock.locked_bones(skel)) & ~is_root
+            rest = ~is_root & ~is_leg
+            groups.append(_rotations(mode, cols[rest], tol.angle))
+            groups.append(_rotations(mode, cols[is_leg], tol.angle / LEG_FINER))
             groups.append(_rotations(mode, cols[is_root], tol.angle / ROOT_FINER))
         start += len(joints) * k
         for j in joints:

@@ -29,6 +29,11 @@ def import_bvh(paths, scale=CMU_SCALE, armature=None, name=None):
     for p in paths:
         if not p.is_file():
             raise ValueError(f"BVH file not found: {p}")
+        with open(p, "rb") as fh:
+            head = fh.read(4096).split()
+        if not head or head[0].upper() != b"HIERARCHY":
+            what = "is empty" if not head else "does not start with HIERARCHY"
+            raise ValueError(f"{p.name} is not a BVH file: it {what}")
     actions = []
     for p in paths:
         before = set(bpy.data.objects)
@@ -42,7 +47,12 @@ def import_bvh(paths, scale=CMU_SCALE, armature=None, name=None):
                 update_scene_duration=False,
             )
         except RuntimeError as exc:
-            lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
+            # The importer's own error, not where Blender's operator code re-raised it.
+            lines = [
+                ln.strip()
+                for ln in str(exc).splitlines()
+                if ln.strip() and not ln.strip().startswith(("Location:", "File ", "^", "~"))
+            ]
             raise ValueError(
                 f"Blender's BVH importer could not read {p.name}: "
                 f"{lines[-1] if lines else 'unknown error'} (a damaged or "

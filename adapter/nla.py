@@ -4,19 +4,22 @@
 Tracks the add-on makes are named with ``TRACK_PREFIX`` and listed on the object, so a
 re-plan removes exactly those; user tracks and actions are never touched. Segment actions
 are shared between strips and characters (keyed by patch, segment and the rig's bone
-rotation modes, :func:`segment_action`); connector actions belong to one character and are
-replaced with its plan. The armature object carries the ground trajectory; its bones carry
+rotation modes, :func:`segment_action`); the other pieces (start, stop, connectors, turns,
+clips) play one body action of the character (:func:`_body_action`), replaced with its
+plan. The armature object carries the ground trajectory; its bones carry
 in-place motion facing the rig's rest facing. Every channel is written in the rotation mode
 of the bone (or object) it drives: a bone plays only the channel of its own mode.
 """
 
 import hashlib
 import json
+import uuid
 
 import numpy as np
 
 from ..motion_patches.kinematics import foot_lock, quat
 from ..motion_patches.kinematics.inplace import rest_facing, root_channel_to_ground
+from ..motion_patches.kinematics.motion import Motion
 from ..motion_patches.kinematics.skeleton import per_skeleton, root_position_to_location
 from . import actions as act_io
 from . import compat
@@ -29,6 +32,8 @@ TRACK_FOOT = TRACK_PREFIX + "foot lock"
 TRACKS_KEY = "motion_patches_tracks"
 SEGMENT_KEY = "motion_patches_segment"
 CHARACTER_KEY = "motion_patches_character"
+ACTIONS_KEY = "motion_patches_actions"  # object: {action id: name} of what planning made for it
+ACTION_ID = "motion_patches_id"  # action: its id, kept by its character under ACTIONS_KEY
 STASH_PREFIX = TRACK_PREFIX + "stash: "
 
 
@@ -40,9 +45,11 @@ def facing_angle(skel):
     return float(np.arctan2(f[1], f[0]))
 
 
-def inplace_channels(skel, motion):
+def inplace_channels(skel, motion, unit=1.0):
     """Root location channels (F, 3) and rotations (F, J, 4) for an object whose Z rotation
-    is the ground heading minus the rig's rest facing.
+    is the ground heading minus the rig's rest facing. ``unit``: the armature's world
+    scale (:func:`~.rig.world_scale`; ``skel`` and ``motion`` are in metres, the root's
+    location channel in the armature's own units, so it is divided by it).
 
     That object is the motion's ground frame turned by -facing, so the body relative to it
     is the motion's own in-place channels turned by +facing: the root's position about Z,
@@ -56,26 +63,22 @@ def inplace_channels(skel, motion):
     rot = np.array(motion.rotations, float)
     r = skel.root
     rot[:, r] = root_channel_to_ground(skel, rot[:, r], -facing)
-    return root_position_to_location(skel, local), quat.make_continuous(rot, axis=0)
+    loc = root_position_to_location(skel, local)
+    if unit != 1.0:
+        loc = loc / unit
+    return loc, quat.make_continuous(rot, axis=0)
 
 
 def check_rig(obj, skel, floor=0.0):
     """The :class:`~motion_patches.kinematics.retarget.RigMap` that puts the patch skeleton ``skel``
     on the armature ``obj`` (None: the armature holds that skeleton itself). Raises
-    ValueError for an object that is no armature, is scaled or tilted, or whose bones
-    cannot play the patch's hips, legs, feet and toes (naming those patch bones)."""
+    ValueError for an object that is no armature, is scaled unevenly (:func:`~.rig.world_scale`:
+    any uniform scale plans; a tilted armature, an FBX import's Y-up bones under a 90
+    degree X rotation, plans stood up, :func:`~.rig.world_tilt`), or whose bones cannot
+    play the patch's hips, legs, feet and toes (naming those patch bones)."""
     if obj is None or obj.type != "ARMATURE":
         raise ValueError("the character must be an armature object")
-    if not np.allclose(np.array(obj.scale), 1.0, atol=1e-4):
-        raise ValueError(
-            f"armature '{obj.name}' is scaled {tuple(round(s, 3) for s in obj.scale)}; "
-            f"apply its scale first (the patch is in metres)"
-        )
-    m = np.array(obj.matrix_world)
-    if abs(m[2, 2] - 1.0) > 1e-6:
-        raise ValueError(
-            f"armature '{obj.name}' is tilted (X/Y rotation); the planned root turns about Z only"
-        )
+    rig_io.world_scale(obj)
     return rig_io.rig_for(obj, skel, floor)
 
 
@@ -90,6 +93,46 @@ def drives_root(obj):
     return track is not None and not track.mute
 
 
+def owned_actions(obj):
+    """{action id: action name} of the actions planning made for ``obj``; None for a
+    character planned before ids were kept."""
+    raw = obj.get(ACTIONS_KEY)
+    if raw is None:
+        return None
+    try:
+        owned = json.loads(raw)
+    except (TypeError, ValueError):
+        return {}
+    return owned if isinstance(owned, dict) else {}
+
+
+def made_for(action, obj):
+    """Whether planning made ``action`` for ``obj`` and may replace it: its id is one
+    ``obj`` keeps, under the name it was made with. A user's copy (the id copied, another
+    name) is the user's, and so is an action of the add-on the user renamed; a character
+    renamed keeps its actions. Characters planned before ids were kept: the name tag."""
+    if action is None:
+        return False
+    owned = owned_actions(obj)
+    if owned is None:
+        return action.get(CHARACTER_KEY) == obj.name
+    return owned.get(action.get(ACTION_ID)) == action.name
+
+
+def _claim_actions(obj, ad, tracks):
+    """Give the character's own actions on ``tracks`` (not the shared segment actions) ids
+    and keep them on ``obj``: what a later plan may replace."""
+    made = {}
+    for name in tracks:
+        tr = ad.nla_tracks.get(name)
+        for st in tr.strips if tr is not None else ():
+            a = st.action
+            if a is not None and a.get(SEGMENT_KEY) is None and a.get(ACTION_ID) is None:
+                a[ACTION_ID] = uuid.uuid4().hex
+                made[a[ACTION_ID]] = a.name
+    obj[ACTIONS_KEY] = json.dumps(made)
+
+
 def remove_owned(obj):
     """Remove the NLA tracks this add-on made on ``obj`` (and nothing else)."""
     ad = obj.animation_data
@@ -101,10 +144,11 @@ def remove_owned(obj):
             ad.nla_tracks.remove(tr)
 
 
-def _orphan_connectors(bpy, character_name):
-    for a in list(bpy.data.actions):
-        if a.get(CHARACTER_KEY) == character_name and a.users == 0:
-            bpy.data.actions.remove(a)
+def _orphan_connectors(bpy, obj):
+    # users first: a crowd's actions are mostly in use, and reading users is far cheaper
+    # than looking up custom properties (this runs once per character written)
+    for a in [a for a in bpy.data.actions if a.users == 0 and made_for(a, obj)]:
+        bpy.data.actions.remove(a)
 
 
 def stash_active_action(obj):
@@ -141,7 +185,7 @@ def rotation_signature(skel, modes):
     return "mixed-" + hashlib.sha1(text.encode()).hexdigest()[:10]
 
 
-def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None, index=None):
+def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None, index=None, unit=1.0):
     """The shared in-place action of a patch segment for a rig whose bones have rotation
     ``modes`` ({bone: rotation_mode}; default all quaternion), created on first use;
     ``rig`` (a :class:`~motion_patches.kinematics.retarget.RigMap`) when the rig is another skeleton
@@ -160,10 +204,14 @@ def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None, index
     key ``patch:seg``, so segment actions of earlier saved files are reused. Keys sit on
     the patch's frames whatever the scene's rate (strips are scaled, :func:`write_plan`).
     ``index``: {key: action} of the segment actions (:func:`segment_index`), so a plan of
-    many strips does not search every action of the file for each."""
+    many strips does not search every action of the file for each. ``unit``: the rig's
+    world scale (:func:`~.rig.world_scale`), in which its root locations are keyed: rigs of
+    another scale get their own actions."""
     sig = rotation_signature(skel, modes or {})
     rig_sig = rig.signature() if rig is not None else ""
     key = f"{patch_key}:{seg}" + (f":rig-{rig_sig}" if rig_sig else "") + (f":{sig}" if sig else "")
+    if unit != 1.0:
+        key += f":unit-{unit:.6g}"
     found = (segment_index(bpy) if index is None else index).get(key)
     if found is not None:
         return found, compat.action_slot(found)
@@ -174,8 +222,9 @@ def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None, index
         f"MP {patch.layer} seg{seg:04d}"
         + (f" rig-{rig_sig[:6]}" if rig_sig else "")
         + (f" {sig}" if sig else "")
+        + (f" x{unit:.4g}" if unit != 1.0 else "")
     )
-    action, slot = _inplace_action(name, skel, motion, {SEGMENT_KEY: key}, modes)
+    action, slot = _inplace_action(name, skel, motion, {SEGMENT_KEY: key}, modes, unit)
     if index is not None:
         index[key] = action
     return action, slot
@@ -191,13 +240,15 @@ def segment_index(bpy):
     return out
 
 
-def _inplace_action(name, skel, motion, tags, modes=None):
-    loc, rot = inplace_channels(skel, motion)
+def _inplace_action(name, skel, motion, tags, modes=None, unit=1.0):
+    loc, rot = inplace_channels(skel, motion, unit)
     action, slot = compat.new_action(name)
     for k, v in tags.items():
         action[k] = v
     frames = np.arange(motion.frames, dtype=float)
-    act_io.key_pose(action, slot, skel, frames, loc, rot, modes, tol=act_io.COMPACT)
+    act_io.key_pose(
+        action, slot, skel, frames, loc, rot, modes, tol=_in_units(act_io.COMPACT, unit)
+    )
     return action, slot
 
 
@@ -214,6 +265,7 @@ def write_plan(
     rig=None,
     bounds=None,
     layer_keys=None,
+    segments=None,
 ):
     """Write a plan's strips and root trajectory on ``obj``; returns strip records.
 
@@ -230,44 +282,54 @@ def write_plan(
     per-character correction on its own track, added over the shared segment actions.
     ``layer_keys``: {layer: patch key} of a plan that changes layer, whose segment pieces
     name their own patch (:class:`motion_patches.planning.transitions.LayerPiece`): their strips
-    play that patch's shared segment actions, on the one motion track."""
+    play that patch's shared segment actions, on the one motion track. ``segments``:
+    :func:`segment_index` of the file, kept up to date here (one for many writes)."""
     skel = rig.target if rig is not None else patch.gait.skeleton
     modes = rig_rotation_modes(obj, skel)
+    unit = rig_io.world_scale(obj)
     if bounds is None:
         bounds = np.concatenate(([0], np.cumsum([m.frames - 1 for m in motions])))
     bounds = np.asarray(bounds, int)
     ad = obj.animation_data or obj.animation_data_create()
     stashed = stash_active_action(obj)
     remove_owned(obj)
-    _orphan_connectors(bpy, obj.name)
+    _orphan_connectors(bpy, obj)
 
     motion_track = ad.nla_tracks.new()
     motion_track.name = TRACK_MOTION
     strips, played = [], []
     first = int(frame_start)
-    index = segment_index(bpy)
+    index = segment_index(bpy) if segments is None else segments
+    own = [n for n, p in enumerate(plan.pieces) if p.kind != "segment"]
+    body = (
+        _body_action(obj, skel, world, locked, bounds, own, motions, modes, unit) if own else None
+    )
     for n, (piece, m) in enumerate(zip(plan.pieces, motions)):
+        start, end = first + int(bounds[n]), first + int(bounds[n + 1])
         if piece.kind == "segment":
-            own = getattr(piece, "patch", None) if layer_keys else None
+            layer_patch = getattr(piece, "patch", None) if layer_keys else None
             action, slot = segment_action(
                 bpy,
-                own or patch,
-                layer_keys[own.layer] if own is not None else patch_key,
+                layer_patch or patch,
+                layer_keys[layer_patch.layer] if layer_patch is not None else patch_key,
                 piece.segment,
                 skel,
                 modes,
                 rig,
                 index,
+                unit,
             )
+            scale = (end - start) / float(max(m.frames - 1, 1))
+            at = None
         else:
-            action, slot = _inplace_action(
-                f"MP {obj.name} {piece.kind}", skel, m, {CHARACTER_KEY: obj.name}, modes
-            )
-        start, end = first + int(bounds[n]), first + int(bounds[n + 1])
-        scale = (end - start) / float(max(m.frames - 1, 1))
-        played.append((action, slot, int(bounds[n]), end - start + 1, scale))
+            action, slot, ranges, _ = body
+            at, scale, _ = ranges[n]
+        played.append((action, slot, int(bounds[n]), end - start + 1, scale, at))
         strip = motion_track.strips.new(f"{n:02d} {piece.label}", start, action)
         compat.set_strip_slot(strip, slot)
+        if at is not None:  # its own frames of the character's body action
+            strip.action_frame_end = at + ranges[n][2] - 1
+            strip.action_frame_start = at
         if abs(scale - 1.0) > 1e-9:
             strip.scale = scale
         strip.extrapolation = (
@@ -296,7 +358,10 @@ def write_plan(
     # A turn about Z only: (0, 0, heading) is that turn in every Euler order, (heading, +Z)
     # in axis-angle; the heading is unwrapped, so no channel jumps by a turn.
     zero = np.zeros(world.frames)
-    if obj.rotation_mode == "QUATERNION":
+    tilt = rig_io.world_tilt(obj)
+    if tilt is not None:  # the turn over the armature's own tilt
+        rot_path, rot_values = _tilted_rotation(obj.rotation_mode, heading, tilt)
+    elif obj.rotation_mode == "QUATERNION":
         q = quat.make_continuous(quat.about_z(heading), axis=0)
         rot_path, rot_values = "rotation_quaternion", q.T
     elif obj.rotation_mode == "AXIS_ANGLE":
@@ -313,24 +378,95 @@ def write_plan(
     rs.blend_in = rs.blend_out = 0.0
     owned = [TRACK_MOTION, TRACK_ROOT]
     if locked is not None:
-        _write_foot_lock(obj, skel, world, locked, frame_start, modes, played)
+        _write_foot_lock(obj, skel, world, locked, frame_start, modes, played, body)
         owned.append(TRACK_FOOT)
     obj[TRACKS_KEY] = json.dumps(owned)
+    _claim_actions(obj, ad, owned)
     return strips, stashed
 
 
+def _tilted_rotation(mode, heading, tilt):
+    """(property, channel rows) of the object rotation ``Rz(heading) @ tilt`` per frame in
+    rotation ``mode``, each frame's channels the ones nearest the frame before (no jump by a
+    turn; the first nearest the tilt's own)."""
+    q = quat.mul(quat.about_z(heading), quat.from_matrix(tilt)[None])
+    q = quat.make_continuous(q, axis=0)
+    if mode == "QUATERNION":
+        return "rotation_quaternion", q.T
+    out = np.empty((len(q), act_io.rest_channels(mode).size))
+    prev = act_io.closest_channels(q[:1], mode, act_io.rest_channels(mode)[None])[0]
+    for f in range(len(q)):
+        prev = out[f] = act_io.closest_channels(q[f : f + 1], mode, prev[None])[0]
+    return act_io.rotation_path(mode), out.T
+
+
+def _in_units(tol, unit):
+    """``tol`` for locations keyed in the armature's units (``unit`` metres each): its
+    length, in metres, divided by it, so a centimetre rig is held as a metre rig is."""
+    if isinstance(tol, act_io.Tolerance) and unit != 1.0:
+        return act_io.Tolerance(tol.angle, tol.length / unit)
+    return tol
+
+
+def _body_action(obj, skel, world, locked, bounds, own, motions, modes, unit=1.0):
+    """One action of the character's own pieces (connectors, turns, clips: the pieces no
+    other character plays): one set of curves serves them all (an F-curve costs a few
+    hundred bytes before any key), piece after piece, each strip playing its own frames.
+
+    Keyed at the lower of the scene's and the patch's rates, so no piece has more keys
+    than frames played or planned: at the scene's (not above the patch's) from ``world``
+    with the feet already locked (``locked``; these frames then need no foot-lock
+    correction, and no scaled strip plays keys between frames); above the patch's rate from
+    the pieces' own ``motions`` at the patch's, their strips scaled as segments' are.
+    Returns (action, slot, {piece: (first action frame, strip scale, frames)}, whether keyed
+    at the scene's rate)."""
+    scene_keys = sum(int(bounds[n + 1] - bounds[n]) for n in own) <= sum(
+        motions[n].frames - 1 for n in own
+    )
+    if scene_keys:
+        rot = world.rotations if locked is None else locked
+        pose = Motion(world.ground, world.root_local, rot, world.contacts)
+        loc, rot = inplace_channels(skel, pose, unit)
+        rows = [np.arange(int(bounds[n]), int(bounds[n + 1]) + 1) for n in own]
+        loc = np.concatenate([loc[r] for r in rows])
+        rot = np.concatenate([rot[r] for r in rows])
+    else:
+        parts = [inplace_channels(skel, motions[n], unit) for n in own]
+        rows = [p[0] for p in parts]
+        loc = np.concatenate(rows)
+        rot = np.concatenate([p[1] for p in parts])
+    ranges, at = {}, 0
+    for n, r in zip(own, rows):
+        span = int(bounds[n + 1] - bounds[n])
+        ranges[n] = (at, 1.0 if scene_keys else span / float(max(len(r) - 1, 1)), len(r))
+        at += len(r)
+    action, slot = compat.new_action(f"MP {obj.name} body")
+    action[CHARACTER_KEY] = obj.name
+    frames = np.arange(len(loc), dtype=float)
+    rot = quat.make_continuous(rot, axis=0)
+    tol = _in_units(act_io.COMPACT, unit)
+    act_io.key_pose(action, slot, skel, frames, loc, rot, modes, tol=tol)
+    return action, slot, ranges, scene_keys
+
+
+FINER = 16.0  # the root's and foot lock's angle tolerance is this much finer (lengths: 4)
+
+
 def _finer(tol):
-    """A quarter of ``tol``'s angle for the root and foot-lock curves: each of their
-    channels is judged alone (a quaternion turns by up to four component errors), the
-    heading turns the whole body and the foot lock holds a planted foot; few curves."""
+    """A finer ``tol`` for the root and foot-lock curves: each of their channels is judged
+    alone (a quaternion turns by up to four component errors), the heading turns the whole
+    body, the ground track carries a planted foot with the hips and the foot lock holds it
+    (at a quarter of the angle the feet drifted 2 mm from the plan; at a sixteenth 0.5 mm,
+    bench_files); few curves."""
     if isinstance(tol, act_io.Tolerance):
-        return act_io.Tolerance(tol.angle / 4.0, tol.length)
+        return act_io.Tolerance(tol.angle / FINER, tol.length / 4.0)
     return tol
 
 
 def _played_frames(played, n_frames):
     """Which strip plays each plan frame and the action frame it plays there: ``played`` =
-    [(action, slot, first plan frame, scene frames it spans, strip scale)] in track order;
+    [(action, slot, first plan frame, scene frames it spans, strip scale, first action
+    frame or None: the action's own start)] in track order;
     where two strips meet on a frame the earlier one plays (Blender takes the first strip
     whose range holds the frame). A scaled strip plays action frame
     ``(frame - start) / scale``. Returns {(action, slot): (plan frames, action frames)},
@@ -338,11 +474,11 @@ def _played_frames(played, n_frames):
     action (a plan plays one segment action on many strips)."""
     owner = np.full(n_frames, -1)
     at = np.zeros(n_frames)
-    for s, (_, _, start, frames, scale) in enumerate(played):
+    for s, (_, _, start, frames, scale, first) in enumerate(played):
         idx = np.arange(start, min(start + frames, n_frames))
         idx = idx[owner[idx] < 0]
         owner[idx] = s
-        at[idx] = (idx - start) / scale
+        at[idx] = (idx - start) / scale + (first or 0)
     keys = {}  # (action, slot) -> its number, in the order strips first play them
     which = np.array([keys.setdefault((a, sl), len(keys)) for a, sl, *_ in played] + [-1])
     playing = which[owner]  # the action on each frame (-1: none; owner -1 picks the last)
@@ -365,7 +501,7 @@ def _lower_channels(frames_of, bones, mode, n_frames, cache=None):
     return out
 
 
-def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=()):
+def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=(), body=None):
     """The foot lock as an Add strip above the motion, so segment actions stay shared.
 
     Blender's Add blend (influence 1) adds each channel value, ``lower + delta``, in every
@@ -379,19 +515,23 @@ def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=(
     Blender takes the strip quaternion's angle as acos of its float32 w: corrections under
     ~0.0005 rad were lost on quaternion bones, 1.3e-3 off the plan; checked in
     tests/blender/test_rotation_modes.py.) On the frames where the lock leaves a bone alone
-    its delta is exactly zero (the motion plays unchanged; the curve stays compact)."""
+    its delta is exactly zero (the motion plays unchanged; the curve stays compact), and so
+    on the frames the character's ``body`` action plays (:func:`_body_action`: it holds the
+    locked rotations itself)."""
     modes = modes or {}
     # of the bones the lock may turn (the legs), those it turned, and on which frames
     legs = foot_lock.locked_bones(skel)
     dots = np.einsum("fjc,fjc->fj", world.rotations[:, legs], locked[:, legs])
     moved = np.abs(np.abs(dots) - 1.0) > 1e-9  # (F, legs)
+    frames_of = _played_frames(played, world.frames)
+    if body is not None and body[3] and (body[0], body[1]) in frames_of:
+        moved[frames_of.pop((body[0], body[1]))[0]] = False
     turned = moved.any(axis=0)
     changed, moved = legs[turned], moved[:, turned]
     action, slot = compat.new_action(f"MP {obj.name} foot lock")
     action[CHARACTER_KEY] = obj.name
     frames = np.arange(world.frames, dtype=float)
     cache, curves, columns = {}, [], []
-    frames_of = _played_frames(played, world.frames)
     by_mode = {}
     for k, j in enumerate(changed):
         by_mode.setdefault(modes.get(skel.names[j], "QUATERNION"), []).append(k)

@@ -33,6 +33,12 @@ def prop_pose(obj):
     return (float(m[0, 3]), float(m[1, 3]), float(np.arctan2(m[1, 0], m[0, 0])))
 
 
+def height(obj, depsgraph):
+    """Top of the evaluated mesh above the floor (z = 0), metres."""
+    world = scene_io.mesh_arrays(obj, depsgraph)[0]
+    return float(world[:, 2].max()) if len(world) else 0.0
+
+
 def footprint(obj, depsgraph):
     """Convex footprint in the prop's ground coordinates (the hull of its evaluated
     vertices, at least ``footprint.MIN_THICKNESS`` wide: :func:`motion_patches.props.footprint.
@@ -56,7 +62,10 @@ def object_patch(obj, depsgraph, skeleton, fps, gait_floor=None, scale=1.0):
     :func:`adapter.scene.environment`'s, the prop placed in the world shrunk by it."""
     x, y, h = prop_pose(obj)
     patch = op.ObjectPatch(
-        obj.name, footprint(obj, depsgraph) / scale, pose=(x / scale, y / scale, h)
+        obj.name,
+        footprint(obj, depsgraph) / scale,
+        pose=(x / scale, y / scale, h),
+        height=height(obj, depsgraph) / scale,
     )
     for item in obj.motion_patch.clips:
         if item.action is None:
@@ -74,6 +83,7 @@ def object_patch(obj, depsgraph, skeleton, fps, gait_floor=None, scale=1.0):
                 )
         else:
             patch.clips.append(pc)
+    patch.keep_clearing(skeleton, 0.0 if gait_floor is None else gait_floor)
     return patch
 
 

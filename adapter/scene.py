@@ -16,6 +16,7 @@ import numpy as np
 
 from ..motion_patches.props import footprint as fp
 from ..motion_patches.props.environment import Environment, Obstacle
+from . import rig as rig_io
 
 BODY_BAND = fp.BODY_BAND
 _PART = re.compile(r" \(part \d+\)$")
@@ -139,10 +140,16 @@ def ground_state(obj):
 
 def character_state(obj, skel, matrix=None):
     """(x, y, heading) of a character: its root's ground position and its rest facing
-    turned by the object's rotation (``matrix``: its world matrix, default the current)."""
+    turned by the object's rotation (``matrix``: its world matrix, default the current;
+    ``skel`` in metres and stood up, :func:`.rig.skeleton_in_metres`: the object's own
+    scale and tilt are not applied again)."""
     from ..motion_patches.kinematics.inplace import rest_facing
 
     m = np.array(obj.matrix_world if matrix is None else matrix)
-    f = m[:3, :3] @ rest_facing(skel)
-    root = m @ np.append(skel.rest[skel.root, :3, 3], 1.0)
+    turn = m[:3, :3] / np.linalg.norm(m[:3, :3], axis=0).mean()  # ``skel`` is in metres
+    tilt = rig_io.world_tilt(obj) if obj.type == "ARMATURE" else None
+    if tilt is not None:  # ``skel`` is stood up already (rig.skeleton_in_metres)
+        turn = turn @ tilt.T
+    f = turn @ rest_facing(skel)
+    root = m[:3, 3] + turn @ skel.rest[skel.root, :3, 3]
     return np.array([root[0], root[1], np.arctan2(f[1], f[0])])

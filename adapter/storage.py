@@ -207,6 +207,12 @@ def store_analysis(obj, figures):
     obj[ANALYSIS_KEY] = json.dumps(figures)
 
 
+def forget_analysis(obj):
+    """Drop ``obj``'s analysis figures: they measured a plan that is no longer there."""
+    if ANALYSIS_KEY in obj:
+        del obj[ANALYSIS_KEY]
+
+
 def last_analysis(obj):
     """The figures of ``obj``'s last analysis (dict), or None."""
     raw = obj.get(ANALYSIS_KEY) if obj is not None else None

@@ -14,6 +14,7 @@ a successful write, those left without a user are deleted as the write itself wo
 """
 
 import contextlib
+import json
 import re
 
 from . import compat, nla
@@ -84,8 +85,6 @@ def check_writable(bpy, obj, first=None, last=None):
 
 
 def _owned(obj):
-    import json
-
     try:
         return list(json.loads(obj.get(nla.TRACKS_KEY, "[]")))
     except (TypeError, ValueError):
@@ -94,7 +93,7 @@ def _owned(obj):
 
 def _ours(action, obj):
     return action is not None and (
-        action.get(nla.SEGMENT_KEY) is not None or action.get(nla.CHARACTER_KEY) == obj.name
+        action.get(nla.SEGMENT_KEY) is not None or nla.made_for(action, obj)
     )
 
 
@@ -134,7 +133,7 @@ def _same(tr, rec):
 class Snapshot:
     """What planning may change on ``objects`` and ``scene``, recorded to be put back."""
 
-    KEYS = (nla.TRACKS_KEY,)
+    KEYS = (nla.TRACKS_KEY, nla.ACTIONS_KEY)
 
     def __init__(self, bpy, scene, objects, keys=()):
         self.bpy, self.scene = bpy, scene
@@ -144,6 +143,7 @@ class Snapshot:
         self.scene_props = {k: scene.get(k) for k in keys}
         self.objects = []
         self.fake = {}
+        self.made = set()  # pointers of the actions planning made for the objects
         for ob in objects:
             ad = ob.animation_data
             rec = {"object": ob, "props": {k: ob.get(k) for k in self.keys}, "ad": None}
@@ -159,8 +159,9 @@ class Snapshot:
                         self._hold(s["action"])
                 self._hold(ad.action)
             for a in bpy.data.actions:
-                if a.get(nla.CHARACTER_KEY) == ob.name:
+                if nla.made_for(a, ob):
                     self._hold(a)
+                    self.made.add(a.as_pointer())
             self.objects.append(rec)
 
     def _hold(self, action):
@@ -180,16 +181,21 @@ class Snapshot:
         when nothing is held), and new actions named ``name.001`` because the old one was
         still there take the name back."""
         self._release()
-        names = {rec["object"].name for rec in self.objects}
         actions = self.bpy.data.actions
-        for action, _ in self.fake.values():
-            if action.get(nla.CHARACTER_KEY) in names and action.users == 0:
+        for action, _ in list(self.fake.values()):
+            if action.as_pointer() in self.made and action.users == 0:
                 actions.remove(action)
+        renamed = {}
         for a in list(actions):
             if a.as_pointer() not in self.actions:
                 m = _SUFFIX.match(a.name)
                 if m and actions.get(m.group(1)) is None:
-                    a.name = m.group(1)
+                    old, a.name = a.name, m.group(1)
+                    renamed[old] = a.name
+        for rec in self.objects:  # the characters keep their actions' names as they now are
+            ob, owned = rec["object"], nla.owned_actions(rec["object"])
+            if owned and renamed:
+                ob[nla.ACTIONS_KEY] = json.dumps({k: renamed.get(v, v) for k, v in owned.items()})
 
     def restore(self):
         """Put everything recorded back; remove the tracks and actions made since."""

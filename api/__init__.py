@@ -32,9 +32,15 @@ from .common import (
     state_dict,
 )
 from .crowd import CROWD_SPOT, cluster_executor, crowd_members, plan_crowd
+from .crowd_conflicts import (
+    CONFLICTS_KEY,
+    crowd_conflicts,
+    has_crowd_conflicts,
+    select_crowd_conflicts,
+)
 from .crowd_copies import CROWD_COLLECTION, duplicate_crowd, remove_crowd
 from .crowd_holds import CROWD_HOLD_RAMP_SECONDS, _holdable
-from .errors import MotionPatchesError, PathNotFound
+from .errors import Cancelled, MotionPatchesError, PathNotFound
 from .overlay import PlanDrawing, clip_ends, footprint_info, plan_drawings, plan_fingerprints
 from .patch_files import bone_map, export_patch, fill_bone_map, import_patch, set_bone_map
 from .plan import plan_path
@@ -61,7 +67,9 @@ __all__ = [
     "BakeResult",
     "CROWD_COLLECTION",
     "CROWD_HOLD_RAMP_SECONDS",
+    "CONFLICTS_KEY",
     "CROWD_SPOT",
+    "Cancelled",
     "cluster_executor",
     "CrowdResult",
     "CrowdSchedule",
@@ -86,12 +94,14 @@ __all__ = [
     "check_layout",
     "clip_ends",
     "compat",
+    "crowd_conflicts",
     "crowd_members",
     "duplicate_crowd",
     "evaluate",
     "export_patch",
     "fill_bone_map",
     "fitted_frame_range",
+    "has_crowd_conflicts",
     "footprint_info",
     "import_mocap",
     "import_patch",
@@ -112,6 +122,7 @@ __all__ = [
     "remove_crowd",
     "scene_fps",
     "scene_io",
+    "select_crowd_conflicts",
     "set_bone_map",
     "state_dict",
     "storage",

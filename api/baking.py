@@ -13,11 +13,11 @@ import numpy as np
 
 from ..adapter import actions as act_io
 from ..adapter import compat, mocap, storage, transaction
-from ..motion_patches.patch import layers
+from ..motion_patches.patch import layers, serialize
 from ..motion_patches.patch.gait import MIN_TURN, build_gait
 from ..motion_patches.patch.locomotion_patch import bake
 from .common import _some_names, scene_fps
-from .errors import MotionPatchesError
+from .errors import Cancelled, MotionPatchesError, check_cancelled
 from .results import BakeResult
 
 
@@ -48,6 +48,7 @@ def bake_locomotion_patch(
     progress: Callable[[float], None] | None = None,
     bvh_files: Iterable[str | os.PathLike] = (),
     fps: float | None = None,
+    cancelled: Callable[[], bool] | None = None,
 ) -> BakeResult:
     """Bake and store a locomotion patch from a straight action and turn actions (none
     needed: the straight stride is bent to turns, see ``gait.STRAIGHT_BEND_RADIUS``), make
@@ -63,7 +64,8 @@ def bake_locomotion_patch(
     matching an imported file's stem meaning that file's action. ``fps`` sets the scene's
     frame rate first (the patch is baked at the scene rate). Everything is checked before
     the first change; when the bake fails anyway, the objects, armatures and actions it
-    made and the frame rate are put back."""
+    made and the frame rate are put back, and so they are when ``cancelled()`` (asked at
+    each progress report) answers True: :class:`~.errors.Cancelled`."""
     if fps is not None and not (isinstance(fps, (int, float)) and 1 <= fps <= 1000):
         raise MotionPatchesError(f"the frame rate must be between 1 and 1000, not {fps}")
     if not str(layer).strip():
@@ -71,6 +73,16 @@ def bake_locomotion_patch(
     for what, v in (("cells", cells), ("nodes per edge", nodes)):
         if not (isinstance(v, int) and 2 <= v <= 8):
             raise MotionPatchesError(f"{what} must be a whole number from 2 to 8, not {v!r}")
+    top = serialize.MAX_EFFORT_RATE
+    if effort_rate is not None and not (
+        isinstance(effort_rate, (int, float))
+        and not isinstance(effort_rate, bool)
+        and 0.0 <= effort_rate <= top
+    ):
+        raise MotionPatchesError(
+            f"the effort rate (effort T per second of motion) must be a number from 0 to "
+            f"{top:g}, not {effort_rate!r}"
+        )
     files = [Path(f).expanduser() for f in bvh_files]
     armature = _bake_armature(scene, armature, bool(files))
     stems = {f.stem for f in files}
@@ -113,6 +125,7 @@ def bake_locomotion_patch(
             effort_rate,
             mirror_turns,
             progress,
+            cancelled,
         )
     storage.remember_bake_clips(scene, armature, straight, turns)
     storage.make_active(scene, res.name)
@@ -154,9 +167,26 @@ def _bake_action(clip, imported) -> bpy.types.Action:
 
 
 def _bake(
-    scene, armature, straight, turns, layer, name, cells, nodes, effort_rate, mirror_turns, progress
+    scene,
+    armature,
+    straight,
+    turns,
+    layer,
+    name,
+    cells,
+    nodes,
+    effort_rate,
+    mirror_turns,
+    progress,
+    cancelled=None,
 ):
     t0 = time.perf_counter()
+
+    def step(f):  # the core's progress report: shown, then the bake may stop there
+        if progress is not None:
+            progress(f)
+        check_cancelled(cancelled, "the bake")
+
     fps = scene_fps(scene)
     bones = {b.name for b in armature.data.bones}
     for action in (straight,) + tuple(turns):
@@ -180,7 +210,9 @@ def _bake(
                 )
         if effort_rate is None:
             effort_rate = layers.effort_rate(gait)
-        patch = bake(gait, cells=cells, nodes=nodes, effort_rate=effort_rate, progress=progress)
+        patch = bake(gait, cells=cells, nodes=nodes, effort_rate=effort_rate, progress=step)
+    except Cancelled:
+        raise
     except ValueError as exc:  # SparsePatch included
         raise MotionPatchesError(str(exc)) from None
     name = name or layer

@@ -10,12 +10,13 @@ from collections.abc import Iterable
 import bpy
 import numpy as np
 
-from ..adapter import evaluate, storage
+from ..adapter import evaluate, props_io, storage
+from ..adapter import rig as rig_io
 from ..adapter import scene as scene_io
 from ..motion_patches.cluster import DaskCluster, InProcess
 from ..motion_patches.planning import layout_check
-from ..motion_patches.props.environment import Obstacle
-from ..motion_patches.quality import layout_spec, metrics
+from ..motion_patches.props.environment import Obstacle, inside_convex
+from ..motion_patches.quality import foot_measure, layout_spec, metrics
 from .common import (
     _check_character,
     _check_far,
@@ -45,10 +46,15 @@ def analyse(context: bpy.types.Context, character: bpy.types.Object, keep: bool 
 def _analyse(context, character):
     meta, arrays = load_plan_record(character)
     frames = np.arange(meta["frame_start"], meta["frame_end"] + 1)
-    bones = [meta["root_name"]] + list(meta["foot_names"])
-    pos, ground, rot, _ = evaluate.sample_armature(context, character, frames, bones)
+    nf = len(meta["foot_names"])
+    ankles, toes = _foot_bones(character, meta)
+    names = [pb.name for pb in character.pose.bones]
+    bones = [meta["root_name"]] + list(meta["foot_names"]) + ankles + toes
+    body, ground, rot, _ = evaluate.sample_armature(context, character, frames, names)
+    pos = body[:, [names.index(b) for b in bones]]
     fps = scene_fps(context.scene)
-    root, feet = pos[:, 0], pos[:, 1:]
+    root, feet = pos[:, 0], pos[:, 1 : 1 + nf]
+    ankle_pos, toe_pos = pos[:, 1 + nf : 1 + nf + len(ankles)], pos[:, 1 + nf + len(ankles) :]
     skate = metrics.foot_skate(feet, fps, arrays["contacts"])
     by_layer = _skate_by_layer(meta, frames, feet, fps, arrays["contacts"])
     goal = np.array(meta["goal"])
@@ -68,6 +74,7 @@ def _analyse(context, character):
         "frames": int(frames.size),
         "seconds": float((frames.size - 1) / fps),
         "foot_skate": skate,
+        "feet": foot_measure.measure(toe_pos, ankle_pos, fps),
         **({"foot_skate_by_layer": by_layer} if by_layer else {}),
         "root_from_plan_cm": {
             "mean": float(root_err.mean() * 100),
@@ -81,9 +88,46 @@ def _analyse(context, character):
         ),
         "frames_root_inside_obstacle": inside,
         "frames_root_over_prop_in_traversal": int((inside_mask & during).sum()),
+        "frames_body_inside_prop": _body_inside_props(context, character, body),
         "traversals": len(meta.get("traversals", [])),
         "boundary_pop": pops,
     }
+
+
+def _body_inside_props(context, character, heads):
+    """Frames on which a bone of ``character`` (its head or its middle; ``heads`` (F, J, 3)
+    evaluated, in pose-bone order) is inside a prop of the scene: over its footprint and
+    more than a centimetre below its top. Traversal clips count too: a jump must clear."""
+    parents = [pb.parent for pb in character.pose.bones]
+    index = {pb.name: j for j, pb in enumerate(character.pose.bones)}
+    kids = [j for j, p in enumerate(parents) if p is not None]
+    mids = 0.5 * (heads[:, kids] + heads[:, [index[parents[j].name] for j in kids]])
+    points = np.concatenate((heads, mids), axis=1)  # (F, P, 3)
+    depsgraph = context.evaluated_depsgraph_get()
+    own = [character, *character.children_recursive]
+    inside = np.zeros(points.shape[0], bool)
+    flat = points.reshape(-1, 3)
+    for ob in scene_io.obstacles(context.scene, depsgraph, own):
+        top = props_io.height(bpy.data.objects[scene_io.owner(ob.name)], depsgraph)
+        hit = inside_convex(flat[:, :2], ob.polygon) & (flat[:, 2] < top - 0.01)
+        inside |= hit.reshape(points.shape[:2]).any(axis=1)
+    return int(inside.sum())
+
+
+def _foot_bones(character, meta):
+    """([ankle bones], [toe bones]) of the character by bone role (its own armature's
+    names: the label-free measure reads no plan), the plan's foot bones when its names
+    follow no convention."""
+    skel = rig_io.skeleton_in_metres(character)
+    try:
+        ankles, toes = foot_measure.foot_bones(skel)
+    except ValueError:
+        names = list(meta["foot_names"])
+        ankles, toes = (
+            [skel.names.index(n) for n in names[0::2]],
+            [skel.names.index(n) for n in names[1::2]],
+        )
+    return [skel.names[i] for i in ankles], [skel.names[i] for i in toes]
 
 
 def _skate_by_layer(meta, frames, feet, fps, planted):

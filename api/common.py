@@ -20,6 +20,7 @@ if TYPE_CHECKING:
 
 
 PLAN_KEY = storage.PLAN_KEY  # the custom property holding a character's plan record
+ANALYSIS_KEY = storage.ANALYSIS_KEY  # ... and the figures of its last analysis
 
 
 def scene_fps(scene: bpy.types.Scene) -> float:

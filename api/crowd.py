@@ -14,8 +14,8 @@ import bpy
 import numpy as np
 
 from ..adapter import moving as moving_io
+from ..adapter import nla, transaction
 from ..adapter import scene as scene_io
-from ..adapter import transaction
 from ..motion_patches import cluster
 from ..motion_patches.crowd import crowd, members
 from ..motion_patches.kinematics import scene_rate
@@ -23,6 +23,7 @@ from ..motion_patches.planning import moving_props
 from ..motion_patches.planning.settings import PlanSettings
 from ..motion_patches.props.environment import Obstacle
 from .common import (
+    ANALYSIS_KEY,
     PLAN_KEY,
     _check_character,
     _not_obstacles,
@@ -32,8 +33,9 @@ from .common import (
     object_patches,
     scene_fps,
 )
+from .crowd_conflicts import remember_conflicts
 from .crowd_holds import _root_track, _with_hold
-from .errors import MotionPatchesError
+from .errors import MotionPatchesError, check_cancelled
 from .results import CrowdResult, CrowdSchedule
 from .settings import plan_settings
 from .solve import (
@@ -52,6 +54,7 @@ from .writing import FRAME_RANGE_KEY, _fit_frame_range, _placed, _write
 CROWD_RESOLVE_SLACK = 0.05  # metres the crowd is resolved wider than its spacing (see plan_crowd)
 CROWD_SPOT = "\x00crowd spot "  # obstacle names of other characters' standing spots
 CROWD_GHOST = members.GHOST  # where another character walks when two would meet
+CANCELLED = "planning the crowd"  # what Cancelled names
 
 
 def cluster_executor(
@@ -137,6 +140,7 @@ def plan_crowd(
     goal_facing: str | None = None,
     turn_in_place: bool | None = None,
     executor: cluster.InProcess | cluster.DaskCluster | None = None,
+    cancelled: Callable[[], bool] | None = None,
 ) -> CrowdResult:
     """Plan several characters and write each one's NLA; ``pairs`` = [(armature, goal)] or
     [(armature, goal, options)], a goal being an object or (x, y, heading); ``options``:
@@ -159,7 +163,11 @@ def plan_crowd(
     could never be free) raises :class:`MotionPatchesError` before anything is written.
 
     ``executor``: where the members' paths are planned (:func:`cluster_executor`: a Dask
-    cluster, or in this process, the default); the plans are the same wherever."""
+    cluster, or in this process, the default); the plans are the same wherever.
+
+    ``cancelled``: asked after each member is planned or re-planned and each character is
+    written; when it answers True, :class:`~.errors.Cancelled` is raised and whatever was
+    written is put back (Esc in Blender, Ctrl-C in the CLI)."""
     settings = plan_settings(
         scene,
         alpha=alpha,
@@ -177,7 +185,9 @@ def plan_crowd(
     )
     if executor is not None:
         c.executor = executor
+    c.cancelled = cancelled
     _place_ends(c)
+    check_cancelled(cancelled, CANCELLED)
     planned, failed = _plan_each(c, progress)
     planned, schedules = _resolve(c, planned)
     holds = _lay_holds(c, planned, schedules)
@@ -191,7 +201,8 @@ def plan_crowd(
     moving_left = _moving_conflicts(c, planned, schedules)
     if progress is not None:
         progress(0.9)
-    written = _write_all(c, planned, schedules)
+    check_cancelled(cancelled, CANCELLED)
+    written = _write_all(c, planned, schedules, progress)
     if progress is not None:
         progress(1.0)
     names = [c.pairs[p[0]][0].name for p in planned]
@@ -206,6 +217,7 @@ def plan_crowd(
                 {"frame": written[p[0]].frame_start + f + c.ramp // 2, "frames": int(n)}
                 for f, n in holds[name]
             ]
+    remember_conflicts(c.scene, conflicts, moving_left)
     return CrowdSchedule(
         [written[n] for n in sorted(written)],
         failed,
@@ -272,6 +284,7 @@ class _Crowd:
     rank_ends: list = field(default_factory=list)  # (start, goal) in the world, by rank
     rank: dict = field(default_factory=dict)  # entry -> its place in ``order``
     executor: object = field(default_factory=cluster.InProcess)  # where members are planned
+    cancelled: object = None  # () -> bool: the user asked to stop (plan_crowd's argument)
 
     @property
     def ramp(self) -> int:
@@ -425,16 +438,21 @@ def _place_ends(c):
     world_ends = [
         (_shrunk(e[0], 1.0 / sz), _shrunk(e[1], 1.0 / sz)) for e, sz in zip(c.ends, c.sizes)
     ]
-    goals = np.array([g[1][:2] for g in world_ends])
-    for i in range(len(c.pairs)):
-        for j in range(i):
-            gap = float(np.linalg.norm(goals[i] - goals[j]))
-            if gap < c.spacing:
-                raise MotionPatchesError(
-                    f"the goals of '{c.pairs[j][0].name}' and '{c.pairs[i][0].name}' are "
-                    f"{gap:.2f} m apart, closer than the spacing ({c.spacing:.2f} m): the one "
-                    f"arriving second would never find its goal free; move one of them"
-                )
+    goals = np.array([g[1][:2] for g in world_ends]).reshape(-1, 2)
+    for lo in range(0, len(goals), 512):  # the first pair (i, then j < i) too close
+        d = np.linalg.norm(goals[lo : lo + 512, None] - goals[None], axis=2)
+        close = (d < c.spacing) & (
+            np.arange(len(goals))[None] < np.arange(lo, lo + len(d))[:, None]
+        )
+        if close.any():
+            i = int(np.nonzero(close.any(axis=1))[0][0])
+            j = int(np.nonzero(close[i])[0][0])
+            gap, i = float(d[i, j]), lo + i
+            raise MotionPatchesError(
+                f"the goals of '{c.pairs[j][0].name}' and '{c.pairs[i][0].name}' are "
+                f"{gap:.2f} m apart, closer than the spacing ({c.spacing:.2f} m): the one "
+                f"arriving second would never find its goal free; move one of them"
+            )
     c.order = sorted(
         range(len(c.pairs)),
         key=lambda n: (
@@ -472,6 +490,12 @@ def _plan_each(c, progress):
     why)]): each entry planned round the others' standing spots, on ``c.executor``."""
     tasks = [_task(c, n) for n in c.order]
     answers = {}
+
+    def step(f):  # after each member (each part, on a cluster): progress, then may stop
+        if progress is not None:
+            progress(0.8 * f)
+        check_cancelled(c.cancelled, CANCELLED)
+
     for size in dict.fromkeys(c.sizes[n] for n in c.order):
         mine = [t for t in tasks if c.sizes[t.entry] == size]
         world = _world_of(c, size).members
@@ -479,7 +503,7 @@ def _plan_each(c, progress):
             members.plan_member,
             mine,
             world=world,
-            progress=None if progress is None else lambda f: progress(0.8 * f),
+            progress=None if progress is None and c.cancelled is None else step,
         )
         answers.update((t.entry, a) for t, a in zip(mine, done))
     planned, failed = [], []
@@ -495,6 +519,7 @@ def _plan_each(c, progress):
 def _replan(c, versions, k, ghosts):
     """Planned character k re-planned round ``ghosts``: its new track and holdable frames
     (the next version of its plan, kept in ``versions[k]``), or None."""
+    check_cancelled(c.cancelled, CANCELLED)
     n = versions[k][0][0]
     a = members.plan_member(_task(c, n, ghosts), _world_of(c, c.sizes[n]).members)
     if isinstance(a, members.NoPlan):
@@ -563,16 +588,22 @@ def _moving_conflicts(c, planned, schedules):
     return out
 
 
-def _write_all(c, planned, schedules):
+def _write_all(c, planned, schedules, progress=None):
     """{entry: PlanResult} of every planned character written (all refused before the
-    first is written when one cannot be), the frame range fitted once after."""
+    first is written when one cannot be), the frame range fitted once after; cancelled
+    between two characters, those written are put back."""
     written = {}
     for (n, plan, _, placed, _), s in zip(planned, schedules):
         _writable(c.pairs[n][0], c.first + s.delay, placed[2].frames)
     with transaction.kept(
-        bpy, c.scene, [c.pairs[n][0] for n, *_ in planned], (PLAN_KEY, FRAME_RANGE_KEY)
+        bpy,
+        c.scene,
+        [c.pairs[n][0] for n, *_ in planned],
+        (PLAN_KEY, ANALYSIS_KEY, FRAME_RANGE_KEY),
     ):
-        for (n, plan, _, placed, _), s in zip(planned, schedules):
+        segments = nla.segment_index(bpy)  # the shared segment actions, found once
+        for k, ((n, plan, _, placed, _), s) in enumerate(zip(planned, schedules)):
+            check_cancelled(c.cancelled, CANCELLED)
             env = _world_of(c, c.sizes[n]).env
             with _without(env, c.own[n]):  # the plan record lists what it walked around
                 written[n] = _write(
@@ -587,7 +618,10 @@ def _write_all(c, planned, schedules):
                     c.settings,
                     c.rigs[n],
                     fit=False,
+                    segments=segments,
                 )
+            if progress is not None:
+                progress(0.9 + 0.1 * (k + 1) / len(planned))
         if written:
             _fit_frame_range(c.scene)  # once: it reads every character's plan record
     return written

@@ -45,7 +45,13 @@ def _with_hold(plan, raw, bounds, at, hold, ramp, rate=1.0):
         span = int(bounds[i + 1] - bounds[i])
         raw[i] = held_motion.held_piece(raw[i], at - bounds[i], hold, ramp, span, rate)
     pieces = list(plan.pieces)
-    pieces[i] = dataclasses.replace(pieces[i], kind="hold")
+    p = pieces[i]
+    pieces[i] = dataclasses.replace(
+        p,
+        kind="hold",
+        held_from=p.held_from if p.kind == "hold" else p.label,
+        holds=(*p.holds, (int(at - bounds[i]), int(hold))),
+    )
     return dataclasses.replace(plan, pieces=pieces), raw
 
 

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 
 class MotionPatchesError(ValueError):
     """A request the add-on cannot carry out; the message says why and what to do."""
@@ -17,3 +19,18 @@ class PathNotFound(MotionPatchesError):
     def __init__(self, message, cause=None, props=()):
         super().__init__(message)
         self.cause, self.props = cause, list(props)
+
+
+class Cancelled(MotionPatchesError):
+    """The user stopped long work (Esc in Blender, Ctrl-C in the CLI) before it was done;
+    what it had begun to write was put back, so the scene is as it was."""
+
+    def __init__(self, what: str = "the work") -> None:
+        super().__init__(f"{what} was cancelled; the scene was left as it was")
+
+
+def check_cancelled(cancelled: Callable[[], bool] | None, what: str = "the work") -> None:
+    """Raise :class:`Cancelled` when ``cancelled`` (the caller's ``() -> bool``, or None:
+    never) says the user asked to stop."""
+    if cancelled is not None and cancelled():
+        raise Cancelled(what)

@@ -5,6 +5,7 @@ planned against, and where the tagged props' clips start and end."""
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 import bpy
@@ -47,19 +48,24 @@ def plan_fingerprints(scene: bpy.types.Scene) -> list:
     return [storage.plan_fingerprint(ob) for ob in scene.objects if ob.type == "ARMATURE"]
 
 
-def plan_drawings(scene: bpy.types.Scene) -> list[PlanDrawing]:
-    """:class:`PlanDrawing` of every planned character. With a patch baked it also holds
-    the plan's lattice (anchored at the start, +x towards the goal, as the planner laid
-    it), the cells the planner's bitmask marks occluded (a cell touched by the grown
-    footprint counts as occluded there, though a segment through a partly covered cell is
-    then tested exactly against the footprint) and the props it walked round."""
+def plan_drawings(
+    scene: bpy.types.Scene, lattice_of: Iterable[str] | None = None
+) -> list[PlanDrawing]:
+    """:class:`PlanDrawing` of every visible planned character (a hidden one, or one in a
+    hidden collection, is not drawn). With a patch baked, for the characters named in
+    ``lattice_of`` (None: all), it also holds the plan's lattice (anchored at the start, +x
+    towards the goal, as the planner laid it), the cells the planner's bitmask marks
+    occluded (a cell touched by the grown footprint counts as occluded there, though a
+    segment through a partly covered cell is then tested exactly against the footprint)
+    and the props it walked round."""
     out = []
     try:
         patch = storage.load_patch(scene)
     except ValueError:
         patch = None
+    lattice_of = None if lattice_of is None else set(lattice_of)
     for ob in scene.objects:
-        if ob.type != "ARMATURE" or not storage.has_plan(ob):
+        if ob.type != "ARMATURE" or not storage.has_plan(ob) or not ob.visible_get():
             continue
         meta, arrays = storage.load_plan(ob)
         g = arrays["ground"]
@@ -75,7 +81,7 @@ def plan_drawings(scene: bpy.types.Scene) -> list[PlanDrawing]:
             g, list(kinds), parity, [s - meta["frame_start"] for s in strip_starts]
         )
         out.append(drawing)
-        if patch is None:
+        if patch is None or (lattice_of is not None and ob.name not in lattice_of):
             continue
         env = storage.plan_environment(meta, patch.side, patch.cells, meta["radius"])
         frame = lattice_frame(g[0], meta["goal"], patch.side, patch.nodes)

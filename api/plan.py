@@ -10,11 +10,13 @@ from ..adapter import scene as scene_io
 from ..adapter import storage, transaction
 from ..motion_patches.patch import layers
 from ..motion_patches.planning import body_clearance, transitions
+from ..motion_patches.planning.motions import stand_note
 from ..motion_patches.planning.planner import PlanError, plan_motions
 from ..motion_patches.planning.settings import PlanSettings
 from ..motion_patches.props.environment import Obstacle
 from ..motion_patches.quality import validate
 from .common import (
+    ANALYSIS_KEY,
     PLAN_KEY,
     _check_character,
     _not_obstacles,
@@ -160,7 +162,7 @@ def plan_path(
             plan.stats["gait_change"] = why
     placed = _placed(scene, patch, rig, motions)
     _writable(character, start_frame, placed[2].frames)
-    with transaction.kept(bpy, scene, [character], (PLAN_KEY, FRAME_RANGE_KEY)):
+    with transaction.kept(bpy, scene, [character], (PLAN_KEY, ANALYSIS_KEY, FRAME_RANGE_KEY)):
         return _write(
             scene,
             character,
@@ -175,6 +177,14 @@ def plan_path(
             layer_keys=layer_keys,
             from_here=from_here,
         )
+
+
+def _too_low(prop, clip, clears, height, scale=1.0):
+    """A sentence: a traversal clip not offered because it does not clear its prop."""
+    return (
+        f"{clip} clears {clears * scale:.2f} m over '{prop.name}', which is "
+        f"{height * scale:.2f} m high: not offered"
+    )
 
 
 def _gait_change(tried):
@@ -307,5 +317,9 @@ def _plan_in_layer(
         frame_start += int(round(wait * scene_fps(scene)))
         motions = plan_motions(patch, plan)
     plan.stats["glitches"] = validate.count(validate.plan_glitches(patch, plan, motions))
+    low = [_too_low(p, n, h, top, scale) for p in props for n, h, top in p.too_low]
+    if low:  # why the walk goes round a tagged prop
+        plan.stats["traversals_too_low"] = low
+    plan.stats["stand"] = stand_note(patch, plan)
     layer = {"planner": planner, "ends": ends, "moving": bool(tracks)}  # for _gait_change
     return patch, rig, env, plan, motions, frame_start, layer

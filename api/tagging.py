@@ -20,10 +20,14 @@ def tag_object_patch(
     patch_name: str | None = None,
     scene: bpy.types.Scene | None = None,
     context: bpy.types.Context | None = None,
+    notes: list[str] | None = None,
 ) -> bpy.types.Object:
     """Make ``obj`` an object patch carrying ``clips``: [(action, kind, effort, copy_step)]
     with kind 'TRAVERSAL' or 'INTERACTION'. Everything is validated first (footprint, root
-    motion of each clip on the patch's skeleton); on error nothing is changed."""
+    motion of each clip on the patch's skeleton); on error nothing is changed. A traversal
+    clip whose body passes lower over the prop than its top is tagged but never planned
+    over it (a jump must not sink its legs into the prop): ``notes`` (a list) gets a
+    sentence naming both heights."""
     scene = scene or bpy.context.scene
     context = context or bpy.context
     try:
@@ -38,15 +42,32 @@ def tag_object_patch(
         if kind not in props_io.KINDS:
             raise MotionPatchesError(f"clip kind must be TRAVERSAL or INTERACTION, not {kind}")
     try:
-        props_io.footprint(obj, depsgraph)
+        prop = object_patch.ObjectPatch(
+            obj.name, props_io.footprint(obj, depsgraph), height=props_io.height(obj, depsgraph)
+        )
+        floor = patch.gait.floor()
         for action, kind, effort, step in clips:
             if action is None:
                 raise ValueError("a clip has no action")
             clip = act_io.clip_from_action(
                 action, None, scene_fps(scene), skeleton=patch.gait.skeleton
             )
-            object_patch.patch_clip_from(clip, props_io.KINDS[kind], scene_fps(scene), effort)
+            pc = object_patch.patch_clip_from(
+                clip, props_io.KINDS[kind], scene_fps(scene), effort, name=action.name, floor=floor
+            )
+            if pc.kind == object_patch.TRAVERSAL and step > 0:
+                prop.add_traversal_copies(pc, step)
+            else:
+                prop.clips.append(pc)
     except ValueError as exc:
         raise MotionPatchesError(f"cannot tag '{obj.name}': {exc}") from None
+    prop.keep_clearing(patch.gait.skeleton, floor)
+    for name, clears, high in prop.too_low:
+        if notes is not None:
+            notes.append(
+                f"{name} clears {clears:.2f} m over '{obj.name}', which is {high:.2f} m high: "
+                f"planning will not jump it until the prop is lower or narrower (a traversal "
+                f"clip must pass above its prop)"
+            )
     props_io.tag(obj, clips)
     return obj

@@ -73,13 +73,16 @@ def _write(
     fit=True,
     layer_keys=None,
     from_here=False,
+    segments=None,
 ):
     """NLA strips and the plan record of one planned character (``placed``: its motion,
     :func:`_placed`; ``env``: the planner's world, shrunk by the character's size; ``settings``: the
     request's, whose radius and foot lock it records and applies).
     ``fit``: fit the scene's frame range now (a crowd fits it once, after every write).
     ``layer_keys``: {layer: patch key} of a plan that changes layer (:func:`_gait_change`).
-    ``from_here``: the plan started where the character is now, not where it stood."""
+    ``from_here``: the plan started where the character is now, not where it stood.
+    ``segments``: the file's shared segment actions (:func:`nla.segment_index`) when several
+    characters are written in a row (a crowd): found once, not once per character."""
     stood = _start_matrix(character, from_here)  # read before the record is replaced
     scale = _size(rig)
     goal_state = _shrunk(plan.goal, 1.0 / scale)  # the facing reached when any would do
@@ -108,6 +111,7 @@ def _write(
         rig,
         bounds,
         layer_keys,
+        segments,
     )
     root = root_positions(world.ground, world.root_local)  # the hips
     foot = contacts.foot_joints(skel)
@@ -144,6 +148,7 @@ def _write(
             "obstacles": {o.name: (o.polygon * scale).tolist() for o in env.obstacles.values()},
         },
     )
+    storage.forget_analysis(character)  # the Analysis panel must not show the last plan's
     if fit:
         _fit_frame_range(scene)
     return PlanResult(

@@ -9,8 +9,10 @@ Prints numbers, asserts nothing about timing. Run from the repository root:
 2. For ``--layouts`` random layouts: a square field of random 12-sided pillars and one
    start/goal pair 8-20 m apart (both clear of every pillar by the character's radius),
    plans with :class:`SegmentPlanner`, synthesises the motion of every piece, and measures
-   plan time, nodes expanded, path length, occlusion computations and foot skate.
-3. The source clip's own foot skate (the floor a synthesised motion is compared against).
+   plan time, nodes expanded, path length, occlusion computations and foot skate: the
+   planner-labelled skate and the label-free measure (motion_patches.quality.foot_measure).
+3. The source clip's own foot skate by both (the floor a synthesised motion is compared
+   against).
 4. Placement: placing and moving obstacles in a scene of 10 and of 1,000 obstacles.
 
 A Markdown table of the figures is printed at the end (see bench/README.md for what each
@@ -42,7 +44,7 @@ from motion_patches.patch import locomotion_patch
 from motion_patches.planning.planner import PlanError, SegmentPlanner, plan_motions
 from motion_patches.planning.settings import PLANNING as DEFAULTS
 from motion_patches.props.environment import Environment, Obstacle
-from motion_patches.quality import metrics
+from motion_patches.quality import foot_measure, metrics
 
 WEIGHTS = tuple(DEFAULTS[k] for k in ("alpha", "beta", "gamma"))
 
@@ -208,6 +210,55 @@ def pooled_skate(records, key="skate"):
     }
 
 
+def feet(motion, skel, fps):
+    """The label-free foot figures (:mod:`motion_patches.quality.foot_measure`) of a motion:
+    its toes and ankles (by bone role) in the world."""
+    ankles, toes = foot_measure.foot_bones(skel)
+    w = motion.world_matrices(skel)[..., :3, 3]
+    return foot_measure.measure(w[:, toes], w[:, ankles], fps)
+
+
+def pooled_feet(figures):
+    """:func:`feet` of many paths together: skate and weighted skate over every scored step
+    (weighted by steps), pops summed, the lowest swing clearance and the largest end-ankle
+    offset of any path, and the worst path's mean skate."""
+
+    def pool(key):
+        steps = np.array([f[key]["steps"] for f in figures], float)
+        mean = np.array([f[key]["mean_cm_per_s"] for f in figures])
+        ok = steps > 0
+        if not ok.any():
+            return float("nan"), float("nan")
+        return float(np.sum(mean[ok] * steps[ok]) / steps.sum()), float(mean[ok].max())
+
+    skate, worst = pool("skate")
+    weighted, worst_w = pool("weighted_skate")
+    clear = [f["min_swing_clearance_cm"] for f in figures if f["swings"]]
+    return {
+        "skate_cm_per_s": skate,
+        "worst_path_skate_cm_per_s": worst,
+        "weighted_skate_cm_per_s": weighted,
+        "worst_path_weighted_skate_cm_per_s": worst_w,
+        "pops": int(sum(f["pops"] for f in figures)),
+        "paths_with_pops": int(sum(f["pops"] > 0 for f in figures)),
+        "min_swing_clearance_cm": float(min(clear)) if clear else float("nan"),
+        "max_end_ankle_off_cm": float(max(f["max_end_ankle_off_cm"] for f in figures)),
+    }
+
+
+def feet_text(p, source):
+    """A report cell: pooled label-free figures beside the source clip's by the same measure."""
+    return (
+        f"skate {p['skate_cm_per_s']:.1f} cm/s (worst path {p['worst_path_skate_cm_per_s']:.1f}), "
+        f"height-weighted {p['weighted_skate_cm_per_s']:.1f} cm/s, {p['pops']} one-frame pops, "
+        f"lowest swing clearance {p['min_swing_clearance_cm']:.1f} cm, end ankles within "
+        f"{p['max_end_ankle_off_cm']:.1f} cm of standing; source clip: skate "
+        f"{source['skate']['mean_cm_per_s']:.1f} cm/s, height-weighted "
+        f"{source['weighted_skate']['mean_cm_per_s']:.1f} cm/s, {source['pops']} pops, "
+        f"swing clearance {source['min_swing_clearance_cm']:.1f} cm"
+    )
+
+
 # -- sections -----------------------------------------------------------------------------
 
 
@@ -311,6 +362,7 @@ def bench_plans(patch, args, profiler=None, reference=None):
         locked = Motion(m.ground, m.root_local, foot_lock.lock_feet(skel, m), m.contacts)
         lock_s = time.perf_counter() - t2
         skate_locked = metrics.foot_skate(foot_positions(locked, skel), fps, m.contacts)
+        feet_free, feet_locked = feet(m, skel, fps), feet(locked, skel, fps)
         spin = spin_locked = (float("nan"), "")
         if reference is not None:
             r, j = metrics.step_ratio(m.rotations, reference)
@@ -337,6 +389,8 @@ def bench_plans(patch, args, profiler=None, reference=None):
             "goal_connectors": plan.stats.get("goal_connectors"),
             "skate": skate,
             "skate_locked": skate_locked,
+            "feet": feet_free,
+            "feet_locked": feet_locked,
             "foot_lock_seconds": lock_s,
             "step_ratio": spin[0],
             "step_ratio_bone": spin[1],
@@ -534,6 +588,15 @@ def markdown(res):
             f" per path",
         ),
         (
+            "feet by the label-free measure (toe within 3 cm of its lowest for 0.2 s), "
+            "without foot locking",
+            feet_text(pl["feet"], res["source_feet"]),
+        ),
+        (
+            "feet by the label-free measure, with foot locking",
+            feet_text(pl["feet_locked"], res["source_feet"]),
+        ),
+        (
             "largest per-frame bone turn against the source clips' (16_15, 16_18, a bone "
             "or its mirror image; under 1 deg counts as 1)",
             f"median path {pl['step_ratio']['median']:.2f}x, worst {pl['step_ratio']['max']:.2f}x"
@@ -584,6 +647,7 @@ def main(argv=None):
     records, failures, pillars = bench_plans(patch, args, profiler, reference)
     print("source clip skate ...", flush=True)
     floor = bench_source_skate(straight, patch.gait.fps)
+    source_feet = foot_measure.of_clip(clip_mod.resample(straight, patch.gait.fps))
     print("placement ...", flush=True)
     placement = bench_placement(args.density)
 
@@ -631,6 +695,8 @@ def main(argv=None):
         "frames_inside_obstacle": int(sum(r["frames_inside_obstacle"] for r in records)),
         "skate": pooled_skate(records),
         "skate_locked": pooled_skate(records, "skate_locked"),
+        "feet": pooled_feet([r["feet"] for r in records]),
+        "feet_locked": pooled_feet([r["feet_locked"] for r in records]),
         "foot_lock_seconds": stats([r["foot_lock_seconds"] for r in records]),
         "step_ratio": stats([r["step_ratio"] for r in records]),
         "step_ratio_locked": stats([r["step_ratio_locked"] for r in records]),
@@ -652,6 +718,7 @@ def main(argv=None):
         "bake": bake,
         "plans": plans,
         "source_skate": floor,
+        "source_feet": source_feet,
         "placement": {str(k): v for k, v in placement.items()},
         "records": records,
         "failures": failures,

@@ -15,9 +15,13 @@ this process or on Dask LocalClusters: ``--workers``, the same members checked),
 :func:`motion_patches.crowd.crowd.resolve` (idle holds, waits, re-routes) and the final check
 :func:`motion_patches.crowd.crowd.conflicts_of`. Times are split into the members (path and
 motion), the re-plans while resolving, resolution and the final check. Memory: the peak
-traced by ``tracemalloc`` over the resolution and check (run a second time, traced), and the
-process's peak resident size after each size (``resource``; it only grows, sizes run in
-increasing order). Per character, milliseconds of each stage.
+traced by ``tracemalloc`` over the resolution and check (run a second time, traced; not with
+``--no-trace``), and the process's peak resident size after each size (``resource``; it only
+grows, sizes run in increasing order). Per character, milliseconds of each stage, and of this
+process's CPU time resolving (what wall time is not on a machine shared with other work).
+The scale targets: 1,000 characters in under 60 s, 10,000 in under 15 minutes within 8 GB
+(``--sizes 10000 --workers 2 --no-trace --scenes ""``), resolution costing about as much per
+character at 100, 1,000 and 10,000.
 
 Then two dense scenes at a 24 fps scene from the 30 fps patch (``--scenes``, the ones
 tests/core/test_crowd_dense.py checks, built by it): a four-way crossing of 40 among seven
@@ -82,6 +86,12 @@ def parse_args(argv=None):
         default="1,2",
         help="the members planned on Dask LocalClusters of these many worker processes, "
         "each in turn (0: in this process); the crowd is resolved once",
+    )
+    p.add_argument(
+        "--no-trace",
+        action="store_true",
+        help="skip the second, traced resolution (its peak is then not measured; tracing "
+        "doubles the resolution's time, long at 10,000 characters)",
     )
     p.add_argument("--json", type=Path, help="also write the full results here")
     args = p.parse_args(argv)
@@ -190,16 +200,17 @@ def run_crowd(patch, n, args):
     masks = [a.holdable for a in planned]
     index = [a.entry for a in planned]
     world = member_world(patch, env, ends)
-    t = {"replan": 0.0}
+    t = {"replan": 0.0, "replan_cpu": 0.0}
 
     def replan(k, discs):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         a = members.plan_member(member_task(ends, index[k], discs), world)
         t["replan"] += time.perf_counter() - t0
+        t["replan_cpu"] += time.process_time() - c0
         return None if isinstance(a, members.NoPlan) else (a.root_track, a.holdable)
 
     wait = round(args.max_wait * fps)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     schedules, left = crowd.resolve(
         list(tracks),
         replan,
@@ -212,27 +223,31 @@ def run_crowd(patch, n, args):
         holdable=masks,
     )
     t_resolve = time.perf_counter() - t0 - t["replan"]  # re-plans counted apart
+    # this process's CPU time too: on a machine shared with other work, wall time is not
+    cpu_resolve = time.process_time() - c0 - t["replan_cpu"]
     finals = [s.track for s in schedules]
     delays = [s.delay for s in schedules]
     t0 = time.perf_counter()
     final = crowd.conflicts_of(finals, delays, SPACING)
     t_check = time.perf_counter() - t0
     # memory of resolution and check, traced (a second run: tracing slows it)
-    tracemalloc.start()
-    crowd.resolve(
-        list(tracks),
-        lambda k, d: None,
-        SPACING,
-        RADIUS,
-        fps,
-        wait,
-        max(1, round(0.2 * fps)),
-        ramp=ramp,
-        holdable=masks,
-    )
-    crowd.conflicts_of(finals, delays, SPACING)
-    _, peak = tracemalloc.get_traced_memory()
-    tracemalloc.stop()
+    peak = float("nan")
+    if not args.no_trace:
+        tracemalloc.start()
+        crowd.resolve(
+            list(tracks),
+            lambda k, d: None,
+            SPACING,
+            RADIUS,
+            fps,
+            wait,
+            max(1, round(0.2 * fps)),
+            ramp=ramp,
+            holdable=masks,
+        )
+        crowd.conflicts_of(finals, delays, SPACING)
+        _, peak = tracemalloc.get_traced_memory()
+        tracemalloc.stop()
     frames = [len(s.track) + s.delay for s in schedules]
     last = by_workers[args.workers[-1]]["members_s"]
     rest = {"replans": t["replan"], "resolve": t_resolve, "check": t_check}
@@ -251,6 +266,7 @@ def run_crowd(patch, n, args):
         "members_by_workers": {str(w): v for w, v in by_workers.items()},
         "seconds": {"members": last, **rest, "total": last + sum(rest.values())},
         "resolve_ms_per_character": 1000 * t_resolve / max(len(tracks), 1),
+        "cpu_seconds": {"replans": t["replan_cpu"], "resolve": cpu_resolve},
         "ms_per_character": {
             k: 1000 * v / max(n, 1) for k, v in (("members", last), *rest.items())
         },
@@ -316,8 +332,8 @@ def markdown(rows):
         "| characters | plaza | planned | no path | holds | waits | re-routed | conflicts left | "
         + " | ".join(cols)
         + " | re-plans s | resolve s | check s | total s | ms per character | resolve ms/ch "
-        "| resolve peak MB | max RSS MB |",
-        "|" + "---|" * (16 + len(cols)),
+        "| resolve CPU ms/ch | resolve peak MB | max RSS MB |",
+        "|" + "---|" * (17 + len(cols)),
     ]
     for r in rows:
         s, by = r["seconds"], r["members_by_workers"]
@@ -327,6 +343,7 @@ def markdown(rows):
             + " | ".join(f"{by[w]['members_s']:.1f}" for w in workers)
             + f" | {s['replans']:.1f} | {s['resolve']:.2f} | {s['check']:.2f} | {s['total']:.1f} "
             f"| {1000 * s['total'] / r['characters']:.0f} | {r['resolve_ms_per_character']:.0f} "
+            f"| {1000 * r['cpu_seconds']['resolve'] / max(r['planned'], 1):.0f} "
             f"| {r['resolve_peak_mb']:.1f} | {r['process_max_rss_mb']:.0f} |"
         )
     return "\n".join(out)

@@ -18,7 +18,10 @@ Prints numbers next to their targets, asserts nothing. Run from the repository r
 4. Measures each plan: detour ratio against the reference, lateral deviation of the
    straight walks, glitches (motion_patches.validate), speed on the first and last frame,
    final heading and position error, frames within the radius of an obstacle, and where
-   the extra length comes from (start connector, goal connector, lattice, route).
+   the extra length comes from (start connector, goal connector, lattice, route); and the
+   feet as the API writes them (foot locked): the skate the planner labels planted beside
+   the label-free measure (motion_patches.quality.foot_measure), each beside the source
+   clip's by the same measure.
 
 One line per plan while running, then Markdown tables with each target met / not met;
 ``--json PATH`` also writes every record.
@@ -42,12 +45,14 @@ for p in (str(REPO), str(HERE)):
 
 import bench_core as core  # noqa: E402
 
+from motion_patches.kinematics import clip as clip_mod
+from motion_patches.kinematics import foot_lock
 from motion_patches.kinematics.inplace import to_world
-from motion_patches.kinematics.motion import concatenate
+from motion_patches.kinematics.motion import Motion, concatenate
 from motion_patches.planning import planner as planner_mod
 from motion_patches.planning.settings import PLANNING as DEFAULTS
 from motion_patches.props.environment import Environment, Obstacle, distance_to_polygon
-from motion_patches.quality import validate
+from motion_patches.quality import foot_measure, metrics, validate
 
 WEIGHTS = tuple(DEFAULTS[k] for k in ("alpha", "beta", "gamma"))
 
@@ -606,6 +611,11 @@ def measure(scene, env, patch, lim, start, goal, args, ref):
     xy = g[:, :2]
     glitches = validate.motion_glitches(motions, plan.pieces, lim)
     hips = to_world(patch.gait.skeleton, g, m.root_local, m.rotations)[0][:, :2]
+    # The feet as the API writes them (fast feet dropped from the labels, feet locked):
+    # the planner-labelled skate beside the label-free measure.
+    skel = patch.gait.skeleton
+    labelled = Motion(g, m.root_local, m.rotations, foot_lock.still_contacts(skel, m, fps))
+    locked = Motion(g, m.root_local, foot_lock.lock_feet(skel, labelled), labelled.contacts)
     rec.update(
         failed=False,
         expansions=plan.expansions,
@@ -630,6 +640,8 @@ def measure(scene, env, patch, lim, start, goal, args, ref):
         min_clearance_m=min_clearance(scene.obstacles, xy),
         glitches=glitches,
         glitch_count=validate.count(glitches),
+        skate=metrics.foot_skate(core.foot_positions(locked, skel), fps, labelled.contacts),
+        feet=core.feet(locked, skel, fps),
     )
     rec.update(decompose(plan.pieces, motions))
     if ref.get("length"):
@@ -802,6 +814,8 @@ def summarise(recs):
         "goal_turn_deg_mean": float(np.mean([r["goal_turn_deg"] for r in found]))
         if found
         else None,
+        "skate": core.pooled_skate(found) if found else None,
+        "feet": core.pooled_feet([r["feet"] for r in found]) if found else None,
     }
 
 
@@ -827,7 +841,7 @@ def fmt(key, v):
     return f"{v:.2f}"
 
 
-def markdown(records, summary):
+def markdown(records, summary, source=None):
     out = [
         "| scene | headings | reference | bound | path | detour (vs bound) | straight dev. | "
         "clearance | glitches | v start / end | heading err. | pos. err. | inside | plan | "
@@ -925,6 +939,35 @@ def markdown(records, summary):
     out.append("| total turning per path, mean | | " + " | ".join(cells) + " |")
     cells = []
     for gname in groups:
+        sk = summary[gname]["skate"]
+        cells.append(f"{sk['mean_cm_per_s']:.1f} cm/s" if sk else "–")
+    src = f" (source clip {source['skate']['mean_cm_per_s']:.1f} cm/s)" if source else ""
+    out.append(
+        f"| foot skate the planner labels planted, foot locked{src} | | " + " | ".join(cells) + " |"
+    )
+    cells = []
+    for gname in groups:
+        f = summary[gname]["feet"]
+        cells.append(
+            f"skate {f['skate_cm_per_s']:.1f} cm/s, weighted {f['weighted_skate_cm_per_s']:.1f}, "
+            f"{f['pops']} pops, clearance {f['min_swing_clearance_cm']:.1f} cm, end ankles "
+            f"{f['max_end_ankle_off_cm']:.1f} cm"
+            if f
+            else "–"
+        )
+    src = (
+        f" (source clip: skate {source['feet']['skate']['mean_cm_per_s']:.1f} cm/s, weighted "
+        f"{source['feet']['weighted_skate']['mean_cm_per_s']:.1f}, {source['feet']['pops']} "
+        f"pops, clearance {source['feet']['min_swing_clearance_cm']:.1f} cm)"
+        if source
+        else ""
+    )
+    out.append(
+        "| feet by the label-free measure (toe within 3 cm of its lowest for 0.2 s), foot "
+        f"locked{src} | | " + " | ".join(cells) + " |"
+    )
+    cells = []
+    for gname in groups:
         e = summary[gname]["excess_mean_m"]
         cells.append(
             ", ".join(f"{k.replace('_connector', '')} {v:+.2f}" for k, v in e.items()) if e else "–"
@@ -961,7 +1004,12 @@ def main(argv=None):
         return 2
     t_all = time.perf_counter()
     print("bake ...", flush=True)
-    patch, _, bake = core.bench_bake(mocap)
+    patch, straight, bake = core.bench_bake(mocap)
+    fps = patch.gait.fps
+    source = {
+        "skate": core.bench_source_skate(straight, fps),
+        "feet": foot_measure.of_clip(clip_mod.resample(straight, fps)),
+    }
     bad = validate.segment_glitches(patch)
     print(
         f"  {bake['bake_seconds']:.1f} s: {bake['kept']} segments kept, {len(bad)} of them "
@@ -990,10 +1038,11 @@ def main(argv=None):
         "limits": lim.to_dict(),
         "targets": {k: {"op": o, "value": t} for k, (o, t, _) in TARGETS.items()},
         "summary": summary,
+        "source_clip": source,
         "records": records,
     }
     print()
-    print(markdown(records, summary))
+    print(markdown(records, summary, source))
     res["total_seconds"] = time.perf_counter() - t_all
     print(f"\n(total {res['total_seconds']:.0f} s)")
     if args.json:

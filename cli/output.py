@@ -9,6 +9,8 @@ import math
 import os
 import sys
 import tempfile
+import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -140,3 +142,36 @@ class Progress:
         if self.enabled and self.tty and self._drawn:
             self._out().write("\n")
             self._out().flush()
+
+
+HEARTBEAT_S = 5.0  # seconds between the lines of a long call without a fraction to show
+
+
+class Heartbeat:
+    """While a call without a fraction to show runs (one long plan), a line on ``stream``
+    every :data:`HEARTBEAT_S` seconds saying it still works and for how long; nothing
+    when disabled (``--json``) or when the call ends first."""
+
+    def __init__(self, label, stream=None, enabled=True):
+        self.label, self.stream, self.enabled = label, stream, enabled
+        self._stop = threading.Event()
+        self._thread = None
+
+    def _beat(self):
+        t0 = time.monotonic()
+        out = self.stream if self.stream is not None else sys.stderr
+        while not self._stop.wait(HEARTBEAT_S):
+            out.write(f"{self.label}: still working, {time.monotonic() - t0:.0f} s\n")
+            out.flush()
+
+    def __enter__(self):
+        if self.enabled:
+            self._thread = threading.Thread(target=self._beat, daemon=True)
+            self._thread.start()
+        return self
+
+    def __exit__(self, *exc):
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+        return False

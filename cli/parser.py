@@ -195,6 +195,11 @@ def _plan_parser(sub, common):
         help="first frame of the motion (default: the current frame)",
     )
     p.add_argument(
+        "--start-prop",
+        metavar="OBJECT",
+        help="a prop tagged with a stand-up clip the character starts seated on",
+    )
+    p.add_argument(
         "--from-here",
         action="store_true",
         help="start where the character is at the current frame (continue from here), not "

@@ -8,7 +8,7 @@ import bpy
 
 from .. import api
 from .lookup import object_named, save_blend, save_target, settings_given
-from .output import OK, BadInput, Failed, Result
+from .output import OK, BadInput, Failed, Heartbeat, Result
 
 
 def _goal_of(args, scene):
@@ -56,17 +56,20 @@ def cmd_plan(args):
     # What is used: the flags over the scene's.
     w = api.planning_settings(scene, **settings_given(args))
     save = save_target(args)
+    seat = args.start_prop and object_named(args.start_prop, "start prop", {"MESH"})
     try:
-        res = api.plan_path(
-            scene,
-            char,
-            goal,
-            patch_name=args.patch,
-            frame_start=args.frame_start,
-            gait=args.gait,
-            from_here=args.from_here,
-            **w,
-        )
+        with Heartbeat(f"plan '{char.name}'", enabled=not args.json):
+            res = api.plan_path(
+                scene,
+                char,
+                goal,
+                patch_name=args.patch,
+                frame_start=args.frame_start,
+                gait=args.gait,
+                from_here=args.from_here,
+                start_prop=seat or None,
+                **w,
+            )
     except api.PathNotFound as exc:
         raise Failed(str(exc)) from None
     fps = api.scene_fps(scene)
@@ -115,7 +118,8 @@ def cmd_analyse(args):
         f"{f['goal_heading_error_deg']:.1f} deg "
         f"(hips {f['goal_root_position_error_cm']:.1f} cm)",
         f"  root from plan: max {f['root_from_plan_cm']['max']:.2f} cm; frames inside an "
-        f"obstacle: {f['frames_root_inside_obstacle']}",
+        f"obstacle: root {f['frames_root_inside_obstacle']}, any bone "
+        f"{f['frames_body_inside_prop']}",
         f"  largest joint jump at a strip boundary: "
         f"{f['boundary_pop'].get('max_boundary_jump_deg', float('nan')):.1f} deg",
     ]

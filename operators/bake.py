@@ -5,15 +5,17 @@ import bpy
 from bpy.props import StringProperty
 
 from .. import api, props
-from .common import list_operators, progress
+from .common import LongWork, list_operators
 
 
-class MOTION_PATCHES_OT_bake_locomotion_patch(bpy.types.Operator):
-    """Bake a tilable locomotion patch from a straight clip and turn clips"""
+class MOTION_PATCHES_OT_bake_locomotion_patch(LongWork, bpy.types.Operator):
+    """Bake a tilable locomotion patch from a straight clip and turn clips (Esc cancels,
+    leaving the scene as it was)"""
 
     bl_idname = "motion_patches.bake_locomotion_patch"
     bl_label = "Bake Locomotion Patch"
     bl_options = {"REGISTER", "UNDO"}
+    progress_label = "Baking"
 
     layer: StringProperty(name="Layer", default="walk", description="Gait name of the patch")
     straight: StringProperty(
@@ -28,14 +30,15 @@ class MOTION_PATCHES_OT_bake_locomotion_patch(bpy.types.Operator):
 
     def _size_from_preferences(self, context):
         """Cells and nodes the caller did not give come from the preferences. Done in
-        execute, not invoke: a button, a script and the redo panel all get it (bpy.ops calls
-        from scripts, EXEC by default, and headless Blender never run invoke)."""
+        prepare, which execute and invoke both run: a button, a script and the redo panel
+        all get it (bpy.ops calls from scripts, EXEC by default, and headless Blender never
+        run invoke)."""
         prefs = props.preferences(context)
         for name in props.BAKE:
             if prefs is not None and not self.properties.is_property_set(name):
                 setattr(self, name, getattr(prefs, name))
 
-    def execute(self, context):
+    def prepare(self, context):
         self._size_from_preferences(context)
         settings = context.scene.motion_patches
         # Action names or the scene's bake settings; the API checks them and remembers them.
@@ -45,21 +48,21 @@ class MOTION_PATCHES_OT_bake_locomotion_patch(bpy.types.Operator):
             if self.turns
             else [r.action for r in settings.turn_actions if r.action]
         )
-        try:
-            with progress(context) as update:
-                res = api.bake_locomotion_patch(
-                    context.scene,
-                    settings.source_armature or context.active_object,
-                    straight,
-                    turns,
-                    layer=self.layer,
-                    cells=self.cells,
-                    nodes=self.nodes,
-                    progress=update,
-                )
-        except api.MotionPatchesError as exc:
-            self.report({"ERROR"}, str(exc))
-            return {"CANCELLED"}
+        scene, armature = context.scene, settings.source_armature or context.active_object
+        layer, cells, nodes = self.layer, self.cells, self.nodes
+        return lambda update, cancelled: api.bake_locomotion_patch(
+            scene,
+            armature,
+            straight,
+            turns,
+            layer=layer,
+            cells=cells,
+            nodes=nodes,
+            progress=update,
+            cancelled=cancelled,
+        )
+
+    def finish(self, context, res):
         st = res.stats
         self.report(
             {"INFO"},

@@ -53,12 +53,15 @@ class MOTION_PATCHES_OT_tag_object_patch(bpy.types.Operator):
         if not clips:
             self.report({"ERROR"}, f"'{ob.name}' has no clip: add one and choose its action")
             return {"CANCELLED"}
+        notes: list[str] = []
         try:
-            api.tag_object_patch(ob, clips, scene=context.scene, context=context)
+            api.tag_object_patch(ob, clips, scene=context.scene, context=context, notes=notes)
         except api.MotionPatchesError as exc:
             self.report({"ERROR"}, str(exc))
             return {"CANCELLED"}
         self.report({"INFO"}, f"'{ob.name}' is an object patch with {len(clips)} clip(s)")
+        for note in notes:
+            self.report({"WARNING"}, note)
         return {"FINISHED"}
 
 

@@ -6,7 +6,7 @@ import bpy
 from bpy.props import BoolProperty, StringProperty
 
 from .. import api, props
-from .common import progress, report_conflicts
+from .common import LongWork, report_conflicts
 
 
 class MOTION_PATCHES_OT_plan_path(bpy.types.Operator):
@@ -36,6 +36,7 @@ class MOTION_PATCHES_OT_plan_path(bpy.types.Operator):
                 context.scene.motion_patches.goal,
                 patch_name=self.patch or None,
                 context=context,
+                start_prop=context.active_object.motion_patches_character.start_prop,
                 from_here=self.from_here,
             )
         except api.MotionPatchesError as exc:
@@ -55,12 +56,14 @@ class MOTION_PATCHES_OT_plan_path(bpy.types.Operator):
         return {"FINISHED"}
 
 
-class MOTION_PATCHES_OT_plan_crowd(bpy.types.Operator):
-    """Plan every selected armature to its own goal (or the scene's), starting them apart"""
+class MOTION_PATCHES_OT_plan_crowd(LongWork, bpy.types.Operator):
+    """Plan every selected armature to its own goal (or the scene's), starting them apart
+    (Esc cancels, leaving the scene as it was)"""
 
     bl_idname = "motion_patches.plan_crowd"
     bl_label = "Plan Crowd"
     bl_options = {"REGISTER", "UNDO"}
+    progress_label = "Planning the crowd"
 
     patch: StringProperty(name="Patch", description="Locomotion patch (default: the active one)")
 
@@ -68,20 +71,14 @@ class MOTION_PATCHES_OT_plan_crowd(bpy.types.Operator):
     def poll(cls, context):
         return any(ob.type == "ARMATURE" for ob in context.selected_objects)
 
-    def execute(self, context):
-        try:
-            pairs = api.crowd_members(context.scene, context.selected_objects)
-            with progress(context) as update:
-                res = api.plan_crowd(
-                    context.scene,
-                    pairs,
-                    patch_name=self.patch or None,
-                    context=context,
-                    progress=update,
-                )
-        except api.MotionPatchesError as exc:
-            self.report({"ERROR"}, str(exc))
-            return {"CANCELLED"}
+    def prepare(self, context):
+        scene, patch = context.scene, self.patch or None
+        self._count = len(pairs := api.crowd_members(scene, context.selected_objects))
+        return lambda update, cancelled: api.plan_crowd(
+            scene, pairs, patch_name=patch, context=context, progress=update, cancelled=cancelled
+        )
+
+    def finish(self, context, res):
         for name, why in res.failed:
             self.report({"WARNING"}, why if name in why else f"{name}: {why}")
         if not res.plans:
@@ -91,7 +88,7 @@ class MOTION_PATCHES_OT_plan_crowd(bpy.types.Operator):
         waits = [f"{n} {d} frames" for n, d in res.delays.items() if d]
         self.report(
             {"INFO"},
-            f"Planned {len(res.plans)} of {len(pairs)} characters in "
+            f"Planned {len(res.plans)} of {self._count} characters in "
             f"{res.seconds:.1f} s" + (f"; waiting: {', '.join(waits)}" if waits else ""),
         )
         return {"FINISHED"}

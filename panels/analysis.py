@@ -14,7 +14,8 @@ def figure_lines(f):
     return [
         f"Foot skate: {sk['mean_cm_per_frame']:.2f} cm/frame ({sk['mean_cm_per_s']:.1f} cm/s)",
         f"Goal error: {f['goal_position_error_cm']:.1f} cm, {f['goal_heading_error_deg']:.1f}°",
-        f"Frames inside props: {f['frames_root_inside_obstacle']}",
+        f"Frames inside props: root {f['frames_root_inside_obstacle']}, "
+        f"body {f.get('frames_body_inside_prop', '-')}",
         f"Boundary pop: {pop['max_boundary_jump_deg']:.1f}° "
         f"(elsewhere p99 {pop['p99_step_deg']:.1f}°)",
     ]

@@ -113,17 +113,26 @@ def _tagged(scene):
     return (ob for ob in scene.objects if ob.type == "MESH" and ob.motion_patch.enabled)
 
 
+def _lattice_of(scene):
+    """Whose tile grid is drawn: the active character's, or every one's when asked."""
+    if scene.motion_patches.overlay_all_lattices:
+        return None
+    active = bpy.context.view_layer.objects.active
+    return [] if active is None else [active.name]
+
+
 def plan_buffers(scene):
-    """{"lines", "points", "tris"} of every planned character (see :func:`buffers`,
-    :func:`api.plan_drawings`): the props it walked around grown by its radius are filled
-    ("tris"): where its root cannot go; the cells the planner's bitmask marks occluded are
-    outlined ("lines")."""
+    """{"lines", "points", "tris"} of every visible planned character's path (see
+    :func:`buffers`, :func:`api.plan_drawings`) and, for the active one (or all, by the
+    Overlay panel's toggle), its lattice: the props it walked around grown by its radius are
+    filled ("tris"): where its root cannot go; the cells the planner's bitmask marks
+    occluded are outlined ("lines")."""
     lines, lcol, points, pcol, tris, tcol = [], [], [], [], [], []
 
     def at_z(pts):
         return [(x, y, Z) for x, y in pts]
 
-    for d in api.plan_drawings(scene):
+    for d in api.plan_drawings(scene, _lattice_of(scene)):
         g = d.ground
         for i in range(g.shape[0] - 1):
             lines += [(g[i, 0], g[i, 1], Z), (g[i + 1, 0], g[i + 1, 1], Z)]
@@ -165,7 +174,11 @@ def _patch_key(scene):
 
 
 def _plans_key(scene):
-    return json.dumps(api.plan_fingerprints(scene) + _patch_key(scene))
+    """Changes with any plan, the patch, who is visible, and whose grid is drawn."""
+    visible = [o.name for o in scene.objects if o.type == "ARMATURE" and o.visible_get()]
+    return json.dumps(
+        api.plan_fingerprints(scene) + _patch_key(scene) + [visible, _lattice_of(scene)]
+    )
 
 
 def _markers_key(scene):
@@ -262,7 +275,8 @@ def sync():
 
 
 @bpy.app.handlers.persistent
-def _on_load(_file=None):
+def _on_load(*_args):
+    # load_post, undo_post, redo_post: whatever Blender passes (a file path, a scene...).
     sync()
 
 
@@ -270,18 +284,26 @@ def _switch(on):
     enable() if on else disable()
 
 
+# Undo and redo put the setting back without its update callback: sync after them too.
+_HANDLERS = ("load_post", "undo_post", "redo_post")
+
+
 def register_handlers():
     props.overlay_switch = _switch  # Show Planner Overlay ticked or unticked
-    if _on_load not in bpy.app.handlers.load_post:
-        bpy.app.handlers.load_post.append(_on_load)
+    for name in _HANDLERS:
+        handlers = getattr(bpy.app.handlers, name)
+        if _on_load not in handlers:
+            handlers.append(_on_load)
     if sync() is not None:
         bpy.app.timers.register(sync, first_interval=0.1)
 
 
 def unregister_handlers():
     props.overlay_switch = None
-    if _on_load in bpy.app.handlers.load_post:
-        bpy.app.handlers.load_post.remove(_on_load)
+    for name in _HANDLERS:
+        handlers = getattr(bpy.app.handlers, name)
+        if _on_load in handlers:
+            handlers.remove(_on_load)
     if bpy.app.timers.is_registered(sync):
         bpy.app.timers.unregister(sync)
     disable()  # never leave a draw handler behind
@@ -294,6 +316,7 @@ class MOTION_PATCHES_PT_overlay(SidebarPanel, bpy.types.Panel):
     def draw(self, context):
         layout = self.layout
         layout.prop(context.scene.motion_patches, "show_overlay")
+        layout.prop(context.scene.motion_patches, "overlay_all_lattices")
         col = layout.column(align=True)
         col.active = context.scene.motion_patches.show_overlay
         for text in LEGEND:

@@ -5,6 +5,7 @@ active armature's bone map (when it is another skeleton than the patch's), the c
 
 import bpy
 
+from .. import api
 from .sidebar import SidebarPanel, wrapped_label
 
 
@@ -22,6 +23,7 @@ class MOTION_PATCHES_PT_planning(SidebarPanel, bpy.types.Panel):
             col = layout.column(align=True)
             wrapped_label(col, context, f"{ob.name}'s Own Goal (crowds)")
             col.prop(ob.motion_patches_character, "goal", text="")
+            layout.prop(ob.motion_patches_character, "start_prop")
             draw_bone_map(layout, context, ob)
         col = layout.column(align=True)
         col.prop(s, "alpha")
@@ -39,6 +41,8 @@ class MOTION_PATCHES_PT_planning(SidebarPanel, bpy.types.Panel):
         row.operator("motion_patches.plan_path", icon="PLAY")
         row.operator("motion_patches.plan_crowd", icon="COMMUNITY")
         layout.operator("motion_patches.duplicate_crowd", icon="DUPLICATE")
+        if api.has_crowd_conflicts(context.scene):  # a crowd was written with close passes
+            layout.operator("motion_patches.select_crowd_conflicts", icon="ERROR")
 
 
 class MOTION_PATCHES_UL_bone_map(bpy.types.UIList):

@@ -51,18 +51,19 @@ def pillar_field(bpy, seed):
 
 
 def chair_lines(bpy, api, source, jump, seed):
-    """Two lines of eleven chairs tagged with the real CMU jump (16_06); a hurried and a
-    calm walker cross them. Each is planned with dynamic and with static stitching."""
+    """Two lines of eleven low hurdles (a chair's footprint, 15 cm high: the real CMU jump
+    16_06, a standing broad jump, clears about 18 cm over them) tagged with that jump; a
+    hurried and a calm walker cross them. Each is planned with dynamic and with static stitching."""
     import numpy as np
 
     scene = bpy.context.scene
     out = {}
     for name, y0, weights in (("Hurried", 15.0, (4.0, 0.5, 0.1)), ("Calm", 25.0, (0.3, 0.1, 3.0))):
         for k, y in enumerate(np.linspace(y0 - 2.5, y0 + 2.5, 11)):
-            bpy.ops.mesh.primitive_cube_add(size=1.0, location=(5.0, y, 0.25))
+            bpy.ops.mesh.primitive_cube_add(size=1.0, location=(5.0, y, 0.075))
             ob = bpy.context.object
-            ob.name = f"{name} chair.{k:02d}"
-            ob.scale = (0.4, 0.44, 0.5)
+            ob.name = f"{name} hurdle.{k:02d}"
+            ob.scale = (0.4, 0.44, 0.15)
             api.tag_object_patch(ob, [(jump, "TRAVERSAL", 8.0, 10.0)])
         walker = source.copy()
         walker.name = name
@@ -158,6 +159,47 @@ def crowd_crossing(bpy, api, evaluate, source):
     }
 
 
+def source_feet(bpy, addon, arm, action):
+    """The label-free foot figures of the source armature playing its recorded ``action``,
+    evaluated through the depsgraph frame by frame as the planned walker is (api.analyse):
+    the floor the walker's feet are held against, by the same measure."""
+    import numpy as np
+
+    compat, fm = addon.adapter.compat, addon.motion_patches.quality.foot_measure
+    skel = addon.adapter.rig.skeleton_in_metres(arm)
+    ankles, toes = fm.foot_bones(skel)
+    ad = arm.animation_data or arm.animation_data_create()
+    keep = ad.action, ad.action_slot
+    compat.assign_action(arm, action, compat.action_slot(action))
+    try:
+        first, last = (int(round(f)) for f in action.frame_range)
+        names = [skel.names[i] for i in ankles + toes]
+        pos, _, _, _ = addon.adapter.evaluate.sample_armature(
+            bpy.context, arm, np.arange(first, last + 1), names
+        )
+    finally:
+        ad.action = keep[0]
+        if keep[0] is not None and keep[1] is not None:
+            ad.action_slot = keep[1]
+    fps = bpy.context.scene.render.fps / bpy.context.scene.render.fps_base
+    return fm.measure(pos[:, 2:], pos[:, :2], fps)
+
+
+def feet_text(m):
+    """The label-free figures in one line (motion_patches.quality.foot_measure)."""
+    return (
+        "skate %.1f cm/s (height-weighted %.1f), %d one-frame pops, swing clearance %.1f cm,"
+        " end ankles within %.1f cm of standing"
+        % (
+            m["skate"]["mean_cm_per_s"],
+            m["weighted_skate"]["mean_cm_per_s"],
+            m["pops"],
+            m["min_swing_clearance_cm"],
+            m["max_end_ankle_off_cm"],
+        )
+    )
+
+
 def main(argv):
     args = parse_args(argv)
     mocap = Path(args.mocap)
@@ -210,7 +252,8 @@ def main(argv):
     # The same plan without foot locking first: the skate the synthesis alone leaves. The
     # weights and radius are the scene's Planning settings, which the API fills in itself.
     api.plan_path(scene, walker, goal_ob, frame_start=1, foot_lock=False)
-    unlocked = api.analyse(bpy.context, walker)["foot_skate"]
+    unlocked_figures = api.analyse(bpy.context, walker)
+    unlocked, unlocked_feet = unlocked_figures["foot_skate"], unlocked_figures["feet"]
     plan = api.plan_path(scene, walker, goal_ob, frame_start=1)
     scene.frame_start, scene.frame_end = plan.frame_start, plan.frame_end
     figures = api.analyse(bpy.context, walker)
@@ -223,6 +266,7 @@ def main(argv):
     con, _, _ = from_core.kinematics.contacts.foot_contacts(src30)
     fj = from_core.kinematics.contacts.foot_joints(src30.skeleton)
     floor = from_core.quality.metrics.foot_skate(src30.joint_positions()[:, fj], 30.0, con)
+    floor_feet = source_feet(bpy, addon, arm, acts[0])
 
     out = Path(args.output)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -248,7 +292,9 @@ def main(argv):
         },
         "evaluated": figures,
         "source_clip_skate": floor,
+        "source_clip_feet": floor_feet,
         "skate_without_foot_lock": unlocked,
+        "feet_without_foot_lock": unlocked_feet,
         "chair_lines": chairs,
         "crowd": crowd,
         "saved": str(out),
@@ -294,6 +340,10 @@ def main(argv):
             unlocked["mean_cm_per_s"],
         )
     )
+    print("    feet by the label-free measure (toe within 3 cm of its lowest for 0.2 s):")
+    print("      walker:              " + feet_text(f["feet"]))
+    print("      without foot lock:   " + feet_text(unlocked_feet))
+    print("      source clip 16_15:   " + feet_text(floor_feet))
     print(
         "    goal error: root motion %.1f cm, %.1f deg; hips %.1f cm from the goal point"
         % (
@@ -320,11 +370,11 @@ def main(argv):
     for name, rows in chairs.items():
         d, st, ev = rows["dynamic"], rows["static"], rows["evaluated"]
         print(
-            "  %-8s chair line (alpha, beta, gamma = %s): %s"
+            "  %-8s hurdle line (alpha, beta, gamma = %s): %s"
             % (
                 name,
                 "4, 0.5, 0.1" if name == "Hurried" else "0.3, 0.1, 3",
-                "hurdles a chair (16_06 jump)" if d["traversals"] else "walks around",
+                "jumps a hurdle (16_06 jump)" if d["traversals"] else "walks around",
             )
         )
         print(
@@ -336,11 +386,12 @@ def main(argv):
             % (st["seconds"] * 1000, st["copies_stitched"], st["stitch_edges"], st["cost"])
         )
         print(
-            "    evaluated: skate %.2f cm/frame, root inside a chair outside the jump: %d frames, "
-            "goal %.1f cm / %.1f deg"
+            "    evaluated: skate %.2f cm/frame, root inside a hurdle outside the jump: %d frames, "
+            "any bone inside a hurdle: %d frames, goal %.1f cm / %.1f deg"
             % (
                 ev["foot_skate"]["mean_cm_per_frame"],
                 ev["frames_root_inside_obstacle"],
+                ev["frames_body_inside_prop"],
                 ev["goal_root_position_error_cm"],
                 ev["goal_heading_error_deg"],
             )
@@ -372,6 +423,7 @@ def main(argv):
         and f["goal_heading_error_deg"] < 10
         and f["frames_root_inside_obstacle"] == 0
         and all(r["evaluated"]["frames_root_inside_obstacle"] == 0 for r in chairs.values())
+        and all(r["evaluated"]["frames_body_inside_prop"] == 0 for r in chairs.values())
         and crowd["frames_root_inside_obstacle"] == 0
         and not crowd["failed"]
         and (crowd["conflicts"] or crowd["evaluated_closest_m"] >= 0.95)

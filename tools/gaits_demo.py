@@ -49,9 +49,9 @@ def main(argv):
     run = api.bake_locomotion_patch(scene, arm, runs[0], [runs[1]], layer="run")
     scene.motion_patches.source_armature = arm
     for k, y in enumerate(np.linspace(-5.0, 5.0, 21)):
-        bpy.ops.mesh.primitive_cube_add(size=1.0, location=(LINE_X, y, 0.25))
+        bpy.ops.mesh.primitive_cube_add(size=1.0, location=(LINE_X, y, 0.075))
         chair = bpy.context.object
-        chair.name, chair.scale = f"Chair.{k:02d}", (0.4, 0.44, 0.5)
+        chair.name, chair.scale = f"Chair.{k:02d}", (0.4, 0.44, 0.15)  # 16_06 clears it
         api.tag_object_patch(chair, [(acts[2], "TRAVERSAL", 8.0, 10.0)], patch_name="walk")
         for c in chair.motion_patch.clips:
             c.layer_in = c.layer_out = "run"

@@ -69,7 +69,7 @@ VIEWS = {
     "chairs": dict(
         characters=("Hurried", "Calm"),
         labels=True,
-        props="chair",
+        props="hurdle",
         near=6.0,
         azimuth=-8.0,
         pitch=36.0,

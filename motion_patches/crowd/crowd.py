@@ -32,21 +32,30 @@ def disc(centre: Sequence[float] | np.ndarray, radius: float, sides: int = 12) -
 
 
 def standing_spots(
-    ends: Sequence[tuple[Sequence[float], Sequence[float]]], n: int, spacing: float, radius: float
+    ends: Sequence[tuple[Sequence[float], Sequence[float]]],
+    n: int,
+    spacing: float,
+    radius: float,
+    box: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> list[tuple[int, np.ndarray]]:
     """[(index, polygon)] of the spots character ``n`` walks around: the goals of the
     characters before it and the starts of those after it, as discs that keep ``spacing``
     between roots once grown by the planner's ``radius``. ``ends`` [(start, goal)] are
     (x, y, heading) states; a spot within that distance of ``n``'s own start or goal is
-    left out (it could not start or arrive at all)."""
+    left out (it could not start or arrive at all), and so is one whose disc lies wholly
+    outside ``box`` (lo, hi) when given: where its plan never looks."""
     if spacing <= 0:
         return []
     grow = max(spacing - radius, 0.05)
     mine = np.array([ends[n][0][:2], ends[n][1][:2]], float)
     where = np.array([(g if m < n else s)[:2] for m, (s, g) in enumerate(ends)], float)
     near = np.linalg.norm(where[:, None, :] - mine[None], axis=2).min(axis=1) < grow + radius
-    keep = np.nonzero(~near & (np.arange(len(ends)) != n))[0]
+    keep = ~near & (np.arange(len(ends)) != n)
     ring = disc((0.0, 0.0), grow)
+    if box is not None:
+        reach = float(np.abs(ring).max())
+        keep &= ((where + reach >= box[0]) & (where - reach <= box[1])).all(axis=1)
+    keep = np.nonzero(keep)[0]
     return [(int(m), ring + where[m]) for m in keep]
 
 
@@ -87,61 +96,58 @@ _OFF = 1 << 20  # cell indices are shifted by this into a key's 21-bit fields
 
 
 class _Sorted:
-    """Reserved root positions (frame, xy, owner) sorted by an int64 key, in two levels: a
-    large one and a small recent one that each reservation is inserted into and that is
-    merged into the large one once it holds a quarter as much. An insertion then copies the
-    small level, not the whole crowd's, and the merges cost O(N log N) in all."""
+    """Reserved root positions (frame, xy, owner) sorted by an int64 key, in runs: each
+    reservation is a run of its own, and the newest run is merged into the one before
+    while that one holds at most four times as much (a log-structured merge). Runs grow
+    geometrically, so there are O(log N) of them to look through and every entry is
+    copied O(log N) times in all, whatever the size of the crowd. An owner's entries
+    always lie in one run (in key order), so what a look-up finds of one owner comes in
+    the order of the queries."""
 
     _COLUMNS = ("key", "frame", "xy", "owner")
 
     def __init__(self):
-        self.levels = [self._empty(), self._empty()]
-
-    @staticmethod
-    def _empty():
-        return {
-            "key": np.empty(0, np.int64),
-            "frame": np.empty(0, np.int64),
-            "xy": np.empty((0, 2), float),
-            "owner": np.empty(0, np.int32),
-        }
+        self.runs = []
 
     @property
     def size(self):
-        return sum(lv["key"].size for lv in self.levels)
+        return sum(run["key"].size for run in self.runs)
 
     def insert(self, key, frame, xy, owner):
         order = np.argsort(key, kind="stable")
-        new = {"key": key, "frame": frame, "xy": xy, "owner": np.full(key.size, owner, np.int32)}
-        recent = self.levels[1]
-        at = np.searchsorted(recent["key"], key[order])
-        for c in self._COLUMNS:
-            recent[c] = np.insert(recent[c], at, new[c][order], axis=0)
-        main = self.levels[0]
-        if recent["key"].size > max(4096, main["key"].size // 4):
-            both = {c: np.concatenate((main[c], recent[c])) for c in self._COLUMNS}
+        run = {
+            "key": key[order],
+            "frame": frame[order],
+            "xy": xy[order],
+            "owner": np.full(key.size, owner, np.int32),
+        }
+        self.runs.append(run)
+        while len(self.runs) > 1 and self.runs[-2]["key"].size <= 4 * self.runs[-1]["key"].size:
+            new = self.runs.pop()
+            old = self.runs.pop()
+            both = {c: np.concatenate((old[c], new[c])) for c in self._COLUMNS}
             order = np.argsort(both["key"], kind="stable")
-            self.levels = [{c: both[c][order] for c in self._COLUMNS}, self._empty()]
+            self.runs.append({c: both[c][order] for c in self._COLUMNS})
 
     def remove(self, owner):
-        for lv in self.levels:
-            keep = lv["owner"] != owner
-            for c in self._COLUMNS:
-                lv[c] = lv[c][keep]
+        for i, run in enumerate(self.runs):
+            keep = run["owner"] != owner
+            if not keep.all():
+                self.runs[i] = {c: run[c][keep] for c in self._COLUMNS}
+        self.runs = [run for run in self.runs if run["key"].size]
 
     def near(self, q):
         """(query index, frame, xy, owner) of every entry whose key is one of ``q``."""
         out = []
-        for lv in self.levels:
-            if not lv["key"].size:
-                continue
-            lo = np.searchsorted(lv["key"], q, "left")
-            n = np.searchsorted(lv["key"], q, "right") - lo
+        for run in self.runs:
+            lo = np.searchsorted(run["key"], q, "left")
+            n = np.searchsorted(run["key"], q, "right") - lo
             hit = np.nonzero(n)[0]
             if hit.size:
                 n = n[hit]
                 ent = np.repeat(lo[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
-                out.append((np.repeat(hit, n), lv["frame"][ent], lv["xy"][ent], lv["owner"][ent]))
+                got = (run["frame"][ent], run["xy"][ent], run["owner"][ent])
+                out.append((np.repeat(hit, n), *got))
         if not out:
             return np.empty(0, int), np.empty(0, np.int64), np.empty((0, 2)), np.empty(0, int)
         return tuple(np.concatenate(c) for c in zip(*out))
@@ -154,13 +160,14 @@ class Reservations:
     it leaves and its goal from its arrival on. A character placed later is checked against
     them all: its walk against the others' walks and spots, its own spots against both.
 
-    Cells are ``spacing / sqrt(2)`` wide, so two roots closer than ``spacing`` are at most
-    two cells apart; a sparse table (sorted int64 keys of frame and cell) keeps memory to
-    the frames walked, whatever the size of the plaza. Lookups are vectorised over frames."""
+    Cells are ``spacing`` and :attr:`SLACK` wide, so two roots closer than that are in the
+    same cell or neighbours (nine cells to look in); a sparse table (sorted int64 keys of
+    frame and cell) keeps memory to the frames walked, whatever the size of the plaza.
+    Lookups are vectorised over frames."""
 
     def __init__(self, spacing):
         self.spacing = float(spacing)
-        self.cell = max(self.spacing, 1e-6) / np.sqrt(2.0)
+        self.cell = self.spacing + self.SLACK
         self.moving = _Sorted()  # keyed by (frame, cell)
         self.spot_keys = np.empty(0, np.int64)  # standing spots: sorted cell keys
         self.spots = np.empty((0, 5), float)  # x, y, first frame, end frame (inf), owner
@@ -175,11 +182,13 @@ class Reservations:
     def _key(t, c):
         return (np.asarray(t, np.int64) << 42) | (c[..., 0] << 21) | c[..., 1]
 
-    _RING = np.array([(i, j) for i in range(-2, 3) for j in range(-2, 3)], np.int64)
+    SLACK = 0.05  # metres cells are wider than the spacing: the most :meth:`busy` adds
+    _RING = np.array([(i, j) for i in range(-1, 2) for j in range(-1, 2)], np.int64)
+    _RING_KEYS = (_RING[:, 0] << 21) + _RING[:, 1]  # added to a cell key: the cells round it
 
     def _moving_near(self, t, xy):
-        """(query row, xy, owner) of moving entries on frame ``t[row]`` within two cells of
-        ``xy[row]``."""
+        """(query row, xy, owner) of moving entries on frame ``t[row]`` in the cell of
+        ``xy[row]`` or next to it."""
         if not self.moving.size or not len(t):
             return np.empty(0, int), np.empty((0, 2)), np.empty(0, int)
         c = self._cells(xy)[:, None, :] + self._RING[None]
@@ -188,16 +197,19 @@ class Reservations:
         return rows // len(self._RING), where, owner
 
     def _spots_near(self, xy):
-        """Indices of standing spots within two cells of any of the points ``xy``."""
+        """Indices of standing spots in the cells of the points ``xy`` or next to them."""
         if not self.spot_keys.size:
             return np.empty(0, int)
-        c = np.unique(self._cells(xy), axis=0)[:, None, :] + self._RING[None]
-        q = np.unique((c[..., 0] << 21 | c[..., 1]).ravel())
+        c = self._cells(xy)
+        c = np.unique(c[:, 0] << 21 | c[:, 1])  # the cells of the points, once each
+        q = np.unique((c[:, None] + self._RING_KEYS[None]).ravel())
         lo = np.searchsorted(self.spot_keys, q, "left")
-        hi = np.searchsorted(self.spot_keys, q, "right")
-        return np.unique(
-            np.concatenate([np.arange(a, b) for a, b in zip(lo, hi) if b > a] or [np.empty(0, int)])
-        )
+        n = np.searchsorted(self.spot_keys, q, "right") - lo
+        hit = np.nonzero(n)[0]
+        if not hit.size:
+            return np.empty(0, int)
+        n = n[hit]  # disjoint ranges of the sorted keys, in order: already sorted and unique
+        return np.repeat(lo[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
 
     def busy(self, track: np.ndarray, frames: int, margin: float = 0.01) -> np.ndarray:
         """(len(track), frames) bool: ``track[k]`` closer than the spacing (and ``margin``)
@@ -205,6 +217,8 @@ class Reservations:
         then), for every frame from 0; the last column stands for every frame after it.
         Found from the cells about the track over all frames at once (the entries sorted by
         cell), so its cost follows the traffic near the track, not the frames searched."""
+        if margin > self.SLACK:
+            raise ValueError(f"a margin of at most {self.SLACK} m, not {margin}")
         track = np.asarray(track, float)
         n, s2 = len(track), (self.spacing + margin) ** 2
         out = np.zeros((n, frames + 2), np.int32)
@@ -449,6 +463,18 @@ def _improve(table, s, found, max_delay, max_hold, step, ramp):
     return best[2], best[3]
 
 
+def _found_by(timing, max_delay, max_extra, max_holds, ramp):
+    """Whether :func:`path_timing.earliest` within ``max_delay``, ``max_extra`` and
+    ``max_holds`` finds ``timing`` (delay, holds), the answer of a search allowing more.
+    It does when ``timing`` fits in it: the earliest arrival of the wider search is then
+    one it can reach, and of those the wider one took the fewest holds, then the shortest
+    wait, which it prefers alike (states are kept by that value, ties broken in the same
+    order of moves); so the narrower search need not be run."""
+    delay, holds = timing
+    extra = delay + sum(h + ramp for _, h in holds)
+    return delay <= max_delay and len(holds) <= max_holds and extra <= max_extra
+
+
 def _timed(table, s, max_delay, max_hold, ramp, found):
     """``s`` re-timed to its earliest arrival clear of everyone reserved
     (:func:`path_timing.earliest`: a wait at its start and idle holds on the way), with the
@@ -465,6 +491,8 @@ def _timed(table, s, max_delay, max_hold, ramp, found):
         s.track, busy, s.holdable, ramp, tries[-1][0], tries[-1][0] + max_hold, tries[-1][1]
     )
     for wait, holds in tries[:-1] if timing is not None else ():
+        if _found_by(timing, wait, wait + max_hold, holds, ramp):
+            break  # the earliest of all is one this search allows: it finds that one too
         first = path_timing.earliest(s.track, busy, s.holdable, ramp, wait, wait + max_hold, holds)
         if first is not None:
             timing = first

@@ -21,7 +21,7 @@ from ..kinematics.inplace import root_positions
 from ..kinematics.motion import Motion
 from ..kinematics.retarget import RigMap
 from ..kinematics.scene_rate import placed
-from ..planning import causes, moving_props
+from ..planning import causes, moving_props, plan_frame
 from ..planning.pieces import Plan, PlanError
 from ..planning.planner import SegmentPlanner, plan_motions, planner_for, with_interactions
 from ..planning.settings import PlanSettings
@@ -225,8 +225,33 @@ def spots_of(task: MemberTask, world: MemberWorld) -> list[Obstacle]:
     if task.rank is None or not world.rank_ends:
         return []
     radius = world.settings.radius
-    found = standing_spots(world.rank_ends, task.rank, world.spacing, radius)
+    box = plan_box(task.ends[0], task.ends[1], world.planner)
+    if box is not None:
+        box = (box[0] * task.size, box[1] * task.size)  # in the world of size 1
+    found = standing_spots(world.rank_ends, task.rank, world.spacing, radius, box)
     return [Obstacle(world.spot_names[m], poly / task.size) for m, poly in found]
+
+
+def plan_box(
+    start: np.ndarray, goal: np.ndarray, planner: SegmentPlanner
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """(lo, hi): a world box holding every footprint a plan of ``start`` -> ``goal`` can
+    meet: the box its search region's obstacles are looked up in (:meth:`SegmentPlanner.
+    framed`, the planner's margin), a tile wider. None when the ends coincide (the plan
+    frame then turns with the start's heading)."""
+    if np.hypot(*(np.asarray(goal[:2], float) - np.asarray(start[:2], float))) <= 1e-6:
+        return None
+    side, env = planner.patch.side, planner.world_env
+    frame, _, _, region = plan_frame.plan_region(
+        np.asarray(start, float),
+        np.asarray(goal, float),
+        side,
+        planner.patch.nodes,
+        causes.MARGIN_TILES,
+        env.side,
+    )
+    lo, hi = (region[0] * side, region[1] * side), ((region[2] + 1) * side, (region[3] + 1) * side)
+    return plan_frame.region_box(frame, lo, hi, env.radius + env.side)
 
 
 def plan_member(task: MemberTask, world: MemberWorld) -> Member | NoPlan:

@@ -66,12 +66,18 @@ def earliest(
         can_hold[half : n - half] = np.asarray(holdable, bool)[half : n - half]
     down, up = _ramps(ramp) if can_hold.any() else (np.zeros(0, int), np.zeros(0, int))
 
-    def at(u, t):
-        """Busy at fractional track frames ``u`` on frames ``t`` (same shape)."""
+    def ramp_points(offsets):
+        """(lo, hi, between) of the fractional track frames ``k + offsets`` for every
+        track frame k (rows): the frames either side and whether it lies between them."""
+        u = k_all[:, None] + offsets[None]
         lo = np.clip(np.floor(u).astype(int), 0, n - 1)
-        hi = np.minimum(lo + 1, n - 1)
+        return lo, np.minimum(lo + 1, n - 1), u > lo + 1e-9
+
+    def at(points, k, t):
+        """Busy at the ramp ``points`` from track frames ``k`` on frames ``t``."""
+        lo, hi, between = points
         t = np.minimum(t, last)
-        return busy[lo, t] | np.where(u > lo + 1e-9, busy[hi, t], False)
+        return busy[lo[k], t] | (between[k] & busy[hi[k], t])
 
     # the goal: free on every frame from the arrival on (the first frame it stays free)
     goal = busy[n - 1, n - 1 :]
@@ -87,7 +93,8 @@ def earliest(
     walk_how = np.zeros((layers, n), np.int8)
     stand_how = np.zeros((layers + half + 2, n), np.int8)
     seed_v[0, 0], seed_how[0, 0] = 0, _START
-    rows = np.minimum(k_all[None, :] + np.arange(layers)[:, None], last)
+    downs, ups = ramp_points(down), ramp_points(up)
+    step, first = 32, -64  # layers whose free frames are looked up at once, the first
     for e in range(layers):
         sv, st = seed_v[e], stand_v[e]
         live_w, live_s = sv < _NONE, st < _NONE
@@ -95,7 +102,10 @@ def earliest(
             if not (seed_v[e + 1 :] < _NONE).any() and not (stand_v[e + 1 :] < _NONE).any():
                 return None  # nothing left walking or standing
             continue
-        free = ~busy[k_all, rows[e]]
+        if not first <= e < first + step:
+            rows = np.minimum(k_all[None, :] + np.arange(e, min(e + step, layers))[:, None], last)
+            frees, first = ~busy[k_all[None, :], rows], e
+        free = frees[e - first]
         val = _run_min(np.where(free, sv, _NONE), free)
         how = np.where(val < _NONE, _WALK, 0).astype(np.int8)
         seeded = free & (sv == val) & live_w
@@ -116,7 +126,7 @@ def earliest(
                 stand_how[e + 1, ks[better]] = _STAND
             if e + half < layers:  # speed up out of a hold
                 t = ks[:, None] + e + 1 + np.arange(ramp)[None]
-                ok = ~at(ks[:, None] + up[None], t).any(1)
+                ok = ~at(ups, ks, t).any(1)
                 k2, v = ks[ok] + half, st[ks[ok]]
                 better = v < seed_v[e + half, k2]
                 seed_v[e + half, k2[better]] = v[better]
@@ -125,7 +135,7 @@ def earliest(
             ks = np.nonzero(reach[: n - ramp] & can_hold[half : n - half])[0] + half
             if ks.size:
                 t = (ks - half)[:, None] + e + 1 + np.arange(ramp + 1)[None]
-                ok = ~at((ks - half)[:, None] + down[None], t).any(1)
+                ok = ~at(downs, ks - half, t).any(1)
                 ks = ks[ok]
                 v = val[ks - half] + _HOLD
                 ks, v = ks[v // _HOLD <= max_holds], v[v // _HOLD <= max_holds]

@@ -98,13 +98,24 @@ class Gait:
 
     def floor(self) -> float:
         """Floor height under the straight loop (where interaction clips are put down).
-        Derived once (forward kinematics of the loop's frames) and kept: every plan, check
-        and redraw of the sidebar asks for it, and the loops never change once built."""
-        if self.floor_height is None:
-            lp = self.straight
+        Kept once found (every plan, check and crowd member asks for it; it takes the
+        loop's forward kinematics), for as long as the loop and skeleton are the same; a
+        patch stores it (``floor_height``, read from the file), so it is not derived at all
+        for a loaded patch."""
+        lp = self.straight
+        key = (lp, lp.root_local, lp.rotations, self.skeleton, self.fps)
+        cached = self.__dict__.get("_floor")
+        if cached is None and self.floor_height is not None:  # stored with the patch
+            cached = self.__dict__["_floor"] = (key, float(self.floor_height))
+        if (
+            cached is None
+            or any(a is not b for a, b in zip(cached[0][:4], key))
+            or (cached[0][4] != self.fps)
+        ):
             clip = Clip("loop", self.skeleton, self.fps, lp.root_local, lp.rotations)
-            self.floor_height = floor_level(clip)
-        return self.floor_height
+            cached = self.__dict__["_floor"] = (key, float(floor_level(clip)))
+            self.floor_height = cached[1]
+        return cached[1]
 
     def cycle_distances(self) -> np.ndarray:
         return np.array([lp.cycle_distance for lp in self.loops])

@@ -83,15 +83,35 @@ def _ease(s, length, ramp_len, eased):
     return e
 
 
+def double_support(gait: Gait) -> np.ndarray:
+    """Phases of the straight loop in the middle of each stretch with both feet planted
+    (a heel or toe of each; ascending, empty for a gait that has none, as a run): where a
+    walk can stop with the last step landed, or start with a foot about to lift."""
+    c = np.asarray(gait.straight.contacts, bool)
+    both = (c[:, 0] | c[:, 1]) & (c[:, 2] | c[:, 3])
+    n = both.size
+    if both.all() or not both.any():
+        return np.zeros(0, int)
+    shift = int(np.argmin(both))  # a frame with one foot up: no stretch wraps past it
+    rolled = np.roll(both, -shift)
+    d = np.diff(np.concatenate(([0], rolled.astype(int), [0])))
+    starts, ends = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
+    return np.sort(((starts + ends - 1) // 2 + shift) % n)
+
+
 def frame_arclengths(
     gait: Gait,
     curve: Curve,
     cycles: int | str | None = None,
     start_phase: int = 0,
     eased: tuple[bool, bool] = (True, True),
+    phases: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Frame phases (K,), arc length of the root on the curve per frame (K,), and the
-    curve's easing weights: the timing of :func:`follow` without building any pose."""
+    curve's easing weights: the timing of :func:`follow` without building any pose.
+    ``phases``: the phases a ``"to node"`` motion may start on and a motion without
+    ``cycles`` may end on (:func:`double_support`: a start or a stop); the stride is
+    stretched along the curve to the nearest (by under a quarter cycle)."""
     n = gait.frames
     ease = _ease(curve.s, curve.length, gait.cycle_distance * RAMP, eased)
     dist = gait.blended_distance(curve.kappa * ease)
@@ -99,7 +119,14 @@ def frame_arclengths(
     phase_at = np.concatenate(([0.0], np.cumsum(np.diff(curve.s) / dmid)))  # cycles along curve
     straight = gait.straight
     profile = straight.distance / straight.cycle_distance  # (n + 1,) within-cycle fraction
-    if cycles == "to node":
+    some = phases is not None and len(phases) > 0
+    if cycles == "to node" and some:
+        # Starting on one of ``phases`` and ending on the node pose: the whole number of
+        # cycles and the start phase whose travel is nearest the curve's.
+        whole, start_phase = _nearest_phase(phase_at[-1], profile, phases, start=True)
+        phase_at *= (whole - profile[start_phase]) / phase_at[-1]
+        total = whole * n - start_phase
+    elif cycles == "to node":
         # Any length, ending on the node pose: start at the phase that leaves a whole
         # number of cycles to the end (the stride stretched by under one frame's travel).
         whole = max(int(np.ceil(phase_at[-1] - 0.5 / n)), 1)
@@ -108,6 +135,12 @@ def frame_arclengths(
             start_phase = 0
         phase_at *= (whole - profile[start_phase]) / phase_at[-1]
         total = whole * n - start_phase
+    elif cycles is None and some:
+        # Ending on one of ``phases``: the stop's last step lands.
+        base = profile[start_phase % n]
+        whole, end = _nearest_phase(phase_at[-1], profile, phases, start=False, base=base)
+        phase_at *= (whole + profile[end] - base) / phase_at[-1]
+        total = whole * n + end - start_phase % n
     elif cycles is not None:
         assert not isinstance(cycles, str), cycles  # "to node" is the one word
         phase_at *= cycles / phase_at[-1]
@@ -120,6 +153,25 @@ def frame_arclengths(
     target = np.clip(target, 0.0, phase_at[-1])
     target[-1] = phase_at[-1]
     return k, np.interp(target, phase_at, curve.s), ease
+
+
+def _nearest_phase(travel, profile, phases, start, base=0.0):
+    """(whole cycles, phase) of ``phases`` whose travel is nearest ``travel`` (cycles):
+    ``whole - profile[phase]`` from a start phase to the node pose (``start``), else
+    ``whole + profile[phase] - base`` from a phase ``base`` into its cycle; never shorter
+    than a tenth of a cycle."""
+    best = None
+    for ph in np.asarray(phases, int):
+        p = profile[ph]
+        for whole in range(max(int(np.floor(travel)) - 1, 0), int(np.ceil(travel)) + 3):
+            length = whole - p if start else whole + p - base
+            if length < 0.1:
+                continue
+            err = abs(length - travel)
+            if best is None or err < best[0]:
+                best = (err, whole, int(ph))
+    assert best is not None, "a cycle or two always fits"
+    return best[1], best[2]
 
 
 def held_weights(weights: np.ndarray, half: int) -> np.ndarray:
@@ -145,18 +197,20 @@ def follow(
     cycles: int | str | None = None,
     start_phase: int = 0,
     eased: tuple[bool, bool] = (True, True),
+    phases: np.ndarray | None = None,
     poses: bool = True,
 ) -> Motion:
     """Motion of the gait along ``curve``.
 
     With ``cycles`` the motion lasts exactly ``cycles`` loops (the curve was fitted to it)
-    and ends on the node pose; without, it stops where the curve ends, mid-cycle if need be;
-    with ``cycles="to node"`` it starts at the phase that makes it end on the node pose.
+    and ends on the node pose; without, it stops where the curve ends, mid-cycle if need be
+    (on one of ``phases`` if given); with ``cycles="to node"`` it starts at the phase (of
+    ``phases``) that makes it end on the node pose.
     ``poses`` False: the ground frames and root alone (what a layout check measures), the
     body left out (the root bone's rotation and the contacts of the first loop stand in
     for it): the blended poses are most of the work.
     """
-    k, s, ease = frame_arclengths(gait, curve, cycles, start_phase, eased)
+    k, s, ease = frame_arclengths(gait, curve, cycles, start_phase, eased, phases)
     x, y, h, _ = curve.at(s)
     weights = gait.weights(np.interp(s, curve.s, curve.kappa * ease))
     weights = held_weights(weights, max(int(round(gait.frames * WEIGHT_WINDOW)), 0))

@@ -7,10 +7,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..kinematics import retime
+from ..kinematics import retime, stand
 from ..kinematics.motion import Motion, ease_to, sliced
+from ..patch.gait import Gait
+from ..patch.layers import has_flight
 from ..patch.locomotion_patch import LocomotionPatch
-from ..patch.synthesis import follow
+from ..patch.synthesis import double_support, follow
 from ..props.object_patch import ObjectPatch
 from . import turn_in_place
 from .pieces import Piece, Plan
@@ -35,11 +37,11 @@ def plan_motions(
     for i, p in enumerate(plan.pieces):
         if p.kind == "turn":
             if not poses and ms and full is None:
-                full = piece_motion(patch, plan.pieces[i - 1])
+                full = piece_motion(patch, plan.pieces[i - 1], standing)
             m = turn_motion(patch, p, (full if not poses else ms[-1]) if ms else None)
             full = m
         else:
-            m = piece_motion(patch, p, poses)
+            m = piece_motion(patch, p, standing, poses)
             full = None
         ms.append(m if poses else _bodiless(m))
     clips = ("traversal", "interaction")
@@ -52,6 +54,10 @@ def plan_motions(
             ease_in = i == 0 or kind == "turn" or kinds[i - 1] == "turn"
             ease_out = i == n - 1 or kind == "turn" or kinds[i + 1] == "turn"
             ms[i] = retime.eased(ms[i], ease_in, ease_out, ramp)
+            if poses and not has_flight(patch.gait):  # the body only: ground and frames kept
+                ms[i] = stand.settled(
+                    patch.gait.skeleton, ms[i], flat_feet(patch.gait), ease_in, ease_out, ramp // 2
+                )
         if kinds[-1] not in clips and np.isfinite(np.asarray(plan.goal[:2], float)).all():
             ms[-1] = hips_to(ms[-1], plan.goal[:2], 2 * patch.gait.frames)
     for i, kind in enumerate(kinds):
@@ -62,6 +68,38 @@ def plan_motions(
         if i > 0 and (kinds[i - 1] in clips or "turn" in (kind, kinds[i - 1])):
             ms[i] = ease_to(ms[i], ms[i - 1], BLEND_FRAMES, at_end=False)
     return ms
+
+
+def stand_note(patch: LocomotionPatch, plan: Plan) -> str | None:
+    """What :func:`plan_motions` derives at the plan's ends, in words (None: nothing, the
+    plan starts and ends in clips or its gait has no double support, as a run)."""
+    if has_flight(patch.gait) or not plan.pieces:
+        return None
+    clips = ("traversal", "interaction")
+    ends = [
+        word
+        for word, piece in (("start", plan.pieces[0]), ("stop", plan.pieces[-1]))
+        if piece.kind not in clips
+    ]
+    if not ends:
+        return None
+    return (
+        " and ".join(f"{e} (derived)" for e in ends)
+        + ": a stand made from the walk's double-support frame, both feet put down flat"
+        " (no start, stop or idle is recorded for the walking subject)"
+    )
+
+
+def flat_feet(gait: Gait) -> stand.FlatFeet:
+    """The gait's feet standing flat (:func:`.stand.flat_feet` of its straight loop;
+    cached on the loop)."""
+    lp = gait.straight
+    got = lp.__dict__.get("_flat_feet")
+    if got is None:
+        got = lp.__dict__["_flat_feet"] = stand.flat_feet(
+            gait.skeleton, lp.root_local, lp.rotations, lp.contacts
+        )
+    return got
 
 
 def turn_motion(patch: LocomotionPatch, piece: Piece, previous: Motion | None = None) -> Motion:
@@ -147,16 +185,21 @@ def _bodiless(m: Motion) -> Motion:
     return Motion(m.ground, m.root_local, m.rotations[:, :1], m.contacts)
 
 
-def piece_motion(patch: LocomotionPatch, piece: Piece, poses: bool = True) -> Motion:
-    """World-space motion of one planned piece (not eased; see :func:`plan_motions`;
-    ``poses`` False: walking pieces without their body, :func:`..patch.synthesis.follow`)."""
+def piece_motion(
+    patch: LocomotionPatch, piece: Piece, standing: bool = False, poses: bool = True
+) -> Motion:
+    """World-space motion of one planned piece (not eased; see :func:`plan_motions`);
+    with ``standing`` a start (goal) connector starts (ends) on a double-support phase
+    (:func:`~..patch.synthesis.double_support`), where a stand is eased from (into);
+    ``poses`` False: walking pieces without their body (:func:`..patch.synthesis.follow`)."""
     if piece.kind == "turn":
         return turn_motion(patch, piece)
-    m = _local_piece_motion(patch, piece, poses)
+    phases = double_support(patch.gait) if standing else None
+    m = _local_piece_motion(patch, piece, phases, poses)
     return m if piece.frame == IDENTITY else m.transformed(*piece.frame)
 
 
-def _local_piece_motion(patch, piece, poses=True):
+def _local_piece_motion(patch, piece, phases=None, poses=True):
     if piece.kind in ("segment", "part"):
         m = patch.motion(piece.segment, poses)
         if piece.kind == "part":
@@ -165,7 +208,9 @@ def _local_piece_motion(patch, piece, poses=True):
     if piece.kind in ("traversal", "interaction"):
         return piece.prop.world_clip(piece.prop.clips[piece.clip_index])
     if piece.kind == "start":
-        return follow(patch.gait, piece.curve, cycles="to node", poses=poses)
+        return follow(patch.gait, piece.curve, cycles="to node", phases=phases, poses=poses)
     if piece.kind == "shortcut":
         return follow(patch.gait, piece.curve, cycles=piece.cycles, poses=poses)
-    return follow(patch.gait, piece.curve, cycles=None, eased=(True, False), poses=poses)
+    return follow(
+        patch.gait, piece.curve, cycles=None, eased=(True, False), phases=phases, poses=poses
+    )

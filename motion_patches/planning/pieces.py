@@ -46,6 +46,10 @@ class Piece:
     frame: tuple = IDENTITY  # plan frame (x, y, angle) taking the piece to the world
     # (x, y, heading, angle) of a turn on the spot (kind "turn"), world
     turn: tuple[float, float, float, float] | None = None
+    # A crowd's idle holds laid into the piece (kind "hold"): what it was, and the frames
+    # held (each (frame in the piece, frames held)).
+    held_from: str = ""
+    holds: tuple = ()
 
     @property
     def label(self) -> str:
@@ -58,6 +62,9 @@ class Piece:
         if self.kind == "part":
             assert self.frames is not None, "a part has its frames"
             return f"seg{self.segment:04d}[{self.frames[0]}-{self.frames[1]}]"
+        if self.kind == "hold":
+            waits = ", ".join(f"{n} frames at +{at}" for at, n in self.holds)
+            return f"{self.held_from or 'walk'} holding {waits}"
         if self.kind in ("traversal", "interaction"):
             assert self.prop is not None, "a traversal has its prop"
             c = self.prop.clips[self.clip_index]

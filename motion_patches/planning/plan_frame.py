@@ -10,6 +10,7 @@ to be. The planner works in these local coordinates (obstacles and props are mov
 them); every planned piece carries the frame that takes it back to the world.
 """
 
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -57,16 +58,50 @@ def state_to_local(frame: tuple[float, float, float], state: np.ndarray) -> np.n
     return np.array([p[0], p[1], state[2] - frame[2]])
 
 
+def plan_region(
+    start: np.ndarray,
+    goal: np.ndarray,
+    side: float,
+    nodes: int,
+    margin_tiles: int,
+    tile_side: float | None = None,
+) -> tuple[tuple[float, float, float], np.ndarray, np.ndarray, tuple[int, int, int, int]]:
+    """(frame, local start, local goal, region): the plan frame of ``start`` -> ``goal`` (a
+    patch of ``side`` metres and ``nodes`` per side) and the tiles (i0, j0, i1, j1,
+    inclusive, local, ``tile_side`` wide: the environment's, by default the patch's) a plan
+    searches: those of its ends and ``margin_tiles`` round them."""
+    frame = lattice_frame(start, goal, side, nodes)
+    ls, lg = state_to_local(frame, start), state_to_local(frame, goal)
+    t = side if tile_side is None else tile_side
+    ts = (math.floor(float(ls[0]) / t), math.floor(float(ls[1]) / t))
+    tg = (math.floor(float(lg[0]) / t), math.floor(float(lg[1]) / t))
+    region = (
+        min(ts[0], tg[0]) - margin_tiles,
+        min(ts[1], tg[1]) - margin_tiles,
+        max(ts[0], tg[0]) + margin_tiles,
+        max(ts[1], tg[1]) + margin_tiles,
+    )
+    return frame, ls, lg, region
+
+
+def region_box(
+    frame: tuple[float, float, float], lo: tuple, hi: tuple, pad: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) world box round the local box ``lo``-``hi``, ``pad`` metres wider: where the
+    obstacles a plan in that box sees are looked up (:func:`local_environment`)."""
+    corners = to_world(
+        frame, np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]]], float)
+    )
+    return corners.min(axis=0) - pad, corners.max(axis=0) + pad
+
+
 def local_environment(
     env: Environment, frame: tuple[float, float, float], lo: tuple, hi: tuple
 ) -> Environment:
     """An environment in the plan frame holding the obstacles of ``env`` that come within
     its radius of the local box ``lo``-``hi`` (found through ``env``'s tile membership, so a
     scene of many props costs only the ones near the plan)."""
-    corners = to_world(
-        frame, np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]]], float)
-    )
-    wlo, whi = corners.min(axis=0) - env.radius, corners.max(axis=0) + env.radius
+    wlo, whi = region_box(frame, lo, hi, env.radius)
     out = Environment(env.side, env.cells, env.radius)
     names = list(env.names_in_box(wlo, whi))
     if not names:

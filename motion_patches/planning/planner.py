@@ -41,10 +41,9 @@ from .pieces import (
     Unreachable,
 )
 from .plan_frame import (
-    lattice_frame,
     local_environment,
     local_prop,
-    state_to_local,
+    plan_region,
     to_local,
 )
 from .segment_search import TraversalObserver
@@ -247,14 +246,8 @@ class SegmentPlanner(ConnectedGraph):
         """Within the block the planner's ``env``, ``props`` and ``goal`` are those of the
         plan frame of ``start`` -> ``goal``; yields (local start, local goal, frame)."""
         side = self.patch.side
-        frame = lattice_frame(start, goal, side, self.patch.nodes)
-        ls, lg = state_to_local(frame, start), state_to_local(frame, goal)
-        ts, tg = self.world_env.tile_of(ls[:2]), self.world_env.tile_of(lg[:2])
-        region = (
-            min(ts[0], tg[0]) - margin_tiles,
-            min(ts[1], tg[1]) - margin_tiles,
-            max(ts[0], tg[0]) + margin_tiles,
-            max(ts[1], tg[1]) + margin_tiles,
+        frame, ls, lg, region = plan_region(
+            start, goal, side, self.patch.nodes, margin_tiles, self.world_env.side
         )
         self.env = local_environment(
             self.world_env,
@@ -415,7 +408,7 @@ class SegmentPlanner(ConnectedGraph):
             raise self.refused("goal", goal, f"no {self.way} into the goal: ")
         if not result.found:
             raise (SearchLimit if result.expansions >= max_expansions else Unreachable)(
-                f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is unreachable: obstacles "
+                "the goal is unreachable: obstacles "
                 f"close every path within {margin_tiles} tiles of start and goal "
                 f"({result.expansions} nodes searched)"
             )

@@ -18,12 +18,14 @@ from numpy.typing import ArrayLike
 
 from ..kinematics import contacts as contacts_mod
 from ..kinematics.clip import Clip, resample
-from ..kinematics.inplace import facing_yaw, to_inplace
+from ..kinematics.inplace import facing_yaw, to_inplace, to_world
 from ..kinematics.motion import Motion
-from .environment import Obstacle, distance_to_polygon, polygons_within
+from ..kinematics.skeleton import Skeleton, forward_kinematics
+from .environment import Obstacle, distance_to_polygon, inside_convex, polygons_within
 
 TRAVERSAL, INTERACTION = "traversal", "interaction"
 BINS = 4  # density bins per side of the extended bounds
+HEADROOM = 0.02  # metres a traversal's body keeps above the prop it clears
 
 
 @dataclass
@@ -141,6 +143,24 @@ def patch_clip_from(
     return PatchClip(name or clip.name, kind, m, float(effort))
 
 
+def body_points(clip: PatchClip, skel: Skeleton) -> np.ndarray:
+    """(N, 3) every bone's head and the middle of every bone on every frame of ``clip``,
+    in prop coordinates: where the body passes (a traversal must pass above the prop)."""
+    m = clip.motion
+    pos, rot = to_world(skel, m.ground, m.root_local, m.rotations)
+    heads = forward_kinematics(skel, pos, rot)[..., :3, 3]
+    kids = np.flatnonzero(skel.parents >= 0)
+    mids = 0.5 * (heads[:, kids] + heads[:, skel.parents[kids]])
+    return np.concatenate((heads, mids), axis=1).reshape(-1, 3)
+
+
+def clearance_over(points: np.ndarray, footprint: np.ndarray, floor: float = 0.0) -> float:
+    """Height above ``floor`` of the lowest of ``points`` (:func:`body_points`) over
+    ``footprint``: how high a prop there may be; inf when none passes over it."""
+    over = inside_convex(points[:, :2], footprint)
+    return float(points[over, 2].min() - floor) if over.any() else float("inf")
+
+
 @dataclass
 class ObjectPatch:
     """A prop instance: footprint, pose on the ground, clips (with copies), density bins."""
@@ -149,6 +169,10 @@ class ObjectPatch:
     footprint: np.ndarray  # (P, 2) convex, counter-clockwise, prop coordinates
     clips: list = field(default_factory=list)  # PatchClip in prop coordinates (copies included)
     pose: tuple = (0.0, 0.0, 0.0)  # x, y, heading of the prop on the ground
+    height: float = 0.0  # top of the prop above the floor (0: not known, nothing checked)
+    # Traversal clips not offered because the body passes lower than the prop's top:
+    # (clip name, its clearance over the footprint, the prop's height), metres.
+    too_low: list = field(default_factory=list)
 
     def to_world(self, xy: ArrayLike) -> np.ndarray:
         x, y, h = self.pose
@@ -183,6 +207,36 @@ class ObjectPatch:
                 self.clips.append(c)
                 added += 1
         return added
+
+    def keep_clearing(self, skel: Skeleton, floor: float = 0.0) -> None:
+        """Drop the traversal copies whose body passes lower over the footprint than the
+        prop's ``height`` (plus :data:`HEADROOM`): a jump that would sink its legs into the
+        prop is not a way over it. A clip none of whose copies clears is listed in
+        :attr:`too_low` with its best clearance. ``floor``: the clips' floor height."""
+        if self.height <= 0.0:
+            return
+        kept: list[PatchClip] = []
+        best: dict[str, float] = {}
+        points: dict[str, np.ndarray] = {}
+        for c in self.clips:
+            if c.kind != TRAVERSAL:
+                kept.append(c)
+                continue
+            # A copy is the clip turned about the prop: turn the footprint the other way.
+            if c.name not in points:
+                points[c.name] = body_points(c.rotated(-c.angle), skel)
+            ca, sa = np.cos(-c.angle), np.sin(-c.angle)
+            turned = self.footprint @ np.array([[ca, sa], [-sa, ca]])
+            h = clearance_over(points[c.name], turned, floor)
+            best[c.name] = max(best.get(c.name, -np.inf), h)
+            if h >= self.height + HEADROOM:
+                kept.append(c)
+        self.clips = kept
+        self.too_low = [
+            (n, h, self.height)
+            for n, h in best.items()
+            if not any(c.name == n and c.kind == TRAVERSAL for c in kept)
+        ]
 
     def extended_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Footprint bounds grown to contain every clip's entry and exit point."""

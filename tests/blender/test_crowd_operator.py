@@ -65,7 +65,10 @@ def test_duplicate_crowd_makes_a_linked_crowd_and_plans_it(walk_blend, addon_mod
 @pytest.mark.parametrize(
     "kw, match",
     [
-        (dict(count=40, region_min=(-5.0, -1.0), region_max=(-4.0, 0.0)), "holds only"),
+        (
+            dict(count=40, region_min=(-5.0, -1.0), region_max=(-4.0, 0.0)),
+            "cannot hold 40 characters",
+        ),
         (dict(count=3, region_min=(-5.0, -1.0), region_max=(-6.0, 0.0)), "second corner"),
     ],
 )

@@ -28,6 +28,7 @@ DEV_ONLY_DIRS = (
     "tests/",
     "bench/",
     "sample_blends/",
+    "samples/",
     "tools/",
     "requirements/",
     "dist/",

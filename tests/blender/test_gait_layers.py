@@ -43,7 +43,7 @@ def layers_blend(addon_module, mocap_dir, tmp_path_factory):
     api.bake_locomotion_patch(scene, arm, runs[0], [runs[1]], layer="run")
     scene.motion_patches.source_armature = arm
     for k, y in enumerate(np.linspace(-5.0, 5.0, 21)):
-        ob = prop_box(f"Chair.{k:02d}", LINE_X, y)
+        ob = prop_box(f"Chair.{k:02d}", LINE_X, y, size=(0.4, 0.44, 0.15))  # 16_06 clears it
         api.tag_object_patch(ob, [(acts[2], "TRAVERSAL", 8.0, 10.0)], patch_name="walk")
         for c in ob.motion_patch.clips:
             c.layer_in = c.layer_out = "run"

@@ -80,3 +80,26 @@ def test_duplicate_crowd_refuses_at_once_what_it_cannot_place(mp, scene, count, 
     with pytest.raises(mp.api.MotionPatchesError, match=needle):
         mp.api.duplicate_crowd(scene, source, count, region, ((20, 0), (30, 10)))
     assert sorted(o.name for o in bpy.data.objects) == before
+
+
+def test_an_empty_or_damaged_bvh_names_the_importer_s_error(mp, clean_scene, mocap_dir, tmp_path):
+    empty_file = tmp_path / "empty.bvh"
+    empty_file.write_text("")
+    with pytest.raises(mp.api.MotionPatchesError, match="empty.bvh is not a BVH file: it is empty"):
+        mp.api.import_mocap([empty_file])
+    cut = tmp_path / "cut.bvh"  # the hierarchy cut in the middle of a joint
+    cut.write_text("\n".join((mocap_dir / "cmu" / "16_15.bvh").read_text().splitlines()[:30]))
+    with pytest.raises(mp.api.MotionPatchesError) as err:
+        mp.api.import_mocap([cut])
+    assert "cut.bvh" in str(err.value) and "Location:" not in str(err.value)
+    assert "ops.py" not in str(err.value)
+    assert not bpy.data.objects  # nothing imported
+
+
+@pytest.mark.parametrize("rate", [1e9, -1.0, float("nan"), True])
+def test_an_absurd_effort_rate_is_refused_naming_it(mp, scene, rate):
+    arm = scene.motion_patches.source_armature
+    before = [p.name for p in scene.motion_patches.patches]
+    with pytest.raises(mp.api.MotionPatchesError, match="effort rate"):
+        mp.api.bake_locomotion_patch(scene, arm, "16_15", ["16_18"], effort_rate=rate)
+    assert [p.name for p in scene.motion_patches.patches] == before

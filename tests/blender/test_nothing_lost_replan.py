@@ -94,3 +94,74 @@ def test_a_start_frame_that_is_not_a_whole_number_is_refused(mp, planned, frame)
     scene, walker, goal = planned
     with pytest.raises(mp.api.MotionPatchesError, match="whole number"):
         mp.api.plan_path(scene, walker, goal, frame_start=frame)
+
+
+# --- what the add-on made, known by id ------------------------------------------------------
+
+
+def own_actions(walker):
+    ad = walker.animation_data
+    return [s.action for t in ad.nla_tracks if t.name.startswith("MP ") for s in t.strips]
+
+
+def test_a_user_s_copy_of_an_add_on_action_is_never_deleted(mp, planned):
+    scene, walker, goal = planned
+    root = walker.animation_data.nla_tracks["MP root"]
+    mine = root.strips[0].action.copy()
+    mine.name = "my root edit"
+    spare = root.strips[0].action.copy()
+    spare.name = "my spare"  # not played by any strip: no user
+    strip = root.strips.new("my strip", 2000, mine)
+    with pytest.raises(mp.api.MotionPatchesError, match="my strip"):
+        mp.api.plan_path(scene, walker, goal, frame_start=1)
+    assert bpy.data.actions.get("my root edit") is mine and root.strips.get("my strip")
+    # Moved to a track of the user's own, a re-plan replaces only what the add-on made.
+    root.strips.remove(strip)
+    walker.animation_data.nla_tracks.new().strips.new("my strip", 2000, mine)
+    made = {a.name for a in own_actions(walker)}
+    mp.api.plan_path(scene, walker, goal, frame_start=1)
+    assert bpy.data.actions.get("my root edit") is mine
+    assert bpy.data.actions.get("my spare") is spare and spare.users == 0
+    left = {a.name for a in bpy.data.actions if a.users == 0} - {"my spare"}
+    assert not left & made - {a.name for a in own_actions(walker)}, left
+
+
+def test_a_renamed_character_is_planned_again_over_its_own_strips(mp, planned):
+    scene, walker, goal = planned
+    old = {a.name for a in own_actions(walker) if a.get("motion_patches_segment") is None}
+    assert old and all("Walker" in n for n in old)
+    walker.name = "Hero"
+    res = mp.api.plan_path(scene, walker, goal, frame_start=1)
+    assert res.frame_end > res.frame_start
+    assert not old & {a.name for a in bpy.data.actions}  # replaced, none left behind
+
+
+def test_a_re_plan_drops_the_last_plan_s_analysis(mp, planned):
+    """The Analysis panel must not show the figures of a plan that is gone."""
+    scene, walker, goal = planned
+    mp.api.analyse(bpy.context, walker, keep=True)
+    assert mp.api.last_analysis(walker) is not None
+    mp.api.plan_path(scene, walker, goal, frame_start=1)
+    assert mp.api.last_analysis(walker) is None
+
+
+def test_a_long_plan_on_the_command_line_says_it_still_works(mp, planned, capsys, monkeypatch):
+    """A 2 km plan took minutes without a word: the CLI says every few seconds that it still
+    plans (here every 0.05 s, the plan slowed to 0.3 s)."""
+    import time as _time
+
+    plan_path = mp.api.plan_path
+
+    def slow(*a, **kw):
+        _time.sleep(0.3)
+        return plan_path(*a, **kw)
+
+    monkeypatch.setattr(mp.cli.output, "HEARTBEAT_S", 0.05)
+    monkeypatch.setattr(mp.api, "plan_path", slow)
+    code = mp.cli.main(["plan", "--character", "Walker", "--goal", "Goal", "--frame-start", "1"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    assert "plan 'Walker': still working" in err
+    code = mp.cli.main(["plan", "--character", "Walker", "--goal", "Goal", "--json"])
+    out, err = capsys.readouterr()
+    assert code == 0 and "still working" not in err  # --json: stdout and stderr stay quiet

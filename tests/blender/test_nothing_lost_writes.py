@@ -50,7 +50,9 @@ def scene_state():
         objects[ob.name] = {
             "anim": anim,
             "props": {k: str(ob[k]) for k in ob.keys()},
-            "location": tuple(ob.location),
+            # to a nanometre: the rig's evaluated place at the current frame, which cubic
+            # keys give to within rounding (2e-16 m) of their value
+            "location": tuple(round(v, 9) + 0.0 for v in ob.location),
         }
     actions = {
         a.name: (

@@ -1,11 +1,15 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""Object patches inside Blender: tag chairs with the real CMU jump, hurdle or walk around."""
+"""Object patches inside Blender: tag low hurdles with the real CMU jump (16_06, a standing
+broad jump, clears about 0.18 m over them), hurdle or walk around; a prop the jump does not
+clear is walked around."""
 
 import bpy
 import numpy as np
 import pytest
 
 from scene_helpers import empty, prop_box, walker_from
+
+HURDLE = (0.4, 0.44, 0.15)  # a chair's footprint, 15 cm high: what 16_06 clears
 
 
 @pytest.fixture(scope="module")
@@ -27,7 +31,7 @@ def chairs_blend(addon_module, mocap_dir, tmp_path_factory):
     )
     api.bake_locomotion_patch(scene, arm, acts[0], [acts[1]], layer="walk")
     for k, y in enumerate(np.linspace(-2.5, 2.5, 11)):
-        ob = prop_box(f"Chair.{k:02d}", 5.0, y)
+        ob = prop_box(f"Hurdle.{k:02d}", 5.0, y, size=HURDLE)
         bpy.context.view_layer.objects.active = ob
         assert bpy.ops.motion_patches.tag_object_patch(
             action="16_06", kind="TRAVERSAL", effort=8.0
@@ -61,9 +65,33 @@ def test_hurried_character_hurdles_a_chair(chairs_blend, addon_module):
     assert any("16_06" in n for n in names), names
     f = addon_module.api.analyse(bpy.context, walker)
     assert f["traversals"] == 1
-    assert f["frames_root_inside_obstacle"] == 0  # outside the jump, never inside a chair
+    assert f["frames_root_inside_obstacle"] == 0  # outside the jump, never inside a hurdle
+    assert f["frames_body_inside_prop"] == 0  # and over it no bone sinks into it
     assert f["goal_root_position_error_cm"] < 10 and f["goal_heading_error_deg"] < 10
     assert f["root_from_plan_cm"]["max"] < 5
+
+
+def test_a_jump_that_does_not_clear_its_prop_is_not_planned_over_it(chairs_blend, addon_module):
+    """A 1 x 3 x 0.5 m box tagged with 16_06: the tag warns naming both heights, and even a
+    hurried walker (who hurdles the low ones) walks round it: no bone enters the box."""
+    api = addon_module.api
+    bpy.ops.wm.open_mainfile(filepath=str(chairs_blend))
+    for ob in [o for o in bpy.data.objects if o.name.startswith("Hurdle.")]:
+        bpy.data.objects.remove(ob)
+    box = prop_box("Box", 5.0, 0.3, size=(1.0, 3.0, 0.5))
+    notes = []
+    api.tag_object_patch(box, [(bpy.data.actions["16_06"], "TRAVERSAL", 8.0, 10.0)], notes=notes)
+    assert len(notes) == 1 and "'Box', which is 0.50 m high" in notes[0], notes
+    clears = float(notes[0].split(" clears ")[1].split(" m")[0])
+    assert 0.0 < clears < 0.5
+    walker = plan(4.0, 0.5, 0.1)
+    assert not any("16_06" in n for n in strip_names(walker))
+    rec = api.load_plan_record(walker)[0]
+    f = api.analyse(bpy.context, walker)
+    assert f["traversals"] == 0 and f["frames_body_inside_prop"] == 0
+    res = api.plan_path(bpy.context.scene, walker, None, alpha=4.0, beta=0.5, gamma=0.1)
+    assert any("16_06 clears" in n and "'Box'" in n for n in res.stats["traversals_too_low"])
+    assert rec["frame_start"] == res.frame_start
 
 
 def test_unhurried_character_walks_around(chairs_blend, addon_module):
@@ -146,7 +174,7 @@ def test_moving_chairs_and_re_planning_changes_the_path(chairs_blend, addon_modu
     jump = [n for n in strip_names(walker) if "16_06" in n]
     assert len(jump) == 1, strip_names(walker)
     hurdled = next(
-        ob for ob in bpy.data.objects if ob.name.startswith("Chair.") and ob.name in jump[0]
+        ob for ob in bpy.data.objects if ob.name.startswith("Hurdle.") and ob.name in jump[0]
     )
     before = evaluated_root(api, walker)
     f = api.analyse(bpy.context, walker)
@@ -155,7 +183,9 @@ def test_moving_chairs_and_re_planning_changes_the_path(chairs_blend, addon_modu
     # Clear a passage around the walker's line: the chairs between y = 0 and 1.5 (the
     # hurdled one among them) go to the north end of the row.
     moved = [
-        ob for ob in bpy.data.objects if ob.name.startswith("Chair.") and -0.1 < ob.location.y < 1.6
+        ob
+        for ob in bpy.data.objects
+        if ob.name.startswith("Hurdle.") and -0.1 < ob.location.y < 1.6
     ]
     assert hurdled in moved and len(moved) == 4
     for k, ob in enumerate(moved):
@@ -244,12 +274,13 @@ def test_a_goal_prop_without_a_sit_clip_is_refused(chairs_blend, addon_module):
     walker = bpy.data.objects["Walker"]
     tracks = [t.name for t in walker.animation_data.nla_tracks] if walker.animation_data else []
     with pytest.raises(api.MotionPatchesError, match="sit-down"):
-        api.plan_path(bpy.context.scene, walker, bpy.data.objects["Chair.03"])
+        api.plan_path(bpy.context.scene, walker, bpy.data.objects["Hurdle.03"])
     # A goal position inside the chair (not the chair itself): refused the same way, as
     # bad input, not as "no path".
-    x, y = bpy.data.objects["Chair.03"].matrix_world.translation[:2]
+    x, y = bpy.data.objects["Hurdle.03"].matrix_world.translation[:2]
     with pytest.raises(
-        api.MotionPatchesError, match="inside the object patch 'Chair.03', which has no interaction"
+        api.MotionPatchesError,
+        match="inside the object patch 'Hurdle.03', which has no interaction",
     ) as err:
         api.plan_path(bpy.context.scene, walker, (x, y, 0.0))
     assert not isinstance(err.value, api.PathNotFound)

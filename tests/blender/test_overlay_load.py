@@ -39,3 +39,23 @@ def test_the_overlay_is_drawn_again_after_opening_a_file_and_reloading_the_addon
     assert overlay.is_enabled()  # enabled again with the file's overlay ticked
     bpy.context.scene.motion_patches.show_overlay = False
     assert not overlay.is_enabled()
+
+
+def test_undo_and_redo_bring_the_overlay_back_in_step_with_its_checkbox(addon_module):
+    """Undo puts Show Planner Overlay back without its update callback (the checkbox ticked,
+    nothing drawn until the file was opened again): the add-on syncs after undo and redo."""
+    overlay = addon_module.panels.overlay
+    bpy.ops.wm.read_homefile(use_empty=True)
+    s = bpy.context.scene.motion_patches
+    s.show_overlay = False
+    assert not overlay.is_enabled()
+    for name in ("undo_post", "redo_post"):
+        s["show_overlay"] = True  # what undo does: the stored value, no update callback
+        assert not overlay.is_enabled()
+        for handler in list(getattr(bpy.app.handlers, name)):
+            handler(bpy.context.scene, None)
+        assert overlay.is_enabled(), name
+        s["show_overlay"] = False
+        for handler in list(getattr(bpy.app.handlers, name)):
+            handler(bpy.context.scene, None)
+        assert not overlay.is_enabled(), name

@@ -189,6 +189,9 @@ def test_a_plaza_of_fifty_crosses_without_meeting(plaza, addon_module):
             moved = np.linalg.norm(pos[c, i, :, :2] - pos[c, i[:1], :, :2], axis=-1).max()
             assert moved < 0.01, (name, h, moved)
             still += h["frames"]
+        # its strip says what it plays and where it holds (it was "00 hold")
+        strips = [s.name for s in planned[c].animation_data.nla_tracks["MP motion"].strips]
+        assert any(" holding " in s and f"{h['frames']} frames at +" in s for s in strips), strips
     print(f"{still} frames held still in {sum(map(len, res.holds.values()))} holds")
     # a lone character crossing the same plaza (nobody else planned with it)
     lone = walker_from(scene.motion_patches.source_armature, "Lone", (-9.5, 0.7, 0.0))

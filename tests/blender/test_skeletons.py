@@ -372,3 +372,138 @@ def test_a_30_second_walk_at_120_fps_adds_under_5_mb(s2_blend, addon_module, tmp
     )
     assert seconds > 28
     assert grown < 5.0
+
+
+def fbx_like_mixamo(mocap_dir, name, scale=(0.01, 0.01, 0.01), units=100.0, y_up=True):
+    """Subject 16 named as Mixamo names its bones, as Blender's FBX importer leaves a
+    Mixamo character: centimetre bones (``units`` per metre: the BVH read at 100 times its
+    metre scale), bones in quaternion mode, the armature's data Y-up under a 90 degree X
+    rotation of the object (``y_up``), the object scaled by 0.01."""
+    before = set(bpy.data.objects)
+    assert bpy.ops.import_anim.bvh(
+        filepath=str(mocap_dir / "cmu/16_15.bvh"),
+        global_scale=CMU_SCALE * units,
+        update_scene_fps=False,
+    ) == {"FINISHED"}
+    (ob,) = [o for o in bpy.data.objects if o not in before]
+    ob.name = name
+    ob.animation_data_clear()
+    for old, new in MIXAMO.items():
+        ob.data.bones[old].name = new
+    for pb in ob.pose.bones:
+        pb.rotation_mode = "QUATERNION"
+    if y_up:  # the data turned Y-up, the object turned back upright
+        bpy.context.view_layer.objects.active = ob
+        for o in bpy.context.selected_objects:
+            o.select_set(False)
+        ob.select_set(True)
+        ob.rotation_euler = (-np.pi / 2, 0.0, 0.0)
+        bpy.ops.object.transform_apply(location=False, rotation=True, scale=False)
+        ob.rotation_euler = (np.pi / 2, 0.0, 0.0)
+    ob.location = (0.4, 0.3, 0.0)
+    ob.scale = scale
+    bpy.context.view_layer.update()  # as an import leaves it: its world matrix current
+    return ob
+
+
+def evaluated_feet(addon_module, rig, ankles, toes):
+    """The label-free foot figures of the rig's evaluated toes and ankles."""
+    fm = import_module(addon_module.__name__ + ".motion_patches.quality.foot_measure")
+    pos = world_positions(addon_module, rig, ankles + toes)
+    return fm.measure(pos[:, 2:], pos[:, :2], bpy.context.scene.render.fps), pos
+
+
+@pytest.mark.parametrize("pillars", [False, True], ids=["open-ground", "pillars"])
+def test_a_centimetre_mixamo_rig_under_a_hundredth_scale_plans(
+    s2_blend, addon_module, mocap_dir, pillars
+):
+    """An FBX-imported Mixamo character (object scale 0.01 and a 90 degree X rotation over
+    Y-up centimetre bones) plans as the same character in metres, Z-up and unrotated, does:
+    its evaluated hips follow the plan within 1 cm, its feet plant by the label-free
+    measure, it reaches the goal; the same world motion as the metre rig's, its root keys
+    in centimetres."""
+    api = addon_module.api
+    bpy.ops.wm.open_mainfile(filepath=str(s2_blend))
+    goal = scene_with_pillars() if pillars else empty("Goal", 6.0, -1.5, -0.2)
+    cm = fbx_like_mixamo(mocap_dir, "Mixamo cm")
+    metres = fbx_like_mixamo(mocap_dir, "Mixamo m", (1.0, 1.0, 1.0), units=1.0, y_up=False)
+    assert abs(cm.data.bones["mixamorig:LeftFoot"].head_local[1]) > 50  # Y-up centimetres
+    scene = bpy.context.scene
+    res = {ob.name: api.plan_path(scene, ob, goal, frame_start=1) for ob in (cm, metres)}
+    scene.frame_set(res["Mixamo cm"].frame_end)
+    assert np.degrees(cm.matrix_world.to_euler("XYZ")[0]) == pytest.approx(90.0, abs=1e-3)
+    assert res["Mixamo cm"].pieces == res["Mixamo m"].pieces
+    assert "onto Mixamo naming" in res["Mixamo cm"].stats["retarget"]
+    ankles = ["mixamorig:LeftFoot", "mixamorig:RightFoot"]
+    toes = ["mixamorig:LeftToeBase", "mixamorig:RightToeBase"]
+    f = api.analyse(bpy.context, cm)
+    assert f["root_from_plan_cm"]["max"] < 1.0
+    assert f["goal_position_error_cm"] < 10 and f["goal_root_position_error_cm"] < 10
+    assert f["goal_heading_error_deg"] < 10
+    assert f["frames_root_inside_obstacle"] == 0
+    feet, pos = evaluated_feet(addon_module, cm, ankles, toes)
+    ref, ref_pos = evaluated_feet(addon_module, metres, ankles, toes)
+    assert np.abs(pos - ref_pos).max() < 0.001  # the same world motion
+    assert feet["planted_fraction"] > 0.3 and feet["pops"] == 0
+    assert feet["skate"]["mean_cm_per_s"] < 10.0 and feet["min_swing_clearance_cm"] > 0.0
+    assert feet["skate"]["mean_cm_per_s"] == pytest.approx(ref["skate"]["mean_cm_per_s"], abs=0.1)
+    assert f["feet"]["skate"]["mean_cm_per_s"] == pytest.approx(
+        feet["skate"]["mean_cm_per_s"], abs=0.1
+    )
+    # the root's location keys are in the armature's centimetres: a hundred times the
+    # metre rig's, on every strip
+    hips = 'pose.bones["mixamorig:Hips"].location'
+    played = []
+    for rig in (cm, metres):
+        values = []
+        for st in rig.animation_data.nla_tracks["MP motion"].strips:
+            first, last = (int(round(v)) for v in st.action.frame_range)
+            values += [
+                [fc.evaluate(f) for f in range(first, last + 1)]
+                for fc in addon_module.adapter.compat.fcurves(st.action)
+                if fc.data_path == hips
+            ]
+        played.append(np.concatenate(values))
+    assert np.abs(played[0]).max() > 1.0
+    assert np.abs(played[0] - 100.0 * played[1]).max() < 0.1
+    print(
+        f"\nscaled Mixamo rig ({'pillars' if pillars else 'open ground'}): hips within "
+        f"{f['root_from_plan_cm']['max']:.2f} cm of the plan, goal "
+        f"{f['goal_position_error_cm']:.1f} cm; feet: "
+        + addon_module.motion_patches.quality.foot_measure.summary(feet)
+    )
+
+
+def test_a_non_uniform_scale_is_refused_naming_the_object(s2_blend, addon_module, mocap_dir):
+    api = addon_module.api
+    bpy.ops.wm.open_mainfile(filepath=str(s2_blend))
+    goal = empty("Goal", 5.0, 2.0, 0.0)
+    rig = fbx_like_mixamo(mocap_dir, "Stretched", scale=(0.01, 0.01, 0.012))
+    actions = set(bpy.data.actions)
+    with pytest.raises(api.MotionPatchesError, match="'Stretched' is scaled .*not the same"):
+        api.plan_path(bpy.context.scene, rig, goal)
+    assert rig.animation_data is None and set(bpy.data.actions) == actions
+    assert tuple(rig.scale) == pytest.approx((0.01, 0.01, 0.012))
+
+
+def test_a_crowd_of_copies_of_a_scaled_mixamo_rig(s2_blend, addon_module, mocap_dir):
+    """Copies of the FBX-like rig stand as it does (its tilt and scale kept, turned to their
+    goals) and plan as a crowd: hips on their plans, goals reached."""
+    api = addon_module.api
+    bpy.ops.wm.open_mainfile(filepath=str(s2_blend))
+    scene = bpy.context.scene
+    source = fbx_like_mixamo(mocap_dir, "Mixamo cm")
+    pairs = api.duplicate_crowd(scene, source, 2, ((-1, -3), (0, 3)), ((6, -3), (7, 3)))
+    assert len(pairs) == 2
+    bpy.context.view_layer.update()
+    up = np.array(source.matrix_world)[:3, 1]  # its Y-up bones' up, in the world
+    assert up @ [0, 0, 1] == pytest.approx(0.01, rel=1e-4)
+    for ob, _ in pairs:
+        m = np.array(ob.matrix_world)[:3, :3]
+        assert m[:, 1] @ [0, 0, 1] == pytest.approx(0.01, rel=1e-4), ob.name
+    res = api.plan_crowd(scene, pairs, frame_start=1)
+    assert not res.failed and len(res.plans) == 2
+    for ob, _ in pairs:
+        f = api.analyse(bpy.context, ob)
+        assert f["root_from_plan_cm"]["max"] < 1.0, ob.name
+        assert f["goal_position_error_cm"] < 10 and f["goal_heading_error_deg"] < 10, ob.name

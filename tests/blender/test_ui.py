@@ -40,7 +40,8 @@ def ui_blend(addon_module, mocap_dir, tmp_path_factory):
     assert bpy.ops.motion_patches.turn_add() == {"FINISHED"}
     s.turn_actions[s.active_turn_index].action = acts[1]
     assert bpy.ops.motion_patches.bake_locomotion_patch(layer="walk") == {"FINISHED"}
-    bpy.context.view_layer.objects.active = prop_box("Chair", 4.0, 0.3)
+    # A chair-sized footprint 15 cm high: the standing jump 16_06 clears it.
+    bpy.context.view_layer.objects.active = prop_box("Chair", 4.0, 0.3, size=(0.4, 0.44, 0.15))
     assert bpy.ops.motion_patches.tag_object_patch(action="16_06", kind="TRAVERSAL") == {"FINISHED"}
     for name, y in (("Walker", 0.3), ("Walker.B", -2.5)):
         walker = walker_from(arm, name=name, location=(1.0, y, 0))
@@ -321,7 +322,7 @@ def test_analyse_keeps_the_figures_on_the_character(scene, addon_module):
     assert (
         f"Foot skate: {sk['mean_cm_per_frame']:.2f} cm/frame ({sk['mean_cm_per_s']:.1f} cm/s)"
     ) in lines
-    assert "Frames inside props: 0" in lines
+    assert "Frames inside props: root 0, body 0" in lines
     assert any(t.startswith("Boundary pop: ") for t in lines)
     activate("Walker.B")  # not analysed: the panel says what to do
     lines = [t for k, t in draw_panels(addon_module)["Analysis"] if k == "label"]
@@ -470,3 +471,36 @@ def test_importing_a_file_that_is_not_a_patch_reports_and_changes_nothing(scene,
     with pytest.raises(RuntimeError, match="not a stored locomotion patch"):
         bpy.ops.motion_patches.import_patch(filepath=str(junk))
     assert len(scene.motion_patches.patches) == n
+
+
+def test_the_overlay_draws_paths_of_visible_characters_and_the_active_one_s_grid(
+    scene, addon_module
+):
+    """A crowd's tile grids drawn on top of each other are unreadable: the grid, occluded
+    cells and props walked round are the active character's (or, by the Overlay panel's
+    toggle, every one's); a hidden character's path is not drawn."""
+    overlay, api = addon_module.panels.overlay, addon_module.api
+    for name in ("Walker", "Walker.B"):
+        activate(name)
+        assert bpy.ops.motion_patches.plan_path() == {"FINISHED"}
+    activate("Walker")
+
+    def drawn():
+        return {
+            len(d.ground): bool(d.grid)
+            for d in api.plan_drawings(scene, overlay._lattice_of(scene))
+        }
+
+    frames = {
+        n: api.load_plan_record(bpy.data.objects[n])[1]["ground"].shape[0]
+        for n in ("Walker", "Walker.B")
+    }
+    assert frames["Walker"] != frames["Walker.B"]
+    assert drawn() == {frames["Walker"]: True, frames["Walker.B"]: False}
+    scene.motion_patches.overlay_all_lattices = True
+    assert drawn() == {frames["Walker"]: True, frames["Walker.B"]: True}
+    key = overlay._plans_key(scene)
+    bpy.data.objects["Walker.B"].hide_set(True)
+    assert overlay._plans_key(scene) != key  # the overlay is rebuilt
+    assert drawn() == {frames["Walker"]: True}
+    assert "overlay_all_lattices" in [p for k, p in draw_panels(addon_module)["Overlay"]]

@@ -104,7 +104,8 @@ def test_curves_keyed_in_bulk_play_their_values(addon_module, clean_scene):
 
 def test_the_foot_lock_reads_the_strip_that_plays_each_frame(addon_module, clean_scene):
     """Where two strips meet on a frame the earlier plays; a scaled strip plays its action
-    at (frame - start) / scale; frames no strip plays keep the rest value; one action
+    at (frame - start) / scale; a strip of part of an action (a character's body action)
+    from its first action frame on; frames no strip plays keep the rest value; one action
     played by several strips is read on all their frames."""
     import bpy
 
@@ -120,7 +121,8 @@ def test_the_foot_lock_reads_the_strip_that_plays_each_frame(addon_module, clean
         made[name] = (action, slot)
     a, b = made["a"], made["b"]
     # plan frames: a on 0..10, b on 10..20 (scale 2: action frames 0..5), a again 20..30
-    played = [(*a, 0, 11, 1.0), (*b, 10, 11, 2.0), (*a, 20, 11, 1.0)]
+    # from its action frame 3 on (action frames 3..10, then nothing)
+    played = [(*a, 0, 11, 1.0, None), (*b, 10, 11, 2.0, None), (*a, 20, 11, 1.0, 3)]
     n = 35
     frames_of = nla._played_frames(played, n)
     assert set(frames_of) == {a, b}
@@ -132,7 +134,7 @@ def test_the_foot_lock_reads_the_strip_that_plays_each_frame(addon_module, clean
     on_b = (f > 10) & (f <= 20)  # frame 20 is b's too
     want[on_b] = -(f[on_b, None] - 10) / 2.0 + 10 * np.arange(4)
     on_a2 = (f > 20) & (f <= 30)
-    want[on_a2] = (f[on_a2, None] - 20) + 10 * np.arange(4)
+    want[on_a2] = np.minimum(f[on_a2, None] - 20 + 3, 10) + 10 * np.arange(4)
     assert np.allclose(out, want), np.argwhere(~np.isclose(out, want))[:5]
     assert len(bpy.data.actions) >= 2
 

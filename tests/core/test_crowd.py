@@ -158,6 +158,35 @@ def test_standing_spots_are_earlier_goals_and_later_starts():
     ends[0] = ((0, 0, 0), (10, 3.5, 0))
     assert [m for m, _ in crowd.standing_spots(ends, 1, 1.0, 0.25)] == [2]
     assert crowd.standing_spots(ends, 0, spacing=0.0, radius=0.25) == []
+    # a box: only the spots whose disc reaches into it (the one at (0, 6) barely does)
+    box = (np.array([-1.0, -1.0]), np.array([11.0, 5.3]))
+    assert [m for m, _ in crowd.standing_spots(ends, 1, 1.0, 0.25, box)] == [2]
+    box = (np.array([-1.0, -1.0]), np.array([11.0, 5.0]))
+    assert crowd.standing_spots(ends, 1, 1.0, 0.25, box) == []
+
+
+def test_reservations_find_the_same_after_many_merges():
+    """The table's runs merge as reservations come and go; what a check finds does not
+    depend on how they lie: the same as a table of the remaining ones made afresh."""
+    rng = np.random.default_rng(3)
+    tracks = [
+        np.cumsum(rng.normal(0, 0.05, (40, 2)), axis=0) + rng.uniform(0, 3, 2) for _ in range(60)
+    ]
+    table = crowd.Reservations(0.5)
+    for i, t in enumerate(tracks):
+        table.reserve(i, t, i % 7)
+    for i in range(0, 60, 5):
+        table.remove(i)
+    fresh = crowd.Reservations(0.5)
+    for i, t in enumerate(tracks):
+        if i % 5:
+            fresh.reserve(i, t, i % 7)
+    probe = np.cumsum(rng.normal(0, 0.05, (50, 2)), axis=0) + 1.5
+    got, want = table.check(probe, 3), fresh.check(probe, 3)
+    assert got.keys() == want.keys() and len(got) > 3
+    for j in got:
+        assert np.array_equal(got[j][0], want[j][0]) and got[j][1:] == want[j][1:]
+    assert np.array_equal(table.busy(probe, 60), fresh.busy(probe, 60))
 
 
 def test_an_empty_crowd_is_handled():

@@ -43,7 +43,8 @@ def test_motion_without_poses_has_the_frames_and_ground_of_the_full_one(
     light = concatenate(plan_motions(walk_patch, plan, poses=False))
     assert light.frames == full.frames
     np.testing.assert_array_equal(light.ground, full.ground)
-    np.testing.assert_array_equal(light.root_local, full.root_local)
+    # the hips' sway the same; their height settles into the stand with the body only
+    np.testing.assert_array_equal(light.root_local[:, :2], full.root_local[:, :2])
     assert light.rotations.shape[1] == 1 < full.rotations.shape[1]
     if goal[2] == np.pi and not obstacles:
         assert any(p.kind == "turn" for p in plan.pieces)

@@ -449,3 +449,43 @@ def test_stitch_candidates_are_each_segments_nearest_frame(walk_patch, hurdle_cl
                 found += len(mine)
     print("candidates compared:", found)
     assert found > 50
+
+
+@pytest.fixture(scope="module")
+def floored_jump(walk_gait):
+    """16_06 put down on the walk's floor, as tagging and planning place it."""
+    return op.patch_clip_from(
+        cmu("16_06"), op.TRAVERSAL, walk_gait.fps, effort=8.0, floor=walk_gait.floor()
+    )
+
+
+def test_the_jump_s_clearance_is_where_its_body_passes_over_the_footprint(walk_gait, floored_jump):
+    """16_06 is a standing broad jump: over a chair's footprint its lowest bone passes about
+    18 cm above the floor; over a deeper box (1 m along the jump) it cannot clear at all."""
+    points = op.body_points(floored_jump, walk_gait.skeleton)
+    chair = op.clearance_over(points, CHAIR, walk_gait.floor())
+    box = np.array([[-0.5, -1.5], [0.5, -1.5], [0.5, 1.5], [-0.5, 1.5]])
+    deep = op.clearance_over(points, box, walk_gait.floor())
+    assert 0.12 < chair < 0.25 and deep < chair
+    far = CHAIR + (10.0, 0.0)  # nothing passes over a footprint off the clip's way
+    assert op.clearance_over(points, far) == float("inf")
+
+
+@pytest.mark.parametrize("height, kept", [(0.10, True), (0.50, False)])
+def test_copies_that_do_not_clear_the_prop_are_not_offered(walk_gait, floored_jump, height, kept):
+    prop = op.ObjectPatch("chair", CHAIR, height=height)
+    assert prop.add_traversal_copies(floored_jump) > 0
+    prop.keep_clearing(walk_gait.skeleton, walk_gait.floor())
+    assert bool(prop.traversals()) == kept
+    if kept:
+        assert prop.too_low == []
+    else:
+        ((name, clears, high),) = prop.too_low
+        assert name == floored_jump.name and clears < high == 0.5
+
+
+def test_a_prop_of_unknown_height_keeps_every_copy(walk_gait, floored_jump):
+    prop = op.ObjectPatch("chair", CHAIR)
+    n = prop.add_traversal_copies(floored_jump)
+    prop.keep_clearing(walk_gait.skeleton, walk_gait.floor())
+    assert len(prop.traversals()) == n
