@@ -8,7 +8,9 @@ rooms kept open); an object of several parts gives one obstacle per part, named
 :func:`part_name`.
 """
 
+import hashlib
 import re
+from collections import OrderedDict
 
 import numpy as np
 
@@ -20,10 +22,11 @@ BODY_BAND = fp.BODY_BAND
 _PART = re.compile(r" \(part \d+\)$")
 
 
-def mesh_arrays(obj, depsgraph):
+def mesh_arrays(obj, depsgraph, with_xy=True):
     """(world vertices (N, 3), triangle vertex indices (3T,), edges (E, 2)) of a mesh
     object's evaluated geometry (modifiers applied): what :mod:`motion_patches.props.footprint`
-    reads. Triangles, not polygons: every face part is then convex in plan."""
+    reads. Triangles, not polygons: every face part is then convex in plan. ``with_xy``
+    False: the world matrix's x, y translation left out (its height kept)."""
     ev = obj.evaluated_get(depsgraph)
     mesh = ev.to_mesh()
     try:
@@ -38,15 +41,54 @@ def mesh_arrays(obj, depsgraph):
     finally:
         ev.to_mesh_clear()
     m = np.array(ev.matrix_world)
-    world = co.reshape(n, 3) @ m[:3, :3].T + m[:3, 3]
+    offset = m[:3, 3] if with_xy else np.array([0.0, 0.0, m[2, 3]])
+    world = co.reshape(n, 3) @ m[:3, :3].T + offset
     return world, tris, edges.reshape(-1, 2)
 
 
+SHAPES_KEPT = 4096  # footprints of this many shapes are kept (a few kB each)
+_shapes: OrderedDict = OrderedDict()  # shape key -> parts about the object's own x, y
+_placed: dict = {}  # object name -> (shape key, x, y, world parts): the last footprint made
+
+
 def footprint_parts(obj, depsgraph, band=BODY_BAND):
-    """Convex world footprint parts [(P, 2)] of a mesh object ([] when it blocks nothing)."""
-    world, tris, edges = mesh_arrays(obj, depsgraph)
-    t = len(tris) // 3
-    return fp.parts(world, tris, np.arange(t) * 3, np.full(t, 3), edges, band)
+    """Convex world footprint parts [(P, 2)] of a mesh object ([] when it blocks nothing).
+
+    Hulling a footprint costs tens of milliseconds for a cylinder, and a layout check asks
+    for every prop's after each edit of one of them. The parts are made about the object's
+    own x, y (its translation taken off) and kept under a key of the evaluated geometry
+    (vertices as the matrix's rotation, scale and height place them, triangles, edges):
+    any edit of the mesh, its modifiers or its matrix other than a move on the ground
+    changes the key, and a move only shifts the parts. Copies of one prop (40 pillars)
+    share one hull."""
+    world, tris, edges, xy = _placed_arrays(obj, depsgraph)
+    h = hashlib.blake2b(digest_size=20)
+    for a in (world, tris, edges, np.asarray(band, float)):
+        h.update(np.ascontiguousarray(a).tobytes())
+    key = h.digest()
+    last = _placed.get(obj.name)
+    if last is not None and last[0] == key and last[1] == xy:
+        return [p.copy() for p in last[2]]
+    rel = _shapes.get(key)
+    if rel is None:
+        t = len(tris) // 3
+        rel = fp.parts(world, tris, np.arange(t) * 3, np.full(t, 3), edges, band)
+        _shapes[key] = rel
+        if len(_shapes) > SHAPES_KEPT:
+            _shapes.popitem(last=False)
+    else:
+        _shapes.move_to_end(key)
+    parts = [p + xy for p in rel]
+    _placed[obj.name] = (key, xy, parts)
+    return [p.copy() for p in parts]
+
+
+def _placed_arrays(obj, depsgraph):
+    """:func:`mesh_arrays` with the world matrix's x, y translation left out, and that
+    translation ((x, y) as a float pair)."""
+    world, tris, edges = mesh_arrays(obj, depsgraph, with_xy=False)
+    m = obj.evaluated_get(depsgraph).matrix_world
+    return world, tris, edges, (float(m[0][3]), float(m[1][3]))
 
 
 def part_name(name, k, count):

@@ -13,11 +13,9 @@ import numpy as np
 from ..adapter import evaluate, props_io, storage
 from ..adapter import rig as rig_io
 from ..adapter import scene as scene_io
-from ..motion_patches.kinematics.motion import concatenate
-from ..motion_patches.planning import causes
-from ..motion_patches.planning.planner import PlanError, SegmentPlanner, plan_motions
-from ..motion_patches.props import blocking
-from ..motion_patches.props.environment import inside_convex
+from ..motion_patches.cluster import DaskCluster, InProcess
+from ..motion_patches.planning import layout_check
+from ..motion_patches.props.environment import Obstacle, inside_convex
 from ..motion_patches.quality import foot_measure, layout_spec, metrics
 from .common import (
     _check_character,
@@ -28,7 +26,6 @@ from .common import (
     _some_names,
     load_plan_record,
     object_patches,
-    path_length,
     scene_fps,
     state_dict,
 )
@@ -216,13 +213,20 @@ def planned_pairs(
 
 
 def check_layout(
-    scene: bpy.types.Scene, spec: dict, context: bpy.types.Context | None = None
+    scene: bpy.types.Scene,
+    spec: dict,
+    context: bpy.types.Context | None = None,
+    executor: InProcess | DaskCluster | None = None,
 ) -> list[dict]:
     """Plan every start/goal pair of a layout ``spec`` WITHOUT writing to the scene.
 
     Returns one dict per pair: reachable, seconds of motion, length, cost, the props
     blocking it when it is not reachable, and whether it passed its limits. Raises
     :class:`MotionPatchesError` for a bad spec (unknown object or patch), before planning.
+    The pairs are planned from the patch and the footprints alone
+    (:func:`layout_check.plan_pair`): here, or on ``executor`` (:func:`cluster_executor`),
+    with the same results. What a check builds (footprints, each world's planner) is kept
+    for the next check of the same scene.
     """
     try:
         spec = layout_spec.normalise(spec)
@@ -233,13 +237,13 @@ def check_layout(
     except ValueError as exc:
         raise MotionPatchesError(str(exc)) from None
     try:
-        w = plan_settings(scene, **{k: spec[k] for k in ("alpha", "beta", "gamma", "radius")})
+        weights = plan_settings(scene, **{k: spec[k] for k in ("alpha", "beta", "gamma", "radius")})
     except MotionPatchesError as exc:
         raise MotionPatchesError(f"layout spec: {exc}") from None
     margin = 3 if spec["margin_tiles"] is None else int(spec["margin_tiles"])
     # Evaluate first: it also brings the objects' world matrices up to date.
     depsgraph = (context or bpy.context).evaluated_depsgraph_get()
-    jobs = []
+    jobs, refused = [], {}
     for p in spec["pairs"]:
         start, sob = _resolve(
             scene, p["start"], "character" if p.get("character") else "start", patch
@@ -272,83 +276,90 @@ def check_layout(
             )
         except MotionPatchesError as exc:
             raise MotionPatchesError(f"layout spec: {exc}") from None
+        try:  # a goal where it stands: nothing to plan, that pair fails (reported)
+            _check_far(_shrunk(start, size), _shrunk(facing_goal, size), "start", size)
+        except MotionPatchesError as exc:
+            refused[len(jobs)] = str(exc)
         jobs.append((p, start, sob, goal, gob, exclude, size))
-    envs, results, props = {}, [], {}
+    worlds, tasks, props = {}, [], {}
     for p, start, sob, goal, gob, exclude, size in jobs:
         allow = bool(p["limits"]["allow_traversal"])
-        key = (tuple(sorted(exclude)), allow, size)
-        if key not in envs:
-            env = scene_io.environment(
-                scene, depsgraph, patch, w.radius, tuple(exclude.values()), size
-            )
-            if size not in props:  # tagged props offer traversals
-                props[size] = object_patches(scene, depsgraph, patch, size)
-            usable = [pr for pr in props[size] if pr.name not in exclude] if allow else []
-            try:
-                planner = SegmentPlanner(
-                    patch,
-                    env,
-                    w.alpha,
-                    w.beta,
-                    w.gamma,
-                    props=usable,
-                    turn_in_place=w.turn_in_place,
-                )
-            except PlanError as exc:
-                raise MotionPatchesError(str(exc)) from None
-            envs[key] = env, planner
-        env, planner = envs[key]
-        r = {
-            "name": p["name"],
-            "start": state_dict(start, sob and sob.name),
-            "goal": state_dict(goal, gob and gob.name),
-            "reachable": False,
-            "seconds": None,
-            "frames": None,
-            "length_m": None,
-            "cost": None,
-            "pieces": None,
-            "traversals": 0,
-            "expansions": None,
-            "plan_seconds": None,
-            "blocked_by": [],
-            "blocked_reason": None,
-            "error": None,
-            "limits": p["limits"],
-        }
-        r["goal_facing"] = p["goal_facing"]
-        if p["goal_facing"] == "any":
-            goal = np.array([goal[0], goal[1], np.nan])
-        start, goal = _shrunk(start, size), _shrunk(goal, size)
-        try:
-            _check_far(start, goal, "start", size)
-            with causes.counted(planner) as expanded:
-                plan = planner.plan(start, goal, margin_tiles=margin)
-        except MotionPatchesError as exc:
-            r["error"], r["blocked_reason"] = str(exc), "refused"
-        except PlanError as exc:
-            if expanded[0] >= causes.SEARCH_LIMIT:
-                r["error"], r["blocked_reason"] = _limit_text(expanded[0]), "search limit"
-            else:
-                r["error"] = str(exc)
-                names, r["blocked_reason"] = blocking.blocking_props(env, start, goal, margin)
-                r["blocked_by"] = scene_io.owners(names)
-        else:
-            world = concatenate(plan_motions(patch, plan))
-            r["goal"] = state_dict(_shrunk(plan.goal, 1.0 / size), gob and gob.name)
-            seconds = (world.frames - 1) / patch.gait.fps
-            r.update(
-                reachable=True,
-                frames=int(round(seconds * scene_fps(scene))) + 1,
-                seconds=seconds,
-                length_m=path_length(world.ground) * size,
-                cost=float(plan.cost),
-                pieces=len(plan.pieces),
-                expansions=int(plan.expansions),
-                plan_seconds=float(plan.seconds),
-                traversals=sum(pc.kind == "traversal" for pc in plan.pieces),
-            )
-        r["failures"] = layout_spec.judge(r, p["limits"])
-        r["passed"] = not r["failures"]
+        obstacles = scene_io.obstacles(scene, depsgraph, tuple(exclude.values()))
+        if size != 1.0:  # the planner's world, shrunk by the character's size
+            obstacles = [Obstacle(ob.name, ob.polygon / size) for ob in obstacles]
+        if size not in props:  # tagged props offer traversals
+            props[size] = object_patches(scene, depsgraph, patch, size)
+        usable = [pr for pr in props[size] if pr.name not in exclude] if allow else []
+        w = layout_check.world(
+            obstacles,
+            weights.radius / size,
+            weights.alpha,
+            weights.beta,
+            weights.gamma,
+            weights.turn_in_place,
+            usable,
+        )
+        worlds[w.key] = w
+        facing = goal if p["goal_facing"] != "any" else np.array([goal[0], goal[1], np.nan])
+        tasks.append(
+            {
+                "world": w.key,
+                "start": _shrunk(start, size).tolist(),
+                "goal": _shrunk(facing, size).tolist(),
+                "margin": margin,
+            }
+        )
+    run = executor if executor is not None else InProcess()
+    planned = run.map(layout_check.plan_pair, tasks, patch=patch, worlds=worlds)
+    results = []
+    for k, ((p, start, sob, goal, gob, exclude, size), got) in enumerate(zip(jobs, planned)):
+        if "planner_error" in got:
+            raise MotionPatchesError(got["planner_error"])
+        r = _pair_result(scene, p, start, sob, goal, gob, size, got)
+        if k in refused:
+            r.update(reachable=False, error=refused[k], blocked_reason="refused")
+            r.update(seconds=None, frames=None, length_m=None, cost=None, pieces=None)
+            r["failures"] = layout_spec.judge(r, p["limits"])
+            r["passed"] = not r["failures"]
         results.append(r)
     return results
+
+
+def _pair_result(scene, p, start, sob, goal, gob, size, got):
+    """The report of one pair from what :func:`layout_check.plan_pair` found."""
+    r = {
+        "name": p["name"],
+        "start": state_dict(start, sob and sob.name),
+        "goal": state_dict(goal, gob and gob.name),
+        "reachable": False,
+        "seconds": None,
+        "frames": None,
+        "length_m": None,
+        "cost": None,
+        "pieces": None,
+        "traversals": 0,
+        "expansions": None,
+        "plan_seconds": None,
+        "blocked_by": [],
+        "blocked_reason": got["blocked_reason"],
+        "error": got["error"],
+        "limits": p["limits"],
+        "goal_facing": p["goal_facing"],
+        "reused": got["reused"],  # answered from the same pair's plan in an unchanged world
+    }
+    if got["blocked_reason"] == "search limit":
+        r["error"] = _limit_text(got["expanded"])
+    elif not got["reachable"]:
+        r["blocked_by"] = scene_io.owners(got["blocked"])
+    else:
+        r["goal"] = state_dict(_shrunk(got["goal"], 1.0 / size), gob and gob.name)
+        r.update(
+            reachable=True,
+            frames=int(round(got["seconds"] * scene_fps(scene))) + 1,
+            seconds=got["seconds"],
+            length_m=got["length_m"] * size,
+            **{k: got[k] for k in ("cost", "pieces", "expansions", "plan_seconds", "traversals")},
+        )
+    r["failures"] = layout_spec.judge(r, p["limits"])
+    r["passed"] = not r["failures"]
+    return r

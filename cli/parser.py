@@ -235,9 +235,30 @@ def _check_parser(sub, common):
         "cost and the blocking props; exit 1 when a pair fails its "
         "limits. Pairs come from --spec, from --character/--goal, or "
         "(neither given) from every character with a planned path "
-        "and its planned goal.",
+        "and its planned goal. Several .blend files and specs are "
+        "checked in one process, with one exit status for all: 0 every "
+        "pair passed, 1 a pair failed, 2 bad input (a file or spec that "
+        "could not be checked).",
     )
-    p.add_argument("--spec", metavar="FILE", help="JSON or TOML file of pairs and limits")
+    p.add_argument(
+        "files",
+        nargs="*",
+        metavar="FILE",
+        help=".blend files to check (each with every spec; a .blend without one uses the "
+        "spec beside it, NAME.layout.toml or NAME.layout.json) and layout specs",
+    )
+    p.add_argument(
+        "--spec",
+        action="append",
+        metavar="FILE",
+        help="JSON or TOML file of pairs and limits (repeat: every .blend with each)",
+    )
+    p.add_argument(
+        "--junit",
+        metavar="FILE",
+        help="also write the results as JUnit XML (one test case per pair), the report "
+        "GitLab, Jenkins and GitHub Actions show",
+    )
     p.add_argument(
         "--character",
         action="append",
@@ -260,6 +281,7 @@ def _check_parser(sub, common):
     )
     p.add_argument("--max-length", type=float, metavar="M", help="limit: at most M metres")
     p.add_argument("--max-cost", type=float, metavar="C", help="limit: at most this cost")
+    _cluster_options(p)
     p.set_defaults(run=cmd_check)
 
 

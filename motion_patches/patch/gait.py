@@ -34,6 +34,8 @@ class Gait:
     notes: list = field(default_factory=list)  # provenance, e.g. "right turn mirrored from 16_18"
     turn_range: tuple | None = None  # sharpest (right, left) curvature: turn clips' one-cycle
     # windows, at least the straight stride's bend
+    floor_height: float | None = None  # :meth:`floor`, stored with the patch (None: not yet
+    # derived; it is then derived once, by forward kinematics of the straight loop)
 
     @property
     def frames(self) -> int:
@@ -96,11 +98,15 @@ class Gait:
 
     def floor(self) -> float:
         """Floor height under the straight loop (where interaction clips are put down).
-        Kept once found (every character of a crowd is checked against it; it takes the
-        loop's forward kinematics), for as long as the loop and skeleton are the same."""
+        Kept once found (every plan, check and crowd member asks for it; it takes the
+        loop's forward kinematics), for as long as the loop and skeleton are the same; a
+        patch stores it (``floor_height``, read from the file), so it is not derived at all
+        for a loaded patch."""
         lp = self.straight
         key = (lp, lp.root_local, lp.rotations, self.skeleton, self.fps)
         cached = self.__dict__.get("_floor")
+        if cached is None and self.floor_height is not None:  # stored with the patch
+            cached = self.__dict__["_floor"] = (key, float(self.floor_height))
         if (
             cached is None
             or any(a is not b for a, b in zip(cached[0][:4], key))
@@ -108,6 +114,7 @@ class Gait:
         ):
             clip = Clip("loop", self.skeleton, self.fps, lp.root_local, lp.rotations)
             cached = self.__dict__["_floor"] = (key, float(floor_level(clip)))
+            self.floor_height = cached[1]
         return cached[1]
 
     def cycle_distances(self) -> np.ndarray:
@@ -154,6 +161,7 @@ class Gait:
             "gait_turn_range": np.array(self.turn_range if self.turn_range else (0.0, 0.0)),
             "gait_count": np.array(len(self.loops)),
             "gait_notes": np.array(self.notes, dtype=str),
+            "gait_floor": np.array(self.floor()),
         }
         d.update({"skel_" + k: v for k, v in self.skeleton.to_dict().items()})
         for i, lp in enumerate(self.loops):
@@ -172,6 +180,7 @@ class Gait:
             loops,
             [str(n) for n in d["gait_notes"]],
             tr if tr and any(tr) else None,
+            float(d["gait_floor"]) if "gait_floor" in d else None,  # older files: derived
         )
 
 

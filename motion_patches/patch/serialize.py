@@ -65,6 +65,7 @@ def patch_from_bytes(data: bytes) -> LocomotionPatch:
         raise ValueError(f"not a stored locomotion patch ({exc})") from None
     header = validate(d)
     gait = Gait.from_dict(d)
+    gait.floor()  # derived here, once, when the file is older than the stored floor
     return LocomotionPatch(  # type: ignore[call-arg]  # (mypy cannot count the *arrays)
         header["layer"],
         gait,
@@ -202,7 +203,7 @@ def validate(d: Mapping[str, np.ndarray]) -> dict[str, Any]:
     _array(d, "skel_rest", "f", (j, 4, 4), finite=True)
     _skeleton_sense(d, parents)
     fps = float(d["gait_fps"])
-    frames = []
+    frames, lows = [], []
     for i in range(loops):
         p = f"loop{i}_"
         n = _array(d, p + "root_local", "f", (None, 3), finite=True).shape[0]
@@ -229,6 +230,7 @@ def validate(d: Mapping[str, np.ndarray]) -> dict[str, Any]:
         if not _array(d, p + "contacts", "b", (n, 4)).any():
             _fail(f"array '{p}contacts' never puts a foot down")
         low = _lowest_joint(d, p)
+        lows.append(low)
         if abs(low) > MAX_FLOOR_GAP:
             _fail(
                 f"array '{p}root_local' with 'skel_rest' and '{p}rotations' puts the feet "
@@ -239,6 +241,11 @@ def validate(d: Mapping[str, np.ndarray]) -> dict[str, Any]:
             _fail(f"array '{p}scalars' (turn {turn:.3g} rad, seam {seam:.3g} deg) is out of range")
         _array(d, p + "name", "U", ())
     _array(d, "gait_turn_range", "f", (2,), lo=-4 * np.pi, hi=4 * np.pi)
+    if "gait_floor" in d:  # optional: files written before it was stored derive it on load
+        # The floor is a low percentile of the lowest foot joint: not below the lowest
+        # joint of any loop, and not far above the highest of those.
+        _array(d, "gait_floor", "f", (), finite=True, lo=min(lows) - 1e-6)
+        _array(d, "gait_floor", "f", (), hi=max(lows) + MAX_FLOOR_GAP)
     _array(d, "pose_centres", "f", (k, None), lo=-1e3, hi=1e3)
     _segment_sense(d, header, fps, frames)
     return header

@@ -198,6 +198,7 @@ def follow(
     start_phase: int = 0,
     eased: tuple[bool, bool] = (True, True),
     phases: np.ndarray | None = None,
+    poses: bool = True,
 ) -> Motion:
     """Motion of the gait along ``curve``.
 
@@ -205,10 +206,20 @@ def follow(
     and ends on the node pose; without, it stops where the curve ends, mid-cycle if need be
     (on one of ``phases`` if given); with ``cycles="to node"`` it starts at the phase (of
     ``phases``) that makes it end on the node pose.
+    ``poses`` False: the ground frames and root alone (what a layout check measures), the
+    body left out (the root bone's rotation and the contacts of the first loop stand in
+    for it): the blended poses are most of the work.
     """
     k, s, ease = frame_arclengths(gait, curve, cycles, start_phase, eased, phases)
     x, y, h, _ = curve.at(s)
     weights = gait.weights(np.interp(s, curve.s, curve.kappa * ease))
     weights = held_weights(weights, max(int(round(gait.frames * WEIGHT_WINDOW)), 0))
-    root, rot, contacts = gait.pose(k, weights)
+    if poses:
+        root, rot, contacts = gait.pose(k, weights)
+    else:
+        ph = np.asarray(k) % gait.frames
+        root = np.zeros((ph.size, 3))
+        for i, lp in enumerate(gait.loops):
+            root += lp.root_local[ph] * weights[:, i : i + 1]
+        rot, contacts = gait.loops[0].rotations[ph, :1], gait.loops[0].contacts[ph]
     return Motion(np.column_stack((x, y, h)), root, rot, contacts)

@@ -20,18 +20,30 @@ from .plan_frame import IDENTITY
 from .stitching import BLEND_FRAMES
 
 
-def plan_motions(patch: LocomotionPatch, plan: Plan, standing: bool = True) -> list[Motion]:
+def plan_motions(
+    patch: LocomotionPatch, plan: Plan, standing: bool = True, poses: bool = True
+) -> list[Motion]:
     """World-space motion of every piece, eased across stitches into and out of clips;
     with ``standing`` a plan that starts (ends) walking starts from (ends in) standing:
     its first (last) piece is time-warped (:mod:`.retime`), ramps one gait cycle long. A
     turn on the spot continues from the pose the walk before it stopped in; the walk
-    slows to a stop at the goal and the turn eases in and out."""
+    slows to a stop at the goal and the turn eases in and out.
+
+    ``poses`` False: the same frames, ground and root, without the body (one joint stands
+    in for it), for what only measures the motion (a layout check's seconds and metres).
+    A turn still starts from the full pose before it, as it picks its phase by that pose."""
     ms: list[Motion] = []
+    full = None  # the last piece's motion with its body (poses False: for a turn after it)
     for i, p in enumerate(plan.pieces):
         if p.kind == "turn":
-            ms.append(turn_motion(patch, p, ms[-1] if ms else None))
+            if not poses and ms and full is None:
+                full = piece_motion(patch, plan.pieces[i - 1], standing)
+            m = turn_motion(patch, p, (full if not poses else ms[-1]) if ms else None)
+            full = m
         else:
-            ms.append(piece_motion(patch, p, standing))
+            m = piece_motion(patch, p, standing, poses)
+            full = None
+        ms.append(m if poses else _bodiless(m))
     clips = ("traversal", "interaction")
     kinds = [p.kind for p in plan.pieces]
     if standing:
@@ -42,7 +54,7 @@ def plan_motions(patch: LocomotionPatch, plan: Plan, standing: bool = True) -> l
             ease_in = i == 0 or kind == "turn" or kinds[i - 1] == "turn"
             ease_out = i == n - 1 or kind == "turn" or kinds[i + 1] == "turn"
             ms[i] = retime.eased(ms[i], ease_in, ease_out, ramp)
-            if not has_flight(patch.gait):
+            if poses and not has_flight(patch.gait):  # the body only: ground and frames kept
                 ms[i] = stand.settled(
                     patch.gait.skeleton, ms[i], flat_feet(patch.gait), ease_in, ease_out, ramp // 2
                 )
@@ -166,26 +178,39 @@ def interaction_states(
     return s, g
 
 
-def piece_motion(patch: LocomotionPatch, piece: Piece, standing: bool = False) -> Motion:
+def _bodiless(m: Motion) -> Motion:
+    """``m`` with its first joint alone (:func:`plan_motions` without poses)."""
+    if m.rotations.shape[1] == 1:
+        return m
+    return Motion(m.ground, m.root_local, m.rotations[:, :1], m.contacts)
+
+
+def piece_motion(
+    patch: LocomotionPatch, piece: Piece, standing: bool = False, poses: bool = True
+) -> Motion:
     """World-space motion of one planned piece (not eased; see :func:`plan_motions`);
     with ``standing`` a start (goal) connector starts (ends) on a double-support phase
-    (:func:`~..patch.synthesis.double_support`), where a stand is eased from (into)."""
+    (:func:`~..patch.synthesis.double_support`), where a stand is eased from (into);
+    ``poses`` False: walking pieces without their body (:func:`..patch.synthesis.follow`)."""
     if piece.kind == "turn":
         return turn_motion(patch, piece)
-    m = _local_piece_motion(patch, piece, double_support(patch.gait) if standing else None)
+    phases = double_support(patch.gait) if standing else None
+    m = _local_piece_motion(patch, piece, phases, poses)
     return m if piece.frame == IDENTITY else m.transformed(*piece.frame)
 
 
-def _local_piece_motion(patch, piece, phases=None):
+def _local_piece_motion(patch, piece, phases=None, poses=True):
     if piece.kind in ("segment", "part"):
-        m = patch.motion(piece.segment)
+        m = patch.motion(piece.segment, poses)
         if piece.kind == "part":
             m = sliced(m, *piece.frames)
         return m.transformed(piece.tile[0] * patch.side, piece.tile[1] * patch.side)
     if piece.kind in ("traversal", "interaction"):
         return piece.prop.world_clip(piece.prop.clips[piece.clip_index])
     if piece.kind == "start":
-        return follow(patch.gait, piece.curve, cycles="to node", phases=phases)
+        return follow(patch.gait, piece.curve, cycles="to node", phases=phases, poses=poses)
     if piece.kind == "shortcut":
-        return follow(patch.gait, piece.curve, cycles=piece.cycles)
-    return follow(patch.gait, piece.curve, cycles=None, eased=(True, False), phases=phases)
+        return follow(patch.gait, piece.curve, cycles=piece.cycles, poses=poses)
+    return follow(
+        patch.gait, piece.curve, cycles=None, eased=(True, False), phases=phases, poses=poses
+    )

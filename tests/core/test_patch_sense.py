@@ -128,3 +128,26 @@ def test_the_issue_s_cases_name_their_cause(good):
 def test_the_baked_patch_still_reads(good, walk_patch):
     p = serialize.patch_from_bytes(pack(good))
     assert p.segment_count == walk_patch.segment_count
+
+
+def test_the_gait_floor_is_stored_and_older_files_derive_it(good, walk_patch):
+    """The floor is written with the patch (no forward kinematics per plan or check); a file
+    written before it was stored loads and derives the same value once."""
+    assert float(good["gait_floor"]) == walk_patch.gait.floor()
+    stored = serialize.patch_from_bytes(pack(good))
+    assert stored.gait.floor_height == walk_patch.gait.floor()
+    older = serialize.patch_from_bytes(pack({k: v for k, v in good.items() if k != "gait_floor"}))
+    assert older.gait.floor_height == pytest.approx(walk_patch.gait.floor(), abs=1e-12)
+
+
+@pytest.mark.parametrize(
+    "value",
+    [np.nan, np.inf, -0.5 + 0.0, 1e30, np.array([0.0]), np.array("0.0"), np.array(0)],
+    ids=["nan", "inf", "below the feet", "huge", "shape", "text", "integer"],
+)
+def test_a_bad_gait_floor_is_refused_naming_it(good, value):
+    floor = float(good["gait_floor"])
+    value = np.array(floor - 0.5 if isinstance(value, float) and value == -0.5 else value)
+    with pytest.raises(ValueError) as err:
+        serialize.patch_from_bytes(pack({**good, "gait_floor": value}))
+    assert "'gait_floor'" in str(err.value), str(err.value)

@@ -1,0 +1,287 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Blender benchmark of layout checks (``api.check_layout``, the CLI's ``check``): what a check
+costs beyond the plans inside it, first call and second call of an unchanged scene, and
+``check`` over many .blend files in one process against one process per file.
+
+Prints JSON and a table, asserts nothing. Run from the repository root with a Blender Python:
+
+    .venv/blender-4.5/bin/python bench/bench_check.py [--files 20] [--json out.json]
+
+Set-up (not timed): the walk patch (CMU 16_15 + 16_18) baked through the API at 30 fps, then
+scenes built as a level designer builds them: Blender cubes and cylinders as props, goals as
+empties, a walker copied from the source armature; each scene saved as a .blend file.
+
+* ``open``: open ground, two pairs.
+* ``pillars``: 40 pillars in a jittered grid between the start and the goals.
+* ``gap``: two walls across the way with a 1.6 m gap between them.
+* ``uturn``: a 6 m wall in front of the walker, its goal behind the wall (round its end).
+
+Per scene, ``check`` is the wall-clock time of ``api.check_layout`` and ``plan`` the sum of
+the planner's own seconds of its pairs (``plan_seconds``); the ratio is check / plan. The
+first call is the first after the file is opened (the patch itself is already loaded: one
+file's patch is decoded once per process, as before); the second is the same call again.
+
+``batch``: ``blender -c motion_patches check`` over N distinct layouts (the four scenes in
+turn, their goals moved 10 cm more each round, so no pair is answered from another file's
+plan), each with its spec beside it, in one process (the CLI's handler given every file)
+against N processes each checking one file (``python -c`` starting bpy and the add-on, as a
+CI job running N commands would). Both count the start of Python, bpy and the add-on.
+"""
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+REPO = HERE.parent
+sys.path.insert(0, str(REPO / "tools"))
+sys.path.insert(0, str(HERE))
+import blender_session  # noqa: E402
+
+SCENES = ("open", "pillars", "gap", "uturn")
+TARGET_RATIO = 1.2
+
+
+def parse_args(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument(
+        "--mocap",
+        default=os.environ.get("MOTION_PATCHES_MOCAP", str(REPO.parent / "shared" / "mocap")),
+    )
+    p.add_argument("--repeat", type=int, default=3, help="second calls timed (median)")
+    p.add_argument("--files", type=int, default=20, help="files of the batch section (0: skip)")
+    p.add_argument("--json", metavar="PATH", help="also write every figure as JSON")
+    p.add_argument("--profile", action="store_true", help="cProfile the first calls")
+    return p.parse_args(argv)
+
+
+def box(bpy, name, x, y, sx, sy, h=2.0):
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(x, y, h / 2))
+    ob = bpy.context.object
+    ob.name = name
+    ob.scale = (sx, sy, h)
+    return ob
+
+
+def build(bpy, api, kind, source, path, shift=0.0):
+    """Scene ``kind`` on the baked file: props, a walker, goals as empties (moved ``shift``
+    metres along y: the batch's files differ); saved to ``path``. Returns its layout spec."""
+    import math
+
+    import numpy as np
+    from bench_blender import character, goal_empty, pillar
+
+    scene = bpy.context.scene
+    for ob in [o for o in scene.objects if o is not source]:
+        bpy.data.objects.remove(ob)
+    character(bpy, source, "Walker", 0.0, 0.0)
+    pairs = []
+    if kind == "open":
+        goal_empty(bpy, "Goal", 8.0, 3.0, 0.3)
+        goal_empty(bpy, "Goal2", 5.0, -4.0, -1.0)
+        pairs = [("Walker", "Goal"), ([0.0, 0.0, 0.0], "Goal2")]
+    elif kind == "pillars":
+        rng = np.random.default_rng(7)
+        for n in range(40):
+            i, j = divmod(n, 8)
+            x, y = 2.0 + 1.6 * i, -5.6 + 1.6 * j
+            x, y = x + rng.uniform(-0.3, 0.3), y + rng.uniform(-0.3, 0.3)
+            pillar(bpy, f"Pillar{n:02d}", float(x), float(y))
+        goal_empty(bpy, "Goal", 11.0, 2.0, 0.0)
+        goal_empty(bpy, "Goal2", 10.5, -4.0, -0.5)
+        pairs = [("Walker", "Goal"), ([0.0, 0.0, 0.0], "Goal2")]
+    elif kind == "gap":
+        box(bpy, "WallA", 4.0, 2.7, 0.2, 4.0)
+        box(bpy, "WallB", 4.0, -2.7, 0.2, 4.0)
+        box(bpy, "WallC", 8.0, 3.2, 0.2, 4.0)
+        box(bpy, "WallD", 8.0, -2.2, 0.2, 4.0)
+        goal_empty(bpy, "Goal", 11.0, 0.0, 0.0)
+        goal_empty(bpy, "Goal2", 11.0, 2.0, math.pi / 2)
+        pairs = [("Walker", "Goal"), ([0.0, 1.0, 0.0], "Goal2")]
+    elif kind == "uturn":
+        box(bpy, "Wall", 3.0, 1.0, 0.2, 6.0)
+        goal_empty(bpy, "Goal", 5.0, 0.0, math.pi)
+        goal_empty(bpy, "Goal2", 5.0, 2.0, 0.0)
+        pairs = [("Walker", "Goal"), ([0.0, 2.0, 0.0], "Goal2")]
+    for ob in scene.objects:
+        if ob.type == "EMPTY":
+            ob.location.y += shift
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    spec = {"radius": 0.25, "pairs": []}
+    for n, (start, goal) in enumerate(pairs):
+        pair = {"name": f"{kind} {n + 1}", "goal": goal}
+        pair["character" if isinstance(start, str) else "start"] = start
+        spec["pairs"].append(pair)
+    return spec
+
+
+def timed_check(api, bpy, spec, profile=False):
+    t0 = time.perf_counter()
+    if profile:
+        import cProfile
+        import io
+        import pstats
+
+        prof = cProfile.Profile()
+        results = prof.runcall(api.check_layout, bpy.context.scene, spec)
+        s = io.StringIO()
+        pstats.Stats(prof, stream=s).sort_stats("cumulative").print_stats(25)
+        print(s.getvalue())
+    else:
+        results = api.check_layout(bpy.context.scene, spec)
+    check = time.perf_counter() - t0
+    plan = sum(r["plan_seconds"] or 0.0 for r in results)
+    return check, plan, results
+
+
+def section_scenes(bpy, api, args, files):
+    rows = []
+    for kind, (path, spec) in files.items():
+        bpy.ops.wm.open_mainfile(filepath=str(path))
+        api.storage.load_patch(bpy.context.scene)  # decoded once per process, as before
+        c1, p1, res = timed_check(api, bpy, spec, args.profile)
+        seconds = []
+        for _ in range(args.repeat):
+            seconds.append(timed_check(api, bpy, spec)[:2])
+        c2 = statistics.median(c for c, _ in seconds)
+        p2 = statistics.median(p for _, p in seconds)
+        rows.append(
+            {
+                "scene": kind,
+                "pairs": len(res),
+                "reached": sum(r["reachable"] for r in res),
+                "first_check_ms": c1 * 1e3,
+                "first_plan_ms": p1 * 1e3,
+                "first_ratio": c1 / p1,
+                "second_check_ms": c2 * 1e3,
+                "second_plan_ms": p2 * 1e3,
+                "second_ratio": c2 / p2,
+            }
+        )
+    return rows
+
+
+CHILD = """
+import sys
+sys.path.insert(0, {tools!r})
+import blender_session
+bpy, addon = blender_session.start()
+sys.exit(addon.cli.main(sys.argv[1:]))
+"""
+
+
+def batch_files(bpy, api, args, base, tmp):
+    """``args.files`` distinct layouts (the four scenes in turn, goals moved 10 cm more each
+    round), each with its spec beside it (NAME.layout.json)."""
+    blends = []
+    for n in range(args.files):
+        kind = SCENES[n % len(SCENES)]
+        bpy.ops.wm.open_mainfile(filepath=str(base))
+        path = tmp / f"layout_{n:02d}.blend"
+        spec = build(bpy, api, kind, bpy.data.objects["Source"], path, 0.1 * (n // len(SCENES)))
+        (tmp / f"layout_{n:02d}.layout.json").write_text(json.dumps(spec))
+        blends.append(path)
+    return blends
+
+
+def section_batch(blends):
+    """N files checked in one process against N processes of one file each."""
+    child = CHILD.format(tools=str(REPO / "tools"))
+    t0 = time.perf_counter()
+    one = subprocess.run(
+        [sys.executable, "-c", child, "check", *map(str, blends), "--json"],
+        capture_output=True,
+        text=True,
+    )
+    one_s = time.perf_counter() - t0
+    doc = json.loads(one.stdout) if one.stdout.strip() else {}
+    t0 = time.perf_counter()
+    codes = []
+    for b in blends:
+        r = subprocess.run(
+            [sys.executable, "-c", child, "check", str(b)], capture_output=True, text=True
+        )
+        codes.append(r.returncode)
+    many_s = time.perf_counter() - t0
+    return {
+        "files": len(blends),
+        "pairs": len(doc.get("pairs", [])),
+        "reused": sum(p["reused"] for p in doc.get("pairs", [])),
+        "one_process_s": one_s,
+        "one_process_exit": one.returncode,
+        "separate_processes_s": many_s,
+        "separate_exits": sorted(set(codes)),
+        "speedup": many_s / one_s,
+        **({"one_process_stderr": one.stderr[-400:]} if one.returncode else {}),
+    }
+
+
+def table(rows, batch):
+    head = (
+        f"{'scene':<8} {'pairs':>5} {'check 1st':>10} {'plan 1st':>9} {'ratio':>6} "
+        f"{'check 2nd':>10} {'plan 2nd':>9} {'ratio':>6}"
+    )
+    out = [head, "-" * len(head)]
+    for r in rows:
+        out.append(
+            f"{r['scene']:<8} {r['reached']}/{r['pairs']:<3} "
+            f"{r['first_check_ms']:>8.1f}ms {r['first_plan_ms']:>7.1f}ms "
+            f"{r['first_ratio']:>5.2f}x {r['second_check_ms']:>8.1f}ms "
+            f"{r['second_plan_ms']:>7.1f}ms {r['second_ratio']:>5.2f}x"
+        )
+    m1 = statistics.median(r["first_ratio"] for r in rows)
+    m2 = statistics.median(r["second_ratio"] for r in rows)
+    out.append(
+        f"median check/plan: first {m1:.2f}x, second {m2:.2f}x (target: at most "
+        f"{TARGET_RATIO}x first, 1.0x second)"
+    )
+    if batch:
+        out.append(
+            f"check over {batch['files']} .blend files ({batch['pairs']} pairs): one process "
+            f"{batch['one_process_s']:.1f} s (exit {batch['one_process_exit']}), "
+            f"{batch['files']} processes {batch['separate_processes_s']:.1f} s "
+            f"(exits {batch['separate_exits']}): {batch['speedup']:.1f}x"
+        )
+    return "\n".join(out), m1, m2
+
+
+def main(argv=None):
+    args = parse_args(argv)
+    bpy, addon = blender_session.start()
+    api = addon.api
+    from bench_blender import baked_scene
+
+    tmp = Path(tempfile.mkdtemp(prefix="bench_check-"))
+    scene, source = baked_scene(bpy, api, args.mocap)
+    base = tmp / "baked.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(base))
+    files = {}
+    for kind in SCENES:
+        bpy.ops.wm.open_mainfile(filepath=str(base))
+        src = bpy.data.objects["Source"]
+        path = tmp / f"{kind}.blend"
+        files[kind] = (path, build(bpy, api, kind, src, path))
+    rows = section_scenes(bpy, api, args, files)
+    batch = section_batch(batch_files(bpy, api, args, base, tmp)) if args.files else None
+    text, m1, m2 = table(rows, batch)
+    doc = {
+        "scenes": rows,
+        "median_first_ratio": m1,
+        "median_second_ratio": m2,
+        "target_ratio": TARGET_RATIO,
+        **({"batch": batch} if batch else {}),
+    }
+    print(json.dumps(doc, indent=1))
+    print(text)
+    if args.json:
+        Path(args.json).write_text(json.dumps(doc, indent=1))
+
+
+if __name__ == "__main__":
+    main()
