@@ -99,6 +99,14 @@ def double_support(gait: Gait) -> np.ndarray:
     return np.sort(((starts + ends - 1) // 2 + shift) % n)
 
 
+def _stretched(phase_at: np.ndarray, total: float) -> np.ndarray:
+    """Cycles along a curve (``phase_at``, from 0) scaled to end on ``total``; a curve of no
+    length (steps on the spot) advances evenly instead of dividing by zero."""
+    if phase_at[-1] > 1e-12:
+        return phase_at * (total / phase_at[-1])
+    return np.linspace(0.0, total, phase_at.size)
+
+
 def frame_arclengths(
     gait: Gait,
     curve: Curve,
@@ -124,7 +132,7 @@ def frame_arclengths(
         # Starting on one of ``phases`` and ending on the node pose: the whole number of
         # cycles and the start phase whose travel is nearest the curve's.
         whole, start_phase = _nearest_phase(phase_at[-1], profile, phases, start=True)
-        phase_at *= (whole - profile[start_phase]) / phase_at[-1]
+        phase_at = _stretched(phase_at, whole - profile[start_phase])
         total = whole * n - start_phase
     elif cycles == "to node":
         # Any length, ending on the node pose: start at the phase that leaves a whole
@@ -133,17 +141,17 @@ def frame_arclengths(
         start_phase = int(np.argmin(np.abs(profile[:n] - (whole - phase_at[-1]))))
         if whole - profile[start_phase] <= 0:
             start_phase = 0
-        phase_at *= (whole - profile[start_phase]) / phase_at[-1]
+        phase_at = _stretched(phase_at, whole - profile[start_phase])
         total = whole * n - start_phase
     elif cycles is None and some:
         # Ending on one of ``phases``: the stop's last step lands.
         base = profile[start_phase % n]
         whole, end = _nearest_phase(phase_at[-1], profile, phases, start=False, base=base)
-        phase_at *= (whole + profile[end] - base) / phase_at[-1]
+        phase_at = _stretched(phase_at, whole + profile[end] - base)
         total = whole * n + end - start_phase % n
     elif cycles is not None:
         assert not isinstance(cycles, str), cycles  # "to node" is the one word
-        phase_at *= cycles / phase_at[-1]
+        phase_at = _stretched(phase_at, cycles)
         total = cycles * n
     else:
         total = int(np.ceil(phase_at[-1] * n - 1e-9))
