@@ -165,19 +165,11 @@ def closest_and_inside(roots, delays, env):
     return closest, inside
 
 
-DOORWAY_LEFT = (
-    "a counter-flow through one doorway still leaves a few pairs too close: the planner "
-    "sends both directions down the doorway's middle, so every pair meeting there is "
-    "head-on along a shared stretch that no wait or hold within 15 s clears and the "
-    "re-routes round the other's stretch do not free"
-)
-
-
 @pytest.mark.parametrize(
     "scene, max_wait",
     [
         (fourway, 4.0),
-        pytest.param(doorway, 15.0, marks=pytest.mark.xfail(strict=True, reason=DOORWAY_LEFT)),
+        (doorway, 15.0),
     ],
     ids=["four-way", "doorway"],
 )
