@@ -1,16 +1,19 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""Lanes: a counter-flow that meets head-on splits in two, each side keeping to its right.
+"""Lanes: where a counter-flow meets head-on, it splits in two, each side keeping to its right.
 
-Two characters planned on their own through a doorway both take its middle. Walking towards
-each other there, no timing clears them unless one waits for the other to be through; the
-re-routes round where the other walks then (:func:`~.crowd.ghosts`) leave the later one a
-sliver beside the first. Crowd tools settle this with a keep-right rule, and so does this:
-the pair still too close, head-on, is freed and both are re-planned, each with a strip on
-its left of the line between them as a passing obstacle (over the stretch where they meet),
-so each finds its own side of the way; then both are re-timed round everyone else. The two
-strips leave a gap of a spacing between them, so walkers on their own sides pass clear of
-each other. A way too narrow for two has no side to keep: the re-plans find no path and
-the pair is left to the waits (a bottleneck taken one at a time) or reported.
+Walkers planned on their own through a doorway all take its opening, hugging whichever
+corner is on their way. Two that meet head-on there share a stretch that no timing clears
+unless one waits for the other to be through, and a re-route round where the other walks
+then (:func:`~.crowd.ghosts`) leaves the later one a sliver beside the first. Crowd tools
+settle this with a keep-right rule, and so does this module: the places where a pass of the
+resolver left pairs meeting head-on (:func:`regions`) are moved onto the narrowest middle of
+the flow through them (:func:`centred`), and every walker going along such a place is
+re-planned with a strip on its left as a passing obstacle (:func:`strip`), the two
+directions' strips each reaching half a spacing over the middle line, so the flows pass on
+their own sides and only the order within a lane is left to the holds and waits. A lane
+plan that is a long way round is not taken. A way too narrow for two has no sides: its
+re-plans find no path, and its walkers are left to take turns by holds and waits, or are
+reported.
 """
 
 from collections.abc import Callable
@@ -21,7 +24,7 @@ HEAD_ON = -0.5  # cosine between two headings under which two walkers meet head-
 DETOUR = 1.25  # a lane plan longer than this many times the plan it replaces is not taken
 DETOUR_M = 2.0  # nor one longer by more than this
 REACH_M = 0.4  # a heading is taken between the points this far behind and ahead on a track
-ALONG_M = 1.0  # a lane strip reaches this far either way of where the two meet
+ALONG_M = 1.0  # a lane strip reaches this far either way of the place's middle
 ACROSS_M = 1.0  # and this far into the walker's left
 BIN_M = 0.25  # the narrowest place of a flow is looked for in slices this long
 SWAY_M = 0.05  # the roots' sway about the planned ground track, kept clear of as well
