@@ -331,7 +331,12 @@ def write_plan(
             strip.action_frame_end = at + ranges[n][2] - 1
             strip.action_frame_start = at
         if abs(scale - 1.0) > 1e-9:
-            strip.scale = scale
+            # Blender keeps the scale in single precision: rounded up, the strip would end a
+            # hair after the next one starts, and that one could not be added.
+            single = np.float32(scale)
+            while float(single) * (m.frames - 1) > end - start:
+                single = np.nextafter(single, np.float32(0.0))
+            strip.scale = float(single)
         strip.extrapolation = (
             "HOLD" if n == 0 else ("HOLD_FORWARD" if n == len(plan.pieces) - 1 else "NOTHING")
         )

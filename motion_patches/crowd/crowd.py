@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..kinematics import retime
-from . import path_timing
+from . import lanes, path_timing
 
 
 def disc(centre: Sequence[float] | np.ndarray, radius: float, sides: int = 12) -> np.ndarray:
@@ -681,11 +681,14 @@ def resolve(
     step = max(int(step), 1)
     holdable = list(holdable) if holdable is not None else [None] * len(tracks)
     order, versions, best = list(range(len(tracks))), [0] * len(tracks), None
+    tracks, laned = list(tracks), {}  # laned: {character: version of its lane plan}
+    strips = {}  # {character: the strips keeping it in its lane}, kept when it is re-routed
+    on_lane = replan and (lambda i, discs: replan(i, strips.get(i, []) + discs))
     for _ in range(restarts + 1):
         schedules, conflicts, table = _resolve_once(
             order,
             tracks,
-            replan,
+            on_lane,
             spacing,
             radius,
             fps,
@@ -700,6 +703,8 @@ def resolve(
         )
         for rank, i in enumerate(order):
             schedules[i].rank = rank
+            if i in laned and schedules[i].version == 0:  # on its lane plan
+                schedules[i].version = laned[i]
         if conflicts and _repair(table, schedules, conflicts, max_delay, max_hold, ramp):
             conflicts = _left(schedules, spacing)
         left = sum(c["frames"] for c in conflicts)
@@ -707,6 +712,12 @@ def resolve(
             best = (left, schedules, conflicts)
         if not conflicts:
             break
+        if replan is not None:  # lanes where pairs meet head-on, for the passes that follow
+            formed = lanes.form(
+                table.placed, conflicts, tracks, laned, replan, versions, spacing, radius
+            )
+            for i, (version, track, mask, lane) in formed.items():
+                laned[i], tracks[i], holdable[i], strips[i] = version, track, mask, lane
         first = list(dict.fromkeys(c["b"] for c in conflicts))
         order = first + [i for i in order if i not in first]
     return best[1], best[2]

@@ -1,8 +1,10 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""A dense four-way crossing: 40 walkers enter a 21 m plaza from its four sides (10 a side)
-and cross to shuffled places on the far side between seven pillars, in a 24 fps scene from
-the 30 fps walk patch; planned with api.plan_crowd and checked through the depsgraph on
-every frame: no two roots closer than two radii, none inside a pillar."""
+"""Dense crowds in a 24 fps scene from the 30 fps walk patch, planned with api.plan_crowd
+and checked through the depsgraph on every frame (no two roots closer than two radii, none
+inside a prop, everyone at its goal): a four-way crossing, 40 walkers entering a 21 m plaza
+from its four sides (10 a side) and crossing to shuffled places on the far side between seven
+pillars; and a counter-flow, 40 walkers through a 2 m doorway (20 each way), checked after
+the file is saved and opened again."""
 
 import time
 
@@ -10,7 +12,7 @@ import bpy
 import numpy as np
 import pytest
 
-from scene_helpers import empty, pillar, walker_from
+from scene_helpers import empty, pillar, prop_box, walker_from
 
 RADIUS = 0.25
 FPS = 24
@@ -55,17 +57,56 @@ def crossing(walk_blend, addon_module):
     return scene, pairs, res, time.perf_counter() - t0
 
 
-def test_a_four_way_crossing_of_forty_at_24_fps_keeps_everyone_apart(crossing, addon_module):
-    api = addon_module.api
-    scene, pairs, res, seconds = crossing
-    print(
-        f"four-way: {len(res.plans)} planned, {len(res.conflicts)} conflicts, "
-        f"{len(res.holds)} holding, {sum(1 for d in res.delays.values() if d)} waits, "
-        f"{len(res.rerouted)} re-routed, {seconds:.1f} s"
+def build_doorway(src, per_side=20, gap=2.0, seed=5):
+    """The scene of tests/core/test_crowd_dense.py's doorway, as objects: a wall 0.3 m thick
+    with a ``gap`` m opening, walkers on a staggered grid on each side crossing to shuffled
+    places on the other."""
+    rng = np.random.default_rng(seed)
+    for name, sign in (("Wall.S", -1), ("Wall.N", 1)):
+        prop_box(name, 0.0, sign * (14.0 + gap / 2) / 2, size=(0.3, 14.0 - gap / 2, 2.0))
+    grid = [
+        (x, y + (1.5 if c % 2 else 0.0))
+        for c, x in enumerate((3.0, 5.0, 7.0, 9.0))
+        for y in np.linspace(-7.5, 4.5, per_side // 4)
+    ]
+    pairs = []
+    for name, sign, h in (("E", 1, 0.0), ("W", -1, np.pi)):
+        order = rng.permutation(len(grid))
+        for k, (x, y) in enumerate(grid):
+            gx, gy = grid[order[k]]
+            ob = walker_from(src, f"{name}{k:02d}", (-sign * x, y, 0.0))
+            face(ob, h)
+            goal = empty(f"Goal{name}{k:02d}", sign * (gx + 1.0), gy + 0.75, h)
+            pairs.append((ob, goal))
+    return pairs
+
+
+def planned_and_reopened(walk_blend, api, folder):
+    """The doorway planned with plan_crowd, the file saved and opened again: (scene, pairs,
+    result, seconds)."""
+    bpy.ops.wm.open_mainfile(filepath=str(walk_blend))
+    scene = bpy.context.scene
+    scene.render.fps = FPS
+    pairs = build_doorway(scene.motion_patches.source_armature)
+    t0 = time.perf_counter()
+    res = api.plan_crowd(scene, pairs, frame_start=1, radius=RADIUS, max_wait_seconds=15.0)
+    seconds = time.perf_counter() - t0
+    path = folder / "doorway.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    names = [(ob.name, g.name) for ob, g in pairs]
+    bpy.ops.wm.open_mainfile(filepath=str(path))
+    pairs = [(bpy.data.objects[ob], bpy.data.objects[g]) for ob, g in names]
+    return bpy.context.scene, pairs, res, seconds
+
+
+def roots_and_props(scene, res, api, props):
+    """(roots (characters, frames, 2) through the depsgraph, the planned objects, an
+    Environment of the ``props`` by name)."""
+    from bl_ext.motion_patches_tests.motion_patches.motion_patches.props.environment import (
+        Environment,
+        Obstacle,
     )
-    assert len(res.plans) == 40 and not res.failed
-    assert not res.conflicts, res.conflicts
-    assert res.holds  # holds are laid in at a scene rate other than the patch's
+
     planned = [bpy.data.objects[p.character] for p in res.plans]
     frames = np.arange(1, max(p.frame_end for p in res.plans) + 1)
     roots = np.empty((len(planned), frames.size, 2))
@@ -77,23 +118,63 @@ def test_a_four_way_crossing_of_forty_at_24_fps_keeps_everyone_apart(crossing, a
             root = api.load_plan_record(ob)[0]["root_name"]
             mw = np.array(ev.matrix_world)
             roots[c, i] = (mw @ np.array(ev.pose.bones[root].matrix)[:, 3])[:2]
+    env = Environment(1.0, 8, 0.0)
+    for name in props:
+        ob = bpy.data.objects[name]
+        pts = np.array([(ob.matrix_world @ v.co)[:2] for v in ob.data.vertices])
+        env.place(Obstacle(ob.name, pts))
+    return roots, planned, env
+
+
+def check_apart(scene, pairs, res, api, props):
+    """Everyone planned, no two roots closer than two radii on any frame, none inside a
+    prop, everyone at its goal on the last frame."""
+    assert len(res.plans) == 40 and not res.failed
+    assert not res.conflicts, res.conflicts
+    roots, planned, env = roots_and_props(scene, res, api, props)
     d = np.linalg.norm(roots[:, None] - roots[None], axis=-1)
     d[np.arange(len(planned)), np.arange(len(planned))] = np.inf
     print(f"closest roots {d.min():.3f} m")
     assert d.min() >= 2 * RADIUS - 0.01  # the depsgraph evaluates in float32
-    from bl_ext.motion_patches_tests.motion_patches.motion_patches.props.environment import (
-        Environment,
-        Obstacle,
-    )
-
-    env = Environment(1.0, 8, 0.0)
-    for k in range(7):
-        ob = bpy.data.objects[f"Pillar.{k}"]
-        pts = np.array([(ob.matrix_world @ v.co)[:2] for v in ob.data.vertices])
-        env.place(Obstacle(ob.name, pts))
     for c, ob in enumerate(planned):
         assert not env.blocked(roots[c], radius=0.0).any(), ob.name
     goals = {ob.name: g for ob, g in pairs}
     for c, ob in enumerate(planned):
         at = np.array(goals[ob.name].matrix_world.translation[:2])
         assert np.linalg.norm(roots[c, -1] - at) < 0.35, (ob.name, roots[c, -1], at)
+
+
+def summary(name, res, seconds):
+    return (
+        f"{name}: {len(res.plans)} planned, {len(res.conflicts)} conflicts, "
+        f"{len(res.holds)} holding, {sum(1 for d in res.delays.values() if d)} waits, "
+        f"{len(res.rerouted)} re-routed, {seconds:.1f} s"
+    )
+
+
+def test_a_four_way_crossing_of_forty_at_24_fps_keeps_everyone_apart(crossing, addon_module):
+    scene, pairs, res, seconds = crossing
+    print(summary("four-way", res, seconds))
+    assert res.holds  # holds are laid in at a scene rate other than the patch's
+    check_apart(scene, pairs, res, addon_module.api, [f"Pillar.{k}" for k in range(7)])
+
+
+DOORWAY_LEFT = (
+    "plan_crowd leaves a few pairs of the doorway too close (5 in the last run), where the "
+    "core's run of the same scene (tests/core/test_crowd_dense.py) leaves none: the lanes "
+    "are formed from what a pass leaves, and the API's plans of the members differ from the "
+    "core test's enough for the passes to end elsewhere"
+)
+
+
+@pytest.mark.xfail(strict=True, raises=AssertionError, reason=DOORWAY_LEFT)
+def test_a_counter_flow_of_forty_through_a_doorway_keeps_everyone_apart(
+    walk_blend, addon_module, tmp_path
+):
+    api = addon_module.api
+    scene, pairs, res, seconds = planned_and_reopened(walk_blend, api, tmp_path)
+    print(summary("doorway", res, seconds))
+    assert res.rerouted  # lanes: walkers re-planned to their own side of the doorway
+    for p in res.plans:  # the plans came back with the file
+        assert api.load_plan_record(bpy.data.objects[p.character])
+    check_apart(scene, pairs, res, api, ["Wall.S", "Wall.N"])
