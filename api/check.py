@@ -243,7 +243,8 @@ def check_layout(
     margin = 3 if spec["margin_tiles"] is None else int(spec["margin_tiles"])
     # Evaluate first: it also brings the objects' world matrices up to date.
     depsgraph = (context or bpy.context).evaluated_depsgraph_get()
-    jobs, refused = [], {}
+    jobs: list = []
+    refused: dict[int, str] = {}
     for p in spec["pairs"]:
         start, sob = _resolve(
             scene, p["start"], "character" if p.get("character") else "start", patch
