@@ -65,9 +65,11 @@ def test_compact_keys_shrink_the_file_and_play_the_plan(measured, patch_fps, sce
 
 
 @pytest.mark.xfail(
+    bpy.app.version < (5, 0, 0),
     strict=True,
-    reason="not reached: a character's own pieces (start, stop, connectors) are keyed per "
-    "character, and captured motion bends on most frames (docs/benchmarks.md, file growth)",
+    reason="not reached on Blender 4.5, which saves .blend files uncompressed by default (5.0 "
+    "and 5.2 compress them, and meet it): a character's own pieces (start, stop, connectors) "
+    "are keyed per character, and captured motion bends on most frames (docs/benchmarks.md)",
 )
 @pytest.mark.parametrize("patch_fps,scene_fps", CASES)
 def test_a_crowd_file_grows_at_most_the_bound(measured, patch_fps, scene_fps):
