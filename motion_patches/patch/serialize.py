@@ -202,6 +202,7 @@ def validate(d: Mapping[str, np.ndarray]) -> dict[str, Any]:
         _fail("array 'skel_parents' makes a bone its own parent")
     _array(d, "skel_rest", "f", (j, 4, 4), finite=True)
     _skeleton_sense(d, parents)
+    skel = Skeleton.from_dict({k[5:]: d[k] for k in d if k.startswith("skel_")})
     fps = float(d["gait_fps"])
     frames, lows = [], []
     for i in range(loops):
@@ -229,7 +230,7 @@ def validate(d: Mapping[str, np.ndarray]) -> dict[str, Any]:
             )
         if not _array(d, p + "contacts", "b", (n, 4)).any():
             _fail(f"array '{p}contacts' never puts a foot down")
-        low = _lowest_joint(d, p)
+        low = _lowest_joint(skel, d, p)
         lows.append(low)
         if abs(low) > MAX_FLOOR_GAP:
             _fail(
@@ -278,9 +279,8 @@ def _skeleton_sense(d, parents):
         _fail("array 'skel_parents' has several roots (bones the walking root would not carry)")
 
 
-def _lowest_joint(d, prefix):
+def _lowest_joint(skel, d, prefix):
     """Height of the lowest joint over a loop, by forward kinematics of its frames."""
-    skel = Skeleton.from_dict({k[5:]: d[k] for k in d if k.startswith("skel_")})
     local = d[prefix + "root_local"]
     root = np.column_stack((np.zeros((local.shape[0], 2)), local[:, 2]))
     with np.errstate(all="ignore"):

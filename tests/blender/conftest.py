@@ -146,6 +146,13 @@ def addon_module(addon_module_name):
 
 
 @pytest.fixture
+def mp(addon_module_name):
+    """The add-on's module, looked up per test: switching the add-on off and on (some
+    modules do) reloads it, and a session-wide reference would be the old one."""
+    return sys.modules[addon_module_name]
+
+
+@pytest.fixture
 def clean_scene(addon_module_name):
     """An empty scene, freshly reset, with the add-on still enabled; yields
     ``bpy.context.scene``."""

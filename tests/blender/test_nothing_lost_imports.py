@@ -5,16 +5,10 @@ scene's patches as they were."""
 
 import io
 import json
-import sys
 
 import bpy
 import numpy as np
 import pytest
-
-
-@pytest.fixture
-def mp(addon_module_name):
-    return sys.modules[addon_module_name]
 
 
 @pytest.fixture

@@ -4,17 +4,10 @@ are refused naming the cause, the scene unchanged: weights all 0, a goal without
 (zero scale), a start that is not a number, a crowd too big for its region or for one
 Duplicate Crowd."""
 
-import sys
-
 import bpy
 import pytest
 
 from scene_helpers import empty, walker_from
-
-
-@pytest.fixture
-def mp(addon_module_name):
-    return sys.modules[addon_module_name]
 
 
 @pytest.fixture

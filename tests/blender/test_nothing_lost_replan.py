@@ -4,8 +4,6 @@ with the timeline mid-walk starts again where it stood before it was planned (it
 position on the first frame), through the operator and the API with ``frame_start=1``;
 "from here" (the operator's From Current Frame, the CLI's --from-here) starts where it is."""
 
-import sys
-
 import bpy
 import numpy as np
 import pytest
@@ -13,11 +11,6 @@ import pytest
 from scene_helpers import empty, walker_from
 
 START = (0.4, 0.3, 0.0)
-
-
-@pytest.fixture
-def mp(addon_module_name):
-    return sys.modules[addon_module_name]
 
 
 @pytest.fixture

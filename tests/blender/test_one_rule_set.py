@@ -10,7 +10,6 @@ walkers copies of the imported armature, goals as empties facing -Y, a body mesh
 with the walkers."""
 
 import json
-import sys
 
 import bpy
 import pytest
@@ -44,12 +43,6 @@ def crowd_blend(walk_blend, tmp_path_factory):
 def scene(crowd_blend):
     bpy.ops.wm.open_mainfile(filepath=str(crowd_blend))
     return bpy.context.scene
-
-
-@pytest.fixture
-def mp(addon_module_name):
-    # Looked up per test: switching the add-on off and on (other modules) reloads it.
-    return sys.modules[addon_module_name]
 
 
 @pytest.fixture

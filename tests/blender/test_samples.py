@@ -3,7 +3,6 @@
 every supported Blender and plan as a newcomer would plan them: the walker across the
 hurdles, the sitter from one chair to the other, the crowd; judged on the evaluated rig."""
 
-import sys
 from pathlib import Path
 
 import bpy
@@ -12,11 +11,6 @@ import pytest
 
 SAMPLES = Path(__file__).resolve().parents[2] / "samples"
 MAX_BYTES = 5_000_000
-
-
-@pytest.fixture
-def mp(addon_module_name):
-    return sys.modules[addon_module_name]
 
 
 def open_sample(name):

@@ -12,7 +12,6 @@ reaches it; ``check`` plans a short open-floor pair for real at each bound."""
 import argparse
 import json
 import math
-import sys
 
 import bpy
 import pytest
@@ -20,12 +19,6 @@ import pytest
 from scene_helpers import empty, walker_from
 
 pytestmark = pytest.mark.usefixtures("addon_module")
-
-
-@pytest.fixture
-def mp(addon_module_name):
-    # Looked up per test: switching the add-on off and on (other modules) reloads it.
-    return sys.modules[addon_module_name]
 
 
 @pytest.fixture(scope="module")
