@@ -385,7 +385,9 @@ def _column_tolerances(curves, tol):
     )
 
 
-def key_curves(action, slot, frames, curves, tol=None, stored=None, values=None, rotations=()):
+def key_curves(
+    action, slot, frames, curves, tol=None, stored=None, values=None, rotations=(), between=True
+):
     """Create the F-curves ``curves`` = [(data_path, index, group, values (F,))], all keyed
     at ``frames``, each in one bulk write (``keyframe_points.add`` + ``foreach_set`` of
     float32 arrays, the type Blender stores, so nothing is converted value by value).
@@ -400,13 +402,24 @@ def key_curves(action, slot, frames, curves, tol=None, stored=None, values=None,
     within it (:func:`motion_patches.kinematics.keys.plan_columns`; ``stored``: those
     choices made already). None: a linear key on every frame.
     ``values``: the curves' values as one (F, C) array already (their ``curves`` entries
-    are then not read)."""
+    are then not read). ``between``: the keys are also played between ``frames`` (a strip
+    scaled to another rate) and held to the plan there too; False: only on them."""
     frames = np.asarray(frames, float)
     if values is None and curves:
         values = np.column_stack([np.asarray(c[3], float) for c in curves])
+    # samples sit on whole frames, one apart
+    whole = bool(frames.size) and np.all(np.diff(frames) == 1.0) and frames[0] == int(frames[0])
     cubic = None
     if isinstance(tol, Tolerance) and curves:
-        cubic = key_plan.cubic_keys(values, _column_tolerances(curves, tol), rotations)
+        # a curve that needs as many keys as samples cost is stored as samples: stop there
+        samples = -(-frames.size * key_plan.SAMPLE_BYTES // key_plan.KEY_BYTES)
+        cubic = key_plan.cubic_keys(
+            values,
+            _column_tolerances(curves, tol),
+            rotations,
+            between,
+            give_up_at=samples if whole else None,
+        )
         stored = [("cubic", None)] * len(curves)
     if stored is None:
         stored = (
@@ -414,8 +427,6 @@ def key_curves(action, slot, frames, curves, tol=None, stored=None, values=None,
             if tol is not None and curves
             else [("all", None)] * len(curves)
         )
-    # samples sit on whole frames, one apart
-    whole = bool(frames.size) and np.all(np.diff(frames) == 1.0) and frames[0] == int(frames[0])
     step = float(frames[1] - frames[0]) if frames.size > 1 else 1.0
     # every curve's (frame, value) pairs, float32, built at once; a curve takes its row
     rows = np.empty((len(curves), 2 * frames.size), np.float32)
@@ -437,7 +448,10 @@ def key_curves(action, slot, frames, curves, tol=None, stored=None, values=None,
                 how, co = "constant", np.array([frames[0], cubic["value"][c]], np.float32)
             else:
                 kept = np.flatnonzero(cubic["keep"][:, c])
-                if whole and kept.size * key_plan.KEY_BYTES >= frames.size * key_plan.SAMPLE_BYTES:
+                if whole and (
+                    cubic["gave_up"][c]
+                    or kept.size * key_plan.KEY_BYTES >= frames.size * key_plan.SAMPLE_BYTES
+                ):
                     how = "samples"
                 else:
                     _key_cubic(
@@ -526,12 +540,14 @@ def curve_points(fc):
     return co.reshape(-1, 2).astype(float)
 
 
-def key_pose(action, slot, skel, frames, root_location, rotations, modes=None, tol=None):
+def key_pose(
+    action, slot, skel, frames, root_location, rotations, modes=None, tol=None, between=True
+):
     """Key the root bone's location and every bone's rotation in the channel its rotation
     mode plays: ``modes`` is {bone name: rotation_mode}, quaternion for bones not in it.
     Quaternion channels are keyed as given (the caller makes them continuous); Euler and
     axis-angle ones are converted continuous over ``frames`` (:func:`rotation_channels`).
-    ``tol``: store the curves compactly (:func:`key_curves`)."""
+    ``tol``, ``between``: store the curves compactly (:func:`key_curves`)."""
     modes = modes or {}
     root = skel.names[skel.root]
     curves = [(f'pose.bones["{root}"].location', i, root, None) for i in range(3)]
@@ -566,7 +582,7 @@ def key_pose(action, slot, skel, frames, root_location, rotations, modes=None, t
     values = np.concatenate(columns, axis=1)
     if isinstance(tol, Tolerance):  # the root's location: finer too (rotations judged apart)
         tol = Tolerance(tol.angle, tol.length / ROOT_FINER)
-    key_curves(action, slot, frames, curves, tol, values=values, rotations=groups)
+    key_curves(action, slot, frames, curves, tol, values=values, rotations=groups, between=between)
 
 
 def _rotations(mode, columns, angle):

@@ -374,7 +374,8 @@ def write_plan(
     else:
         rot_path, rot_values = "rotation_euler", (zero, zero, heading)
     curves += [(rot_path, i, "Object Transforms", v) for i, v in enumerate(rot_values)]
-    act_io.key_curves(root_action, root_slot, frames, curves, _finer(act_io.COMPACT))
+    # on the scene's frames, its strip unscaled: nothing plays between them
+    act_io.key_curves(root_action, root_slot, frames, curves, _finer(act_io.COMPACT), between=False)
     root_track = ad.nla_tracks.new()
     root_track.name = TRACK_ROOT
     rs = root_track.strips.new(f"{obj.name} root", first, root_action)
@@ -450,7 +451,8 @@ def _body_action(obj, skel, world, locked, bounds, own, motions, modes, unit=1.0
     frames = np.arange(len(loc), dtype=float)
     rot = quat.make_continuous(rot, axis=0)
     tol = _in_units(act_io.COMPACT, unit)
-    act_io.key_pose(action, slot, skel, frames, loc, rot, modes, tol=tol)
+    # keyed on the scene's frames, its strips unscaled play nothing between them
+    act_io.key_pose(action, slot, skel, frames, loc, rot, modes, tol=tol, between=not scene_keys)
     return action, slot, ranges, scene_keys
 
 
@@ -553,7 +555,9 @@ def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=(
             for c in range(delta.shape[-1])
         ]
     values = np.concatenate(columns, axis=1) if columns else None
-    act_io.key_curves(action, slot, frames, curves, _finer(act_io.COMPACT), values=values)
+    act_io.key_curves(
+        action, slot, frames, curves, _finer(act_io.COMPACT), values=values, between=False
+    )
     track = obj.animation_data.nla_tracks.new()
     track.name = TRACK_FOOT
     strip = track.strips.new(f"{obj.name} foot lock", int(frame_start), action)
