@@ -192,7 +192,9 @@ def _around(keep: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return prev[f], nxt[np.minimum(f + 1, n - 1)]
 
 
-def _dense(v: np.ndarray, m: np.ndarray, keep: np.ndarray, around=None, points=None) -> np.ndarray:
+def _dense(
+    v: np.ndarray, m: np.ndarray, keep: np.ndarray | None, around=None, points=None
+) -> np.ndarray:
     """(2F - 1, C) what the cubic keys ``keep`` (F, C) of ``v`` with slopes ``m`` play on
     every frame and half frame, all columns at once (``around``: :func:`_around` of
     ``keep``, when known; ``points``: only those of the 2F - 1 points, whose ``around``
