@@ -202,9 +202,12 @@ def _dense(
     n, c = v.shape
     if points is None:
         points = np.arange(2 * n - 1)
-    lo, hi = _around(keep) if around is None else around
     if around is None:
+        assert keep is not None
+        lo, hi = _around(keep)
         lo, hi = lo[points], hi[points]
+    else:
+        lo, hi = around
     at = points[:, None] / 2.0
     h = np.maximum(hi - lo, 1)
     t = np.clip((at - lo) / h, 0.0, 1.0)
