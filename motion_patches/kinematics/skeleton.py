@@ -117,9 +117,8 @@ def per_skeleton(fn: Callable[[Skeleton], T]) -> Callable[[Skeleton], T]:
 def _local_rest(skel: Skeleton) -> np.ndarray:
     """:meth:`Skeleton.local_rest`, computed."""
     out = skel.rest.copy()
-    for j, p in enumerate(skel.parents):
-        if p >= 0:
-            out[j] = np.linalg.inv(skel.rest[p]) @ skel.rest[j]
+    child = np.flatnonzero(skel.parents >= 0)
+    out[child] = np.linalg.inv(skel.rest[skel.parents[child]]) @ skel.rest[child]
     return out
 
 
