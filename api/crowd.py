@@ -484,7 +484,8 @@ def _task(c, n, ghosts=()):
 def _entry(c, member):
     """[n, plan, raw piece motions, placed motion, holdable frames] of a member."""
     m = member
-    return [m.entry, m.plan, m.raw, _placed(c.scene, c.patch, c.rigs[m.entry], m.raw), m.holdable]
+    raw = members.unpacked(m.raw)
+    return [m.entry, m.plan, raw, _placed(c.scene, c.patch, c.rigs[m.entry], raw), m.holdable]
 
 
 def _plan_each(c, progress):

@@ -216,7 +216,25 @@ def synthesised(task: MemberTask, world: MemberWorld, plan: Plan) -> Member:
     raw = plan_motions(world.patch, plan)
     _, bounds, whole = placed(world.patch, task.rig, raw, world.scene_fps)
     hold = holdable(plan, bounds, whole, world.ramp)  # holds are timed on the scene's frames
-    return Member(task.entry, plan, raw, bounds, root_track(whole), hold)
+    return Member(task.entry, plan, packed(raw), bounds, root_track(whole), hold)
+
+
+def packed(motions: list) -> list:
+    """Piece motions kept with single-precision rotations (the precision Blender keys them
+    in): a member's motions travel back from a worker and wait with every other member's
+    until the crowd is written, and rotations are nearly all of them (10,000 members: about
+    3.7 GB in double precision). :func:`unpacked` gives them back in double precision."""
+    return [
+        Motion(m.ground, m.root_local, np.asarray(m.rotations, np.float32), m.contacts)
+        for m in motions
+    ]
+
+
+def unpacked(motions: list) -> list:
+    """:func:`packed` motions in double precision again, as the rest of the core takes them."""
+    return [
+        Motion(m.ground, m.root_local, np.asarray(m.rotations, float), m.contacts) for m in motions
+    ]
 
 
 def spots_of(task: MemberTask, world: MemberWorld) -> list[Obstacle]:

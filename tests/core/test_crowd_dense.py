@@ -105,7 +105,7 @@ def plan_crowd(patch, env, ends, fps, max_wait, times=None):
         times["members"] += time.perf_counter() - t0
         if isinstance(a, members.NoPlan):
             raise PlanError(a.text)
-        return (a.raw, a.plan), a.root_track, a.holdable
+        return (members.unpacked(a.raw), a.plan), a.root_track, a.holdable
 
     versions = [[solve(i)] for i in range(len(ends))]
 
