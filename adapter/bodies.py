@@ -61,41 +61,40 @@ def shapes_in_file():
     return {m[SHAPE_KEY]: m for m in bpy.data.meshes if SHAPE_KEY in m.keys()}
 
 
-def remove(character):
-    """Remove the body of ``character`` and whatever of ours only it used; the number of
-    parts removed."""
-    n, meshes, materials = _remove_parts(character)
-    _purge(meshes, materials)
+def remove(characters):
+    """Remove the bodies of ``characters`` and whatever of ours only they used; the number
+    of parts removed."""
+    n, meshes, materials = take_off(characters)
+    purge(meshes, materials)
     return n
 
 
-def _remove_parts(character):
-    """Remove the character's parts; (how many, their meshes, their materials)."""
-    old = parts(character)
+def take_off(characters):
+    """Remove the characters' parts, all in one batch (one at a time, a crowd's thousands
+    of removals each scan the file); (how many, their meshes, their materials), left in
+    the file for :func:`make` to use again and :func:`purge` to clear."""
+    owners = set(characters)  # one pass over the file (Object.children is a pass each)
+    old = [o for o in bpy.data.objects if o.parent in owners and BODY_KEY in o.keys()]
     meshes = {p.data for p in old}
     materials = {s.material for p in old for s in p.material_slots if s.material is not None}
-    for p in old:
-        bpy.data.objects.remove(p)
+    bpy.data.batch_remove(old)
     return len(old), meshes, materials
 
 
-def _purge(meshes, materials):
+def purge(meshes, materials):
     """Remove the meshes and materials of ours among these that nothing uses any more."""
-    for m in meshes:
-        if m.users == 0 and SHAPE_KEY in m.keys():
-            bpy.data.meshes.remove(m)
-    for m in materials:
-        if m.users == 0 and MATERIAL_KEY in m.keys():
-            bpy.data.materials.remove(m)
+    unused = [m for m in meshes if m.users == 0 and SHAPE_KEY in m.keys()]
+    unused += [m for m in materials if m.users == 0 and MATERIAL_KEY in m.keys()]
+    bpy.data.batch_remove(unused)
 
 
-def make(character, colour, shapes):
-    """A body for the armature ``character`` (its old one removed first): a capsule part
-    per :func:`body_bones` bone in the character's collections, sized by
-    :func:`proxy_body.bone_radii` in the rig's own units, coloured ``colour`` (linear RGB).
+def make(character, colour, shapes, materials=None):
+    """A body for the armature ``character`` (with none: :func:`take_off` first): a
+    capsule part per :func:`body_bones` bone in the character's collections, sized by
+    :func:`proxy_body.bone_radii` in the rig's own units, coloured ``colour`` (linear RGB)
+    in its old material when ``materials`` ({character name: material}) holds one.
     ``shapes`` (:func:`shapes_in_file`, kept across characters) gains the meshes made.
     Returns the parts."""
-    _, old_meshes, old_materials = _remove_parts(character)  # meshes kept: still shared
     bones = body_bones(character)
     index = {b.name: i for i, b in enumerate(bones)}
     parents = []
@@ -108,12 +107,12 @@ def make(character, colour, shapes):
     heights = np.array([(world @ b.tail_local).z for b in bones])
     lengths = np.array([b.length for b in bones])
     radii = proxy_body.bone_radii(parents, lengths, heights, metres_per_unit(character))
-    mine = [m for m in old_materials if m.get(MATERIAL_KEY) == character.name]
-    material = _material(character, colour, mine[0] if mine else None)
+    material = _material(character, colour, (materials or {}).get(character.name))
     made = []
+    colls = character.users_collection  # a search of every collection: once
     for b, length, r in zip(bones, lengths, radii):
         part = bpy.data.objects.new(f"{character.name} body {b.name}", _mesh(length, r, shapes))
-        for coll in character.users_collection:
+        for coll in colls:
             coll.objects.link(part)
         part.parent = character
         part.parent_type = "BONE"
@@ -124,7 +123,6 @@ def make(character, colour, shapes):
         slot.material = material
         part.hide_select = True  # a click goes to the character, not its body
         made.append(part)
-    _purge(old_meshes, old_materials)  # what the old body alone used
     return made
 
 

@@ -83,13 +83,17 @@ def add_bodies(
             raise MotionPatchesError(
                 f"a body colour is three numbers from 0 to 1 (red, green, blue), not {colour!r}"
             )
+    chars = list(dict.fromkeys(chars))  # each once
     bpy.context.view_layer.update()  # world matrices current: a scale just set counts
+    _, old_meshes, old_materials = bodies.take_off(chars)  # its meshes are made again
     shapes = bodies.shapes_in_file()
+    mine = {m.get(bodies.MATERIAL_KEY): m for m in old_materials}  # each character's own
     made = []
-    for ob in dict.fromkeys(chars):  # each once
-        made += bodies.make(ob, colour or character_colour(ob.name), shapes)
+    for ob in chars:
+        made += bodies.make(ob, colour or character_colour(ob.name), shapes, mine)
+    bodies.purge(old_meshes, old_materials)  # what the old bodies alone used
     return BodiesResult(
-        characters=[ob.name for ob in dict.fromkeys(chars)],
+        characters=[ob.name for ob in chars],
         parts=len(made),
         meshes=len({p.data.name for p in made}),
     )
@@ -98,7 +102,7 @@ def add_bodies(
 def remove_bodies(characters: Iterable[bpy.types.Object]) -> int:
     """Remove the proxy bodies of the characters (only the parts the extension made, and
     the meshes and materials nothing else uses); the number of parts removed."""
-    return sum(bodies.remove(ob) for ob in characters if ob is not None)
+    return bodies.remove([ob for ob in characters if ob is not None])
 
 
 def has_body(character: bpy.types.Object | None) -> bool:

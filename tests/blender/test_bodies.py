@@ -8,13 +8,14 @@ Every vertex of a capsule lies at its radius from its bone's segment (head to ta
 evaluated vertices measured against the evaluated bones say at once whether the body
 follows the pose and how thick it is."""
 
+import json
 import sys
 
 import bpy
 import numpy as np
 import pytest
 
-from scene_helpers import prop_box, walker_from
+from scene_helpers import empty, prop_box, walker_from
 
 CMU_SCALE = 0.056444
 
@@ -233,3 +234,20 @@ def test_plan_with_bodies_saves_characters_whose_bodies_walk_the_plan(
     ev = walker.evaluated_get(bpy.context.evaluated_depsgraph_get())
     hips = ev.matrix_world @ ev.pose.bones["Hips"].head
     assert hips.xy.length > 1.0  # on its way to the goal 5 m off: the strips play
+
+
+def test_crowd_with_bodies_gives_every_character_a_body(addon_module, walk_blend, capsys):
+    bpy.ops.wm.open_mainfile(filepath=str(walk_blend))
+    src = bpy.data.objects["Source"]
+    for name, y in (("A", 0.0), ("B", -3.0)):
+        walker_from(src, name, (0.0, y, 0.0))
+        empty(f"Goal {name}", 6.0, y, 0.0)
+    cli = addon_module.cli
+    capsys.readouterr()
+    argv = ["crowd", "--pair", "A", "Goal A", "--pair", "B", "Goal B", "--bodies", "--json"]
+    assert cli.main(argv) == cli.OK
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["bodies"] == {"characters": ["A", "B"], "parts": 62, "meshes": 31}
+    api = addon_module.api
+    assert api.has_body(bpy.data.objects["A"]) and api.has_body(bpy.data.objects["B"])
+    assert not api.has_body(src)
