@@ -197,6 +197,7 @@ def test_the_buttons_add_and_remove_the_selected_characters_bodies(addon_module,
     assert api.has_body(walker) and api.has_body(other)
     assert ops.remove_body() == {"FINISHED"}
     assert not api.has_body(walker) and not api.has_body(other)
+    assert ops.remove_body() == {"FINISHED"}  # nothing left: "0 capsules removed"
 
 
 def test_a_duplicated_crowd_of_a_character_with_a_body_has_bodies(addon_module, walk_blend):
