@@ -19,6 +19,7 @@ from bpy.props import (
     StringProperty,
 )
 
+from .adapter.bodies import BODY_KEY
 from .motion_patches.planning.settings import SETTINGS
 
 # Called with the new value when Show Planner Overlay changes; the overlay (panels/overlay.py)
@@ -152,6 +153,19 @@ class MOTION_PATCHES_PG_bone_pair(bpy.types.PropertyGroup):
     )
 
 
+# Objects a goal picker does not offer: a camera, a light or a sound is not a place to walk
+# to, nor a capsule of a character's proxy body (a crowd has hundreds).
+NOT_GOALS = {"CAMERA", "LIGHT", "LIGHT_PROBE", "SPEAKER"}
+
+
+def _goal_poll(self, ob):
+    return ob.type not in NOT_GOALS and BODY_KEY not in ob.keys()
+
+
+def _prop_poll(self, ob):
+    return ob.type == "MESH" and BODY_KEY not in ob.keys()
+
+
 class MOTION_PATCHES_PG_character(bpy.types.PropertyGroup):
     goal: PointerProperty(
         type=bpy.types.Object,
@@ -159,13 +173,14 @@ class MOTION_PATCHES_PG_character(bpy.types.PropertyGroup):
         description="Where this character walks when it is planned in a "
         "crowd (empty: the scene's goal; a character with "
         "neither is refused, named)",
+        poll=_goal_poll,
     )
     start_prop: PointerProperty(
         type=bpy.types.Object,
         name="Start Prop",
         description="A prop tagged with a stand-up clip this character starts seated on "
         "when Plan Path plans it (empty: where it stands)",
-        poll=lambda self, ob: ob.type == "MESH",
+        poll=_prop_poll,
     )
 
 
@@ -202,6 +217,7 @@ class MOTION_PATCHES_PG_scene(bpy.types.PropertyGroup):
         type=bpy.types.Object,
         name="Goal",
         description="Object whose location and facing (-Y) is the goal",
+        poll=_goal_poll,
     )
     alpha: PLANNING["alpha"]()
     beta: PLANNING["beta"]()

@@ -3,7 +3,8 @@
 
 Since 4.4 actions are layered with slots; 5.0 removed ``Action.fcurves``. Everything
 here goes through layers -> strip -> channelbag(slot) and assigns slots explicitly, so
-the rest of the add-on never branches on the version.
+the rest of the add-on never branches on the version. 5.0 gives every material its node
+tree and deprecates ``Material.use_nodes``.
 """
 
 import bpy
@@ -65,3 +66,11 @@ def assign_action(id_block, action, slot):
 
 def set_strip_slot(strip, slot):
     strip.action_slot = slot
+
+
+def material_nodes(mat):
+    """The material's node tree, made on 4.5 (a new material has none there; 5.0 always
+    has one and deprecates ``use_nodes``)."""
+    if bpy.app.version < (5, 0, 0) and not mat.use_nodes:
+        mat.use_nodes = True
+    return mat.node_tree

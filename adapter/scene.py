@@ -16,6 +16,7 @@ import numpy as np
 
 from ..motion_patches.props import footprint as fp
 from ..motion_patches.props.environment import Environment, Obstacle
+from . import bodies
 from . import rig as rig_io
 
 BODY_BAND = fp.BODY_BAND
@@ -108,11 +109,14 @@ def owners(obstacle_names):
 
 
 def obstacles(scene, depsgraph, exclude=()):
-    """Obstacles of every visible mesh object in the scene but ``exclude``."""
+    """Obstacles of every visible mesh object in the scene but ``exclude`` and the
+    characters' proxy bodies (:mod:`.bodies`: display only, they walk with their owner)."""
     out = []
     skip = {o.name for o in exclude}
     for obj in scene.objects:
         if obj.type != "MESH" or obj.name in skip or not obj.visible_get():
+            continue
+        if bodies.is_part(obj):
             continue
         polys = footprint_parts(obj, depsgraph)
         out += [Obstacle(part_name(obj.name, k, len(polys)), p) for k, p in enumerate(polys)]

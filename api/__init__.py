@@ -7,10 +7,10 @@ user, raised before the scene is changed.
 
 One module per use case: :mod:`.baking` and :mod:`.tagging` (a patch and its props),
 :mod:`.patch_files` (patch files, bone maps), :mod:`.plan` (one character), :mod:`.crowd`,
-:mod:`.crowd_copies` (crowds), :mod:`.check` (analysis, layout checks) and :mod:`.overlay`
-(what the viewport overlay draws); the steps they share are in :mod:`.common`,
-:mod:`.settings`, :mod:`.solve` and :mod:`.writing`. Operators, panels, the CLI and
-scripts use the names re-exported here.
+:mod:`.crowd_copies` (crowds), :mod:`.check` (analysis, layout checks), :mod:`.overlay`
+(what the viewport overlay draws) and :mod:`.bodies` (proxy bodies round the bones); the
+steps they share are in :mod:`.common`, :mod:`.settings`, :mod:`.solve` and
+:mod:`.writing`. Operators, panels, the CLI and scripts use the names re-exported here.
 """
 
 from ..adapter import compat, evaluate, storage
@@ -18,6 +18,7 @@ from ..adapter import scene as scene_io
 from ..motion_patches.patch import layers
 from ..motion_patches.quality import metrics
 from .baking import bake_locomotion_patch, import_mocap
+from .bodies import add_bodies, character_colour, chosen_characters, has_body, remove_bodies
 from .check import analyse, check_layout, planned_pairs
 from .common import (
     MAX_COORDINATE,
@@ -44,7 +45,7 @@ from .errors import Cancelled, MotionPatchesError, PathNotFound
 from .overlay import PlanDrawing, clip_ends, footprint_info, plan_drawings, plan_fingerprints
 from .patch_files import bone_map, export_patch, fill_bone_map, import_patch, set_bone_map
 from .plan import plan_path
-from .results import BakeResult, CrowdResult, CrowdSchedule, PlanResult
+from .results import BakeResult, BodiesResult, CrowdResult, CrowdSchedule, PlanResult
 from .settings import (
     DEFAULTS,
     SETTINGS,
@@ -65,6 +66,7 @@ from .writing import (
 __all__ = [
     "BLENDER_DEFAULT_RANGE",
     "BakeResult",
+    "BodiesResult",
     "CROWD_COLLECTION",
     "CROWD_HOLD_RAMP_SECONDS",
     "CONFLICTS_KEY",
@@ -88,10 +90,13 @@ __all__ = [
     "_holdable",
     "_write",
     "active_patch_name",
+    "add_bodies",
     "analyse",
     "bake_locomotion_patch",
     "bone_map",
+    "character_colour",
     "check_layout",
+    "chosen_characters",
     "clip_ends",
     "compat",
     "crowd_conflicts",
@@ -103,6 +108,7 @@ __all__ = [
     "fitted_frame_range",
     "has_crowd_conflicts",
     "footprint_info",
+    "has_body",
     "import_mocap",
     "import_patch",
     "last_analysis",
@@ -119,6 +125,7 @@ __all__ = [
     "planned_pairs",
     "planning_checked",
     "planning_settings",
+    "remove_bodies",
     "remove_crowd",
     "scene_fps",
     "scene_io",

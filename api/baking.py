@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import os
+import re
 import time
 from collections.abc import Callable, Iterable
 from pathlib import Path
@@ -13,6 +14,7 @@ import numpy as np
 
 from ..adapter import actions as act_io
 from ..adapter import compat, mocap, storage, transaction
+from ..motion_patches.kinematics.clip import straightest
 from ..motion_patches.patch import layers, serialize
 from ..motion_patches.patch.gait import MIN_TURN, build_gait
 from ..motion_patches.patch.locomotion_patch import bake
@@ -26,12 +28,55 @@ def import_mocap(
     scale: float = mocap.CMU_SCALE,
     armature: bpy.types.Object | None = None,
     name: str | None = None,
+    scene: bpy.types.Scene | None = None,
 ) -> tuple[bpy.types.Object, list[bpy.types.Action]]:
-    """Import BVH files as actions on one armature; returns (armature, [actions])."""
+    """Import BVH files as actions on one armature; returns (armature, [actions]). A new
+    armature is named ``name``, else after the files' subject (:func:`subject_name`).
+    ``scene``: the clips are for its bake: the armature becomes its source armature, and
+    the clip that walks furthest in a straight line (:func:`straight_clip`) its straight
+    clip."""
+    paths = list(paths)
+    if armature is None and not name:
+        name = subject_name(paths)
     try:
-        return mocap.import_bvh(paths, scale, armature, name)
+        arm, acts = mocap.import_bvh(paths, scale, armature, name)
     except ValueError as exc:
         raise MotionPatchesError(str(exc)) from None
+    if scene is not None:
+        s = scene.motion_patches
+        s.source_armature = arm
+        straight = straight_clip(arm, acts)
+        if straight is not None:
+            s.straight_action = straight
+    return arm, acts
+
+
+def subject_name(paths: Iterable[str | os.PathLike]) -> str:
+    """The name of an armature imported from BVH files: what their names share before an
+    underscore or dash, "Subject 16" for a number (CMU's 16_15.bvh, 16_18.bvh); else the
+    one file's name; else "Mocap"."""
+    stems = [Path(p).stem for p in paths]
+    parts = [re.split(r"[_\-]", s, maxsplit=1) for s in stems]
+    heads = {p[0] for p in parts}
+    if all(len(p) == 2 for p in parts) and len(heads) == 1 and (head := heads.pop()):
+        return f"Subject {head}" if head.isdigit() else head
+    return stems[0] if len(stems) == 1 else "Mocap"
+
+
+def straight_clip(
+    armature: bpy.types.Object, actions: Iterable[bpy.types.Action]
+) -> bpy.types.Action | None:
+    """The action among ``actions`` on ``armature`` that walks furthest in a straight line
+    (:func:`motion_patches.kinematics.clip.straightest`), or None."""
+    acts, clips = [], []
+    for a in actions:
+        try:
+            clips.append(act_io.clip_from_action(a, armature, 30.0))
+        except ValueError:  # no root motion: not a walk
+            continue
+        acts.append(a)
+    i = straightest(clips)
+    return None if i is None else acts[i]
 
 
 def bake_locomotion_patch(

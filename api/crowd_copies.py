@@ -10,6 +10,7 @@ import numpy as np
 
 from ..adapter import copies, nla
 from ..adapter import scene as scene_io
+from .bodies import add_bodies, has_body, remove_bodies
 from .common import _check_character, _not_obstacles, _patch_for_planning
 from .errors import MotionPatchesError
 
@@ -34,10 +35,12 @@ def duplicate_crowd(
     """[(character, goal empty)]: ``count`` copies of the armature ``source`` sharing its
     armature data (linked, as Alt+D makes them), scattered over ``region`` ((x0, y0), (x1,
     y1)) and each sent to a goal empty scattered over ``goal_region``, facing the way it
-    walks; all in a new collection. Starts and goals keep ``spacing`` (default: two radii)
-    plus a radius from one another and stay clear of the props. Everything is checked and
-    every spot drawn before anything is made: a source the patch cannot play, or regions
-    too small to hold the crowd, raise :class:`MotionPatchesError` with the scene unchanged."""
+    walks; all in a new collection. A source with a proxy body (:func:`.bodies.add_bodies`)
+    gives its copies bodies too, of the same meshes, each in its own colour. Starts and
+    goals keep ``spacing`` (default: two radii) plus a radius from one another and stay
+    clear of the props. Everything is checked and every spot drawn before anything is
+    made: a source the patch cannot play, or regions too small to hold the crowd, raise
+    :class:`MotionPatchesError` with the scene unchanged."""
     context = context or bpy.context
     patch = _patch_for_planning(scene, patch_name)
     if source is None or source.type != "ARMATURE":
@@ -100,11 +103,15 @@ def duplicate_crowd(
     skel = rig.target if rig is not None else patch.gait.skeleton
     facing = nla.facing_angle(skel)
     pairs = copies.make_copies(scene, source, starts, goals, facing, CROWD_COLLECTION)
+    if has_body(source):
+        add_bodies([ob for ob, _ in pairs])
     context.view_layer.update()
     return pairs
 
 
 def remove_crowd(pairs: list[tuple]) -> None:
     """Remove what :func:`duplicate_crowd` made (the copies, their goals, their collection
-    when it is left empty, the actions planning made for them); the source is untouched."""
+    when it is left empty, the actions planning made for them, their bodies); the source
+    is untouched."""
+    remove_bodies([ob for ob, _ in pairs])
     copies.remove_copies(pairs, CROWD_COLLECTION)

@@ -55,3 +55,10 @@ class CrowdSchedule(CrowdResult):
     # [{"character", "prop", "frame", "distance_m"}]: a walk as scheduled (waits and holds
     # of the crowd included) meeting a prop that moves
     moving_conflicts: list = field(default_factory=list)
+
+
+@dataclass
+class BodiesResult:
+    characters: list  # names of the characters given a body, in the order given
+    parts: int  # capsule objects made
+    meshes: int  # distinct meshes they use (a crowd of one rig shares them)

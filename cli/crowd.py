@@ -6,7 +6,7 @@ import bpy
 from .. import api
 from .lookup import object_named, save_blend, save_target, settings_given
 from .output import FAILED, OK, BadInput, Progress, Result
-from .plan import plan_doc, plan_line
+from .plan import bodies_doc, bodies_text, plan_doc, plan_line
 
 
 def _crowd_pairs(args, scene):
@@ -48,6 +48,7 @@ def cmd_crowd(args):
             )
     finally:
         progress.close()
+    bodies = api.add_bodies([c for c, _ in pairs]) if args.bodies else None
     fps = api.scene_fps(scene)
     moving = list(getattr(res, "moving_conflicts", []))
     ok = not res.failed and not res.conflicts and not moving
@@ -65,6 +66,7 @@ def cmd_crowd(args):
         "weights": w,
         "workers": args.workers,
         "scheduler": args.scheduler,
+        "bodies": bodies_doc(bodies),
         "saved": saved,
     }
     text = [
@@ -79,6 +81,7 @@ def cmd_crowd(args):
             + (f", waits {wait} frames" if wait else "")
             + (", re-routed round the others" if p.character in res.rerouted else "")
         )
+    text += ["  " + t for t in bodies_text(bodies)]
     for c, e in res.failed:
         text.append(f"  FAILED {e}")
     for c in res.conflicts:

@@ -9,6 +9,8 @@ not be checked (bad input) is one test case with an ``<error>``."""
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+from .output import count
+
 
 def classname(blend, spec):
     """The test cases' class: the .blend's name without its suffix, then the spec's
@@ -23,7 +25,8 @@ def _figures(r):
     if r["reachable"]:
         return (
             f"reachable: {r['length_m']:.2f} m, {r['seconds']:.2f} s of motion, "
-            f"cost {r['cost']:.3f}, {r['pieces']} pieces, {r['traversals']} traversal(s)"
+            f"cost {r['cost']:.3f}, {count(r['pieces'], 'piece')}, "
+            f"{count(r['traversals'], 'traversal')}"
         )
     text = f"unreachable ({r['blocked_reason'] or 'no path'})"
     if r["error"]:

@@ -59,6 +59,11 @@ def jsonable(value):
     return value
 
 
+def count(n, noun, plural=None):
+    """'1 piece', '3 pieces' (``plural`` when not ``noun`` + s)."""
+    return f"{n} {noun if n == 1 else plural or noun + 's'}"
+
+
 def dump(doc):
     return json.dumps(jsonable(doc), indent=2, allow_nan=False)
 

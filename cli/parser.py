@@ -205,6 +205,7 @@ def _plan_parser(sub, common):
         help="start where the character is at the current frame (continue from here), not "
         "where it stood before it was planned",
     )
+    _bodies_option(p, "the character")
     _save_options(p)
     p.set_defaults(run=cmd_plan)
 
@@ -334,6 +335,7 @@ def _crowd_parser(sub, common):
         help="closest two characters' roots may come, in metres (default: two radii)",
     )
     _cluster_options(p)
+    _bodies_option(p, "every character of the crowd")
     _save_options(p)
     p.add_argument(
         "--save-anyway",
@@ -398,6 +400,15 @@ def _import_parser(sub, common):
     )
     _save_options(p)
     p.set_defaults(run=cmd_import)
+
+
+def _bodies_option(p, who):
+    p.add_argument(
+        "--bodies",
+        action="store_true",
+        help=f"give {who} a proxy body: a low-poly capsule round each bone, parented to "
+        "it, in a colour per character (made again: replaced)",
+    )
 
 
 def _save_options(p):

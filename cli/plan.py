@@ -8,7 +8,7 @@ import bpy
 
 from .. import api
 from .lookup import object_named, save_blend, save_target, settings_given
-from .output import OK, BadInput, Failed, Heartbeat, Result
+from .output import OK, BadInput, Failed, Heartbeat, Result, count
 
 
 def _goal_of(args, scene):
@@ -43,10 +43,27 @@ def plan_doc(res, fps):
 
 def plan_line(res, fps):
     return (
-        f"planned '{res.character}': {len(res.pieces)} pieces, frames {res.frame_start}-"
+        f"planned '{res.character}': {count(len(res.pieces), 'piece')}, frames {res.frame_start}-"
         f"{res.frame_end} ({(res.frame_end - res.frame_start) / fps:.1f} s of motion, "
         f"{res.length_m:.1f} m), cost {res.cost:.2f}, {res.seconds * 1000:.0f} ms"
     )
+
+
+def bodies_doc(res):
+    """The JSON of an ``api.add_bodies`` result (None: no --bodies)."""
+    if res is None:
+        return None
+    return {"characters": res.characters, "parts": res.parts, "meshes": res.meshes}
+
+
+def bodies_text(res):
+    if res is None:
+        return []
+    n = len(res.characters)
+    return [
+        f"{count(n, 'body', 'bodies')}: {count(res.parts, 'capsule')} sharing "
+        f"{count(res.meshes, 'mesh', 'meshes')}"
+    ]
 
 
 def cmd_plan(args):
@@ -72,6 +89,7 @@ def cmd_plan(args):
             )
     except api.PathNotFound as exc:
         raise Failed(str(exc)) from None
+    bodies = api.add_bodies([char]) if args.bodies else None
     fps = api.scene_fps(scene)
     saved = save_blend(save)
     doc = plan_doc(res, fps)
@@ -81,9 +99,10 @@ def cmd_plan(args):
         goal=api.state_dict(res.goal, goal_obj and goal_obj.name),
         patch=args.patch or api.active_patch_name(scene),
         weights=w,
+        bodies=bodies_doc(bodies),
         saved=saved,
     )
-    text = [plan_line(res, fps)]
+    text = [plan_line(res, fps)] + bodies_text(bodies)
     if args.gait:
         text.append(
             f"  layer '{res.stats.get('layer')}' (Eq. 5 cost per layer: "

@@ -3,7 +3,7 @@
 
 import bpy
 
-from . import analyse, bake, crowd, mocap, object_patch, patch_files, plan
+from . import analyse, bake, bodies, crowd, mocap, object_patch, patch_files, plan
 from .common import guarded
 
 classes = tuple(
@@ -15,6 +15,7 @@ classes = tuple(
     + plan.classes
     + analyse.classes
     + crowd.classes
+    + bodies.classes
 )
 
 register, unregister = bpy.utils.register_classes_factory(classes)

@@ -7,7 +7,9 @@ from .. import api
 
 
 class MOTION_PATCHES_OT_import_mocap(bpy.types.Operator, ImportHelper):
-    """Import BVH motion capture files as actions on one armature"""
+    """Import BVH files as clips to bake a locomotion patch from: every file an action on
+    one armature named after the subject, in metres, the straight walk picked as the
+    Straight Clip (Blender's own Motion Capture importer makes an armature per file)"""
 
     bl_idname = "motion_patches.import_mocap"
     bl_label = "Import Mocap Clips"
@@ -19,7 +21,11 @@ class MOTION_PATCHES_OT_import_mocap(bpy.types.Operator, ImportHelper):
     )
     directory: StringProperty(subtype="DIR_PATH", options={"HIDDEN", "SKIP_SAVE"})
     scale: FloatProperty(
-        name="Scale", default=0.056444, min=1e-6, description="File units to metres (CMU: 0.056444)"
+        name="Scale",
+        default=0.056444,
+        min=1e-6,
+        precision=6,  # all of CMU's 0.056444, not 0.06
+        description="File units to metres (CMU: 0.056444)",
     )
 
     def execute(self, context):
@@ -29,12 +35,17 @@ class MOTION_PATCHES_OT_import_mocap(bpy.types.Operator, ImportHelper):
             self.filepath
         ]
         try:
-            arm, acts = api.import_mocap(paths, self.scale)
+            arm, acts = api.import_mocap(paths, self.scale, scene=context.scene)
         except api.MotionPatchesError as exc:
             self.report({"ERROR"}, str(exc))
             return {"CANCELLED"}
-        context.scene.motion_patches.source_armature = arm
-        self.report({"INFO"}, f"Imported {len(acts)} clip(s) on '{arm.name}'")
+        straight = context.scene.motion_patches.straight_action
+        n = len(acts)
+        self.report(
+            {"INFO"},
+            f"Imported {n} clip{'' if n == 1 else 's'} on '{arm.name}'"
+            + (f"; straight clip: '{straight.name}'" if straight in acts else ""),
+        )
         return {"FINISHED"}
 
 

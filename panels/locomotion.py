@@ -13,6 +13,7 @@ class MOTION_PATCHES_UL_actions(bpy.types.UIList):
     """Turn clips of the bake (each row picks an action)."""
 
     def draw_item(self, context, layout, data, item, icon, active_data, active_propname, index=0):
+        layout.use_property_split = False  # a row's fields fill it (the panel splits)
         layout.prop(item, "action", text="", emboss=True)
 
 
@@ -20,6 +21,7 @@ class MOTION_PATCHES_UL_patches(bpy.types.UIList):
     """Baked locomotion patches; the active row is the patch the planner uses."""
 
     def draw_item(self, context, layout, data, item, icon, active_data, active_propname, index=0):
+        layout.use_property_split = False  # a row's fields fill it (the panel splits)
         row = layout.row()
         row.label(text=item.name, icon="MOD_ARRAY")
         row.label(text=f"{item.layer}, {item.fps:g} fps")
@@ -56,14 +58,12 @@ class MOTION_PATCHES_PT_locomotion(SidebarPanel, bpy.types.Panel):
     def draw(self, context):
         s = context.scene.motion_patches
         layout = self.layout
+        layout.use_property_split = True  # label | field, as Blender's own panels
+        layout.use_property_decorate = False
         layout.operator("motion_patches.import_mocap", icon="IMPORT")
-        # Labels above their fields: beside them "Source Armature" is cut to "Source ...".
-        col = layout.column(align=True)
-        col.label(text="Source Armature")
-        col.prop(s, "source_armature", text="")
-        col = layout.column(align=True)
-        col.label(text="Straight Clip")
-        col.prop(s, "straight_action", text="")
+        # Short labels: the label column is 40 % of the sidebar ("Source Armature" is cut).
+        layout.prop(s, "source_armature", text="Armature")
+        layout.prop(s, "straight_action", text="Straight Clip")
         layout.label(text="Turn Clips")
         list_with_buttons(
             layout,

@@ -12,6 +12,7 @@ class MOTION_PATCHES_UL_clips(bpy.types.UIList):
     """A prop's clips: action and kind per row (effort and copies below the list)."""
 
     def draw_item(self, context, layout, data, item, icon, active_data, active_propname, index=0):
+        layout.use_property_split = False  # a row's fields fill it (the panel splits)
         row = layout.row(align=True)
         row.prop(item, "action", text="", emboss=True)
         row.prop(item, "kind", text="")
@@ -30,8 +31,12 @@ class MOTION_PATCHES_PT_object_patch(SidebarPanel, bpy.types.Panel):
         ob = context.active_object
         mp = ob.motion_patch
         layout = self.layout
+        layout.use_property_split = True  # label | field, as Blender's own panels
+        layout.use_property_decorate = False
         layout.label(text=ob.name, icon="MESH_CUBE")
-        layout.prop(mp, "enabled")
+        col = layout.column()
+        col.use_property_split = False  # a checkbox with its label beside it
+        col.prop(mp, "enabled")
         list_with_buttons(
             layout,
             "MOTION_PATCHES_UL_clips",
@@ -45,11 +50,11 @@ class MOTION_PATCHES_PT_object_patch(SidebarPanel, bpy.types.Panel):
             clip = mp.clips[mp.active_clip_index]
             col = layout.column(align=True)
             col.prop(clip, "effort")
-            col.prop(clip, "copy_step")
+            col.prop(clip, "copy_step", text="Copy Step (°)")  # "Copies Every (°)" is cut
             if clip.kind == "TRAVERSAL":  # which gait layers may take it (walk, run, *)
-                row = layout.row(align=True)
-                row.prop(clip, "layer_in")
-                row.prop(clip, "layer_out")
+                col = layout.column(align=True)
+                col.prop(clip, "layer_in")
+                col.prop(clip, "layer_out")
         n, area = api.footprint_info(ob)
         layout.label(
             text=f"{n} vertices" + (f", footprint {area:.2f} m²" if area is not None else ""),

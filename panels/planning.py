@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """Planning panel: the goal (the scene's, and the active character's own for crowds), the
-active armature's bone map (when it is another skeleton than the patch's), the cost weights
-α β γ, radius and stitching, and the Plan Path / Plan Crowd buttons."""
+active character's proxy body and bone map (when it is another skeleton than the
+patch's), the cost weights α β γ, radius and stitching, and the Plan Path / Plan Crowd
+buttons."""
 
 import bpy
 
@@ -16,26 +17,34 @@ class MOTION_PATCHES_PT_planning(SidebarPanel, bpy.types.Panel):
     def draw(self, context):
         s = context.scene.motion_patches
         layout = self.layout
+        layout.use_property_split = True  # label | field, as Blender's own panels
+        layout.use_property_decorate = False
         layout.prop(s, "goal")
         ob = context.active_object
         if ob is not None and ob.type == "ARMATURE":
             # The character's name over the field: beside it, "Walker's Goal" is cut.
             col = layout.column(align=True)
+            col.use_property_split = False
             wrapped_label(col, context, f"{ob.name}'s Own Goal (crowds)")
             col.prop(ob.motion_patches_character, "goal", text="")
             layout.prop(ob.motion_patches_character, "start_prop")
+            draw_body(layout, ob)
             draw_bone_map(layout, context, ob)
         col = layout.column(align=True)
         col.prop(s, "alpha")
         col.prop(s, "beta")
         col.prop(s, "gamma")
-        layout.prop(s, "radius")
+        layout.prop(s, "radius", text="Radius")  # "Character Radius" is cut beside its field
         layout.prop(s, "stitching")
-        layout.prop(s, "foot_lock")
-        layout.prop(s, "fit_frame_range")
-        layout.prop(s, "goal_facing", text="Facing")  # "Goal Facing" does not fit beside
-        layout.prop(s, "turn_in_place")
+        layout.prop(s, "goal_facing", text="Facing")
         layout.prop(s, "gait")
+        # Checkboxes with their labels beside them, the panel's whole width: in the label
+        # column "Lock Planted Feet" would be cut.
+        col = layout.column(align=True)
+        col.use_property_split = False
+        col.prop(s, "foot_lock")
+        col.prop(s, "turn_in_place")
+        col.prop(s, "fit_frame_range")
         layout.operator("motion_patches.reset_planning", icon="LOOP_BACK")
         row = layout.row(align=True)
         row.operator("motion_patches.plan_path", icon="PLAY")
@@ -45,10 +54,22 @@ class MOTION_PATCHES_PT_planning(SidebarPanel, bpy.types.Panel):
             layout.operator("motion_patches.select_crowd_conflicts", icon="ERROR")
 
 
+def draw_body(layout, ob):
+    """Add Body (Replace Body once it has one) and Remove Body for the active character."""
+    row = layout.row(align=True)
+    has = api.has_body(ob)
+    row.operator(
+        "motion_patches.add_body", icon="MESH_CAPSULE", text="Replace Body" if has else "Add Body"
+    )
+    if has:
+        row.operator("motion_patches.remove_body", icon="X", text="Remove")
+
+
 class MOTION_PATCHES_UL_bone_map(bpy.types.UIList):
     """Bone map rows: the patch bone, and the armature bone that plays it (editable)."""
 
     def draw_item(self, context, layout, data, item, icon, active_data, active_propname, index=0):
+        layout.use_property_split = False  # a row's fields fill it (the panel splits)
         row = layout.row(align=True)
         row.label(text=item.patch_bone, icon="BONE_DATA")
         arm = context.active_object

@@ -8,8 +8,10 @@ Run with Blender as a Python module, e.g.::
 
 What is drawn is the saved demo itself: its ground, pillars and chairs as they are, and the
 planned characters evaluated through the depsgraph at a handful of frames. The BVH rigs have
-no mesh, so each character is shown as its **armature bones**: a cylinder per evaluated bone
-(head to tail), a ball per joint and one larger ball on the Head bone. Copies at several frames
+no mesh, so each character is given the extension's **proxy body** (``api.add_bodies``: a
+capsule round each bone, parented to it) and the body is copied as the depsgraph evaluates it
+(``--figures bones``: the armature bones instead, a cylinder per bone, a ball per joint and
+one larger ball on the Head bone). Copies at several frames
 along the plan ("onion skin", lighter = earlier; a traversal adds its take-off, top and
 landing) share the character's colour with its planned ground path (``arrays["ground"]`` of
 the plan record on the armature), drawn as a thin tube; small white discs mark the joins
@@ -139,6 +141,13 @@ def parse_args(argv):
         help="poses drawn per character, evenly spaced in time (default: 8, 4 for "
         "the crowd; a traversal adds its take-off, top and landing)",
     )
+    p.add_argument(
+        "--figures",
+        choices=("bodies", "bones"),
+        default="bodies",
+        help="draw each pose as the character's proxy body (api.add_bodies) or as its "
+        "armature bones (default: %(default)s)",
+    )
     p.add_argument("--verbose", action="store_true", help="show Blender's render progress")
     return p.parse_args(argv)
 
@@ -225,6 +234,21 @@ def stick_figure(bpy, bmesh, Matrix, ob_eval, name, mat, collection):
                 radius=max(0.09, length * 0.6),
                 matrix=Matrix.Translation(head + axis * 0.55),
             )
+    for f in bm.faces:
+        f.smooth = True
+    return mesh_object(bpy, bm, name, mat, collection)
+
+
+def body_figure(bpy, bmesh, parts, depsgraph, name, mat, collection):
+    """The character's proxy body (``parts``: its capsule objects) as the depsgraph
+    evaluates it now, copied into one static mesh in world space."""
+    bm = bmesh.new()
+    for part in parts:
+        ev = part.evaluated_get(depsgraph)
+        me = ev.to_mesh()
+        me.transform(ev.matrix_world)
+        bm.from_mesh(me)
+        ev.to_mesh_clear()
     for f in bm.faces:
         f.smooth = True
     return mesh_object(bpy, bm, name, mat, collection)
@@ -318,11 +342,12 @@ def pick_frames(meta, arrays, copies):
     return sorted(frames)
 
 
-def build(bpy, api, view, copies):
+def build(bpy, addon, view, copies, figures="bodies"):
     import bmesh
     import numpy as np
     from mathutils import Matrix, Vector
 
+    api = addon.api
     scene = bpy.context.scene
     coll = bpy.data.collections.new("render_demo (not saved)")
     scene.collection.children.link(coll)
@@ -402,23 +427,24 @@ def build(bpy, api, view, copies):
             )
         frames = pick_frames(meta, arrays, copies)
         worst = 0.0
+        if figures == "bodies":
+            api.add_bodies([ob])
+            parts = addon.adapter.bodies.parts(ob)
         for i, f in enumerate(frames):
             scene.frame_set(f)
             dg = bpy.context.evaluated_depsgraph_get()
             ev = ob.evaluated_get(dg)
             t = i / max(1, len(frames) - 1)
-            fig = stick_figure(
-                bpy,
-                bmesh,
-                Matrix,
-                ev,
-                f"rd {name} f{f}",
-                material(bpy, f"rd {name} f{f}", tint(colour, t), 0.45),
-                coll,
-            )
+            mat = material(bpy, f"rd {name} f{f}", tint(colour, t), 0.45)
+            if figures == "bodies":
+                fig = body_figure(bpy, bmesh, parts, dg, f"rd {name} f{f}", mat, coll)
+            else:
+                fig = stick_figure(bpy, bmesh, Matrix, ev, f"rd {name} f{f}", mat, coll)
             fit_points.extend(fig.matrix_world @ Vector(c) for c in fig.bound_box)
             hips = ev.matrix_world @ ev.pose.bones[meta["root_name"]].head
             worst = max(worst, (hips - Vector(arrays["root"][f - f0])).length)
+        if figures == "bodies":  # only the copies are drawn, not the live body
+            api.remove_bodies([ob])
         fit_points.extend(Vector((x, y, 0.0)) for x, y in ground[::10, :2])
         paths.append(ground[:, :2])
         report.append((name, frames, worst))
@@ -555,7 +581,7 @@ def main(argv):
     saved_frame = scene.frame_current
 
     copies = args.copies or VIEWS[args.view].get("copies", 8)
-    labels, fit_points, report = build(bpy, addon.api, args.view, copies)
+    labels, fit_points, report = build(bpy, addon, args.view, copies, args.figures)
     scene.frame_set(saved_frame)
     size = tuple(args.size or VIEWS[args.view]["size"])
     cam = camera_and_light(bpy, args.view, fit_points, size)
@@ -579,9 +605,14 @@ def main(argv):
     )
     for name, frames, worst in report:
         print(
-            "  %-8s armature bones at frames %s "
+            "  %-8s %s at frames %s "
             "(evaluated hips within %.2f cm of the plan's root)"
-            % (name, ", ".join(map(str, frames)), worst * 100)
+            % (
+                name,
+                "proxy body" if args.figures == "bodies" else "armature bones",
+                ", ".join(map(str, frames)),
+                worst * 100,
+            )
         )
     print(
         "  Cycles CPU, %d samples, %dx%d, denoiser: %s"

@@ -6,6 +6,7 @@ A clip holds the root's armature-space position and every bone's pose rotation p
 common frame rate and mirroring (for the missing right turns) work on clips as a whole.
 """
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -73,6 +74,29 @@ def resample(clip: Clip, fps: float) -> Clip:
     n = int(np.floor(clip.duration * fps + 1e-6)) + 1
     pos, rot = sample(clip, np.arange(n) / fps)
     return Clip(clip.name, clip.skeleton, float(fps), pos, rot, dict(clip.tags))
+
+
+STRAIGHT_DISTANCE = 2.0  # metres a straight walk covers at least, start to end
+STRAIGHT_RATIO = 0.95  # its start-to-end distance over the length of its root's path
+
+
+def straightest(clips: Sequence[Clip]) -> int | None:
+    """Index of the clip that walks furthest in a straight line: the greatest start-to-end
+    ground distance (root, x and y) among the clips covering ``STRAIGHT_DISTANCE`` at
+    least with a path at most 1 / ``STRAIGHT_RATIO`` as long; None when none does (a turn
+    curves, a standing jump or a sit-down goes too short a way). What a bake's straight
+    clip is guessed from (CMU 16: 16_15 walks 4.3 m in a 4.3 m path; the turn 16_18 goes
+    3.1 m in 3.9 m; the jump 16_06 1.3 m)."""
+    best, far = None, 0.0
+    for i, c in enumerate(clips):
+        xy = np.asarray(c.root_pos, float)[:, :2]
+        if len(xy) < 2:
+            continue
+        net = float(np.linalg.norm(xy[-1] - xy[0]))
+        path = float(np.linalg.norm(np.diff(xy, axis=0), axis=1).sum())
+        if net >= STRAIGHT_DISTANCE and net >= STRAIGHT_RATIO * path and net > far:
+            best, far = i, net
+    return best
 
 
 def lateral_axis(skel: Skeleton) -> np.ndarray:

@@ -157,3 +157,144 @@ def test_planning_sets_the_scene_frame_range(addon_module):
     scene.frame_start, scene.frame_end = 1, 10
     api.plan_path(scene, walker, goal, frame_start=1)
     assert (scene.frame_start, scene.frame_end) == (1, 10)
+
+
+# --- Blender's conventions (what a newcomer meets in the window) ---------------------------
+
+# The sidebar at the default 1920x1200 layout (the GUI suite's screenshots): a panel's fields
+# span 236 px. With use_property_split the label takes 40 % of that, right-aligned with a
+# margin each side (0.4 of a 20 px widget unit): longer labels are cut to "Layer...".
+FIELDS_WIDTH = 236
+LABEL_COLUMN = 0.4 * FIELDS_WIDTH - 2 * 8
+CHECKBOX = 24  # a checkbox's box and gap before its label
+
+
+def label_width(text):
+    """Width of ``text`` at the UI's 11 points (the interface scale is 0 without a window,
+    so this measures with the font directly)."""
+    import blf
+
+    blf.size(0, 11)
+    return blf.dimensions(0, text)[0]
+
+
+class SplitRecorder:
+    """A layout that passes its property split on to the layouts made in it, as Blender's
+    does, and records each property with its label and whether it is split."""
+
+    def __init__(self, log, split=False):
+        self.log, self.use_property_split, self.use_property_decorate = log, split, True
+
+    def row(self, *args, **kw):
+        return SplitRecorder(self.log, self.use_property_split)
+
+    column = box = split = row
+
+    def label(self, *args, **kw):
+        pass
+
+    operator = label
+
+    def prop(self, data, name, text=None, **kw):
+        rna = data.bl_rna.properties[name]
+        label = rna.name if text is None else text
+        self.log.append((name, label, self.use_property_split, rna.type == "BOOLEAN"))
+
+    prop_search = prop
+
+    def template_list(self, listtype, list_id, data, items, active_data, active_prop, **kw):
+        cls = getattr(bpy.types, listtype)
+        for i, item in enumerate(getattr(data, items)):
+            lay = SplitRecorder(self.log, self.use_property_split)
+            cls.draw_item(None, bpy.context, lay, data, item, 0, active_data, active_prop, i)
+
+
+@pytest.fixture
+def every_panel_drawn(addon_module, walk_blend):
+    """{panel: [(property, label, split, boolean)]} of every sidebar panel, drawn with a
+    character active, and again with a tagged prop active (its clip a traversal)."""
+    from scene_helpers import prop_box, walker_from
+
+    bpy.ops.wm.open_mainfile(filepath=str(walk_blend))
+    walker = walker_from(bpy.data.objects["Source"], "Walker")
+    chair = prop_box("Chair", 3.0, 0.0)
+    clip = chair.motion_patch.clips.add()
+    clip.action, clip.kind = bpy.data.actions["16_15"], "TRAVERSAL"
+    drawn = {}
+    for active in (walker, chair):
+        bpy.context.view_layer.objects.active = active
+        for cls in addon_module.panels.classes:
+            if not issubclass(cls, bpy.types.Panel) or (
+                hasattr(cls, "poll") and not cls.poll(bpy.context)
+            ):
+                continue
+            log = []
+            cls.draw(SimpleNamespace(layout=SplitRecorder(log)), bpy.context)
+            drawn.setdefault(cls.bl_label, log)
+    return drawn
+
+
+def test_sidebar_labels_fit_beside_their_fields(every_panel_drawn):
+    assert label_width("Source Armature") > 60  # the font measures (not a headless stub)
+    split = {p for panel, log in every_panel_drawn.items() for p in log if p[2]}
+    # Blender's convention: label | field in the panels with fields.
+    for panel in ("Locomotion Patches", "Object Patch", "Planning"):
+        assert any(p[2] for p in every_panel_drawn[panel]), f"{panel}: no property split"
+    for name, label, _, boolean in split:
+        assert label, f"'{name}' is split with no label: its label column is empty"
+        assert not boolean, f"checkbox '{label}' in the label column (cut when long)"
+        assert label_width(label) <= LABEL_COLUMN, f"'{label}' is cut beside its field"
+    for panel, log in every_panel_drawn.items():
+        for name, label, is_split, boolean in log:
+            if not is_split and boolean:
+                assert label_width(label) <= FIELDS_WIDTH - CHECKBOX, f"'{label}' is cut"
+    names = {p[0] for log in every_panel_drawn.values() for p in log}
+    assert {"layer_in", "layer_out", "copy_step", "radius", "source_armature"} <= names
+
+
+def test_goal_pickers_offer_places_not_cameras_lights_or_bodies(addon_module, walk_blend):
+    bpy.ops.wm.open_mainfile(filepath=str(walk_blend))
+    scene = bpy.context.scene
+    api = addon_module.api
+    cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    lamp = bpy.data.objects.new("Light", bpy.data.lights.new("Light", "POINT"))
+    goal = bpy.data.objects.new("Goal", None)
+    for ob in (cam, lamp, goal):
+        scene.collection.objects.link(ob)
+    api.add_bodies([bpy.data.objects["Source"]])
+    body = next(o for o in scene.objects if o.parent == bpy.data.objects["Source"])
+    for owner, name in ((scene.motion_patches, "goal"), (bpy.data.objects["Source"], None)):
+        group = type(owner) if name else type(owner.motion_patches_character)
+        poll = group.__annotations__["goal"].keywords["poll"]  # what the picker lists
+        assert [poll(None, ob) for ob in (cam, lamp, body, goal)] == [False, False, False, True]
+    start = type(bpy.data.objects["Source"].motion_patches_character).__annotations__
+    assert not start["start_prop"].keywords["poll"](None, body)
+
+
+def test_the_bvh_scale_shows_every_digit_of_cmus():
+    scale = bpy.ops.motion_patches.import_mocap.get_rna_type().properties["scale"]
+    assert scale.default == pytest.approx(0.056444) and scale.precision == 6
+
+
+def test_an_imported_armature_is_named_after_its_subject(addon_module):
+    name = addon_module.api.baking.subject_name
+    assert name(["cmu/16_06.bvh", "cmu/16_15.bvh", "cmu/16_18.bvh"]) == "Subject 16"
+    assert name(["actor-walk.bvh", "actor-turn.bvh"]) == "actor"
+    assert name(["walk.bvh"]) == "walk"
+    assert name(["02_01.bvh", "16_15.bvh"]) == "Mocap"  # two subjects
+
+
+def test_a_plan_of_one_piece_says_1_piece(addon_module):
+    res = SimpleNamespace(
+        character="Walker",
+        pieces=["walk"],
+        frame_start=1,
+        frame_end=31,
+        length_m=1.0,
+        cost=1.0,
+        seconds=0.01,
+    )
+    line = addon_module.cli.plan.plan_line(res, 30.0)
+    assert "1 piece," in line and "pieces" not in line
+    res.pieces = ["walk", "turn"]
+    assert "2 pieces," in addon_module.cli.plan.plan_line(res, 30.0)

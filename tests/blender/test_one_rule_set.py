@@ -252,30 +252,44 @@ def test_an_imported_patch_is_the_active_one_through_every_door(scene, mp, cli, 
     assert mp.api.active_patch_name(bpy.context.scene) == "by cli"
 
 
-def test_file_import_offers_mocap_and_patch_files_and_both_import(scene, mp, mocap_dir, tmp_path):
-    """File > Import lists both entries (drawn into a recording layout), each an operator
-    that exists; run in background mode they import a CMU BVH and a patch file."""
-    menu = bpy.types.TOPBAR_MT_file_import
-    assert mp.panels.file_import.draw_entries in menu._dyn_ui_initialize()
-    drawn = []
-    layout = type(
-        "Layout", (), {"operator": lambda self, idname, text="": drawn.append((idname, text))}
-    )()
-    mp.panels.file_import.draw_entries(type("Menu", (), {"layout": layout})(), bpy.context)
-    assert [t for _, t in drawn] == [
-        "Motion Patches Mocap (.bvh)",
+def test_file_menus_offer_mocap_and_patch_files_and_import_them(scene, mp, mocap_dir, tmp_path):
+    """File > Import lists both entries, File > Export the patch (drawn into a recording
+    layout), each an operator that exists; run in background mode the imports read CMU BVH
+    files and a patch file."""
+    entries = []
+    for menu, draw in (
+        (bpy.types.TOPBAR_MT_file_import, mp.panels.file_import.draw_entries),
+        (bpy.types.TOPBAR_MT_file_export, mp.panels.file_import.draw_exports),
+    ):
+        assert draw in menu._dyn_ui_initialize()
+        drawn = []
+        layout = type(
+            "Layout", (), {"operator": lambda self, idname, text="": drawn.append((idname, text))}
+        )()
+        draw(type("Menu", (), {"layout": layout})(), bpy.context)
+        entries.append(drawn)
+    assert [t for _, t in entries[0]] == [
+        "Motion Patches Clips to Bake (.bvh)",  # beside Blender's own "Motion Capture (.bvh)"
         "Motion Patches Patch (.mpatch)",
     ]
-    for idname, _ in drawn:
+    assert entries[1] == [("motion_patches.export_patch", "Motion Patches Patch (.mpatch)")]
+    for idname, _ in entries[0] + entries[1]:
         module, name = idname.split(".")
         getattr(getattr(bpy.ops, module), name).get_rna_type()  # raises when it does not exist
+    tip = bpy.ops.motion_patches.import_mocap.get_rna_type().description
+    assert "one armature" in tip and "Blender's own Motion Capture importer" in tip
 
     before = set(bpy.data.objects)
-    bvh = mocap_dir / "cmu" / "16_06.bvh"
-    assert bpy.ops.motion_patches.import_mocap(filepath=str(bvh)) == {"FINISHED"}
+    cmu = mocap_dir / "cmu"
+    files = [{"name": f} for f in ("16_06.bvh", "16_15.bvh", "16_18.bvh")]  # as the browser
+    assert bpy.ops.motion_patches.import_mocap(directory=str(cmu), files=files) == {"FINISHED"}
     (arm,) = set(bpy.data.objects) - before
-    assert arm.type == "ARMATURE" and scene.motion_patches.source_armature == arm
-    assert arm.animation_data.action.name == "16_06"
+    s = scene.motion_patches
+    assert arm.type == "ARMATURE" and s.source_armature == arm
+    assert arm.name == "Subject 16"  # not the first file's "16_06"
+    # The straight walk just imported, ready to bake (the file's own "16_15" is the bake's).
+    assert s.straight_action.get("motion_patches_source") == "16_15.bvh"
+    assert s.straight_action.name == "16_15.001"
 
     patch_file = tmp_path / "walk.mpatch"
     mp.api.export_patch(scene, patch_file)

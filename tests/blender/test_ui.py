@@ -142,6 +142,7 @@ def test_sidebar_has_one_panel_per_concept(scene, addon_module):
     for op in ("plan_path", "plan_crowd", "reset_planning"):
         assert ("operator", f"motion_patches.{op}") in plan
     assert plan.count(("prop", "goal")) == 2  # the scene's goal and the walker's own
+    assert ("operator", "motion_patches.add_body") in plan  # the walker's proxy body
     assert ("prop", "show_overlay") in drawn["Overlay"]
 
 

@@ -9,8 +9,8 @@ and drives one scene through the sidebar:
 * real input (xdotool): open the sidebar (N), pick the Motion Patches tab (a click on it),
   + on the turn list, Bake, collapse the Locomotion panel (a click on its header), + on the
   prop's clip list, Tag Object Patch, Plan Path, Analyse Motion, Show Planner Overlay, top
-  view (numpad 7), Plan Crowd with Esc while it runs, then to its end, Duplicate Crowd
-  (Return in its dialog);
+  view (numpad 7), Plan Crowd with Esc while it runs, then to its end, Add Body on the
+  eight walkers, Duplicate Crowd (Return in its dialog);
 * Python, where input cannot reach (tools/gui/agent.py): importing the mocap (a file
   browser), making the walker, the goal and the chair, choosing actions in the lists,
   placing the perspective view, opening the preferences at the add-on.
@@ -21,11 +21,13 @@ Ctrl+Shift+C (a property copies its data path) says what is under it.
 
 Checks: each operator did its job (read back from the scene: a patch with kept segments,
 the prop tagged, NLA tracks and a plan record on the walker, the scene's frame range
-covering the plan, analysis figures stored, the overlay on); no screenshot is blank;
-overlay pixels: where the planned path must be (projected by Blender) the overlay's path
-colours appear, and inside the chair's outline nothing of the overlay shows (depth test);
-and Blender's log has no traceback and no error line. Screenshots of every state go to
-``--out``; ``--docs DIR`` also writes the README's small ones.
+covering the plan, analysis figures stored, the overlay on, a capsule per bone on each
+walker's evaluated bones, the copies of a walker with a body given bodies); no screenshot
+is blank; overlay pixels: where the planned path must be (projected by Blender) the
+overlay's path colours appear, and inside the chair's outline nothing of the overlay shows
+(depth test); body pixels: at each walker's chest (projected) the picture changes when the
+bodies are hidden; and Blender's log has no traceback and no error line. Screenshots of
+every state go to ``--out``; ``--docs DIR`` also writes the README's small ones.
 
 Exit status: 0 all passed, 1 something failed (the summary says what).
 """
@@ -379,6 +381,7 @@ result = text.splitlines()""")
             ("Overlay: Show Planner Overlay, top view", self.overlay_top),
             ("Overlay: perspective view, depth", self.overlay_perspective),
             ("Planning: Plan Crowd, Esc, then to its end", self.crowd),
+            ("Planning: Add Body on the eight walkers", self.bodies),
             ("Planning: Duplicate Crowd, Return in its dialog", self.duplicate),
             ("Preferences: the add-on's defaults", self.preferences),
         ]
@@ -848,6 +851,138 @@ result = [o.name for o in crowd if mp.api.PLAN_KEY in o and o.animation_data
         )
         return f"cancelled by Esc, the scene kept; then 8 walkers planned in {secs:.1f} s"
 
+    # --- proxy bodies ------------------------------------------------------------------
+
+    BODY_STATE = """
+import numpy as np
+io = mp.adapter.bodies
+dg = bpy.context.evaluated_depsgraph_get()
+walkers = sorted((o for o in bpy.data.objects
+                  if o.name.startswith("Walker") and o.type == "ARMATURE"), key=lambda o: o.name)
+off = 0.0  # the farthest a capsule's evaluated vertex lies from its bone's segment, less its radius
+parts = {}
+for w in walkers:
+    ev = w.evaluated_get(dg)
+    mw = np.array(ev.matrix_world)
+    parts[w.name] = [len(io.parts(w)), len({p.data.name for p in io.parts(w)})]
+    for p in io.parts(w):
+        pb = ev.pose.bones[p.parent_bone]
+        a, b = ((mw @ np.append(np.array(v), 1.0))[:3] for v in (pb.head, pb.tail))
+        pe = p.evaluated_get(dg)
+        me = pe.to_mesh()
+        co = np.array([v.co[:] for v in me.vertices])
+        pe.to_mesh_clear()
+        m = np.array(pe.matrix_world)
+        x = co @ m[:3, :3].T + m[:3, 3]
+        d = b - a
+        t = np.clip((x - a) @ d / max(float(d @ d), 1e-12), 0, 1)
+        dist = np.linalg.norm(x - (a + t[:, None] * d), axis=1)
+        off = max(off, float(dist.max() - dist.min()))
+result = dict(parts=parts, off=off, meshes=len({m.name for m in bpy.data.meshes
+                                               if io.SHAPE_KEY in m.keys()}))"""
+
+    def bodies(self):
+        """Add Body from its button with the eight walkers selected (the Walker active): each
+        gets a capsule per bone, on its bones at the frame shown, the eight sharing the
+        meshes; the viewport, in perspective at a frame mid-walk, shows them (the picture
+        changes where the walkers stand when the bodies are hidden)."""
+        self.s.py("""
+w = bpy.data.objects["Walker"]
+for ob in bpy.context.scene.objects:
+    ob.select_set(ob.type == "ARMATURE" and ob.name.startswith("Walker"))
+bpy.context.view_layer.objects.active = w
+meta, arrays = mp.api.load_plan_record(w)
+bpy.context.scene.frame_set((meta["frame_start"] + meta["frame_end"]) // 2)
+result = 1""")
+        self.settle()
+        self.press("motion_patches.add_body")
+        st = self.s.py(self.BODY_STATE)
+        counts = sorted(set(map(tuple, st["parts"].values())))
+        self.check(
+            len(st["parts"]) == 8 and counts == [(31, 31)],
+            f"Add Body did not give the eight walkers a capsule per bone: {st['parts']}",
+        )
+        self.check(st["meshes"] == 31, f"the walkers' bodies use {st['meshes']} meshes, not 31")
+        self.check(st["off"] < 1e-4, f"a capsule is {st['off'] * 100:.2f} cm off its bone")
+        said = self.reports()
+        self.check(
+            any(r.startswith("8 bodies made: 248 capsules") for r in said[-3:]),
+            f"no summary: {said[-3:]}",
+        )
+        self.settle()
+        self.sidebar_shot("11-body-panel")
+        self.s.py("""
+from mathutils import Euler
+import math
+for ob in bpy.context.scene.objects:
+    ob.select_set(False)
+bpy.context.scene.motion_patches.show_overlay = False  # the picture is of the bodies
+r3d = area("VIEW_3D").spaces[0].region_3d
+r3d.view_perspective = "PERSP"
+r3d.view_location = (3.5, -2.6, 0.6)
+r3d.view_rotation = Euler((math.radians(62), 0.0, math.radians(-28)), "XYZ").to_quaternion()
+r3d.view_distance = 10.0
+redraw_all()
+result = 1""")
+        view = self.s.py('result = rect(region("VIEW_3D", "WINDOW"))')
+        self.s.move(5, 5)
+        shots = {}
+        for shown in (False, True):
+            self.s.py(
+                "for o in bpy.data.objects:\n"
+                "    if mp.adapter.bodies.is_part(o):\n"
+                f"        o.hide_viewport = {not shown}\n"
+                "redraw_all()\nresult = 1"
+            )
+            self.s.wait_idle()
+            time.sleep(0.3)
+            shots[shown] = self.s.grab()
+        self.grab_checked("12-bodies", crop=tuple(view))
+        hips = self.s.py("""
+from bpy_extras.view3d_utils import location_3d_to_region_2d
+reg = region("VIEW_3D", "WINDOW")
+r3d = area("VIEW_3D").spaces[0].region_3d
+rx, ry, rw, rh = rect(reg)
+dg = bpy.context.evaluated_depsgraph_get()
+covers = [rect(r) for r in area("VIEW_3D").regions if r.type != "WINDOW" and r.width > 1
+          and r.height > 1]
+out = []
+for w in (o for o in bpy.data.objects if o.name.startswith("Walker") and o.type == "ARMATURE"):
+    ev = w.evaluated_get(dg)
+    v = location_3d_to_region_2d(reg, r3d, ev.matrix_world @ ev.pose.bones["Spine"].head)
+    if v is None:
+        continue
+    x, y = int(rx + v.x), int(ry + rh - v.y)
+    if rx + 20 <= x < rx + rw - 20 and ry + 20 <= y < ry + rh - 20 and not any(
+            cx - 20 <= x < cx + cw + 20 and cy - 20 <= y < cy + ch + 20
+            for cx, cy, cw, ch in covers):
+        out.append([x, y])
+result = out""")
+        self.check(len(hips) >= 6, f"only {len(hips)} of the 8 walkers are in view")
+        pts = np.array(hips) - np.array(view[:2])
+        lo, hi = pts.min(axis=0) - (160, 220), pts.max(axis=0) + (160, 160)
+        self.doc_boxes["12-bodies"] = (
+            max(int(lo[0]), 0),
+            max(int(lo[1]), 0),
+            min(int(hi[0]), view[2]),
+            min(int(hi[1]), view[3]),
+        )
+        changed = []
+        for x, y in hips:
+            a = shots[False][y - 6 : y + 7, x - 6 : x + 7].astype(int)
+            b = shots[True][y - 6 : y + 7, x - 6 : x + 7].astype(int)
+            changed.append(float((np.abs(a - b).max(axis=2) > 30).mean()))
+        shown = sum(c > 0.5 for c in changed)
+        self.check(
+            shown == len(hips),
+            f"the bodies show at only {shown} of {len(hips)} walkers' chests in the viewport "
+            f"(changed pixel shares {[round(c, 2) for c in changed]})",
+        )
+        return (
+            f"8 walkers, 248 capsules sharing 31 meshes, on their bones within "
+            f"{st['off'] * 1000:.3f} mm; bodies visible at {shown} of {len(hips)} chests"
+        )
+
     def duplicate(self):
         """Duplicate Crowd from its button: the dialog (its values set beforehand as the
         operator's last ones), Return, then the copies planned a step at a time."""
@@ -874,8 +1009,13 @@ result = 1""")
         made = self.s.py("""
 coll = bpy.data.collections.get(mp.api.CROWD_COLLECTION)
 obs = [o for o in coll.objects if o.type == "ARMATURE"] if coll else []
-result = [len(obs), sum(1 for o in obs if mp.api.PLAN_KEY in o)]""")
-        self.check(made == [4, 4], f"Duplicate Crowd made / planned {made} (want 4 and 4)")
+result = [len(obs), sum(1 for o in obs if mp.api.PLAN_KEY in o),
+          sum(1 for o in obs if mp.api.has_body(o))]""")
+        self.check(
+            made == [4, 4, 4],
+            f"Duplicate Crowd made / planned / gave bodies to {made} (want 4, 4 and 4: the "
+            f"Walker has a body)",
+        )
         said = self.reports()
         self.check(
             any(r.startswith("Crowd of 4: 4 planned") for r in said[-8:]),
@@ -978,6 +1118,13 @@ if len(wins) > 1:
                 img = img[max(0, y0) : y1, max(0, x0) : x1]
             written.append(self.s.save(img, docs / out, scale=0.75, palette=True))
         written.append(self.s.save(cut("09-preferences"), docs / "preferences.png", palette=True))
+        if "12-bodies" in self.shots:  # the walkers with their proxy bodies
+            img = cut("12-bodies")
+            box = self.doc_boxes.get("12-bodies")
+            if box:
+                x0, y0, x1, y1 = box
+                img = img[y0:y1, x0:x1]
+            written.append(self.s.save(img, docs / "bodies.png", scale=0.75, palette=True))
         sizes = ", ".join(f"{p.name} {p.stat().st_size // 1024} KiB" for p in written)
         self.log(f"docs: {sizes}")
 
