@@ -89,15 +89,17 @@ def _write(
     skel = rig.target if rig is not None else patch.gait.skeleton
     motions, bounds, world = placed
     # Feet moving fast while labelled planted (through a blend) are not planted: neither
-    # pinned nor measured as skating (foot_lock.still_contacts).
+    # pinned nor measured as skating (foot_lock.still_contacts). Both read the motion as
+    # the character plays it: on its own rig (``skel``), at the scene's rate.
+    fps = scene_fps(scene)
     posed = foot_lock.pose_legs(skel, world)
     world = Motion(
         world.ground,
         world.root_local,
         world.rotations,
-        foot_lock.still_contacts(skel, world, patch.gait.fps, posed),
+        foot_lock.still_contacts(skel, world, fps, posed),
     )
-    locked = foot_lock.lock_feet(skel, world, posed=posed) if settings.foot_lock else None
+    locked = foot_lock.lock_feet(skel, world, posed=posed, fps=fps) if settings.foot_lock else None
     strips, stashed = nla.write_plan(
         bpy,
         character,
