@@ -385,7 +385,43 @@ def _column_tolerances(curves, tol):
     )
 
 
-def key_curves(action, slot, frames, curves, tol=None, stored=None, values=None, rotations=()):
+def fit_curves(frames, curves, tol, values=None, rotations=(), between=True):
+    """The cubic keys :func:`key_curves` stores for ``curves`` within ``tol`` (a
+    :class:`Tolerance`; see there), or None when they are stored otherwise. Touches no
+    Blender data: a crowd fits the next characters' keys while one is written."""
+    if not (isinstance(tol, Tolerance) and curves):
+        return None
+    frames = np.asarray(frames, float)
+    if values is None:
+        values = np.column_stack([np.asarray(c[3], float) for c in curves])
+    # a curve that needs as many keys as samples cost is stored as samples: stop there
+    samples = -(-frames.size * key_plan.SAMPLE_BYTES // key_plan.KEY_BYTES)
+    return key_plan.cubic_keys(
+        values,
+        _column_tolerances(curves, tol),
+        rotations,
+        between,
+        give_up_at=samples if _whole(frames) else None,
+    )
+
+
+def _whole(frames):
+    """Whether ``frames`` are whole frames one apart (where samples sit)."""
+    return bool(frames.size) and np.all(np.diff(frames) == 1.0) and frames[0] == int(frames[0])
+
+
+def key_curves(
+    action,
+    slot,
+    frames,
+    curves,
+    tol=None,
+    stored=None,
+    values=None,
+    rotations=(),
+    between=True,
+    fitted=None,
+):
     """Create the F-curves ``curves`` = [(data_path, index, group, values (F,))], all keyed
     at ``frames``, each in one bulk write (``keyframe_points.add`` + ``foreach_set`` of
     float32 arrays, the type Blender stores, so nothing is converted value by value).
@@ -400,13 +436,17 @@ def key_curves(action, slot, frames, curves, tol=None, stored=None, values=None,
     within it (:func:`motion_patches.kinematics.keys.plan_columns`; ``stored``: those
     choices made already). None: a linear key on every frame.
     ``values``: the curves' values as one (F, C) array already (their ``curves`` entries
-    are then not read)."""
+    are then not read). ``between``: the keys are also played between ``frames`` (a strip
+    scaled to another rate) and held to the plan there too; False: only on them.
+    ``fitted``: :func:`fit_curves` of these arguments, made already."""
     frames = np.asarray(frames, float)
     if values is None and curves:
         values = np.column_stack([np.asarray(c[3], float) for c in curves])
-    cubic = None
-    if isinstance(tol, Tolerance) and curves:
-        cubic = key_plan.cubic_keys(values, _column_tolerances(curves, tol), rotations)
+    whole = _whole(frames)
+    cubic = fitted
+    if cubic is None:
+        cubic = fit_curves(frames, curves, tol, values, rotations, between)
+    if cubic is not None:
         stored = [("cubic", None)] * len(curves)
     if stored is None:
         stored = (
@@ -414,8 +454,6 @@ def key_curves(action, slot, frames, curves, tol=None, stored=None, values=None,
             if tol is not None and curves
             else [("all", None)] * len(curves)
         )
-    # samples sit on whole frames, one apart
-    whole = bool(frames.size) and np.all(np.diff(frames) == 1.0) and frames[0] == int(frames[0])
     step = float(frames[1] - frames[0]) if frames.size > 1 else 1.0
     # every curve's (frame, value) pairs, float32, built at once; a curve takes its row
     rows = np.empty((len(curves), 2 * frames.size), np.float32)
@@ -437,7 +475,10 @@ def key_curves(action, slot, frames, curves, tol=None, stored=None, values=None,
                 how, co = "constant", np.array([frames[0], cubic["value"][c]], np.float32)
             else:
                 kept = np.flatnonzero(cubic["keep"][:, c])
-                if whole and kept.size * key_plan.KEY_BYTES >= frames.size * key_plan.SAMPLE_BYTES:
+                if whole and (
+                    cubic["gave_up"][c]
+                    or kept.size * key_plan.KEY_BYTES >= frames.size * key_plan.SAMPLE_BYTES
+                ):
                     how = "samples"
                 else:
                     _key_cubic(
@@ -526,12 +567,22 @@ def curve_points(fc):
     return co.reshape(-1, 2).astype(float)
 
 
-def key_pose(action, slot, skel, frames, root_location, rotations, modes=None, tol=None):
+def key_pose(
+    action, slot, skel, frames, root_location, rotations, modes=None, tol=None, between=True
+):
     """Key the root bone's location and every bone's rotation in the channel its rotation
     mode plays: ``modes`` is {bone name: rotation_mode}, quaternion for bones not in it.
     Quaternion channels are keyed as given (the caller makes them continuous); Euler and
     axis-angle ones are converted continuous over ``frames`` (:func:`rotation_channels`).
-    ``tol``: store the curves compactly (:func:`key_curves`)."""
+    ``tol``, ``between``: store the curves compactly (:func:`key_curves`)."""
+    curves, values, tol, groups = pose_curves(skel, root_location, rotations, modes, tol)
+    key_curves(action, slot, frames, curves, tol, values=values, rotations=groups, between=between)
+
+
+def pose_curves(skel, root_location, rotations, modes=None, tol=None):
+    """What :func:`key_pose` keys: (curves, their values (F, C), the tolerance, the
+    :class:`~motion_patches.kinematics.keys.Rotations` among them), for :func:`key_curves`
+    or :func:`fit_curves`. Touches no Blender data."""
     modes = modes or {}
     root = skel.names[skel.root]
     curves = [(f'pose.bones["{root}"].location', i, root, None) for i in range(3)]
@@ -566,7 +617,7 @@ def key_pose(action, slot, skel, frames, root_location, rotations, modes=None, t
     values = np.concatenate(columns, axis=1)
     if isinstance(tol, Tolerance):  # the root's location: finer too (rotations judged apart)
         tol = Tolerance(tol.angle, tol.length / ROOT_FINER)
-    key_curves(action, slot, frames, curves, tol, values=values, rotations=groups)
+    return curves, values, tol, groups
 
 
 def _rotations(mode, columns, angle):

@@ -266,6 +266,7 @@ def write_plan(
     bounds=None,
     layer_keys=None,
     segments=None,
+    body=None,
 ):
     """Write a plan's strips and root trajectory on ``obj``; returns strip records.
 
@@ -283,10 +284,11 @@ def write_plan(
     ``layer_keys``: {layer: patch key} of a plan that changes layer, whose segment pieces
     name their own patch (:class:`motion_patches.planning.transitions.LayerPiece`): their strips
     play that patch's shared segment actions, on the one motion track. ``segments``:
-    :func:`segment_index` of the file, kept up to date here (one for many writes)."""
+    :func:`segment_index` of the file, kept up to date here (one for many writes).
+    ``body``: :func:`body_keys` of this plan, fitted already (see :func:`own_pieces`,
+    :func:`write_units`)."""
     skel = rig.target if rig is not None else patch.gait.skeleton
-    modes = rig_rotation_modes(obj, skel)
-    unit = rig_io.world_scale(obj)
+    modes, unit = write_units(obj, skel)
     if bounds is None:
         bounds = np.concatenate(([0], np.cumsum([m.frames - 1 for m in motions])))
     bounds = np.asarray(bounds, int)
@@ -300,10 +302,10 @@ def write_plan(
     strips, played = [], []
     first = int(frame_start)
     index = segment_index(bpy) if segments is None else segments
-    own = [n for n, p in enumerate(plan.pieces) if p.kind != "segment"]
-    body = (
-        _body_action(obj, skel, world, locked, bounds, own, motions, modes, unit) if own else None
-    )
+    own = own_pieces(plan)
+    if own and body is None:
+        body = body_keys(skel, world, locked, bounds, own, motions, modes, unit)
+    body = _body_action(obj, body) if own else None
     for n, (piece, m) in enumerate(zip(plan.pieces, motions)):
         start, end = first + int(bounds[n]), first + int(bounds[n + 1])
         if piece.kind == "segment":
@@ -374,7 +376,8 @@ def write_plan(
     else:
         rot_path, rot_values = "rotation_euler", (zero, zero, heading)
     curves += [(rot_path, i, "Object Transforms", v) for i, v in enumerate(rot_values)]
-    act_io.key_curves(root_action, root_slot, frames, curves, _finer(act_io.COMPACT))
+    # on the scene's frames, its strip unscaled: nothing plays between them
+    act_io.key_curves(root_action, root_slot, frames, curves, _finer(act_io.COMPACT), between=False)
     root_track = ad.nla_tracks.new()
     root_track.name = TRACK_ROOT
     rs = root_track.strips.new(f"{obj.name} root", first, root_action)
@@ -413,18 +416,28 @@ def _in_units(tol, unit):
     return tol
 
 
-def _body_action(obj, skel, world, locked, bounds, own, motions, modes, unit=1.0):
-    """One action of the character's own pieces (connectors, turns, clips: the pieces no
-    other character plays): one set of curves serves them all (an F-curve costs a few
-    hundred bytes before any key), piece after piece, each strip playing its own frames.
+def own_pieces(plan):
+    """The pieces of ``plan`` only its character plays (all but segments): its body action's."""
+    return [n for n, p in enumerate(plan.pieces) if p.kind != "segment"]
+
+
+def write_units(obj, skel):
+    """(rotation modes, world scale) of the armature ``obj`` playing ``skel``: what
+    :func:`body_keys` needs from Blender, read before the fit."""
+    return rig_rotation_modes(obj, skel), rig_io.world_scale(obj)
+
+
+def body_keys(skel, world, locked, bounds, own, motions, modes, unit=1.0):
+    """The keys of a character's body action (:func:`_body_action`) fitted, touching no
+    Blender data (a crowd fits the next characters' while one is written): {"frames",
+    "curves", "values", "tol", "rotations", "between", "fitted", "ranges", "scene_keys"}.
 
     Keyed at the lower of the scene's and the patch's rates, so no piece has more keys
     than frames played or planned: at the scene's (not above the patch's) from ``world``
     with the feet already locked (``locked``; these frames then need no foot-lock
     correction, and no scaled strip plays keys between frames); above the patch's rate from
     the pieces' own ``motions`` at the patch's, their strips scaled as segments' are.
-    Returns (action, slot, {piece: (first action frame, strip scale, frames)}, whether keyed
-    at the scene's rate)."""
+    ``ranges``: {piece: (first action frame, strip scale, frames)}."""
     scene_keys = sum(int(bounds[n + 1] - bounds[n]) for n in own) <= sum(
         motions[n].frames - 1 for n in own
     )
@@ -445,13 +458,47 @@ def _body_action(obj, skel, world, locked, bounds, own, motions, modes, unit=1.0
         span = int(bounds[n + 1] - bounds[n])
         ranges[n] = (at, 1.0 if scene_keys else span / float(max(len(r) - 1, 1)), len(r))
         at += len(r)
-    action, slot = compat.new_action(f"MP {obj.name} body")
-    action[CHARACTER_KEY] = obj.name
     frames = np.arange(len(loc), dtype=float)
     rot = quat.make_continuous(rot, axis=0)
-    tol = _in_units(act_io.COMPACT, unit)
-    act_io.key_pose(action, slot, skel, frames, loc, rot, modes, tol=tol)
-    return action, slot, ranges, scene_keys
+    curves, values, tol, groups = act_io.pose_curves(
+        skel, loc, rot, modes, _in_units(act_io.COMPACT, unit)
+    )
+    # keyed on the scene's frames, its strips unscaled play nothing between them
+    between = not scene_keys
+    return {
+        "frames": frames,
+        "curves": curves,
+        "values": values,
+        "tol": tol,
+        "rotations": groups,
+        "between": between,
+        "fitted": act_io.fit_curves(frames, curves, tol, values, groups, between),
+        "ranges": ranges,
+        "scene_keys": scene_keys,
+    }
+
+
+def _body_action(obj, keys):
+    """One action of the character's own pieces (connectors, turns, clips: the pieces no
+    other character plays), keyed as :func:`body_keys` fitted them: one set of curves
+    serves them all (an F-curve costs a few hundred bytes before any key), piece after
+    piece, each strip playing its own frames.
+    Returns (action, slot, {piece: (first action frame, strip scale, frames)}, whether keyed
+    at the scene's rate)."""
+    action, slot = compat.new_action(f"MP {obj.name} body")
+    action[CHARACTER_KEY] = obj.name
+    act_io.key_curves(
+        action,
+        slot,
+        keys["frames"],
+        keys["curves"],
+        keys["tol"],
+        values=keys["values"],
+        rotations=keys["rotations"],
+        between=keys["between"],
+        fitted=keys["fitted"],
+    )
+    return action, slot, keys["ranges"], keys["scene_keys"]
 
 
 FINER = 16.0  # the root's and foot lock's angle tolerance is this much finer (lengths: 4)
@@ -553,7 +600,9 @@ def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=(
             for c in range(delta.shape[-1])
         ]
     values = np.concatenate(columns, axis=1) if columns else None
-    act_io.key_curves(action, slot, frames, curves, _finer(act_io.COMPACT), values=values)
+    act_io.key_curves(
+        action, slot, frames, curves, _finer(act_io.COMPACT), values=values, between=False
+    )
     track = obj.animation_data.nla_tracks.new()
     track.name = TRACK_FOOT
     strip = track.strips.new(f"{obj.name} foot lock", int(frame_start), action)

@@ -308,6 +308,7 @@ def check_layout(
                 "start": _shrunk(start, size).tolist(),
                 "goal": _shrunk(facing, size).tolist(),
                 "margin": margin,
+                "scale": size,
             }
         )
     run = executor if executor is not None else InProcess()

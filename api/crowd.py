@@ -4,8 +4,10 @@ standing spots, then kept apart in time by holds, waits and re-routes."""
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Callable, Iterable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from functools import partial
 from typing import Any
@@ -49,7 +51,7 @@ from .solve import (
     _without,
     _writable,
 )
-from .writing import FRAME_RANGE_KEY, _fit_frame_range, _placed, _write
+from .writing import FRAME_RANGE_KEY, _fit_frame_range, _placed, _prepared, _write
 
 CROWD_RESOLVE_SLACK = 0.05  # metres the crowd is resolved wider than its spacing (see plan_crowd)
 CROWD_SPOT = "\x00crowd spot "  # obstacle names of other characters' standing spots
@@ -588,10 +590,18 @@ def _moving_conflicts(c, planned, schedules):
     return out
 
 
+AHEAD = 4  # characters whose writes are prepared while one is written
+FITTERS = max(1, min(2, os.cpu_count() or 1))  # threads preparing them (numpy frees the GIL)
+
+
 def _write_all(c, planned, schedules, progress=None):
     """{entry: PlanResult} of every planned character written (all refused before the
     first is written when one cannot be), the frame range fitted once after; cancelled
-    between two characters, those written are put back."""
+    between two characters, those written are put back.
+
+    What a write computes before it touches Blender (the foot lock, the body action's
+    keys: :func:`_prepared`) is made for the next characters in threads while one is
+    written; Blender's data is only touched here, in order."""
     written = {}
     for (n, plan, _, placed, _), s in zip(planned, schedules):
         _writable(c.pairs[n][0], c.first + s.delay, placed[2].frames)
@@ -602,26 +612,47 @@ def _write_all(c, planned, schedules, progress=None):
         (PLAN_KEY, ANALYSIS_KEY, FRAME_RANGE_KEY),
     ):
         segments = nla.segment_index(bpy)  # the shared segment actions, found once
-        for k, ((n, plan, _, placed, _), s) in enumerate(zip(planned, schedules)):
-            check_cancelled(c.cancelled, CANCELLED)
-            env = _world_of(c, c.sizes[n]).env
-            with _without(env, c.own[n]):  # the plan record lists what it walked around
-                written[n] = _write(
-                    c.scene,
-                    c.pairs[n][0],
-                    c.patch,
-                    c.patch_name,
-                    plan,
-                    placed,
-                    c.first + s.delay,
-                    env,
-                    c.settings,
-                    c.rigs[n],
-                    fit=False,
-                    segments=segments,
-                )
-            if progress is not None:
-                progress(0.9 + 0.1 * (k + 1) / len(planned))
+        pool = ThreadPoolExecutor(max_workers=FITTERS)
+        ahead = {}
+
+        def prepare(k):
+            n, plan, _, placed, _ = planned[k]
+            rig = c.rigs[n]
+            skel = rig.target if rig is not None else c.patch.gait.skeleton
+            units = nla.write_units(c.pairs[n][0], skel)  # read here: Blender's data
+            ahead[k] = pool.submit(
+                _prepared, skel, placed, c.settings, c.fps, plan, units
+            )
+
+        try:
+            for k in range(min(AHEAD, len(planned))):
+                prepare(k)
+            for k, ((n, plan, _, placed, _), s) in enumerate(zip(planned, schedules)):
+                check_cancelled(c.cancelled, CANCELLED)
+                prepared = ahead.pop(k).result()
+                if k + AHEAD < len(planned):
+                    prepare(k + AHEAD)
+                env = _world_of(c, c.sizes[n]).env
+                with _without(env, c.own[n]):  # the plan record lists what it walked around
+                    written[n] = _write(
+                        c.scene,
+                        c.pairs[n][0],
+                        c.patch,
+                        c.patch_name,
+                        plan,
+                        placed,
+                        c.first + s.delay,
+                        env,
+                        c.settings,
+                        c.rigs[n],
+                        fit=False,
+                        segments=segments,
+                        prepared=prepared,
+                    )
+                if progress is not None:
+                    progress(0.9 + 0.1 * (k + 1) / len(planned))
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
         if written:
             _fit_frame_range(c.scene)  # once: it reads every character's plan record
     return written

@@ -59,6 +59,30 @@ def _fit_frame_range(scene):
         scene[FRAME_RANGE_KEY] = [start, end]
 
 
+def _prepared(skel, placed, settings: PlanSettings, fps, plan, units):
+    """What writing a plan computes before it touches Blender (a crowd makes the next
+    characters' while one is written): (the motion on the scene's frames with the
+    contacts that hold, its rotations with the feet locked or None, the body action's
+    fitted keys, :func:`nla.body_keys`, or None). ``placed``: :func:`_placed`; ``fps``:
+    the scene's rate (the motion's frames); ``units``: :func:`nla.write_units` of the
+    character."""
+    motions, bounds, world = placed
+    # Feet moving fast while labelled planted (through a blend) are not planted: neither
+    # pinned nor measured as skating (foot_lock.still_contacts). Both read the motion as
+    # the character plays it: on its own rig (``skel``), at the scene's rate.
+    posed = foot_lock.pose_legs(skel, world)
+    world = Motion(
+        world.ground,
+        world.root_local,
+        world.rotations,
+        foot_lock.still_contacts(skel, world, fps, posed),
+    )
+    locked = foot_lock.lock_feet(skel, world, posed=posed, fps=fps) if settings.foot_lock else None
+    own = nla.own_pieces(plan)
+    body = nla.body_keys(skel, world, locked, bounds, own, motions, *units) if own else None
+    return world, locked, body
+
+
 def _write(
     scene,
     character,
@@ -74,6 +98,7 @@ def _write(
     layer_keys=None,
     from_here=False,
     segments=None,
+    prepared=None,
 ):
     """NLA strips and the plan record of one planned character (``placed``: its motion,
     :func:`_placed`; ``env``: the planner's world, shrunk by the character's size; ``settings``: the
@@ -82,24 +107,17 @@ def _write(
     ``layer_keys``: {layer: patch key} of a plan that changes layer (:func:`_gait_change`).
     ``from_here``: the plan started where the character is now, not where it stood.
     ``segments``: the file's shared segment actions (:func:`nla.segment_index`) when several
-    characters are written in a row (a crowd): found once, not once per character."""
+    characters are written in a row (a crowd): found once, not once per character.
+    ``prepared``: :func:`_prepared` of this character and plan, made already."""
     stood = _start_matrix(character, from_here)  # read before the record is replaced
     scale = _size(rig)
     goal_state = _shrunk(plan.goal, 1.0 / scale)  # the facing reached when any would do
     skel = rig.target if rig is not None else patch.gait.skeleton
-    motions, bounds, world = placed
-    # Feet moving fast while labelled planted (through a blend) are not planted: neither
-    # pinned nor measured as skating (foot_lock.still_contacts). Both read the motion as
-    # the character plays it: on its own rig (``skel``), at the scene's rate.
-    fps = scene_fps(scene)
-    posed = foot_lock.pose_legs(skel, world)
-    world = Motion(
-        world.ground,
-        world.root_local,
-        world.rotations,
-        foot_lock.still_contacts(skel, world, fps, posed),
-    )
-    locked = foot_lock.lock_feet(skel, world, posed=posed, fps=fps) if settings.foot_lock else None
+    motions, bounds, _ = placed
+    if prepared is None:
+        units = nla.write_units(character, skel)
+        prepared = _prepared(skel, placed, settings, scene_fps(scene), plan, units)
+    world, locked, body = prepared
     strips, stashed = nla.write_plan(
         bpy,
         character,
@@ -114,6 +132,7 @@ def _write(
         bounds,
         layer_keys,
         segments,
+        body,
     )
     root = root_positions(world.ground, world.root_local)  # the hips
     foot = contacts.foot_joints(skel)

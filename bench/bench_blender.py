@@ -401,7 +401,7 @@ def section_crowd(bpy, addon, args):
         pillar(bpy, f"P{i}", 14.0 * i + 11.0, -1.5)
     t0 = time.perf_counter()
     writes = []
-    write = api._write
+    write = api.crowd._write_all  # the writes, with what is prepared for them meanwhile
 
     def timed_write(*a, **kw):
         t = time.perf_counter()
@@ -410,7 +410,7 @@ def section_crowd(bpy, addon, args):
         finally:
             writes.append(time.perf_counter() - t)
 
-    api.crowd._write = timed_write  # what plan_crowd calls
+    api.crowd._write_all = timed_write  # what plan_crowd calls
     bpy.ops.wm.save_as_mainfile(filepath=str(Path(tempfile.gettempdir()) / "bench_crowd0.blend"))
     before = (Path(tempfile.gettempdir()) / "bench_crowd0.blend").stat().st_size
     t0 = time.perf_counter()
@@ -420,7 +420,7 @@ def section_crowd(bpy, addon, args):
                 args.profile, api.plan_crowd, scene, pairs, frame_start=1, executor=executor
             )
     finally:
-        api.crowd._write = write
+        api.crowd._write_all = write
     total = time.perf_counter() - t0
     saved = Path(tempfile.gettempdir()) / "bench_crowd1.blend"
     t1 = time.perf_counter()

@@ -192,24 +192,32 @@ def _around(keep: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return prev[f], nxt[np.minimum(f + 1, n - 1)]
 
 
-def _dense(v: np.ndarray, m: np.ndarray, keep: np.ndarray) -> np.ndarray:
+def _dense(
+    v: np.ndarray, m: np.ndarray, keep: np.ndarray | None, around=None, points=None
+) -> np.ndarray:
     """(2F - 1, C) what the cubic keys ``keep`` (F, C) of ``v`` with slopes ``m`` play on
-    every frame and half frame, all columns at once."""
-    n = len(v)
-    lo, hi = _around(keep)
-    at = np.arange(2 * n - 1)[:, None] / 2.0
+    every frame and half frame, all columns at once (``around``: :func:`_around` of
+    ``keep``, when known; ``points``: only those of the 2F - 1 points, whose ``around``
+    it then is)."""
+    n, c = v.shape
+    if points is None:
+        points = np.arange(2 * n - 1)
+    if around is None:
+        assert keep is not None
+        lo, hi = _around(keep)
+        lo, hi = lo[points], hi[points]
+    else:
+        lo, hi = around
+    at = points[:, None] / 2.0
     h = np.maximum(hi - lo, 1)
     t = np.clip((at - lo) / h, 0.0, 1.0)
-    t2, t3 = t * t, t * t * t
-    cols = np.arange(v.shape[1])
-    y0, y1 = v[lo, cols], v[hi, cols]
-    m0, m1 = m[lo, cols] * h, m[hi, cols] * h
-    return (
-        (2 * t3 - 3 * t2 + 1) * y0
-        + (t3 - 2 * t2 + t) * m0
-        + (-2 * t3 + 3 * t2) * y1
-        + (t3 - t2) * m1
-    )
+    i0, i1 = lo * c + np.arange(c), hi * c + np.arange(c)  # flat indices: one gather each
+    vf, mf = v.ravel(), m.ravel()
+    y0 = vf[i0]
+    d = vf[i1] - y0
+    m0, m1 = mf[i0] * h, mf[i1] * h
+    # the Hermite cubic of :func:`hermite`, in Horner's form
+    return y0 + t * (m0 + t * ((3.0 * d - 2.0 * m0 - m1) + t * (m0 + m1 - 2.0 * d)))
 
 
 def _reference(v: np.ndarray, m: np.ndarray) -> np.ndarray:
@@ -240,15 +248,21 @@ class Rotations:
         self.angle = float(angle)
 
 
-def _unit_errors(played, ref, tol, rotations, units, n_units):
-    """(P, U) error of each unit over its tolerance (1: just within) at every point."""
+def _unit_errors(played, ref, tol, rotations, units, n_units, active=None):
+    """(P, U) error of each unit over its tolerance (1: just within) at every point.
+    ``active`` (U,) bool: only those units are judged (the others read 0)."""
     err = np.zeros((played.shape[0], n_units))
-    scalar = units < 0
-    if np.any(scalar):
-        err_c = np.abs(played - ref) / tol
-        np.maximum.at(err.T, -units[scalar] - 1, err_c[:, scalar].T)
+    lone = np.flatnonzero(units < 0)
+    if active is not None:
+        lone = lone[active[-units[lone] - 1]]
+    if lone.size:  # a lone column is its own unit
+        err[:, -units[lone] - 1] = np.abs(played[:, lone] - ref[:, lone]) / tol[lone]
     for r in rotations:
         cols = r.columns
+        if active is not None:
+            cols = cols[active[units[cols[:, 0]]]]
+            if not cols.size:
+                continue
         a = _chord_angle(r.to_quat(played[:, cols]), r.to_quat(ref[:, cols])) / r.angle
         err[:, units[cols[:, 0]]] = a
     return err
@@ -270,7 +284,11 @@ def _units_of(n_cols, tol, rotations):
 
 
 def cubic_keys(
-    values: ArrayLike, tol: ArrayLike, rotations: tuple = (), between: bool = True
+    values: ArrayLike,
+    tol: ArrayLike,
+    rotations: tuple = (),
+    between: bool = True,
+    give_up_at: int | None = None,
 ) -> dict:
     """Cubic keys of every column of ``values`` (F, C) within tolerance: ``tol`` (C,) per
     column (or one for all) in the column's units, except the columns of ``rotations``
@@ -284,9 +302,13 @@ def cubic_keys(
     a column whose unit stays within tolerance when it is held at its mid-range is made
     constant (one key).
 
+    ``give_up_at``: a unit that keeps that many frames stops taking keys (it costs more
+    than one sample a frame and is stored as samples: its ``keep`` is then partial, and
+    it is held against the plan as samples play, exact on frames and linear between).
+
     Returns {"keep": (F, C) bool kept frames, "values" and "slopes" (F, C) the keys take
-    on each frame, "constant": (C,) bool,
-    "value": (C,) the constant's value}."""
+    on each frame, "constant": (C,) bool, "value": (C,) the constant's value,
+    "gave_up": (C,) bool the columns to store as samples}."""
     v = np.asarray(values, float)
     n, c = v.shape
     tol = np.broadcast_to(np.asarray(tol, float), (c,)).copy()
@@ -295,30 +317,52 @@ def cubic_keys(
     m = slopes(v)
     v_key = v
     ref = _reference(v, m)
+    # the points judged: every frame and, with ``between``, every half frame
+    points = np.arange(0, 2 * n - 1, 1 if between else 2)
+    judged = ref[points]
     keep_u = np.zeros((n, n_units), bool)
     keep_u[[0, -1]] = True
+    # a unit whose every interval fits keeps fitting (its keys no longer change): only the
+    # units that took a key last pass are played and judged again
+    active = np.ones(n_units, bool)
+    gave_up = np.zeros(n_units, bool)
+    played = np.empty((points.size, c))
     while n > 2:
-        played = _dense(v_key, m, keep_u[:, col_unit])
-        err = _unit_errors(played, ref, tol, rotations, units, n_units)  # (2F - 1, U)
-        if not between:
-            err[1::2] = 0.0
-        lo, hi = _around(keep_u)
+        act = np.flatnonzero(active)
+        cols = np.flatnonzero(active[col_unit])
+        lo, hi = _around(keep_u[:, act])
+        lo, hi = lo[points], hi[points]
+        at = np.cumsum(active) - 1  # a unit's place among the active ones
+        on = at[col_unit[cols]]
+        played[:, cols] = _dense(v_key[:, cols], m[:, cols], None, (lo[:, on], hi[:, on]), points)
+        err = _unit_errors(played, judged, tol, rotations, units, n_units, active)[:, act]
         # between two keys a frame apart no key can be added: what is played there stays
         err[hi - lo <= 1] = 0.0
-        # the worst point of each interval between keys, per unit
-        seg = lo + np.arange(n_units) * n  # interval of each point, named by its first key
-        flat_err, flat_seg = err.T.ravel(), seg.T.ravel()
-        worst = np.zeros(n_units * n)
-        np.maximum.at(worst, flat_seg, flat_err)
-        hit = (flat_err > 1.0) & (flat_err == worst[flat_seg])
-        if not hit.any():
+        # the worst point of each interval between keys, per unit: points of one interval
+        # are consecutive, so each interval is one run of the unit-major flattening
+        flat_err = err.T.ravel()
+        seg = (lo + np.arange(act.size) * n).T.ravel()
+        new = np.r_[True, seg[1:] != seg[:-1]]
+        run = np.cumsum(new) - 1
+        worst = np.maximum.reduceat(flat_err, np.flatnonzero(new))
+        hit = np.flatnonzero((flat_err > 1.0) & (flat_err == worst[run]))
+        if not hit.size:
             break
-        _, first = np.unique(flat_seg[hit], return_index=True)
-        unit, point = np.divmod(np.flatnonzero(hit)[first], 2 * n - 1)
+        hit = hit[np.r_[True, run[hit[1:]] != run[hit[:-1]]]]  # the first worst of a run
+        k, point = np.divmod(hit, points.size)
+        point = points[point]
+        unit = act[k]
         # a frame, or the half frame's neighbour that is no key yet
         frame = (point + 1) // 2
         frame = np.where(keep_u[frame, unit], point // 2, frame)
         keep_u[frame, unit] = True
+        active[:] = False
+        active[unit] = True
+        if give_up_at is not None:
+            gave_up |= active & (keep_u.sum(axis=0) >= give_up_at)
+            active &= ~gave_up
+            if not active.any():
+                break
     keep = keep_u[:, col_unit]
     constant = np.zeros(c, bool)
     value = 0.5 * (v.max(axis=0) + v.min(axis=0)) if n else np.zeros(c)
@@ -326,20 +370,30 @@ def cubic_keys(
     order = [[j] for j in np.flatnonzero(units < 0)]
     width = max((r.columns.shape[1] for r in rotations), default=0)
     order += [[r.columns[:, k] for r in rotations if k < r.columns.shape[1]] for k in range(width)]
-    played = _dense(v_key, m, keep) if n else v
+    played = _dense(v_key, m, keep, points=points) if n else v
+    sampled = gave_up[col_unit]
+    if n and sampled.any():  # samples: the values on frames, linear between
+        samples = np.empty((2 * n - 1, int(sampled.sum())))
+        samples[0::2] = v[:, sampled]
+        samples[1::2] = 0.5 * (v[:-1, sampled] + v[1:, sampled])
+        played[:, sampled] = samples[points]
     # points between keys a frame apart keep what those keys play (see above)
     excused = np.zeros(0, bool)
     if n:
         lo, hi = _around(keep_u)
         excused = hi - lo <= 1
+        excused[1::2, gave_up] = True  # nor between samples
         excused[0::2] = False  # frames themselves are never excused
+        excused = excused[points]
     for group in order:
         cols = np.concatenate([np.ravel(g) for g in group]) if group else np.zeros(0, int)
         if not cols.size or not n:
             continue
         trial = played.copy()
         trial[:, cols] = value[cols]
-        err = _unit_errors(trial, ref, tol, rotations, units, n_units)
+        touched = np.zeros(n_units, bool)
+        touched[col_unit[cols]] = True
+        err = _unit_errors(trial, judged, tol, rotations, units, n_units, touched)
         err[excused] = 0.0
         ok = err.max(axis=0) <= 1.0
         take = cols[ok[col_unit[cols]]]
@@ -353,6 +407,7 @@ def cubic_keys(
         "slopes": m,
         "constant": constant,
         "value": value,
+        "gave_up": sampled & ~constant,
     }
 
 

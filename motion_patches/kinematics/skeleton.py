@@ -53,12 +53,9 @@ class Skeleton:
         raise KeyError(f"none of the bones {candidates} is in the skeleton")
 
     def local_rest(self) -> np.ndarray:
-        """(J, 4, 4) rest matrix of each bone relative to its parent's rest matrix."""
-        out = self.rest.copy()
-        for j, p in enumerate(self.parents):
-            if p >= 0:
-                out[j] = np.linalg.inv(self.rest[p]) @ self.rest[j]
-        return out
+        """(J, 4, 4) rest matrix of each bone relative to its parent's rest matrix
+        (read-only: made once per skeleton, every forward kinematics pass needs it)."""
+        return _local_rest(self)
 
     def mirror_map(self) -> np.ndarray:
         """Index of each bone's left/right counterpart (itself when it has none)."""
@@ -114,6 +111,15 @@ def per_skeleton(fn: Callable[[Skeleton], T]) -> Callable[[Skeleton], T]:
     once.__doc__, once.__name__ = fn.__doc__, fn.__name__
     once.__wrapped__ = fn  # type: ignore[attr-defined]
     return once
+
+
+@per_skeleton
+def _local_rest(skel: Skeleton) -> np.ndarray:
+    """:meth:`Skeleton.local_rest`, computed."""
+    out = skel.rest.copy()
+    child = np.flatnonzero(skel.parents >= 0)
+    out[child] = np.linalg.inv(skel.rest[skel.parents[child]]) @ skel.rest[child]
+    return out
 
 
 def compose(rot: np.ndarray, pos: np.ndarray) -> np.ndarray:

@@ -110,6 +110,7 @@ def standing(
         root[2] -= drop
         w = _in_place(skel, root, rot)[0]
     glob = w[:, :3, :3].copy()
+    local_rest = skel.local_rest()
     for side, (hip, knee, a, _) in enumerate(chains):
         H, K, A = w[hip, :3, 3], w[knee, :3, 3], w[a, :3, 3]
         forward = np.array([[1.0, 0.0, 0.0]])
@@ -123,8 +124,7 @@ def standing(
         glob[a] = foot_rot[side]
         for j in _between(skel, hip, knee) + _between(skel, knee, a) + [a]:
             p = skel.parents[j]
-            lr = np.linalg.inv(skel.rest[p, :3, :3]) @ skel.rest[j, :3, :3]
-            basis = (glob[p] @ lr).T @ glob[j]
+            basis = (glob[p] @ local_rest[j, :3, :3]).T @ glob[j]
             q = quat.from_matrix(basis)
             rot[j] = q if np.dot(q, rot[j]) >= 0 else -q
     return root, rot

@@ -30,7 +30,7 @@ from ..props.environment import Environment, Obstacle
 from ..props.object_patch import ObjectPatch
 from . import causes
 from .motions import plan_motions
-from .pieces import PlanError
+from .pieces import InsideObstacle, PlanError
 from .planner import SegmentPlanner
 
 KEPT = 8  # planners kept in a process (one per world: a check's excludes and sizes)
@@ -122,7 +122,8 @@ def forget() -> None:
 def plan_pair(task: dict, patch: LocomotionPatch, worlds: dict[str, World]) -> dict:
     """Plan one pair: ``task`` holds "world" (a key of ``worlds``), "start" and "goal"
     (x, y, heading in the world the planner sees; a NaN heading: any facing) and "margin"
-    (tiles). Returns the figures of the pair: "reachable"; when reached "seconds",
+    (tiles), and "scale" (the character's size: the planner's world is the scene's divided
+    by it; 1 when absent). Returns the figures of the pair: "reachable"; when reached "seconds",
     "length_m" (in the planner's world), "cost", "pieces", "traversals", "expansions",
     "plan_seconds" and "goal" (the state reached); when not, "error", "blocked" (obstacle
     names) and "blocked_reason" ("search limit" when the search stopped at its limit);
@@ -135,15 +136,15 @@ def plan_pair(task: dict, patch: LocomotionPatch, worlds: dict[str, World]) -> d
     start = np.asarray(task["start"], float)
     goal = np.asarray(task["goal"], float)
     margin = int(task["margin"])
-    key = np.concatenate((start, goal, [margin])).tobytes()
+    key = np.concatenate((start, goal, [margin, task.get("scale", 1.0)])).tobytes()
     if key in figures:
         return dict(figures[key], reused=True)
-    out = _planned(patch, env, planner, start, goal, margin)
+    out = _planned(patch, env, planner, start, goal, margin, float(task.get("scale", 1.0)))
     figures[key] = out
     return dict(out)
 
 
-def _planned(patch, env, planner, start, goal, margin):
+def _planned(patch, env, planner, start, goal, margin, scale=1.0):
     out: dict = {
         "reachable": False,
         "blocked": [],
@@ -159,7 +160,8 @@ def _planned(patch, env, planner, start, goal, margin):
             out["error"], out["blocked_reason"] = None, "search limit"
             out["expanded"] = int(expanded[0])
         else:
-            out["error"] = str(exc)
+            # said in the scene's coordinates (``scale``: the character's size)
+            out["error"] = exc.text(scale) if isinstance(exc, InsideObstacle) else str(exc)
             out["blocked"], out["blocked_reason"] = blocking_props(env, start, goal, margin)
         return out
     motion = concatenate(plan_motions(patch, plan, poses=False))

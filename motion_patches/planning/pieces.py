@@ -18,6 +18,23 @@ class PlanError(ValueError):
     """The goal cannot be reached, or the request is malformed; the message says why."""
 
 
+class InsideObstacle(PlanError):
+    """The start or goal is inside an obstacle or within the radius of one. The planner
+    works in its own world (the scene's divided by the character's size): :meth:`text`
+    says it in the scene's, given that size."""
+
+    def __init__(self, what: str, point, radius: float):
+        self.what, self.point, self.radius = what, (float(point[0]), float(point[1])), radius
+        super().__init__(self.text())
+
+    def text(self, scale: float = 1.0) -> str:
+        x, y = self.point[0] * scale, self.point[1] * scale
+        return (
+            f"the {self.what} ({x:.2f}, {y:.2f}) is inside or within "
+            f"{self.radius * scale:.2f} m of an obstacle"
+        )
+
+
 class SearchLimit(PlanError):
     """The search stopped at its node limit before finding a way (not proof there is none)."""
 

@@ -34,6 +34,7 @@ from .motions import (
 )
 from .pieces import (
     FacingRefused,
+    InsideObstacle,
     Piece,
     Plan,
     PlanError,
@@ -153,10 +154,7 @@ class SegmentPlanner(ConnectedGraph):
             if not np.isfinite(pt[:2]).all():
                 raise PlanError(f"the {what} position must be finite numbers")
             if self.world_env.blocked(pt[None, :2])[0]:
-                raise PlanError(
-                    f"the {what} ({pt[0]:.2f}, {pt[1]:.2f}) is inside or within "
-                    f"{self.world_env.radius:.2f} m of an obstacle"
-                )
+                raise InsideObstacle(what, pt, self.world_env.radius)
         with self.framed(start, goal, margin_tiles) as (ls, lg, frame):
             plan = self.plan_local(ls, lg, margin_tiles, max_expansions, use_corridor)
             searched = len(plan.pieces)

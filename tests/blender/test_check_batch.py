@@ -292,3 +292,19 @@ def test_the_pytest_plugin_collects_the_specs_beside_blend_files(files, tmp_path
     (failure,) = cases["into the cage"].result
     assert "blocked by Ring" in failure.message or "blocked by Ring" in (failure.text or "")
     assert "1 failed, 1 passed" in run.stdout
+
+
+def test_a_start_inside_a_prop_is_said_in_the_scenes_coordinates(api, walk_blend):
+    """A character 1.5 times the patch's size plans in the scene divided by 1.5; a start
+    inside a prop is still reported where it is in the scene, with the scene's radius."""
+    bpy.ops.wm.open_mainfile(filepath=str(walk_blend))
+    walker = walker_from(bpy.context.scene.motion_patches.source_armature, location=(3.0, 2.0, 0))
+    walker.scale = (1.5, 1.5, 1.5)
+    pillar("Around", 3.0, 2.0, r=0.6)
+    empty("Goal", 9.0, 2.0, 0.0)
+    (r,) = api.check_layout(
+        bpy.context.scene,
+        {"radius": 0.3, "pairs": [{"character": "Walker", "goal": "Goal"}]},
+    )
+    assert not r["reachable"]
+    assert "the start (3.00, 2.00) is inside or within 0.30 m" in r["error"], r["error"]

@@ -223,3 +223,40 @@ def test_a_smooth_channel_needs_a_few_keys_a_second():
     assert np.abs(played - v).max() <= 1e-4 * (1 + 1e-9)
     assert fit["keep"][:, 0].sum() <= 30  # 2 s of a 1 Hz swing at 120 fps: 240 frames
     assert fit["constant"][1] is np.False_ and fit["keep"][:, 1].sum() <= 4
+
+
+@pytest.mark.parametrize("between", [True, False])
+def test_giving_up_on_cubic_keys_changes_no_choice_of_the_others(between):
+    """A unit that reaches the cost of samples stops taking keys (it is stored as samples):
+    exactly the units whose full fit keeps that many frames give up, and every other
+    column keeps the very keys the full fit keeps."""
+    rng = np.random.default_rng(3)
+    n = 120
+    q = walk_rotations(n, 30, rng)
+    j = q.shape[1]
+    noisy = q + rng.normal(size=q.shape) * 0.01 * (np.arange(j) % 2 == 0)[None, :, None]
+    values = np.concatenate((np.cumsum(rng.normal(size=(n, 3)) * 1e-3, 0), noisy.reshape(n, -1)), 1)
+    tol = np.full(values.shape[1], np.inf)
+    tol[:3] = keys.LENGTH
+    rot = keys.Rotations(3 + np.arange(j * 4).reshape(j, 4), quat.normalize)
+    limit = -(-n * keys.SAMPLE_BYTES // keys.KEY_BYTES)
+    full = keys.cubic_keys(values, tol, (rot,), between)
+    part = keys.cubic_keys(values, tol, (rot,), between, give_up_at=limit)
+    heavy = (full["keep"].sum(axis=0) >= limit) & ~full["constant"]
+    assert heavy.any() and (~heavy & ~full["constant"]).any()  # both kinds are here
+    assert np.array_equal(part["gave_up"], heavy & ~part["constant"])
+    kept = ~heavy
+    assert np.array_equal(part["keep"][:, kept], full["keep"][:, kept])
+    assert np.array_equal(part["constant"][kept], full["constant"][kept])
+
+
+def test_keys_judged_on_frames_only_hold_there():
+    """``between=False`` (a strip that plays its keys on whole frames only): every frame
+    within the tolerance, and no more keys than when half frames are judged too."""
+    rng = np.random.default_rng(8)
+    t = np.arange(200)
+    v = np.column_stack((np.sin(t * 0.21) + rng.normal(size=200) * 1e-4, np.cos(t * 0.05)))
+    on = keys.cubic_keys(v, 1e-3, between=False)
+    both = keys.cubic_keys(v, 1e-3)
+    assert np.abs(keys.play(v, on, t) - v).max() <= 1e-3 * (1 + 1e-9)
+    assert on["keep"].sum() <= both["keep"].sum()
