@@ -49,25 +49,7 @@ def measured(walk_blend, addon_module, mocap_dir, tmp_path_factory):
     return case
 
 
-SHRINK_CASES = [
-    pytest.param(
-        *case,
-        marks=pytest.mark.xfail(
-            bpy.app.version >= (5, 0, 0),
-            strict=True,
-            reason="a 30 fps patch in a 24 fps scene, in the files Blender 5.0 and 5.2 "
-            "compress: cubic keys 7.33 KB per character-second against linear 7.31 (both 7.2, "
-            "cubic the smaller, before swinging feet were lifted clear of the floor: more "
-            "foot-lock keys, which both store); uncompressed (4.5) cubic keys are smaller",
-        ),
-    )
-    if case == (30, 24)
-    else case
-    for case in CASES
-]
-
-
-@pytest.mark.parametrize("patch_fps,scene_fps", SHRINK_CASES)
+@pytest.mark.parametrize("patch_fps,scene_fps", CASES)
 def test_compact_keys_shrink_the_file_and_play_the_plan(measured, patch_fps, scene_fps):
     rows = measured(patch_fps, scene_fps)
     every, linear, cubic = rows["every"], rows["linear"], rows["cubic"]
