@@ -621,9 +621,7 @@ def _write_all(c, planned, schedules, progress=None):
             rig = c.rigs[n]
             skel = rig.target if rig is not None else c.patch.gait.skeleton
             units = nla.write_units(c.pairs[n][0], skel)  # read here: Blender's data
-            ahead[k] = pool.submit(
-                _prepared, skel, placed, c.settings, c.patch.gait.fps, plan, units
-            )
+            ahead[k] = pool.submit(_prepared, skel, placed, c.settings, c.fps, plan, units)
 
         try:
             for k in range(min(AHEAD, len(planned))):

@@ -64,10 +64,12 @@ def _prepared(skel, placed, settings: PlanSettings, fps, plan, units):
     characters' while one is written): (the motion on the scene's frames with the
     contacts that hold, its rotations with the feet locked or None, the body action's
     fitted keys, :func:`nla.body_keys`, or None). ``placed``: :func:`_placed`; ``fps``:
-    the patch's rate; ``units``: :func:`nla.write_units` of the character."""
+    the scene's rate (the motion's frames); ``units``: :func:`nla.write_units` of the
+    character."""
     motions, bounds, world = placed
     # Feet moving fast while labelled planted (through a blend) are not planted: neither
-    # pinned nor measured as skating (foot_lock.still_contacts).
+    # pinned nor measured as skating (foot_lock.still_contacts). Both read the motion as
+    # the character plays it: on its own rig (``skel``), at the scene's rate.
     posed = foot_lock.pose_legs(skel, world)
     world = Motion(
         world.ground,
@@ -75,7 +77,7 @@ def _prepared(skel, placed, settings: PlanSettings, fps, plan, units):
         world.rotations,
         foot_lock.still_contacts(skel, world, fps, posed),
     )
-    locked = foot_lock.lock_feet(skel, world, posed=posed) if settings.foot_lock else None
+    locked = foot_lock.lock_feet(skel, world, posed=posed, fps=fps) if settings.foot_lock else None
     own = nla.own_pieces(plan)
     body = nla.body_keys(skel, world, locked, bounds, own, motions, *units) if own else None
     return world, locked, body
@@ -114,7 +116,7 @@ def _write(
     motions, bounds, _ = placed
     if prepared is None:
         units = nla.write_units(character, skel)
-        prepared = _prepared(skel, placed, settings, patch.gait.fps, plan, units)
+        prepared = _prepared(skel, placed, settings, scene_fps(scene), plan, units)
     world, locked, body = prepared
     strips, stashed = nla.write_plan(
         bpy,

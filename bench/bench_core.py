@@ -359,7 +359,7 @@ def bench_plans(patch, args, profiler=None, reference=None):
         m = Motion(m.ground, m.root_local, m.rotations, foot_lock.still_contacts(skel, m, fps))
         skate = metrics.foot_skate(foot_positions(m, skel), fps, m.contacts)
         t2 = time.perf_counter()
-        locked = Motion(m.ground, m.root_local, foot_lock.lock_feet(skel, m), m.contacts)
+        locked = Motion(m.ground, m.root_local, foot_lock.lock_feet(skel, m, fps=fps), m.contacts)
         lock_s = time.perf_counter() - t2
         skate_locked = metrics.foot_skate(foot_positions(locked, skel), fps, m.contacts)
         feet_free, feet_locked = feet(m, skel, fps), feet(locked, skel, fps)

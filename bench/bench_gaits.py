@@ -95,7 +95,9 @@ def run_plans(patch, args):
         m = Motion(  # as the API writes a plan: feet moving fast are not planted
             m.ground, m.root_local, m.rotations, foot_lock.still_contacts(skel, m, patch.gait.fps)
         )
-        locked = Motion(m.ground, m.root_local, foot_lock.lock_feet(skel, m), m.contacts)
+        locked = Motion(
+            m.ground, m.root_local, foot_lock.lock_feet(skel, m, fps=patch.gait.fps), m.contacts
+        )
         rec = {
             "layout": n,
             "seconds": dt,

@@ -615,7 +615,9 @@ def measure(scene, env, patch, lim, start, goal, args, ref):
     # the planner-labelled skate beside the label-free measure.
     skel = patch.gait.skeleton
     labelled = Motion(g, m.root_local, m.rotations, foot_lock.still_contacts(skel, m, fps))
-    locked = Motion(g, m.root_local, foot_lock.lock_feet(skel, labelled), labelled.contacts)
+    locked = Motion(
+        g, m.root_local, foot_lock.lock_feet(skel, labelled, fps=fps), labelled.contacts
+    )
     rec.update(
         failed=False,
         expansions=plan.expansions,

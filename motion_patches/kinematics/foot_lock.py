@@ -9,6 +9,12 @@ two-bone IK (the knee bends or opens, then the thigh swings). The hips, the body
 and the foot's own world orientation are kept, so only the thigh and shin channels change
 and bone lengths cannot.
 The correction eases in and out over a few frames around each run, so nothing pops.
+
+The lock is solved on the skeleton that plays the motion, from the motion as played there:
+a character on another rig than the patch's is locked on its own legs, in metres, after
+retargeting. Such a rig's swinging toes pass lower than the recording's (other thigh and
+shin lengths under the same joint turns), through the floor; :func:`swing_lift` raises a
+swinging foot to clear its own planted height as the recording's toes do.
 """
 
 from collections.abc import Callable
@@ -26,6 +32,11 @@ BLEND_FRAMES = 4  # frames the correction takes to ease in before and out after 
 STILL_FACTOR = 2.0  # x contacts.CONTACT_SPEED: a planted joint moving faster is not planted,
 STILL_SHARE = 0.5  # nor one moving faster than this share of the body's pace, when that is more
 STRETCH = 0.985  # the straightest a locked leg gets, as a fraction of thigh + shin
+SWING_CLEARANCE = 0.015  # metres a swinging toe is kept above its planted height (recorded
+# walks keep 1.1 to 1.6 cm: CMU 16_15, 02_01)
+SWING_SPEED = (0.5, 1.0)  # m/s: a toe slower than the first is not swinging, one faster
+# than the second is in full
+LIFT_FRAMES = 2  # frames either side a swing's lift is spread over
 
 
 def leg_chains(skel: Skeleton) -> list[tuple[int, int, int, int]]:
@@ -102,8 +113,12 @@ def planted_offsets(
     frames where only the toe is (heel up, or a toe landing), the foot is moved so the toe
     stays where the corrected foot had it on the neighbouring ankle-planted frame (or at
     the mean of its run when there is none), so the correction is continuous within a
-    contact. Outside contacts the correction of the nearest contact frame fades out with a
-    smoothstep over ``blend`` frames."""
+    contact. A contact whose heel is down in several runs (it lifts for a frame or two
+    and comes down again) is held by its longest one, each other run where the toe was
+    on the frame before (after): the heel comes down where the pinned toe puts it, not at
+    a mean of its own (which jumped the toe by the foot's slide between them). Outside
+    contacts the correction of the nearest contact frame fades out with a smoothstep over
+    ``blend`` frames."""
     n = len(ankle_xy)
     ankle_on = np.asarray(ankle_on, bool)
     toe_only = np.asarray(toe_on, bool) & ~ankle_on
@@ -112,6 +127,7 @@ def planted_offsets(
     if a.size:
         held = _run_means(ankle_xy, a, b)
         d[ankle_on] = np.repeat(held, b - a, axis=0) - ankle_xy[ankle_on]
+    heel_starts = a
     a, b = runs(toe_only)
     if a.size:
         heel_off = (a > 0) & ankle_on[np.maximum(a - 1, 0)]  # the toe stays where it was
@@ -122,8 +138,46 @@ def planted_offsets(
         )
         d[toe_only] = np.repeat(anchor, b - a, axis=0) - toe_xy[toe_only]
     on = ankle_on | toe_only
+    if heel_starts.size > 1:  # contacts whose heel comes down more than once
+        plant_a, plant_b = runs(on)
+        plant = np.searchsorted(plant_a, heel_starts, side="right") - 1
+        for k in np.flatnonzero(np.bincount(plant, minlength=plant_a.size) > 1):
+            _chain(d, ankle_xy, toe_xy, ankle_on, int(plant_a[k]), int(plant_b[k]))
+    return _faded(d, on, blend)
+
+
+def _chain(d, ankle_xy, toe_xy, ankle_on, start, end):
+    """Corrections ``d`` of one contact (frames ``start`` to ``end``) whose heel is down in
+    several runs, made continuous at the toe: the longest heel run held at its mean, every
+    other run (heel or toe only), outwards from it, keeping the toe where the corrected toe
+    was on the frame next to it."""
+    heel = ankle_on[start:end]
+    cut = np.flatnonzero(np.diff(heel.astype(int))) + 1 + start
+    bounds = np.concatenate(([start], cut, [end]))
+    parts = list(zip(bounds[:-1], bounds[1:]))
+    heels = [i for i, (a, _) in enumerate(parts) if ankle_on[a]]
+    main = max(heels, key=lambda i: (parts[i][1] - parts[i][0], -i))
+    a, b = parts[main]
+    d[a:b] = ankle_xy[a:b].mean(axis=0) - ankle_xy[a:b]
+    order = [(i, -1) for i in range(main + 1, len(parts))]
+    order += [(i, 1) for i in range(main - 1, -1, -1)]
+    for i, side in order:
+        a, b = parts[i]
+        near = a - 1 if side < 0 else b  # the frame next to it, corrected already
+        edge = a if side < 0 else b - 1  # its own frame on that side
+        toe = toe_xy[near] + d[near]  # where the toe stays at the hand-over
+        if ankle_on[a]:
+            d[a:b] = ankle_xy[edge] + (toe - toe_xy[edge]) - ankle_xy[a:b]
+        else:
+            d[a:b] = toe - toe_xy[a:b]
+
+
+def _faded(d, on, blend=BLEND_FRAMES):
+    """``d`` (F, K), set on the planted frames ``on``, with the correction of the nearest
+    planted frame fading out over ``blend`` frames (smoothstep) outside them."""
     if not on.any():
         return d
+    n = len(d)
     idx = np.arange(n)
     planted = idx[on]
     k = np.searchsorted(planted, idx)
@@ -143,6 +197,48 @@ def planted_offsets(
     out = d[before] * (wb * scale)[:, None] + d[after] * (wa * scale)[:, None]
     out[on] = d[on]
     return out
+
+
+def swing_lift(toe: np.ndarray, ankle_on: np.ndarray, toe_on: np.ndarray, fps: float) -> np.ndarray:
+    """(F,) heights a foot is lifted by (its toe's world positions (F, 3), already moved by
+    the horizontal pin) so that a swinging toe clears the floor of the rig that plays it.
+
+    The toe's planted height is measured on that rig, from the motion as it plays there:
+    the median over its contacts of the toe's mean height in each. A rig with other leg
+    proportions than the patch's swings its toe lower (a longer thigh over a shorter shin
+    drops a bent leg's foot), through the floor; the source's toes stay 1.1 to 1.6 cm
+    above. So a toe off the floor is kept out of it, and ``SWING_CLEARANCE`` above it
+    while it swings: in full faster than ``SWING_SPEED[1]``, not at all under
+    ``SWING_SPEED[0]`` (a toe lifting off or setting down is near the floor). A toe still
+    labelled planted that moves that fast is leaving or landing: it clears the floor as
+    much. The lift is spread over ``LIFT_FRAMES`` either side, never less than needed, so
+    it eases in and out (it may begin a frame or two before the toe leaves the floor). A
+    foot never planted is not lifted."""
+    ankle_on, toe_on = np.asarray(ankle_on, bool), np.asarray(toe_on, bool)
+    on = ankle_on | toe_on
+    lift = np.zeros(len(toe))
+    if not toe_on.any() or len(toe) < 2:
+        return lift
+    z = toe[:, 2]
+    a, b = runs(on)
+    ends = np.stack((a, b), 1).ravel()
+    count = np.add.reduceat(np.append(toe_on, False).astype(float), ends)[::2]
+    total = np.add.reduceat(np.append(z * toe_on, 0.0), ends)[::2]
+    floor = float(np.median(total[count > 0] / count[count > 0]))
+    step = np.linalg.norm(np.diff(toe[:, :2], axis=0), axis=1) * fps
+    speed = np.maximum(np.append(step, 0.0), np.insert(step, 0, 0.0))  # m/s, either side
+    t = np.clip((speed - SWING_SPEED[0]) / (SWING_SPEED[1] - SWING_SPEED[0]), 0.0, 1.0)
+    swing = t * t * (3 - 2 * t)
+    need = np.maximum(floor + SWING_CLEARANCE * swing - z, 0.0)
+    need[on] = (swing * np.maximum(floor + SWING_CLEARANCE - z, 0.0))[on]
+    if not need.any():
+        return lift
+    # the most needed within LIFT_FRAMES, averaged over as many: never less than needed,
+    # and a step of the lift at most a fifth of the most needed
+    r = LIFT_FRAMES
+    window = np.lib.stride_tricks.sliding_window_view(np.pad(need, r), 2 * r + 1)
+    top = np.pad(window.max(axis=1), r, mode="edge")
+    return np.lib.stride_tricks.sliding_window_view(top, 2 * r + 1).mean(axis=1)
 
 
 def _both_planted_offsets(ankle_xy, toe_xy, contacts, blend=BLEND_FRAMES):
@@ -382,6 +478,7 @@ def lock_feet(
     blend: int = BLEND_FRAMES,
     offsets: Callable[[int, np.ndarray, np.ndarray], np.ndarray] | None = None,
     posed: tuple[np.ndarray, np.ndarray] | None = None,
+    fps: float | None = None,
 ) -> np.ndarray:
     """Rotation channels (F, J, 4) of ``world`` (a Motion) with planted feet pinned.
 
@@ -392,6 +489,10 @@ def lock_feet(
     (side, ankle xy (F, 2), toe xy (F, 2)) -> (F, 2) horizontal ankle corrections
     replacing :func:`planted_offsets` (a turn in place moves its feet its own way). A plan
     pins its feet on :func:`still_contacts`; ``posed``: the legs posed (:func:`pose_legs`).
+    With ``fps`` (the motion's frame rate) swinging toes are also kept clear of the floor
+    (:func:`swing_lift`). ``skel`` is the skeleton that plays the motion (a character's
+    own rig, in metres) and ``world`` the motion as played on it: the lock is solved on
+    that rig's legs and proportions, from its own feet.
 
     The new channels are the old ones turned: a bone whose world rotation is left-
     multiplied by a turn T, under a parent turned by P, gets the channel
@@ -409,6 +510,12 @@ def lock_feet(
         d = _both_planted_offsets(p[ankle, :, :2], p[toe, :, :2], world.contacts, blend)
     else:
         d = np.stack([corrections(s, p[ankle[s], :, :2], p[toe[s], :, :2]) for s in range(2)])
+    if fps is not None and corrections is None:
+        c = np.asarray(world.contacts, bool)
+        moved = p[toe].copy()
+        moved[..., :2] += d
+        dz = [swing_lift(moved[s], c[:, 2 * s], c[:, 2 * s + 1], fps) for s in range(2)]
+        d = np.concatenate((d, np.stack(dz)[..., None]), axis=-1)
     moving = np.sqrt(np.einsum("sfi,sfi->sf", d, d)) > 1e-7  # (2, F)
     if not moving.any():
         return quat.make_continuous(world.rotations.copy(), axis=0)
@@ -418,7 +525,7 @@ def lock_feet(
 
     rows = np.flatnonzero(moving.reshape(2 * n))  # the IK where a correction applies
     target = both(p[ankle])[rows]
-    target[:, :2] += d.reshape(2 * n, 2)[rows]
+    target[:, : d.shape[-1]] += both(d)[rows]
     hinge = both(g[hip, :, :, 0])[rows]  # the thigh's X axis: the knee's hinge in a rest-like leg
     h = ground[:, 2]
     forward = np.column_stack((np.cos(h), np.sin(h), np.zeros_like(h)))[rows % n]

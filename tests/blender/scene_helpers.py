@@ -4,6 +4,10 @@
 import bpy
 import numpy as np
 
+from rig_names import MIXAMO
+
+CMU_SCALE = 0.056444  # the CMU BVH's units in metres
+
 
 def pillar(name, x, y, r=0.25, h=2.0):
     bpy.ops.mesh.primitive_cylinder_add(radius=r, depth=h, location=(x, y, h / 2))
@@ -37,3 +41,54 @@ def walker_from(source, name="Walker", location=(0.4, 0.3, 0.0)):
     bpy.context.scene.collection.objects.link(walker)
     walker.location = location
     return walker
+
+
+def native_rig(mocap_dir, rel, name, rename=None):
+    """A rig from Blender's BVH importer at its defaults (Euler bones), animation cleared,
+    its bones renamed by ``rename`` ({old: new})."""
+    before = set(bpy.data.objects)
+    assert bpy.ops.import_anim.bvh(
+        filepath=str(mocap_dir / rel), global_scale=CMU_SCALE, update_scene_fps=False
+    ) == {"FINISHED"}
+    (ob,) = [o for o in bpy.data.objects if o not in before]
+    ob.name = name
+    ob.animation_data_clear()
+    for old, new in (rename or {}).items():
+        ob.data.bones[old].name = new
+    ob.location = (0.4, 0.3, 0.0)
+    return ob
+
+
+def fbx_like_mixamo(
+    mocap_dir, name, scale=(0.01, 0.01, 0.01), units=100.0, y_up=True, rel="cmu/16_15.bvh"
+):
+    """A CMU subject (``rel``: subject 16 by default) named as Mixamo names its bones, as
+    Blender's FBX importer leaves a Mixamo character: centimetre bones (``units`` per
+    metre: the BVH read at 100 times its metre scale), bones in quaternion mode, the
+    armature's data Y-up under a 90 degree X rotation of the object (``y_up``), the object
+    scaled by 0.01."""
+    before = set(bpy.data.objects)
+    assert bpy.ops.import_anim.bvh(
+        filepath=str(mocap_dir / rel),
+        global_scale=CMU_SCALE * units,
+        update_scene_fps=False,
+    ) == {"FINISHED"}
+    (ob,) = [o for o in bpy.data.objects if o not in before]
+    ob.name = name
+    ob.animation_data_clear()
+    for old, new in MIXAMO.items():
+        ob.data.bones[old].name = new
+    for pb in ob.pose.bones:
+        pb.rotation_mode = "QUATERNION"
+    if y_up:  # the data turned Y-up, the object turned back upright
+        bpy.context.view_layer.objects.active = ob
+        for o in bpy.context.selected_objects:
+            o.select_set(False)
+        ob.select_set(True)
+        ob.rotation_euler = (-np.pi / 2, 0.0, 0.0)
+        bpy.ops.object.transform_apply(location=False, rotation=True, scale=False)
+        ob.rotation_euler = (np.pi / 2, 0.0, 0.0)
+    ob.location = (0.4, 0.3, 0.0)
+    ob.scale = scale
+    bpy.context.view_layer.update()  # as an import leaves it: its world matrix current
+    return ob

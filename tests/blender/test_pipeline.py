@@ -85,10 +85,32 @@ def test_plan_writes_nla_and_evaluates_onto_the_goal(baked_blend, addon_module):
     assert pop["max_boundary_jump_deg"] <= max(pop["p99_step_deg"], 1.0) * 1.5
 
 
+def boundary_step_over_its_neighbours(addon_module, character, around=3):
+    """Degrees by which a bone's turn across a strip boundary exceeds its largest turn on
+    the ``around`` frames either side (evaluated; the most over every bone and boundary):
+    a pop stands out from the motion around it, a bone moving steadily through a
+    boundary does not."""
+    meta, _ = addon_module.api.load_plan_record(character)
+    frames = np.arange(meta["frame_start"], meta["frame_end"] + 1)
+    names = [pb.name for pb in character.pose.bones]
+    rot = addon_module.adapter.evaluate.sample_armature(bpy.context, character, frames, names)[2]
+    quat = addon_module.motion_patches.kinematics.quat
+    steps = np.degrees(quat.angle_between(rot[1:], rot[:-1]))  # (F - 1, J)
+    worst = -np.inf
+    for b in meta["boundaries"]:
+        i = b - meta["frame_start"] - 1  # the step onto the boundary's first frame
+        near = np.concatenate((steps[max(i - around, 0) : i], steps[i + 1 : i + 1 + around]))
+        worst = max(worst, float((steps[i] - near.max(axis=0)).max()))
+    return worst
+
+
 def test_foot_lock_pins_the_evaluated_feet(baked_blend, addon_module):
     """The Add track over the shared segment strips: the same plan, evaluated through
     the depsgraph with and without it; planted feet slide much less with it, nothing else
-    about the path changes, and no pose pops."""
+    about the path changes, and no pose pops: no bone turns across a strip boundary more
+    than a degree beyond its turns on the frames around it. (The plan turns on the spot,
+    then walks off: there the recorded swing passes 7 cm under the planted toe, and the
+    lock lifts the foot, bending the knee 5-6 degrees a frame through the boundary.)"""
     bpy.ops.wm.open_mainfile(filepath=str(baked_blend))
     scene = bpy.context.scene
     api = addon_module.api
@@ -109,10 +131,9 @@ def test_foot_lock_pins_the_evaluated_feet(baked_blend, addon_module):
     assert after["goal_root_position_error_cm"] == pytest.approx(
         before["goal_root_position_error_cm"], abs=0.1
     )
-    assert (
-        after["boundary_pop"]["max_boundary_jump_deg"]
-        <= before["boundary_pop"]["max_boundary_jump_deg"] + 5.0
-    )
+    over = boundary_step_over_its_neighbours(addon_module, char)
+    print(f"\nlocked: a boundary step at most {over:.2f} deg over the steps around it")
+    assert locked.pieces[1:] and over <= 1.0
     # Re-planning without the lock removes its track (the add-on owns it), nothing else.
     api.plan_path(scene, char, goal, frame_start=1, foot_lock=False)
     assert [t.name for t in char.animation_data.nla_tracks] == ["MP motion", "MP root"]

@@ -20,9 +20,8 @@ import numpy as np
 import pytest
 
 from rig_names import MIXAMO, RIGIFY
-from scene_helpers import empty, pillar, walker_from
+from scene_helpers import empty, fbx_like_mixamo, native_rig, pillar, walker_from
 
-CMU_SCALE = 0.056444
 FPS = 24
 
 LEGS = [
@@ -51,22 +50,6 @@ def s2_blend(addon_module, mocap_dir, tmp_path_factory):
     path = tmp_path_factory.mktemp("skeletons") / "s2.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(path))
     return path
-
-
-def native_rig(mocap_dir, rel, name, rename=None):
-    """A rig from Blender's BVH importer at its defaults (Euler bones), animation cleared,
-    its bones renamed by ``rename`` ({old: new})."""
-    before = set(bpy.data.objects)
-    assert bpy.ops.import_anim.bvh(
-        filepath=str(mocap_dir / rel), global_scale=CMU_SCALE, update_scene_fps=False
-    ) == {"FINISHED"}
-    (ob,) = [o for o in bpy.data.objects if o not in before]
-    ob.name = name
-    ob.animation_data_clear()
-    for old, new in (rename or {}).items():
-        ob.data.bones[old].name = new
-    ob.location = (0.4, 0.3, 0.0)
-    return ob
 
 
 def odd_rig(name, bones=("Root", "Torso", "Wing.L", "Wing.R", "Tail")):
@@ -372,38 +355,6 @@ def test_a_30_second_walk_at_120_fps_adds_under_5_mb(s2_blend, addon_module, tmp
     )
     assert seconds > 28
     assert grown < 5.0
-
-
-def fbx_like_mixamo(mocap_dir, name, scale=(0.01, 0.01, 0.01), units=100.0, y_up=True):
-    """Subject 16 named as Mixamo names its bones, as Blender's FBX importer leaves a
-    Mixamo character: centimetre bones (``units`` per metre: the BVH read at 100 times its
-    metre scale), bones in quaternion mode, the armature's data Y-up under a 90 degree X
-    rotation of the object (``y_up``), the object scaled by 0.01."""
-    before = set(bpy.data.objects)
-    assert bpy.ops.import_anim.bvh(
-        filepath=str(mocap_dir / "cmu/16_15.bvh"),
-        global_scale=CMU_SCALE * units,
-        update_scene_fps=False,
-    ) == {"FINISHED"}
-    (ob,) = [o for o in bpy.data.objects if o not in before]
-    ob.name = name
-    ob.animation_data_clear()
-    for old, new in MIXAMO.items():
-        ob.data.bones[old].name = new
-    for pb in ob.pose.bones:
-        pb.rotation_mode = "QUATERNION"
-    if y_up:  # the data turned Y-up, the object turned back upright
-        bpy.context.view_layer.objects.active = ob
-        for o in bpy.context.selected_objects:
-            o.select_set(False)
-        ob.select_set(True)
-        ob.rotation_euler = (-np.pi / 2, 0.0, 0.0)
-        bpy.ops.object.transform_apply(location=False, rotation=True, scale=False)
-        ob.rotation_euler = (np.pi / 2, 0.0, 0.0)
-    ob.location = (0.4, 0.3, 0.0)
-    ob.scale = scale
-    bpy.context.view_layer.update()  # as an import leaves it: its world matrix current
-    return ob
 
 
 def evaluated_feet(addon_module, rig, ankles, toes):

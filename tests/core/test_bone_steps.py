@@ -50,7 +50,7 @@ def test_planned_walks_step_no_faster_than_their_source(walk_patch, walk16, turn
             m.rotations,
             foot_lock.still_contacts(skel, m, walk_patch.gait.fps),
         )
-    rot = foot_lock.lock_feet(skel, m) if locked else m.rotations
+    rot = foot_lock.lock_feet(skel, m, fps=walk_patch.gait.fps) if locked else m.rotations
     ratio, worst = metrics.step_ratio(rot, reference, floor_deg=1e-3)
     print(
         f"seed {seed}{' locked' if locked else ''}: {[p.kind for p in plan.pieces]}, largest "
@@ -78,7 +78,7 @@ def test_easing_onto_another_subjects_clip_keeps_every_bone_to_its_pace(
     still = Motion(
         m.ground, m.root_local, m.rotations, foot_lock.still_contacts(skel, m, walk_gait.fps)
     )
-    locked = foot_lock.lock_feet(skel, still)
+    locked = foot_lock.lock_feet(skel, still, fps=walk_gait.fps)
     ratio, worst = max(
         metrics.step_ratio(m.rotations, reference), metrics.step_ratio(locked, reference)
     )

@@ -90,30 +90,36 @@ def test_a_straight_leg_bends_its_knee_forward():
         assert np.sign(new_knee[0]) == np.sign(forward[0, 0]) and abs(new_knee[0]) > 0.05
 
 
-def planted_offsets_by_run(ankle_xy, toe_xy, ankle_on, toe_on, blend):
-    """planted_offsets' first step written run by run (what the vectorised one replaced)."""
+def planted_offsets_frame_by_frame(ankle_xy, toe_xy, ankle_on, toe_on):
+    """planted_offsets' corrections on planted frames, written contact by contact and frame
+    by frame: the longest heel run of a contact held at its mean; from it outwards, each
+    frame keeps the heel where it was on the frame next to it while the heel stays down on
+    both, else the toe (a toe-only frame, a hand-over); a contact with its heel never down
+    holds its toe at its mean."""
     from motion_patches.kinematics.contacts import runs
 
-    n = len(ankle_xy)
-    toe_only = toe_on & ~ankle_on
-    d = np.zeros((n, 2))
-    for a, b in zip(*runs(ankle_on)):
-        d[a:b] = ankle_xy[a:b].mean(axis=0) - ankle_xy[a:b]
-    for a, b in zip(*runs(toe_only)):
-        if a > 0 and ankle_on[a - 1]:
-            anchor = toe_xy[a - 1] + d[a - 1]
-        elif b < n and ankle_on[b]:
-            anchor = toe_xy[b] + d[b]
-        else:
-            anchor = toe_xy[a:b].mean(axis=0)
-        d[a:b] = anchor - toe_xy[a:b]
+    d = np.zeros((len(ankle_xy), 2))
+    for start, end in zip(*runs(ankle_on | toe_on)):
+        heel = ankle_on[start:end]
+        if not heel.any():
+            d[start:end] = toe_xy[start:end].mean(axis=0) - toe_xy[start:end]
+            continue
+        ha, hb = (x + start for x in runs(heel))
+        k = int(np.argmax(hb - ha))
+        d[ha[k] : hb[k]] = ankle_xy[ha[k] : hb[k]].mean(axis=0) - ankle_xy[ha[k] : hb[k]]
+        for f, near in [(f, f - 1) for f in range(hb[k], end)] + [
+            (f, f + 1) for f in range(ha[k] - 1, start - 1, -1)
+        ]:
+            joint = ankle_xy if ankle_on[f] and ankle_on[near] else toe_xy
+            d[f] = joint[near] + d[near] - joint[f]
     return d
 
 
 @pytest.mark.parametrize("seed", range(6))
-def test_planted_offsets_hold_each_run_as_run_by_run(seed):
+def test_planted_offsets_hold_each_contact_as_frame_by_frame(seed):
     """Random contacts (runs touching the ends, toe-only runs before, after and between
-    heel runs): on every planted frame the correction is the run-by-run one."""
+    heel runs, a heel coming down twice in one contact): on every planted frame the
+    correction is the frame-by-frame one."""
     rng = np.random.default_rng(seed)
     n = 300
     ankle = np.cumsum(rng.normal(size=(n, 2)) * 0.01, axis=0)
@@ -121,11 +127,32 @@ def test_planted_offsets_hold_each_run_as_run_by_run(seed):
     ankle_on = np.repeat(rng.random(n // 10) < 0.5, 10)
     toe_on = np.repeat(rng.random(n // 5) < 0.5, 5) | ankle_on
     toe_on[:3] = True  # a toe-only run at the start (when the heel is not down there)
-    want = planted_offsets_by_run(ankle, toe, ankle_on, toe_on, 4)
+    ankle_on[toe_on & (rng.random(n) < 0.05)] ^= True  # heels flickering within contacts
+    want = planted_offsets_frame_by_frame(ankle, toe, ankle_on, toe_on)
     got = foot_lock.planted_offsets(ankle, toe, ankle_on, toe_on, blend=4)
     on = ankle_on | toe_on
     assert on.any() and (toe_on & ~ankle_on).any()
     assert np.allclose(got[on], want[on], atol=1e-12)
+
+
+def test_a_heel_down_twice_in_one_contact_hands_over_without_a_jump():
+    """A planted foot sliding 1 cm a frame whose heel is up for two frames mid-contact (the
+    synthesis moved it fast there): the toe stays put through both hand-overs. Each heel
+    run held at its own mean put the toe down 10 cm from where it stood."""
+    n = 40
+    ankle = np.column_stack((np.linspace(0.0, 0.39, n), np.zeros(n)))
+    toe = ankle + [0.15, 0.0]
+    ankle_on = np.zeros(n, bool)
+    ankle_on[10:18] = ankle_on[20:30] = True
+    toe_on = np.zeros(n, bool)
+    toe_on[10:32] = True
+    d = foot_lock.planted_offsets(ankle, toe, ankle_on, toe_on, blend=4)
+    held_toe = (toe + d)[10:32]
+    assert np.abs(np.diff(held_toe, axis=0)).max() < 1e-12  # the toe never moves
+    assert np.allclose((ankle + d)[20:30], ankle[20:30].mean(axis=0))  # the longest run's mean
+    # the old rule, each heel run at its own mean, jumped the toe at the heel's return
+    own = ankle[10:18].mean(axis=0) - ankle[17], ankle[20:30].mean(axis=0) - ankle[20]
+    assert np.linalg.norm((toe[17] + own[0]) - (toe[20] + own[1])) > 0.09
 
 
 def test_the_legs_world_matrices_are_the_whole_skeletons(walk_patch, walk):
@@ -194,10 +221,11 @@ def ik_one_frame(hip, knee, ankle, target, hinge, forward):
     return best[2], best[3]
 
 
-def lock_feet_frame_by_frame(skel, world, blend=foot_lock.BLEND_FRAMES):
+def lock_feet_frame_by_frame(skel, world, blend=foot_lock.BLEND_FRAMES, fps=None):
     """lock_feet as a loop over frames and legs: the whole skeleton's world matrices, the
     IK of each frame on its own, the turned bones' channels from their new world
-    rotations (skeleton.local_rotations_from_global)."""
+    rotations (skeleton.local_rotations_from_global); with ``fps`` the ankle's target also
+    raised by the swing lift."""
     from motion_patches.kinematics.skeleton import local_rotations_from_global
 
     m = world.world_matrices(skel)
@@ -212,6 +240,11 @@ def lock_feet_frame_by_frame(skel, world, blend=foot_lock.BLEND_FRAMES):
             world.contacts[:, 2 * s + 1],
             blend,
         )
+        d = np.column_stack((d, np.zeros(world.frames)))
+        if fps is not None:
+            moved_toe = p[:, toe] + d
+            c = world.contacts
+            d[:, 2] = foot_lock.swing_lift(moved_toe, c[:, 2 * s], c[:, 2 * s + 1], fps)
         thigh = [hip] + foot_lock._segments(skel, knee, hip)
         shin = [knee] + foot_lock._segments(skel, ankle, knee)
         moved = False
@@ -219,7 +252,7 @@ def lock_feet_frame_by_frame(skel, world, blend=foot_lock.BLEND_FRAMES):
             if np.linalg.norm(d[f]) <= 1e-7:
                 continue
             moved = True
-            target = p[f, ankle] + np.array([d[f, 0], d[f, 1], 0.0])
+            target = p[f, ankle] + d[f]
             h = world.ground[f, 2]
             r_thigh, r_shin = ik_one_frame(
                 p[f, hip],
@@ -239,15 +272,17 @@ def lock_feet_frame_by_frame(skel, world, blend=foot_lock.BLEND_FRAMES):
     return local, changed
 
 
+@pytest.mark.parametrize("fps", [None, 30.0], ids=["pinned", "swings-lifted"])
 @pytest.mark.parametrize("blend", [foot_lock.BLEND_FRAMES, 1])
-def test_the_vectorised_lock_is_the_frame_by_frame_one(walk_patch, walk, blend):
+def test_the_vectorised_lock_is_the_frame_by_frame_one(walk_patch, walk, blend, fps):
     """On a planned walk of real capture (CMU 16_15 + 16_18, turning), lock_feet (both
     legs and all frames at once, the turns applied to the channels as quaternions) gives
     the rotations of the lock written frame by frame on the whole skeleton: the changed
-    bones' channels to 1e-9, every other channel untouched (bar its sign)."""
+    bones' channels to 1e-9, every other channel untouched (bar its sign); with the
+    frame rate, the swinging feet lifted as well."""
     skel = walk_patch.gait.skeleton
-    got = foot_lock.lock_feet(skel, walk, blend)
-    want, changed = lock_feet_frame_by_frame(skel, walk, blend)
+    got = foot_lock.lock_feet(skel, walk, blend, fps=fps)
+    want, changed = lock_feet_frame_by_frame(skel, walk, blend, fps)
     assert len(changed) == 6  # thigh, shin and ankle of both legs
     assert not np.allclose(np.abs(np.sum(want * walk.rotations, axis=-1))[:, changed], 1.0)
     dots = np.abs(np.sum(got[:, changed] * want[:, changed], axis=-1))
@@ -287,3 +322,63 @@ def test_both_feet_at_once_are_each_foot_alone(walk_patch, walk, seed, blend):
         )
         assert np.array_equal(got[s], want)
         assert np.any(want != 0)
+
+
+def swinging_foot(dip=0.03):
+    """Toe positions (F, 3) of one foot: planted at 2 cm, a swing 0.7 m forward (up to
+    2.5 m/s, easing in and out) that dips ``dip`` below the planted height (a retargeted
+    leg's; a negative dip rises), planted again; the ankle and toe contact flags (F,)."""
+    plant, swing = 15, 12
+    t = (np.arange(swing) + 1) / (swing + 1)
+    x = np.concatenate((np.zeros(plant), 0.35 * (1 - np.cos(np.pi * t)), np.full(plant, 0.7)))
+    z = np.concatenate(
+        (np.full(plant, 0.02), 0.02 - dip * np.sqrt(np.sin(np.pi * t)), np.full(plant, 0.02))
+    )
+    toe = np.column_stack((x, np.zeros_like(x), z))
+    on = np.ones(len(x), bool)
+    on[plant : plant + swing] = False
+    return toe, on, on.copy()
+
+
+def test_a_swinging_toe_is_lifted_clear_of_its_planted_height():
+    """A swing dipping 3 cm through the floor of its plants is lifted to at least
+    SWING_CLEARANCE above it wherever the toe moves faster than SWING_SPEED[1], eased in
+    and out (no step of the lift over a fifth of the most needed, 2 * LIFT_FRAMES + 1
+    frames taking it up); far from the swing nothing moves."""
+    fps = 30.0
+    toe, heel_on, toe_on = swinging_foot()
+    lift = foot_lock.swing_lift(toe, heel_on, toe_on, fps)
+    z = toe[:, 2] + lift
+    step = np.linalg.norm(np.diff(toe[:, :2], axis=0), axis=1) * fps
+    fast = np.zeros(len(toe), bool)
+    fast[1:] |= step > foot_lock.SWING_SPEED[1]
+    fast[:-1] |= step > foot_lock.SWING_SPEED[1]
+    fast &= ~toe_on
+    assert fast.sum() > 5
+    assert np.all(z[fast] >= 0.02 + foot_lock.SWING_CLEARANCE - 1e-12)
+    most = 0.03 + foot_lock.SWING_CLEARANCE
+    assert np.abs(np.diff(lift)).max() <= most / (2 * foot_lock.LIFT_FRAMES + 1) + 1e-12
+    r = 2 * foot_lock.LIFT_FRAMES
+    assert np.all(lift[: 15 - r] == 0) and np.all(lift[27 + r :] == 0)
+    assert lift.max() <= most + 1e-12
+
+
+def test_a_toe_swinging_clear_or_never_planted_is_not_lifted():
+    fps = 30.0
+    toe, heel_on, toe_on = swinging_foot(dip=-0.05)  # rises 5 cm: clear of the floor
+    assert not foot_lock.swing_lift(toe, heel_on, toe_on, fps).any()
+    toe, heel_on, toe_on = swinging_foot()
+    never = np.zeros(len(toe), bool)
+    assert not foot_lock.swing_lift(toe, never, never, fps).any()
+
+
+def test_a_slow_toe_is_kept_out_of_the_floor_only():
+    """A toe dipping while it barely moves (setting down, turning on the spot) is not a
+    swing: slower than SWING_SPEED[0] it is lifted out of the floor of its plants, not
+    SWING_CLEARANCE above them."""
+    toe, heel_on, toe_on = swinging_foot()
+    toe[:, 0] *= 0.15  # under 0.4 m/s
+    z = toe[:, 2] + foot_lock.swing_lift(toe, heel_on, toe_on, 30.0)
+    assert z.min() >= 0.02 - 1e-12
+    deepest = np.argmin(toe[:, 2])
+    assert z[deepest] < 0.02 + 0.5 * foot_lock.SWING_CLEARANCE

@@ -64,7 +64,10 @@ def written(walk_patch, plan):
     still = foot_lock.still_contacts(skel, world, fps, posed)
     world = Motion(world.ground, world.root_local, world.rotations, still)
     locked = Motion(
-        world.ground, world.root_local, foot_lock.lock_feet(skel, world, posed=posed), still
+        world.ground,
+        world.root_local,
+        foot_lock.lock_feet(skel, world, posed=posed, fps=fps),
+        still,
     )
     return locked.world_matrices(skel)[:, foot_joints(skel)][..., :3, 3], still
 
