@@ -26,7 +26,7 @@ from .contacts import CONTACT_SPEED, foot_joints, runs
 from .inplace import root_channel_to_ground, root_positions
 from .motion import Motion
 from .retarget import segment_parent
-from .skeleton import Skeleton, per_skeleton
+from .skeleton import Skeleton, affine_inverse, per_skeleton
 
 BLEND_FRAMES = 4  # frames the correction takes to ease in before and out after a contact
 STILL_FACTOR = 2.0  # x contacts.CONTACT_SPEED: a planted joint moving faster is not planted,
@@ -381,10 +381,10 @@ def _leg_skeleton(skel, chains):
 def _rest_offsets(sub):
     """(K, 4, 4) rest matrix of each bone of ``sub`` relative to its parent's
     (:meth:`Skeleton.local_rest <motion_patches.skeleton.Skeleton.local_rest>`, the
-    inverses taken in one call)."""
+    inverses in closed form, :func:`~.skeleton.affine_inverse`)."""
     out = sub.rest.copy()
     child = np.flatnonzero(sub.parents >= 0)
-    out[child] = np.linalg.inv(sub.rest[sub.parents[child]]) @ sub.rest[child]
+    out[child] = affine_inverse(sub.rest[sub.parents[child]]) @ sub.rest[child]
     return out
 
 
