@@ -8,12 +8,16 @@ and drives one scene through the sidebar:
 
 * real input (xdotool): open the sidebar (N), pick the Motion Patches tab (a click on it),
   + on the turn list, Bake, collapse the Locomotion panel (a click on its header), + on the
-  prop's clip list, Tag Object Patch, Plan Path, Analyse Motion, Show Planner Overlay, top
-  view (numpad 7), Plan Crowd with Esc while it runs, then to its end, Add Body on the
-  eight walkers, Duplicate Crowd (Return in its dialog);
+  prop's clip list, Tag Object Patch, Plan Path, Analyse Motion, Plan Path again, Show
+  Planner Overlay, top view (numpad 7), the overlay unticked then Ctrl+Z, Ctrl+Shift+Z,
+  Ctrl+Z, Plan Crowd with Esc while it runs, then to its end, Add Body on the eight walkers,
+  Duplicate Crowd to twenty (Return in its dialog), Every Character's Grid ticked and
+  unticked, Ctrl+O and Return in the file browser (samples/props.blend), there Plan Path,
+  Analyse Motion and Add Body;
 * Python, where input cannot reach (tools/gui/agent.py): importing the mocap (a file
   browser), making the walker, the goal and the chair, choosing actions in the lists,
-  placing the perspective view, opening the preferences at the add-on.
+  placing the views, pointing the file browser at the sample, opening the preferences at
+  the add-on.
 
 Buttons are found on screen by their identity, not by coordinates written here: the pointer
 is moved over the sidebar and Ctrl+C (an operator button copies its Python command) or
@@ -22,12 +26,25 @@ Ctrl+Shift+C (a property copies its data path) says what is under it.
 Checks: each operator did its job (read back from the scene: a patch with kept segments,
 the prop tagged, NLA tracks and a plan record on the walker, the scene's frame range
 covering the plan, analysis figures stored, the overlay on, a capsule per bone on each
-walker's evaluated bones, the copies of a walker with a body given bodies); no screenshot
-is blank; overlay pixels: where the planned path must be (projected by Blender) the
-overlay's path colours appear, and inside the chair's outline nothing of the overlay shows
-(depth test); body pixels: at each walker's chest (projected) the picture changes when the
-bodies are hidden; and Blender's log has no traceback and no error line. Screenshots of
-every state go to ``--out``; ``--docs DIR`` also writes the README's small ones.
+walker's evaluated bones, the copies of a walker with a body given bodies); the chair, 0.5 m
+high, tagged with a jump that clears 0.18 m: the tag's warning and Plan Path's name both
+heights (read from Blender's log, the chair's height from its evaluated bounds) and the
+walker goes round it, no bone of its evaluated rig inside it; Plan Path again clears the
+walker's figures (the Analysis panel's hint instead, shot) and Analyse measures the new plan;
+after each of untick, Ctrl+Z, Ctrl+Shift+Z, Ctrl+Z the checkbox, the overlay's draw handler
+and the path's pixels agree, and the plan is as it was; Plan Crowd's fraction (read from the
+running operator) is between 0 and 1 while the status bar shows its bar, and Esc leaves
+every walker and action as it was; with twenty walkers the overlay draws every path and the
+grid of the active walker only (the overlay's own buffers), every grid once ticked (more of
+the picture covered); the sample, saved by 4.5, plans its walker over a hurdle with no bone
+of the evaluated rig inside a prop on any frame (Analyse Motion's figures) and shows its
+body mid-jump. No screenshot is blank; overlay pixels: where the planned path must be
+(projected by Blender) the overlay's path colours appear, and inside the chair's outline
+nothing of the overlay shows (depth test); body pixels: at each walker's chest (projected)
+the picture changes when the bodies are hidden; and Blender's log has no traceback and no
+error line. Screenshots of every state go to ``--out``; ``--docs DIR`` also writes the
+README's small ones. The steps after the first plans are in steps_overlay.py and
+steps_sample.py.
 
 Exit status: 0 all passed, 1 something failed (the summary says what).
 """
@@ -48,6 +65,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from session import GuiError, Session  # noqa: E402
+from steps_overlay import OverlaySteps  # noqa: E402
+from steps_sample import SampleSteps  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[2]
 EXT_ID = "motion_patches"
@@ -77,7 +96,7 @@ class Step:
         self.name, self.ok, self.detail, self.seconds = name, None, "", 0.0
 
 
-class Suite:
+class Suite(OverlaySteps, SampleSteps):
     def __init__(self, args):
         self.args = args
         self.out = Path(args.out).resolve()
@@ -281,9 +300,10 @@ class Suite:
             time.sleep(0.2)
         return time.monotonic() - t0
 
-    def grab_checked(self, name, crop=None, min_colours=24):
-        """A screenshot (the screen or a crop) saved as ``name``.png; fails when blank."""
-        img = self.s.grab()
+    def grab_checked(self, name, crop=None, min_colours=24, img=None):
+        """A screenshot (the screen or a crop; ``img``: one just taken) saved as
+        ``name``.png; fails when blank."""
+        img = self.s.grab() if img is None else img
         part = (
             img if crop is None else img[crop[1] : crop[1] + crop[3], crop[0] : crop[0] + crop[2]]
         )
@@ -374,22 +394,34 @@ result = text.splitlines()""")
             ("scene: mocap, walker, goal, chair (Python)", self.make_scene),
             ("sidebar: N, then a click on the Motion Patches tab", self.open_tab),
             ("Locomotion Patches: + turn clip, Bake", self.bake),
-            ("Object Patch: + clip, Tag Object Patch", self.tag),
-            ("Planning: Plan Path", self.plan),
+            ("Object Patch: + clip, Tag Object Patch (warned: too high to jump)", self.tag),
+            ("Planning: Plan Path (round the chair, saying why)", self.plan),
             ("scene frame range follows the plan", self.frame_range),
             ("Analysis: Analyse Motion", self.analyse),
+            ("Analysis: Plan Path clears the figures, Analyse Motion again", self.reanalyse),
             ("Overlay: Show Planner Overlay, top view", self.overlay_top),
             ("Overlay: perspective view, depth", self.overlay_perspective),
-            ("Planning: Plan Crowd, Esc, then to its end", self.crowd),
+            ("Overlay: untick, Ctrl+Z, Ctrl+Shift+Z, Ctrl+Z", self.overlay_undo),
+            ("Planning: Plan Crowd, its progress, Esc, then to its end", self.crowd),
             ("Planning: Add Body on the eight walkers", self.bodies),
-            ("Planning: Duplicate Crowd, Return in its dialog", self.duplicate),
+            ("Planning: Duplicate Crowd to twenty, Return in its dialog", self.duplicate),
+            ("Overlay: a crowd of twenty, the active walker's grid", self.crowd_overlay),
+            ("Sample: Ctrl+O props.blend, Plan Path over a hurdle, Add Body", self.sample),
             ("Preferences: the add-on's defaults", self.preferences),
         ]
 
     @property
     def non_blocking(self):
         """Steps whose failure leaves the scene as the next steps need it."""
-        return (self.frame_range, self.overlay_top, self.overlay_perspective)
+        return (
+            self.frame_range,
+            self.reanalyse,
+            self.overlay_top,
+            self.overlay_perspective,
+            self.overlay_undo,
+            self.crowd_overlay,
+            self.sample,
+        )
 
     def start(self):
         self.s.start()
@@ -448,12 +480,13 @@ result = 1""")
             "Chair 0.4 m half way"
         )
 
-    def open_tab(self):
+    def open_tab(self, shot="01-sidebar"):
         view = self.s.py('result = rect(region("VIEW_3D", "WINDOW"))')
-        self.s.key("n", at=(view[0] + view[2] // 2, view[1] + view[3] // 2))
-        self.s.wait_idle()
-        ok = self.s.py('result = area("VIEW_3D").spaces[0].show_region_ui')
-        self.check(ok, "N over the viewport did not open the sidebar")
+        if not self.s.py('result = area("VIEW_3D").spaces[0].show_region_ui'):
+            self.s.key("n", at=(view[0] + view[2] // 2, view[1] + view[3] // 2))
+            self.s.wait_idle()
+            ok = self.s.py('result = area("VIEW_3D").spaces[0].show_region_ui')
+            self.check(ok, "N over the viewport did not open the sidebar")
         (x, top, w, h), _ = self.sidebar()
         # The tabs run down the sidebar's outer edge; click down it until ours is active.
         for y in range(top + 10, top + h, 24):  # a tab is at least ~35 px long
@@ -464,7 +497,7 @@ result = 1""")
         else:
             raise GuiError(f"clicking down the sidebar's tabs never made '{TAB}' active")
         self.settle()
-        self.sidebar_shot("01-sidebar")
+        self.sidebar_shot(shot)
         return f"tab clicked at y={y}"
 
     def bake(self):
@@ -513,11 +546,41 @@ result = 1""")
             'c.action = bpy.data.actions["16_06"]\nc.kind = "TRAVERSAL"\nresult = 1'
         )
         self.settle()
+        since = len(self.log_lines())
         self.press("motion_patches.tag_object_patch", below="motion_patches.clip_add")
         ok = self.s.py('result = bpy.data.objects["Chair"].motion_patch.enabled')
         self.check(ok, "Tag Object Patch did not tag the chair")
+        # The jump clears less than the chair's 0.5 m: the tag warns, naming both heights.
+        top = self.s.py("""
+from mathutils import Vector
+dg = bpy.context.evaluated_depsgraph_get()
+ev = bpy.data.objects["Chair"].evaluated_get(dg)
+result = max((ev.matrix_world @ Vector(c)).z for c in ev.bound_box)""")
+        clears, high = self.too_low_warning(since, "Chair")
+        self.check(
+            clears < high and abs(high - top) < 0.006,
+            f"the tag's warning says 16_06 clears {clears} m over a {high} m prop "
+            f"(the chair's evaluated top is {top:.3f} m)",
+        )
+        self.facts["too_low"] = [clears, high]
         self.settle()
         self.sidebar_shot("03-object-patch")
+        return f"warned: 16_06 clears {clears:.2f} m, the chair is {high:.2f} m high"
+
+    def too_low_warning(self, since, prop, what="a tag"):
+        """(clearance, height) from the WARNING Blender logged since line ``since`` that a
+        traversal clip clears less than ``prop`` is high (the report the window showed)."""
+        pat = re.compile(rf"clears ([\d.]+) m over '{prop}', which is ([\d.]+) m high")
+        found = [
+            pat.search(ln)
+            for ln in self.log_lines()[since:]
+            if "| WARNING" in ln and pat.search(ln)
+        ]
+        if not found:
+            raise AssertionError(
+                f"{what} gave no warning naming both heights; last reports: {self.reports()[-3:]}"
+            )
+        return float(found[0].group(1)), float(found[0].group(2))
 
     def plan(self):
         self.s.py("""
@@ -528,6 +591,7 @@ w.select_set(True)
 bpy.context.view_layer.objects.active = w
 result = 1""")
         self.settle()
+        since = len(self.log_lines())
         self.press("motion_patches.plan_path", cols=(0.25,))
         res = self.s.py("""
 import json
@@ -546,11 +610,19 @@ result = dict(tracks=tracks, strips=sum(len(t.strips) for t in ad.nla_tracks) if
             f"Plan Path wrote no NLA strips on the Walker: {res}",
         )
         self.facts["plan"] = res
+        # Round the chair, not over it, and the status bar says why (both heights).
+        self.check(not res["traversals"], f"the walker jumps the 0.5 m chair: {res}")
+        said = self.too_low_warning(since, "Chair", "Plan Path")
+        self.check(
+            said == tuple(self.facts.get("too_low", said)),
+            f"Plan Path's reason {said} is not the tag's {self.facts.get('too_low')}",
+        )
         self.settle()
         self.sidebar_shot("04-planning")
         return (
             f"tracks {res['tracks']}, frames {res['plan'][0]}-{res['plan'][1]}, scene range "
-            f"{res['scene'][0]}-{res['scene'][1]}, traversals {res['traversals']}"
+            f"{res['scene'][0]}-{res['scene'][1]}, no traversal (reported: clears "
+            f"{said[0]:.2f} m, {said[1]:.2f} m high)"
         )
 
     def frame_range(self):
@@ -573,12 +645,42 @@ result = json.loads(raw) if raw else None""")
             fig is not None and "foot_skate" in fig,
             "Analyse Motion stored no figures on the Walker",
         )
+        self.check(
+            fig["frames_body_inside_prop"] == 0,
+            f"a bone of the walker is inside the chair on {fig['frames_body_inside_prop']} frames",
+        )
         self.settle()
         self.sidebar_shot("05-analysis")
         return (
             f"foot skate {fig['foot_skate']['mean_cm_per_frame']:.2f} cm/frame, goal error "
-            f"{fig['goal_position_error_cm']:.1f} cm"
+            f"{fig['goal_position_error_cm']:.1f} cm, no bone in the chair"
         )
+
+    ANALYSIS = """
+import json
+w = bpy.data.objects["Walker"]
+raw = w.get("motion_patches_analysis")
+meta, arrays = mp.api.load_plan_record(w)
+result = [json.loads(raw) if raw else None, meta["frame_end"] - meta["frame_start"] + 1]"""
+
+    def reanalyse(self):
+        """Plan Path again: the figures of the plan it replaced are gone from the Walker and
+        its Analysis panel (the hint instead); Analyse Motion measures the new plan."""
+        self.press("motion_patches.plan_path", cols=(0.25,))  # fails unless it ran
+        fig, frames = self.s.py(self.ANALYSIS)
+        self.check(fig is None, "the Walker kept the figures of the plan Plan Path replaced")
+        self.settle()
+        self.sidebar_shot("13-analysis-cleared")
+        self.press("motion_patches.analyse_motion", timeout=300, below="motion_patches.plan_path")
+        fig, frames = self.s.py(self.ANALYSIS)
+        self.check(
+            fig is not None and fig["frames"] == frames,
+            f"Analyse Motion did not measure the new plan of {frames} frames: "
+            f"{fig and fig['frames']}",
+        )
+        self.settle()
+        self.sidebar_shot("14-analysis-refreshed")
+        return f"cleared by Plan Path; {fig['frames']} frames measured again"
 
     # --- overlay ------------------------------------------------------------------------
 
@@ -643,20 +745,18 @@ for u in np.linspace(-0.35, 0.35, 7):   # points on the chair's faces the eye se
 result = dict(path=path, chair=inside, view=[rx, ry, rw, rh], covers=covers,
               ends=[list(p) for p in (screen(e) for e in ends) if p])''')
 
+    @staticmethod
+    def near_colour(img, x, y, r=3):
+        """Whether one of the overlay's path colours is within ``r`` pixels of (x, y)."""
+        patch = img[max(0, y - r) : y + r + 1, max(0, x - r) : x + r + 1].reshape(-1, 3)
+        d = np.abs(patch.astype(float)[:, None, :] - PATH_COLOURS[None]).max(axis=2)
+        return bool((d <= COLOUR_TOLERANCE).any())
+
     def overlay_pixels(self, img_off, img_on, st, name):
         """The overlay is where it must be and nowhere it must not: along the visible
         planned path a path colour appears (with the overlay, not without it), behind the
         chair and inside its outline the picture does not change with the overlay."""
-
-        def near_colour(img, x, y, r=3):
-            patch = (
-                img[max(0, y - r) : y + r + 1, max(0, x - r) : x + r + 1]
-                .reshape(-1, 3)
-                .astype(float)
-            )
-            d = np.abs(patch[:, None, :] - PATH_COLOURS[None]).max(axis=2)
-            return bool((d <= COLOUR_TOLERANCE).any())
-
+        near_colour = self.near_colour
         visible = [(int(round(x)), int(round(y))) for x, y, hid in st["path"] if not hid]
         hidden = [(int(round(x)), int(round(y))) for x, y, hid in st["path"] if hid]
         self.check(len(visible) >= 10, f"{name}: only {len(visible)} path points in view")
@@ -786,6 +886,13 @@ def state(ob):
 crowd = sorted((o for o in bpy.data.objects if o.name.startswith("Walker")), key=lambda o: o.name)
 result = [json.dumps([state(o) for o in crowd]), sorted(a.name for a in bpy.data.actions)]"""
 
+    STATUS_BAR = """
+a = next((a for a in window().screen.areas if a.type == "STATUSBAR"), None)
+result = rect(a) if a is not None else [0, window().height - 40, window().width, 40]"""
+    PROGRESS = """
+result = [op._stepper.fraction for op in window().modal_operators
+          if op.bl_idname == "MOTION_PATCHES_OT_plan_crowd" and hasattr(op, "_stepper")]"""
+
     def crowd(self):
         """Plan Crowd from its button on the Walker and seven more: it runs with a bar in the
         status bar while Blender's loop goes on; Esc stops it with every walker as it was;
@@ -817,10 +924,31 @@ result = 1""")
         )
         view = self.s.py('result = rect(region("VIEW_3D", "WINDOW"))')
         self.s.move(view[0] + view[2] // 2, view[1] + view[3] // 2)
+        bar = self.s.py(self.STATUS_BAR)
+        idle = self.s.grab()
         since = len(self.log_lines())
         self.s.click(x, y)
-        time.sleep(1.0)
-        self.grab_checked("10-plan-crowd-progress", crop=(0, 1160, 1920, 40), min_colours=8)
+        # Its progress: the fraction the running operator shows in the status bar, read
+        # from it (the operator itself, through the window's modal operators).
+        t0, seen = time.monotonic(), []
+        while time.monotonic() - t0 < 20 and not (seen and 0 < seen[-1] < 1):
+            time.sleep(0.1)
+            got = self.s.py(self.PROGRESS)
+            if not got and seen:
+                break  # ended before its progress was read
+            seen += got
+        self.check(
+            seen and 0 < seen[-1] < 1,
+            f"Plan Crowd showed no progress while it ran (fractions read: {seen})",
+        )
+        busy = self.grab_checked("10-plan-crowd-progress", crop=tuple(bar), min_colours=8)
+        later = self.s.py(self.PROGRESS)
+        bx, by, bw, bh = bar
+        a, b = (i[by : by + bh, bx : bx + bw].astype(int) for i in (busy, idle))
+        drawn = float((np.abs(a - b).max(axis=2) > 40).mean())
+        self.check(
+            drawn > 0.005, f"the status bar did not change while Plan Crowd ran ({drawn:.2%})"
+        )
         self.s.key("Escape", at=(view[0] + view[2] // 2, view[1] + view[3] // 2))
         self.wait_modal(timeout=60)
         cancels = [
@@ -849,7 +977,13 @@ result = [o.name for o in crowd if mp.api.PLAN_KEY in o and o.animation_data
         self.check(
             any(r.startswith("Planned 8 of 8") for r in said[-12:]), f"no summary: {said[-12:]}"
         )
-        return f"cancelled by Esc, the scene kept; then 8 walkers planned in {secs:.1f} s"
+        shown = f"{round(seen[-1] * 100)} %" + (
+            f" then {round(later[0] * 100)} %" if later and later[0] != seen[-1] else ""
+        )
+        return (
+            f"progress {shown} in the status bar ({drawn:.1%} of it drawn), cancelled by Esc, "
+            f"the scene kept; then 8 walkers planned in {secs:.1f} s"
+        )
 
     # --- proxy bodies ------------------------------------------------------------------
 
@@ -925,6 +1059,28 @@ r3d.view_distance = 10.0
 redraw_all()
 result = 1""")
         view = self.s.py('result = rect(region("VIEW_3D", "WINDOW"))')
+        shots, hips = self.body_shots("Walker")
+        self.grab_checked("12-bodies", crop=tuple(view))
+        self.check(len(hips) >= 6, f"only {len(hips)} of the 8 walkers are in view")
+        pts = np.array(hips) - np.array(view[:2])
+        lo, hi = pts.min(axis=0) - (160, 220), pts.max(axis=0) + (160, 160)
+        self.doc_boxes["12-bodies"] = (
+            max(int(lo[0]), 0),
+            max(int(lo[1]), 0),
+            min(int(hi[0]), view[2]),
+            min(int(hi[1]), view[3]),
+        )
+        shown = self.bodies_shown(shots, hips)
+        return (
+            f"8 walkers, 248 capsules sharing 31 meshes, on their bones within "
+            f"{st['off'] * 1000:.3f} mm; bodies visible at {shown} of {len(hips)} chests"
+        )
+
+    def body_shots(self, prefix):
+        """The screen with the bodies hidden, then shown, and where the chests (the Spine
+        bone's head, evaluated, projected) of the armatures whose names start with
+        ``prefix`` lie in view, clear of the viewport's edges and of the regions over it:
+        ({False: img, True: img}, [[x, y]])."""
         self.s.move(5, 5)
         shots = {}
         for shown in (False, True):
@@ -937,8 +1093,7 @@ result = 1""")
             self.s.wait_idle()
             time.sleep(0.3)
             shots[shown] = self.s.grab()
-        self.grab_checked("12-bodies", crop=tuple(view))
-        hips = self.s.py("""
+        chests = self.s.py(f"""
 from bpy_extras.view3d_utils import location_3d_to_region_2d
 reg = region("VIEW_3D", "WINDOW")
 r3d = area("VIEW_3D").spaces[0].region_3d
@@ -947,7 +1102,7 @@ dg = bpy.context.evaluated_depsgraph_get()
 covers = [rect(r) for r in area("VIEW_3D").regions if r.type != "WINDOW" and r.width > 1
           and r.height > 1]
 out = []
-for w in (o for o in bpy.data.objects if o.name.startswith("Walker") and o.type == "ARMATURE"):
+for w in (o for o in bpy.data.objects if o.name.startswith({prefix!r}) and o.type == "ARMATURE"):
     ev = w.evaluated_get(dg)
     v = location_3d_to_region_2d(reg, r3d, ev.matrix_world @ ev.pose.bones["Spine"].head)
     if v is None:
@@ -958,39 +1113,32 @@ for w in (o for o in bpy.data.objects if o.name.startswith("Walker") and o.type 
             for cx, cy, cw, ch in covers):
         out.append([x, y])
 result = out""")
-        self.check(len(hips) >= 6, f"only {len(hips)} of the 8 walkers are in view")
-        pts = np.array(hips) - np.array(view[:2])
-        lo, hi = pts.min(axis=0) - (160, 220), pts.max(axis=0) + (160, 160)
-        self.doc_boxes["12-bodies"] = (
-            max(int(lo[0]), 0),
-            max(int(lo[1]), 0),
-            min(int(hi[0]), view[2]),
-            min(int(hi[1]), view[3]),
-        )
+        return shots, chests
+
+    def bodies_shown(self, shots, chests):
+        """How many of the ``chests`` the bodies show at (the picture changes there when
+        they are hidden); fails unless at all."""
         changed = []
-        for x, y in hips:
+        for x, y in chests:
             a = shots[False][y - 6 : y + 7, x - 6 : x + 7].astype(int)
             b = shots[True][y - 6 : y + 7, x - 6 : x + 7].astype(int)
             changed.append(float((np.abs(a - b).max(axis=2) > 30).mean()))
         shown = sum(c > 0.5 for c in changed)
         self.check(
-            shown == len(hips),
-            f"the bodies show at only {shown} of {len(hips)} walkers' chests in the viewport "
+            chests and shown == len(chests),
+            f"the bodies show at only {shown} of {len(chests)} chests in the viewport "
             f"(changed pixel shares {[round(c, 2) for c in changed]})",
         )
-        return (
-            f"8 walkers, 248 capsules sharing 31 meshes, on their bones within "
-            f"{st['off'] * 1000:.3f} mm; bodies visible at {shown} of {len(hips)} chests"
-        )
+        return shown
 
     def duplicate(self):
         """Duplicate Crowd from its button: the dialog (its values set beforehand as the
         operator's last ones), Return, then the copies planned a step at a time."""
         self.s.py("""
 last = bpy.context.window_manager.operator_properties_last("motion_patches.duplicate_crowd")
-last.count = 4
-last.region_min, last.region_max = (-6.0, 4.0), (-3.0, 8.0)  # clear of the walkers
-last.goal_min, last.goal_max = (8.0, 4.0), (11.0, 8.0)
+last.count = 12  # with the eight walkers, a crowd of twenty
+last.region_min, last.region_max = (-6.0, 3.5), (-2.5, 8.0)  # clear of the walkers
+last.goal_min, last.goal_max = (8.0, 3.5), (11.5, 8.0)
 for ob in bpy.context.scene.objects:
     ob.select_set(False)
 w = bpy.data.objects["Walker"]
@@ -1012,16 +1160,16 @@ obs = [o for o in coll.objects if o.type == "ARMATURE"] if coll else []
 result = [len(obs), sum(1 for o in obs if mp.api.PLAN_KEY in o),
           sum(1 for o in obs if mp.api.has_body(o))]""")
         self.check(
-            made == [4, 4, 4],
-            f"Duplicate Crowd made / planned / gave bodies to {made} (want 4, 4 and 4: the "
+            made == [12, 12, 12],
+            f"Duplicate Crowd made / planned / gave bodies to {made} (want 12 each: the "
             f"Walker has a body)",
         )
         said = self.reports()
         self.check(
-            any(r.startswith("Crowd of 4: 4 planned") for r in said[-8:]),
+            any(r.startswith("Crowd of 12: 12 planned") for r in said[-8:]),
             f"no summary: {said[-8:]}",
         )
-        return f"4 copies planned in {secs:.1f} s after the dialog"
+        return f"12 copies planned in {secs:.1f} s after the dialog: twenty walkers"
 
     def preferences(self):
         self.s.py("""
