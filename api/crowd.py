@@ -153,13 +153,14 @@ def plan_crowd(
 
     Characters are taken in priority order (the given priority, then the longer distance
     from start to goal first). Each path is planned against the props and the spots where
-    the others stand still while it walks: the goals of those before it and the starts of
-    those after it (:func:`motion_patches.crowd.crowd.standing_spots`; dropped when they box it
-    in). Then each character in turn is checked against a space-time reservation of
-    everyone before it and kept ``spacing`` metres (default: two radii) from them by an
-    idle hold mid-walk on a double-support frame, else a wait at its start (whole 0.2 s
-    steps, each at most ``max_wait_seconds``), else a re-route round where the other walks
-    then (:func:`motion_patches.crowd.crowd.resolve`). Closer approaches left are returned as
+    the others stand still: their starts and goals (:func:`motion_patches.crowd.crowd.
+    standing_spots`; when they box it in, the goals of those before it and the starts of
+    those after it; when those do too, none). Then each character in turn is checked
+    against a space-time reservation of everyone before it and kept ``spacing`` metres
+    (default: two radii) from them by an idle hold mid-walk on a double-support frame, else
+    a wait at its start (whole 0.2 s steps, each at most ``max_wait_seconds``), else a
+    re-route round where the other walks then (:func:`motion_patches.crowd.crowd.resolve`;
+    a counter-flow through a narrow way is split into lanes). Closer approaches left are returned as
     ``conflicts`` by pair and frame, checked on the motion as written. Bad input (a
     character twice, two characters sent to one goal, goals closer than ``spacing``: one
     could never be free) raises :class:`MotionPatchesError` before anything is written.
@@ -467,7 +468,7 @@ def _place_ends(c):
     names = [f"{CROWD_SPOT}{c.pairs[n][0].name}" for n in c.order]
     for w in c.worlds.values():  # where each stands still, found where each is planned
         w.members.rank_ends, w.members.spot_names = c.rank_ends, names
-        w.members.spacing = c.spacing
+        w.members.spacing = c.spacing + CROWD_RESOLVE_SLACK  # kept as the crowd is resolved
 
 
 def _task(c, n, ghosts=()):

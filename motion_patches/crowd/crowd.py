@@ -2,14 +2,16 @@
 """Crowds of independently planned characters kept apart in space and time.
 
 Each character's path is planned on its own against the props (the paper plans one
-character), with the spots where the others stand still while it walks as extra
-obstacles: the goals of the characters before it in priority and the starts of those
-after it. The crowd is then resolved in priority order against a space-time reservation
-table (:class:`Reservations`): a character that would come too close to one placed
-before it is re-timed along its path (:mod:`.path_timing`: idle holds mid-walk, time warps
-to a stop on a double-support frame with feet planted, and a later start), else re-routed
-round where the other walks then; pairs left are mended locally, then by restarts with
-raised priorities. What none of these clears is reported by pair and frame, not hidden.
+character), with the spots where the others stand still as extra obstacles: their starts
+and goals (:func:`standing_spots`). The crowd is then resolved in priority order against
+a space-time reservation table (:class:`Reservations`): a character that would come too
+close to one placed before it is re-timed along its path (:mod:`.path_timing`: idle holds
+mid-walk, time warps to a stop on a double-support frame with feet planted, and a later
+start; holds only out of the way of those still to be placed, :mod:`.ways`), else
+re-routed round where the other walks then; pairs left are mended locally, then by
+restarts with raised priorities, where a counter-flow met head-on in a narrow way split
+into lanes (:mod:`.lanes`). What none of these clears is reported by pair and frame, not
+hidden.
 """
 
 from collections.abc import Callable, Sequence
@@ -20,7 +22,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..kinematics import retime
-from . import lanes, path_timing
+from . import lanes, path_timing, ways
+from .reservations import Reservations
 
 
 def disc(centre: Sequence[float] | np.ndarray, radius: float, sides: int = 12) -> np.ndarray:
@@ -37,26 +40,43 @@ def standing_spots(
     spacing: float,
     radius: float,
     box: tuple[np.ndarray, np.ndarray] | None = None,
+    every: bool = True,
 ) -> list[tuple[int, np.ndarray]]:
-    """[(index, polygon)] of the spots character ``n`` walks around: the goals of the
-    characters before it and the starts of those after it, as discs that keep ``spacing``
-    between roots once grown by the planner's ``radius``. ``ends`` [(start, goal)] are
-    (x, y, heading) states; a spot within that distance of ``n``'s own start or goal is
-    left out (it could not start or arrive at all), and so is one whose disc lies wholly
-    outside ``box`` (lo, hi) when given: where its plan never looks."""
+    """[(index, polygon)] of the spots character ``n`` walks around, as discs that keep
+    ``spacing`` between roots once grown by the planner's ``radius``: with ``every``, the
+    start and the goal of every other character (index ``2 m`` the start of character
+    ``m``, ``2 m + 1`` its goal); else only where the others stand while it walks if they
+    walk in priority order, the goals of those before it and the starts of those after it.
+
+    The crowd is resolved in an order of its own, and its walkers wait and hold, so which of
+    them still stand at their start or already at their goal while one walks by is not
+    known when it is planned: a plan past the goal of one ranked after it leaves that one
+    to arrive only once it has gone by, a plan past the start of one ranked before it has
+    that one set off before it comes, and in a dense crowd such orders chain until no
+    timing keeps them all. Round every spot there is no such order to keep; the fewer spots
+    are for a walker they box in. ``ends`` [(start, goal)] are (x, y, heading) states; a
+    spot within that distance of ``n``'s own start or goal is left out (it could not start
+    or arrive at all), and so is one whose disc lies wholly outside ``box`` (lo, hi) when
+    given: where its plan never looks."""
     if spacing <= 0:
         return []
     grow = max(spacing - radius, 0.05)
     mine = np.array([ends[n][0][:2], ends[n][1][:2]], float)
-    where = np.array([(g if m < n else s)[:2] for m, (s, g) in enumerate(ends)], float)
+    both = np.array([[s[:2], g[:2]] for s, g in ends], float)  # (characters, start / goal, 2)
+    if every:
+        index = np.arange(2 * len(ends))
+    else:
+        m = np.arange(len(ends))
+        index = np.where(m < n, 2 * m + 1, 2 * m)  # goals before it, starts after
+    where = both.reshape(-1, 2)[index]
     near = np.linalg.norm(where[:, None, :] - mine[None], axis=2).min(axis=1) < grow + radius
-    keep = ~near & (np.arange(len(ends)) != n)
+    keep = ~near & (index // 2 != n)
     ring = disc((0.0, 0.0), grow)
     if box is not None:
         reach = float(np.abs(ring).max())
         keep &= ((where + reach >= box[0]) & (where - reach <= box[1])).all(axis=1)
     keep = np.nonzero(keep)[0]
-    return [(int(m), ring + where[m]) for m in keep]
+    return [(int(index[k]), ring + where[k]) for k in keep]
 
 
 def timeline(track: np.ndarray, delay: int, horizon: int) -> np.ndarray:
@@ -88,249 +108,6 @@ def ghosts(
             keep.append(p)
     grow = max(spacing - radius, 0.05)
     return [disc(p, grow) for p in keep]
-
-
-# --- space-time reservations ------------------------------------------------------------
-
-_OFF = 1 << 20  # cell indices are shifted by this into a key's 21-bit fields
-
-
-class _Sorted:
-    """Reserved root positions (frame, xy, owner) sorted by an int64 key, in runs: each
-    reservation is a run of its own, and the newest run is merged into the one before
-    while that one holds at most four times as much (a log-structured merge). Runs grow
-    geometrically, so there are O(log N) of them to look through and every entry is
-    copied O(log N) times in all, whatever the size of the crowd. An owner's entries
-    always lie in one run (in key order), so what a look-up finds of one owner comes in
-    the order of the queries."""
-
-    _COLUMNS = ("key", "frame", "xy", "owner")
-
-    def __init__(self):
-        self.runs = []
-
-    @property
-    def size(self):
-        return sum(run["key"].size for run in self.runs)
-
-    def insert(self, key, frame, xy, owner):
-        order = np.argsort(key, kind="stable")
-        run = {
-            "key": key[order],
-            "frame": frame[order],
-            "xy": xy[order],
-            "owner": np.full(key.size, owner, np.int32),
-        }
-        self.runs.append(run)
-        while len(self.runs) > 1 and self.runs[-2]["key"].size <= 4 * self.runs[-1]["key"].size:
-            new = self.runs.pop()
-            old = self.runs.pop()
-            both = {c: np.concatenate((old[c], new[c])) for c in self._COLUMNS}
-            order = np.argsort(both["key"], kind="stable")
-            self.runs.append({c: both[c][order] for c in self._COLUMNS})
-
-    def remove(self, owner):
-        for i, run in enumerate(self.runs):
-            keep = run["owner"] != owner
-            if not keep.all():
-                self.runs[i] = {c: run[c][keep] for c in self._COLUMNS}
-        self.runs = [run for run in self.runs if run["key"].size]
-
-    def near(self, q):
-        """(query index, frame, xy, owner) of every entry whose key is one of ``q``."""
-        out = []
-        for run in self.runs:
-            lo = np.searchsorted(run["key"], q, "left")
-            n = np.searchsorted(run["key"], q, "right") - lo
-            hit = np.nonzero(n)[0]
-            if hit.size:
-                n = n[hit]
-                ent = np.repeat(lo[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
-                got = (run["frame"][ent], run["xy"][ent], run["owner"][ent])
-                out.append((np.repeat(hit, n), *got))
-        if not out:
-            return np.empty(0, int), np.empty(0, np.int64), np.empty((0, 2)), np.empty(0, int)
-        return tuple(np.concatenate(c) for c in zip(*out))
-
-
-class Reservations:
-    """A space-time reservation table (prioritised planning: Silver's cooperative
-    pathfinding, with frames as time steps): every reserved character holds the cells its
-    root passes through on each frame of its walk, and two standing spots, its start until
-    it leaves and its goal from its arrival on. A character placed later is checked against
-    them all: its walk against the others' walks and spots, its own spots against both.
-
-    Cells are ``spacing`` and :attr:`SLACK` wide, so two roots closer than that are in the
-    same cell or neighbours (nine cells to look in); a sparse table (sorted int64 keys of
-    frame and cell) keeps memory to the frames walked, whatever the size of the plaza.
-    Lookups are vectorised over frames."""
-
-    def __init__(self, spacing):
-        self.spacing = float(spacing)
-        self.cell = self.spacing + self.SLACK
-        self.moving = _Sorted()  # keyed by (frame, cell)
-        self.spot_keys = np.empty(0, np.int64)  # standing spots: sorted cell keys
-        self.spots = np.empty((0, 5), float)  # x, y, first frame, end frame (inf), owner
-        self.by_cell = _Sorted()  # moving again, keyed by cell alone
-        self.placed = {}  # index -> (delay, track)
-        self.horizon = 0
-
-    def _cells(self, xy):
-        return np.floor(np.asarray(xy, float) / self.cell).astype(np.int64) + _OFF
-
-    @staticmethod
-    def _key(t, c):
-        return (np.asarray(t, np.int64) << 42) | (c[..., 0] << 21) | c[..., 1]
-
-    SLACK = 0.05  # metres cells are wider than the spacing: the most :meth:`busy` adds
-    _RING = np.array([(i, j) for i in range(-1, 2) for j in range(-1, 2)], np.int64)
-    _RING_KEYS = (_RING[:, 0] << 21) + _RING[:, 1]  # added to a cell key: the cells round it
-
-    def _moving_near(self, t, xy):
-        """(query row, xy, owner) of moving entries on frame ``t[row]`` in the cell of
-        ``xy[row]`` or next to it."""
-        if not self.moving.size or not len(t):
-            return np.empty(0, int), np.empty((0, 2)), np.empty(0, int)
-        c = self._cells(xy)[:, None, :] + self._RING[None]
-        q = self._key(np.repeat(np.asarray(t)[:, None], len(self._RING), 1), c).ravel()
-        rows, _, where, owner = self.moving.near(q)
-        return rows // len(self._RING), where, owner
-
-    def _spots_near(self, xy):
-        """Indices of standing spots in the cells of the points ``xy`` or next to them."""
-        if not self.spot_keys.size:
-            return np.empty(0, int)
-        c = self._cells(xy)
-        c = np.unique(c[:, 0] << 21 | c[:, 1])  # the cells of the points, once each
-        q = np.unique((c[:, None] + self._RING_KEYS[None]).ravel())
-        lo = np.searchsorted(self.spot_keys, q, "left")
-        n = np.searchsorted(self.spot_keys, q, "right") - lo
-        hit = np.nonzero(n)[0]
-        if not hit.size:
-            return np.empty(0, int)
-        n = n[hit]  # disjoint ranges of the sorted keys, in order: already sorted and unique
-        return np.repeat(lo[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
-
-    def busy(self, track: np.ndarray, frames: int, margin: float = 0.01) -> np.ndarray:
-        """(len(track), frames) bool: ``track[k]`` closer than the spacing (and ``margin``)
-        to a reserved root on frame ``t`` (walking then, or standing at its start or goal
-        then), for every frame from 0; the last column stands for every frame after it.
-        Found from the cells about the track over all frames at once (the entries sorted by
-        cell), so its cost follows the traffic near the track, not the frames searched."""
-        if margin > self.SLACK:
-            raise ValueError(f"a margin of at most {self.SLACK} m, not {margin}")
-        track = np.asarray(track, float)
-        n, s2 = len(track), (self.spacing + margin) ** 2
-        out = np.zeros((n, frames + 2), np.int32)
-        if self.by_cell.size:
-            c = self._cells(track)[:, None, :] + self._RING[None]
-            rows, when, where, _ = self.by_cell.near((c[..., 0] << 21 | c[..., 1]).ravel())
-            if rows.size:
-                rows = rows // len(self._RING)
-                d = where - track[rows]
-                close = np.einsum("ij,ij->i", d, d) < s2
-                t = np.minimum(when[close], frames)
-                np.add.at(out, (rows[close], t), 1)
-                np.add.at(out, (rows[close], t + 1), -1)
-        near = self._spots_near(track)
-        if near.size:  # standing: a span of frames each
-            sp = self.spots[near]
-            d = track[:, None, :] - sp[None, :, :2]
-            k, j = np.nonzero(np.einsum("kjx,kjx->kj", d, d) < s2)
-            lo = np.minimum(sp[j, 2], frames).astype(int)
-            hi = np.minimum(sp[j, 3], frames + 1).astype(int)
-            keep = lo < hi
-            np.add.at(out, (k[keep], lo[keep]), 1)
-            np.add.at(out, (k[keep], hi[keep]), -1)
-        return (np.cumsum(out, axis=1) > 0)[:, : frames + 1]
-
-    def check(self, track: ArrayLike, delay: int = 0) -> dict[int, tuple[np.ndarray, int, float]]:
-        """Conflicts of a character walking ``track`` (frames, 2) from frame ``delay`` on,
-        standing at its first point before and at its last point after: {other index:
-        (frames too close (sorted array), closest frame, distance there)}."""
-        track = np.asarray(track, float)
-        d, n, s = int(delay), len(track), self.spacing
-        found = []  # (other, frame, distance) arrays
-        # walk against walks
-        t = np.arange(d, d + n)
-        rows, where, owner = self._moving_near(t, track)
-        if rows.size:
-            dist = np.linalg.norm(where - track[rows], axis=1)
-            close = dist < s
-            found.append((owner[close], t[rows[close]], dist[close]))
-        # my start (before I leave) and goal (after I arrive) against the others' walks
-        end = max(self.horizon, d + n)
-        for frames, xy in ((np.arange(0, d), track[0]), (np.arange(d + n, end), track[-1])):
-            if frames.size:
-                rows, where, owner = self._moving_near(
-                    frames, np.broadcast_to(xy, (frames.size, 2))
-                )
-                if rows.size:
-                    dist = np.linalg.norm(where - xy, axis=1)
-                    close = dist < s
-                    found.append((owner[close], frames[rows[close]], dist[close]))
-        # everything of mine against the others' standing spots
-        near = self._spots_near(track)
-        if near.size:
-            sp = self.spots[near]
-            dist = np.linalg.norm(track[:, None, :] - sp[None, :, :2], axis=2)  # (n, S)
-            when = t[:, None]
-            close = (dist < s) & (when >= sp[None, :, 2]) & (when < sp[None, :, 3])
-            r, k = np.nonzero(close)
-            found.append((sp[k, 4].astype(int), t[r], dist[r, k]))
-            for (a, b), xy in (((0, d), track[0]), ((d + n, np.inf), track[-1])):
-                dist = np.linalg.norm(sp[:, :2] - xy, axis=1)
-                lo, hi = np.maximum(sp[:, 2], a), np.minimum(sp[:, 3], b)
-                for k in np.nonzero((dist < s) & (lo < hi))[0]:  # both standing: every frame
-                    frames = np.arange(int(lo[k]), int(min(hi[k], max(end, lo[k] + 1))))
-                    found.append(
-                        (np.full(frames.size, int(sp[k, 4])), frames, np.full(frames.size, dist[k]))
-                    )
-        out = {}
-        if not found:
-            return out
-        who = np.concatenate([f[0] for f in found]).astype(int)
-        when = np.concatenate([f[1] for f in found]).astype(np.int64)
-        dist = np.concatenate([f[2] for f in found])
-        for j in np.unique(who):
-            m = who == j
-            k = int(np.argmin(dist[m]))
-            out[int(j)] = (np.unique(when[m]), int(when[m][k]), float(dist[m][k]))
-        return out
-
-    def reserve(self, index: int, track: ArrayLike, delay: int = 0) -> None:
-        """Hold ``track``'s cells over its frames and its two standing spots for ``index``."""
-        track = np.asarray(track, float)
-        d, n = int(delay), len(track)
-        t = np.arange(d, d + n)
-        c = self._cells(track)
-        self.moving.insert(self._key(t, c), t, track, index)
-        self.by_cell.insert(c[:, 0] << 21 | c[:, 1], t, track, index)
-        spots = np.array([[*track[0], 0, d, index], [*track[-1], d + n, np.inf, index]], float)
-        spots = spots[spots[:, 2] < spots[:, 3]]
-        c = self._cells(spots[:, :2])
-        skeys = c[:, 0] << 21 | c[:, 1]
-        order = np.argsort(skeys)  # np.insert keeps the given order at one position
-        skeys, spots = skeys[order], spots[order]
-        at = np.searchsorted(self.spot_keys, skeys)
-        self.spot_keys = np.insert(self.spot_keys, at, skeys)
-        self.spots = np.insert(self.spots, at, spots, axis=0)
-        self.placed[index] = (d, track)
-        self.horizon = max(self.horizon, d + n)
-
-    def remove(self, index: int) -> None:
-        """Free everything ``index`` holds (the others keep their places)."""
-        self.moving.remove(index)
-        self.by_cell.remove(index)
-        keep = self.spots[:, 4] != index
-        self.spot_keys, self.spots = self.spot_keys[keep], self.spots[keep]
-        del self.placed[index]
-        self.horizon = max((d + len(t) for d, t in self.placed.values()), default=0)
-
-    def line(self, index: int, horizon: int) -> np.ndarray:
-        """(horizon, 2) positions of a reserved character (as :func:`timeline`)."""
-        d, track = self.placed[index]
-        return timeline(track, d, horizon)
 
 
 def held_track(
@@ -528,10 +305,16 @@ def _resolve_once(
     counts each character's re-plans over all passes (its next one's number)."""
     table = Reservations(spacing)
     schedules, conflicts = [None] * len(tracks), []
+    paths, waiting = ways.Ways(tracks, spacing), np.ones(len(tracks), bool)
+
+    def clear(track, mask):  # holds only out of the way of those still to be placed
+        return None if mask is None else np.asarray(mask, bool) & ~paths.crossed(track, waiting)
+
     for i in order:
-        track = tracks[i]
-        s = Schedule(0, (), 0, np.asarray(track, float)[:, :2], holdable[i])
-        s.base = (s.track, s.holdable)
+        waiting[i] = False
+        track = np.asarray(tracks[i], float)[:, :2]
+        s = Schedule(0, (), 0, track, clear(track, holdable[i]))
+        s.base = (s.track, holdable[i])
         best, reserved = None, []
         for attempt in range(rounds + 1):
             found = table.check(s.track)
@@ -550,13 +333,15 @@ def _resolve_once(
                 break
             horizon = max(table.horizon, len(s.track) + s.delay) + 1
             for j, (_, frame, _) in found.items():
-                reserved += ghosts(table.line(j, horizon), frame, spacing, radius, fps)
+                d, walked = table.placed[j]
+                reserved += ghosts(timeline(walked, d, horizon), frame, spacing, radius, fps)
             new = replan(i, list(reserved))
             if new is None:
                 break
             versions[i] += 1
-            s = Schedule(0, (), versions[i], np.asarray(new[0], float)[:, :2], new[1])
-            s.base = (s.track, s.holdable)
+            track = np.asarray(new[0], float)[:, :2]
+            s = Schedule(0, (), versions[i], track, clear(track, new[1]))
+            s.base = (s.track, new[1])
         s, found = best
         table.reserve(i, s.track, s.delay)
         schedules[i] = s
@@ -577,46 +362,54 @@ def _resolve_once(
 def _repair(table, schedules, conflicts, max_delay, max_hold, ramp):
     """Conflicts left mended locally, cheaper than a restart: a character still too close
     is freed with those it meets, placed first and re-timed (:func:`_timed`), then they are
-    re-timed round it; kept where all of them come clear, else put back as they were.
-    ``schedules`` and ``table`` are changed in place; the ranks of the group are re-dealt in
-    their new order. Returns how many groups were mended."""
+    re-timed round it; kept where all of them come clear, else put back as they were. When
+    that fails, the group is widened to everyone its plan meets were it to walk at once
+    (those whose timings leave it no way through) and tried again. ``schedules`` and
+    ``table`` are changed in place; the ranks of the group are re-dealt in their new order.
+    Returns how many groups were mended."""
     mended = 0
     for b in list(dict.fromkeys(c["b"] for c in conflicts)):
-        if not table.check(schedules[b].track, schedules[b].delay):
+        s = schedules[b]
+        if not table.check(s.track, s.delay):
             continue  # mended with another group
-        found = _without(table, b, schedules[b])
-        group = [b] + sorted(found, key=lambda j: schedules[j].rank)
-        old = {i: schedules[i] for i in group}
-        for i in group[1:]:
-            table.remove(i)
-        new = {}
-        for i in group:
-            fresh = Schedule(0, (), old[i].version, *old[i].base, old[i].rank, old[i].base)
-            c = table.check(fresh.track)
-            timed, c = _timed(table, fresh, max_delay, max_hold, ramp, c) if c else (fresh, c)
-            if c:
+        table.remove(b)
+        near = sorted(table.check(s.track, s.delay), key=lambda j: schedules[j].rank)
+        met = sorted(set(table.check(s.base[0])) - set(near), key=lambda j: schedules[j].rank)
+        table.reserve(b, s.track, s.delay)
+        for group in [[b] + near, [b] + near + met][: 2 if met else 1]:
+            new = _in_turn(table, schedules, group, max_delay, max_hold, ramp)
+            if new is not None:
+                for i, rank in zip(group, sorted(schedules[i].rank for i in group)):
+                    new[i].rank = rank
+                    schedules[i] = new[i]
+                mended += 1
                 break
-            table.reserve(i, timed.track, timed.delay)
-            new[i] = timed
-        if len(new) < len(group):
-            for i in new:
-                table.remove(i)
-            for i in group:
-                table.reserve(i, old[i].track, old[i].delay)
-            continue
-        for i, rank in zip(group, sorted(old[i].rank for i in group)):
-            new[i].rank = rank
-            schedules[i] = new[i]
-        mended += 1
     return mended
 
 
-def _without(table, i, s):
-    """The conflicts of ``s`` (character ``i``, reserved) against the others."""
-    table.remove(i)
-    found = table.check(s.track, s.delay)
-    table.reserve(i, s.track, s.delay)
-    return found
+def _in_turn(table, schedules, group, max_delay, max_hold, ramp):
+    """The characters of ``group`` (reserved in ``table``) freed and placed again in its
+    order, each re-timed from its plan before any wait or hold (:func:`_timed`): {character:
+    schedule} when all of them come clear (reserved so), else None (the table as it was)."""
+    old = {i: schedules[i] for i in group}
+    for i in group:
+        table.remove(i)
+    new = {}
+    for i in group:
+        fresh = Schedule(0, (), old[i].version, *old[i].base, old[i].rank, old[i].base)
+        c = table.check(fresh.track)
+        timed, c = _timed(table, fresh, max_delay, max_hold, ramp, c) if c else (fresh, c)
+        if c:
+            break
+        table.reserve(i, timed.track, timed.delay)
+        new[i] = timed
+    if len(new) == len(group):
+        return new
+    for i in new:
+        table.remove(i)
+    for i in group:
+        table.reserve(i, old[i].track, old[i].delay)
+    return None
 
 
 def _left(schedules, spacing):
@@ -650,10 +443,11 @@ def resolve(
     all starting on frame 0: each character in turn is checked against the
     :class:`Reservations` of those before it and, when it comes closer than ``spacing``,
     first re-timed to its earliest arrival clear of them all (:func:`_timed`,
-    :func:`path_timing.earliest`: a wait at the start and idle holds anywhere on the way,
-    one hold preferred); when no such timing fits in the longest wait and holds, changed by
-    (at most ``stages`` changes, the first that clears everything, in this order of
-    preference):
+    :func:`path_timing.earliest`: a wait at the start and idle holds on the way, one hold
+    preferred; a hold is never where one still to be placed walks, :class:`ways.Ways`, so
+    no walker stands in a doorway the others have yet to go through); when no such timing
+    fits in the longest wait and holds, changed by (at most ``stages`` changes, the first
+    that clears everything, in this order of preference):
 
     1. an idle hold (whole ``step`` frames, all its holds at most ``max_hold``, see
        :func:`_improve` for which lengths are tried) on a
@@ -673,9 +467,11 @@ def resolve(
     what is still left makes the crowd be resolved again from the start with the
     characters that met them placed first (prioritised planning's restart with raised
     priorities), at most ``restarts`` times, and the pass with the fewest frames too close
-    is kept. What is left is reported: [{"a", "b" (indices, ``a`` placed first), "frame"
-    (closest), "first_frame", "frames", "distance_m"}]. :attr:`Schedule.rank` is each
-    character's place in the order of the pass kept."""
+    is kept. Before a restart, a counter-flow left meeting head-on in a narrow way is split
+    into lanes (:func:`lanes.form`), the same over the passes that follow. What is left is
+    reported: [{"a", "b" (indices, ``a`` placed first), "frame" (closest), "first_frame",
+    "frames", "distance_m"}]. :attr:`Schedule.rank` is each character's place in the order
+    of the pass kept."""
     ramp = int(ramp if ramp is not None else round(fps)) // 2 * 2
     max_hold = max_delay if max_hold is None else max_hold
     step = max(int(step), 1)
@@ -683,6 +479,7 @@ def resolve(
     order, versions, best = list(range(len(tracks))), [0] * len(tracks), None
     tracks, laned = list(tracks), {}  # laned: {character: version of its lane plan}
     strips = {}  # {character: the strips keeping it in its lane}, kept when it is re-routed
+    places = []  # the lanes' places (midpoint, axis), the same over the passes
     on_lane = replan and (lambda i, discs: replan(i, strips.get(i, []) + discs))
     for _ in range(restarts + 1):
         schedules, conflicts, table = _resolve_once(
@@ -714,7 +511,7 @@ def resolve(
             break
         if replan is not None:  # lanes where pairs meet head-on, for the passes that follow
             formed = lanes.form(
-                table.placed, conflicts, tracks, laned, replan, versions, spacing, radius
+                table.placed, conflicts, tracks, laned, replan, versions, spacing, radius, places
             )
             for i, (version, track, mask, lane) in formed.items():
                 laned[i], tracks[i], holdable[i], strips[i] = version, track, mask, lane

@@ -7,13 +7,16 @@ unless one waits for the other to be through, and a re-route round where the oth
 then (:func:`~.crowd.ghosts`) leaves the later one a sliver beside the first. Crowd tools
 settle this with a keep-right rule, and so does this module: the places where a pass of the
 resolver left pairs meeting head-on (:func:`regions`) are moved onto the narrowest middle of
-the flow through them (:func:`centred`), and every walker going along such a place is
-re-planned with a strip on its left as a passing obstacle (:func:`strip`), the two
-directions' strips each reaching half a spacing over the middle line, so the flows pass on
-their own sides and only the order within a lane is left to the holds and waits. A lane
-plan that is a long way round is not taken. A way too narrow for two has no sides: its
-re-plans find no path, and its walkers are left to take turns by holds and waits, or are
-reported.
+the flow through them (:func:`centred`), turned square to it (:func:`flow_axis`), and kept
+only where the flow is held in, by a doorway or a narrow way (:func:`confined`; in the open,
+re-routes and timing part walkers and a strip would only wall off the way round). Every
+walker going along such a place is re-planned with a strip on its left as a passing obstacle
+(:func:`strip`), the two directions' strips each reaching half a spacing over the middle
+line, so the flows pass on their own sides and only the order within a lane is left to the
+holds and waits. A place is kept over the passes of the resolver, so a pass that finds it
+again gives its walkers the same strips. A lane plan that is a long way round is not taken.
+A way too narrow for two has no sides: its re-plans find no path, and its walkers are left
+to take turns by holds and waits, or are reported.
 """
 
 from collections.abc import Callable
@@ -21,8 +24,7 @@ from collections.abc import Callable
 import numpy as np
 
 HEAD_ON = -0.5  # cosine between two headings under which two walkers meet head-on
-DETOUR = 1.25  # a lane plan longer than this many times the plan it replaces is not taken
-DETOUR_M = 2.0  # nor one longer by more than this
+DETOUR = 1.5  # a lane plan longer than this many times the plan it replaces is not taken
 REACH_M = 0.4  # a heading is taken between the points this far behind and ahead on a track
 ALONG_M = 1.0  # a lane strip reaches this far either way of the place's middle
 ACROSS_M = 1.0  # and this far into the walker's left
@@ -65,7 +67,12 @@ def meeting(
 
 
 def strip(
-    mid: np.ndarray, axis: np.ndarray, side: int, spacing: float, radius: float
+    mid: np.ndarray,
+    axis: np.ndarray,
+    side: int,
+    spacing: float,
+    radius: float,
+    sway: float = SWAY_M,
 ) -> np.ndarray:
     """(4, 2) counter-clockwise rectangle on the left of a walker going ``side * axis``
     past ``mid``: from half a spacing (less the planner's ``radius``, plus the sway) over
@@ -74,7 +81,7 @@ def strip(
     least ``spacing`` apart."""
     u = np.asarray(axis, float) * side
     n = np.array([-u[1], u[0]])  # the walker's left
-    over = max(spacing / 2 - radius, 0.0) + SWAY_M
+    over = max(spacing / 2 - radius, 0.0) + sway
     c = np.asarray(mid, float)
     return np.array(
         [
@@ -154,9 +161,62 @@ def centred(
     return best
 
 
+def spread(mid: np.ndarray, axis: np.ndarray, tracks: list[np.ndarray], across: float) -> float:
+    """Metres the points of ``tracks`` in the :data:`BIN_M` slice about ``mid`` (square to
+    ``axis``) spread over, of those within ``across`` of ``mid``."""
+    n = np.array([-axis[1], axis[0]])
+    parts = [np.empty(0)]
+    for t in tracks:
+        rel = np.asarray(t, float)[:, :2] - mid
+        v = rel @ n
+        parts.append(v[(np.abs(rel @ axis) <= BIN_M / 2) & (np.abs(v) <= across)])
+    got = np.concatenate(parts)
+    return float(np.ptp(got)) if got.size else 0.0
+
+
+def confined(mid: np.ndarray, axis: np.ndarray, tracks: list[np.ndarray]) -> bool:
+    """Whether the flow through ``mid`` (its narrowest place, :func:`centred`) is held in
+    there: looked at twice as far across (2 :data:`ACROSS_M`), it spreads no wider than
+    within :data:`ACROSS_M` (to a slice, :data:`BIN_M`). So it is in a doorway or a narrow
+    way, whose sides stop the walks whatever their goals; in the open the flow spreads
+    further the further one looks, and walkers meeting there are kept apart by re-routes
+    and timing, not lanes, whose strips would only wall off the way round."""
+    return spread(mid, axis, tracks, 2 * ACROSS_M) <= spread(mid, axis, tracks, ACROSS_M) + BIN_M
+
+
+def flow_axis(mid: np.ndarray, axis: np.ndarray, tracks: list[np.ndarray]) -> np.ndarray:
+    """The direction the flow takes through the region about ``mid`` (:data:`ALONG_M`
+    along ``axis``, :data:`ACROSS_M` across): the mean of the directions the walks through
+    it go along it, each turned to ``axis``'s way (the two directions of a counter-flow
+    count alike). One pair meeting at a slant gives a slanted axis; the flow through a
+    doorway goes through it square."""
+    axis = np.asarray(axis, float)
+    n = np.array([-axis[1], axis[0]])
+    total = np.zeros(2)
+    for t in tracks:
+        t = np.asarray(t, float)[:, :2]
+        rel = t - mid
+        inside = (np.abs(rel @ axis) <= ALONG_M) & (np.abs(rel @ n) <= ACROSS_M)
+        k = np.nonzero(inside[:-1])[0]
+        if not k.size:
+            continue
+        d = (t[k + 1] - t[k]).sum(axis=0)
+        size = float(np.linalg.norm(d))
+        if size >= ALONG_M and abs(float(d @ axis)) >= -HEAD_ON * size:
+            total += d / size * np.sign(d @ axis)
+    size = float(np.linalg.norm(total))
+    return total / size if size > 1e-9 else axis
+
+
 def length(track: np.ndarray) -> float:
     """Metres walked along a ground ``track``."""
     return float(np.linalg.norm(np.diff(np.asarray(track, float)[:, :2], axis=0), axis=1).sum())
+
+
+def same_place(a: tuple[np.ndarray, np.ndarray], b: tuple[np.ndarray, np.ndarray]) -> bool:
+    """Whether two places (midpoint, axis) are one: closer than :data:`ALONG_M`, their axes
+    along one line (either way)."""
+    return bool(np.linalg.norm(a[0] - b[0]) < ALONG_M and abs(float(a[1] @ b[1])) > -HEAD_ON)
 
 
 def form(
@@ -168,33 +228,48 @@ def form(
     versions: list[int],
     spacing: float,
     radius: float,
+    places: list[tuple[np.ndarray, np.ndarray]] | None = None,
 ) -> dict[int, tuple[int, np.ndarray, np.ndarray | None, list[np.ndarray]]]:
     """Lanes where pairs were left too close head-on (:func:`regions`, from the crowd's
     reservations ``placed`` {character: (delay, track)}): every character not yet
-    ``laned`` whose plan (``tracks``) walks through such a region along it is re-planned
+    ``laned`` whose plan (``tracks``) walks through such a place along it is re-planned
     round the :func:`strip` on its left there (``replan(i, polygons)``, counted in
-    ``versions``), so the two flows pass on their own sides. Returns {character: (version,
-    track, holdable)} of the new plans (a character with no path on its side keeps its
+    ``versions``), so the two flows pass on their own sides. ``places`` [(midpoint, axis)]
+    are the lanes of the passes before (extended in place): a place found again is the one
+    already there (:func:`same_place`), so every walker through it keeps to the same
+    strips, whichever pair of a pass found it. Returns {character: (version, track,
+    holdable, strips)} of the new plans (a character with no path on its side keeps its
     plan)."""
-    places = [(centred(m, u, tracks), u) for m, u in regions(placed, conflicts)]
+    places = [] if places is None else places
+    fresh = 0
+    for mid, axis in regions(placed, conflicts):
+        for _ in range(2):  # the flow's direction and narrowest middle, each from the other
+            axis = flow_axis(mid, axis, tracks)
+            mid = centred(mid, axis, tracks)
+        found = (mid, axis)
+        if confined(mid, axis, tracks) and not any(same_place(found, p) for p in places):
+            places.append(found)
+            fresh += 1
     out: dict[int, tuple[int, np.ndarray, np.ndarray | None, list[np.ndarray]]] = {}
-    if not places:
+    if not fresh:
         return out
     for i, track in enumerate(tracks):
         if i in laned:
             continue
-        strips = []
-        for mid, axis in places:
-            side = side_of(np.asarray(track, float)[:, :2], mid, axis)
-            if side:
-                strips.append(strip(mid, axis, side, spacing, radius))
-        if not strips:
+        track = np.asarray(track, float)[:, :2]
+        mine = [(p, side_of(track, *p)) for p in places]
+        mine = [(p, side) for p, side in mine if side]
+        if not mine:
             continue
+        strips = [strip(mid, axis, side, spacing, radius) for (mid, axis), side in mine]
         got = replan(i, strips)
+        if got is None:  # a lane too narrow for the planner's way through: without the sway
+            strips = [strip(m, u, side, spacing, radius, 0.0) for (m, u), side in mine]
+            got = replan(i, strips)
         if got is None:
             continue
         versions[i] += 1
-        new, was = length(got[0]), length(track)
-        if new <= min(DETOUR * was, was + DETOUR_M):  # a lane, not a way round
-            out[i] = (versions[i], np.asarray(got[0], float)[:, :2], got[1], strips)
+        lane = np.asarray(got[0], float)[:, :2]
+        if length(lane) <= DETOUR * length(track):  # a lane, not a way round
+            out[i] = (versions[i], lane, got[1], strips)
     return out

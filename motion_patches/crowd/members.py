@@ -237,17 +237,21 @@ def unpacked(motions: list) -> list:
     ]
 
 
-def spots_of(task: MemberTask, world: MemberWorld) -> list[Obstacle]:
-    """Where the others stand still while the member walks
-    (:func:`~.crowd.standing_spots` of its rank), as obstacles in its world."""
+def spots_of(task: MemberTask, world: MemberWorld, every: bool = True) -> list[Obstacle]:
+    """Where the others stand still (:func:`~.crowd.standing_spots` of its rank: with
+    ``every``, every other's start and goal, else those it walks by if the crowd walks in
+    priority order), as obstacles in its world."""
     if task.rank is None or not world.rank_ends:
         return []
     radius = world.settings.radius
     box = plan_box(task.ends[0], task.ends[1], world.planner)
     if box is not None:
         box = (box[0] * task.size, box[1] * task.size)  # in the world of size 1
-    found = standing_spots(world.rank_ends, task.rank, world.spacing, radius, box)
-    return [Obstacle(world.spot_names[m], poly / task.size) for m, poly in found]
+    found = standing_spots(world.rank_ends, task.rank, world.spacing, radius, box, every)
+    return [
+        Obstacle(f"{world.spot_names[k // 2]} {('start', 'goal')[k % 2]}", poly / task.size)
+        for k, poly in found
+    ]
 
 
 def plan_box(
@@ -273,30 +277,21 @@ def plan_box(
 
 
 def plan_member(task: MemberTask, world: MemberWorld) -> Member | NoPlan:
-    """Plan one member round the standing spots (dropped when they box it in) and, when
-    re-routing, round its ghosts (no plan when they box it in); then round the props that
-    move by re-routing (the crowd times the waits); then its motion."""
+    """Plan one member round the standing spots and, when re-routing, round its ghosts (no
+    plan when they box it in); then round the props that move by re-routing (the crowd
+    times the waits); then its motion."""
     env, planner = world.env, world.planner
     radius = world.settings.radius
-    spots = spots_of(task, world)
     mine = np.array([task.ends[0][:2], task.ends[1][:2]], float)
     extra = [Obstacle(f"{GHOST}{k}", np.asarray(p, float)) for k, p in enumerate(task.ghosts)]
     extra = [g for g in extra if not g.within(mine, radius).any()]  # not on its own ends
     try:
         with without(env, task.own):
-            for ob in spots + extra:  # where the others stand still while this one walks
+            for ob in extra:  # where others walk when it would meet them
                 env.place(ob)
             try:
                 with without(env, world.awake):
-                    try:
-                        plan = planned_path(planner, task.ends, explain=not (spots or extra))
-                    except PlanError:
-                        if not spots or extra:
-                            raise
-                        for spot in spots:  # boxed in by the others: plan past them
-                            env.remove(spot.name)
-                        spots = []
-                        plan = planned_path(planner, task.ends)
+                    plan = round_spots(task, world, bool(extra))
                 if world.tracks:
                     plan, _, left = around_moving(
                         planner,
@@ -311,11 +306,38 @@ def plan_member(task: MemberTask, world: MemberWorld) -> Member | NoPlan:
                         text = moving_text(left, world.patch, world.first, world.scene_fps)
                         return NoPlan(task.entry, "moving", text, "moving", [x.prop for x in left])
             finally:
-                for ob in spots + extra:
+                for ob in extra:
                     env.remove(ob.name)
     except PlanError as exc:
         return no_plan_of(task.entry, exc)
     return synthesised(task, world, plan)
+
+
+def round_spots(task: MemberTask, world: MemberWorld, ghosts: bool) -> Plan:
+    """The member's plan round where the others stand still (:func:`spots_of`): round every
+    other's start and goal; boxed in by them, round those it walks by if the crowd walks in
+    priority order; boxed in again, past them all, but not when re-routing round ``ghosts``
+    (it raises then: no way round where the others walk)."""
+    env, planner = world.env, world.planner
+
+    def planned(spots):
+        for ob in spots:
+            env.place(ob)
+        try:
+            return planned_path(planner, task.ends, explain=not (spots or ghosts))
+        finally:
+            for ob in spots:
+                env.remove(ob.name)
+
+    tries = [spots_of(task, world, every=True)]
+    if tries[0]:
+        fewer = spots_of(task, world, every=False)
+        tries += [fewer] if len(fewer) < len(tries[0]) else []
+        tries += [[]] if tries[-1] and not ghosts else []
+    for spots in tries[:-1]:
+        with contextlib.suppress(PlanError):
+            return planned(spots)
+    return planned(tries[-1])
 
 
 def plan_members(tasks: Sequence[MemberTask], world: MemberWorld) -> list:

@@ -4,7 +4,7 @@
 import numpy as np
 import pytest
 
-from motion_patches.crowd import crowd
+from motion_patches.crowd import crowd, ways
 from motion_patches.kinematics import contacts, retime
 from motion_patches.kinematics.motion import concatenate
 from motion_patches.planning.planner import SegmentPlanner, plan_motions
@@ -147,22 +147,76 @@ def test_reroute_when_neither_hold_nor_wait_clears():
     assert conflicts0 and not sched0[1].rerouted  # without re-routing the conflict stays
 
 
-def test_standing_spots_are_earlier_goals_and_later_starts():
+def test_a_walker_held_up_does_not_stop_where_one_still_to_come_walks():
+    """b holds before crossing a's path; c, placed after b, walks north a little before the
+    crossing. Without c, b stops right before the crossing; with c to come, b stops before
+    c's way instead, out of it (a hold there would block c until b walks on)."""
+    a = line((5.0, -5.0), (5.0, 5.0), 101)
+    b = line((0.0, 0.0), (10.0, 0.0), 101)  # meets a at (5, 0) on frame 50
+    c = line((4.0, -5.0), (4.0, 5.0), 101)
+    ones = np.ones(101, bool)
+    sched, left = crowd.resolve([a, b], None, 0.5, 0.25, 30.0, 60, 3, ramp=10, holdable=[ones] * 2)
+    ((k, _),) = sched[1].holds
+    assert left == [] and abs(b[k][0] - 4.0) < 0.5  # where c would walk
+    sched, left = crowd.resolve(
+        [a, b, c], None, 0.5, 0.25, 30.0, 60, 3, ramp=10, holdable=[ones] * 3
+    )
+    ((k, _),) = sched[1].holds
+    assert left == [] and 4.0 - b[k][0] >= 0.5 and b[k][0] < 4.5  # before c's way, out of it
+    la, lb, lc = lines_of(sched)
+    assert min(min_gap(la, lb), min_gap(la, lc), min_gap(lb, lc)) >= 0.5
+
+
+def test_the_ways_of_those_to_come_are_found_within_the_spacing():
+    """Every frame within the spacing of a waiting one's path is found, none further than
+    the spacing and :data:`ways.BETWEEN_M` (paths are kept a point every few frames)."""
+    tracks = [line((0.0, 0.0), (10.0, 0.0), 101), line((0.0, 3.0), (10.0, 3.0), 101)]
+    paths = ways.Ways(tracks, 0.5)
+    probe = line((5.0, -2.0), (5.0, 5.0), 71)  # 0.1 m a frame, across both
+    gap = np.minimum(np.abs(probe[:, 1]), np.abs(probe[:, 1] - 3.0))
+    found = paths.crossed(probe, np.array([True, True]))
+    assert found[gap < 0.5].all() and (gap[found] < 0.5 + ways.BETWEEN_M).all()
+    second = paths.crossed(probe, np.array([False, True]))  # the first already placed
+    assert np.array_equal(second, found & (probe[:, 1] > 1.5))
+    assert not paths.crossed(probe, np.zeros(2, bool)).any()
+
+
+def test_a_pair_left_is_mended_by_placing_the_one_held_fast_first():
+    """b cannot wait (c comes to stand by its start on frame 3) nor hold, and meets a where
+    their paths cross: placed after a, it stays too close. Mended (no restart): b placed
+    first and a re-timed round it, a waiting at its start."""
+    a = line((5.0, -5.0), (5.0, 5.0), 101)
+    c = line((10.0, -2.0), (10.0, -0.45), 4)
+    b = line((10.0, 0.0), (0.0, 0.0), 101)
+    sched, left = crowd.resolve([a, c, b], None, 0.5, 0.25, 30.0, 30, 3, restarts=0)
+    assert left == []
+    assert sched[2].rank == 0 and (sched[2].delay, sched[2].holds) == (0, ())
+    assert sched[0].delay > 0
+    assert min_gap(*lines_of([sched[0], sched[2]])) >= 0.5
+
+
+def test_standing_spots_are_every_start_and_goal_else_those_passed_in_priority_order():
     ends = [((0, 0, 0), (10, 0, 0)), ((0, 3, 0), (10, 3, 0)), ((0, 6, 0), (10, 6, 0))]
-    spots = crowd.standing_spots(ends, 1, spacing=1.0, radius=0.25)
-    assert [m for m, _ in spots] == [0, 2]
-    centres = [poly.mean(axis=0) for _, poly in spots]
-    assert np.allclose(centres[0], (10, 0)) and np.allclose(centres[1], (0, 6))
+    every = crowd.standing_spots(ends, 1, spacing=1.0, radius=0.25)
+    assert [k for k, _ in every] == [0, 1, 4, 5]  # starts 2 m, goals 2 m + 1: of 0 and 2
+    centres = [poly.mean(axis=0) for _, poly in every]
+    assert np.allclose(centres, [(0, 0), (10, 0), (0, 6), (10, 6)])
+    # fewer: the goal of the one before it, the start of the one after
+    spots = crowd.standing_spots(ends, 1, spacing=1.0, radius=0.25, every=False)
+    assert [k for k, _ in spots] == [1, 4]
     r = np.linalg.norm(spots[0][1] - (10, 0), axis=1)  # a polygon round the 0.75 m disc
     assert np.allclose(r, 0.75 / np.cos(np.pi / 12))
-    ends[0] = ((0, 0, 0), (10, 3.5, 0))
-    assert [m for m, _ in crowd.standing_spots(ends, 1, 1.0, 0.25)] == [2]
+    ends[0] = ((0, 0, 0), (10, 3.5, 0))  # a goal by its own goal is left out
+    assert [k for k, _ in crowd.standing_spots(ends, 1, 1.0, 0.25)] == [0, 4, 5]
+    assert [k for k, _ in crowd.standing_spots(ends, 1, 1.0, 0.25, every=False)] == [4]
     assert crowd.standing_spots(ends, 0, spacing=0.0, radius=0.25) == []
-    # a box: only the spots whose disc reaches into it (the one at (0, 6) barely does)
+    # a box: only the spots whose disc reaches into it (those at y = 6 barely do)
     box = (np.array([-1.0, -1.0]), np.array([11.0, 5.3]))
-    assert [m for m, _ in crowd.standing_spots(ends, 1, 1.0, 0.25, box)] == [2]
+    assert [k for k, _ in crowd.standing_spots(ends, 1, 1.0, 0.25, box)] == [0, 4, 5]
+    assert [k for k, _ in crowd.standing_spots(ends, 1, 1.0, 0.25, box, False)] == [4]
     box = (np.array([-1.0, -1.0]), np.array([11.0, 5.0]))
-    assert crowd.standing_spots(ends, 1, 1.0, 0.25, box) == []
+    assert [k for k, _ in crowd.standing_spots(ends, 1, 1.0, 0.25, box)] == [0]
+    assert crowd.standing_spots(ends, 1, 1.0, 0.25, box, every=False) == []
 
 
 def test_reservations_find_the_same_after_many_merges():

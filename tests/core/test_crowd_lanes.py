@@ -80,3 +80,64 @@ def test_a_head_on_pair_no_wait_clears_gets_lanes():
     assert all(s.version == 1 for s in sched)
     _, left = crowd.resolve([a, b], None, 0.55, 0.25, 30.0, 0, 6)
     assert left
+
+
+def doorway_flow(seed=3, count=20, spread=0.7):
+    """Walks through a doorway at x = 0 (crossing it within ``spread`` of y = 0) from and to
+    places up to 6 m either side, every other one the other way."""
+    rng = np.random.default_rng(seed)
+    tracks = []
+    for k in range(count):
+        y = rng.uniform(-spread, spread)
+        y0, y1 = rng.uniform(-6, 6, 2)
+        a = line((-6.0, y0), (0.0, y), 60)
+        b = line((0.0, y), (6.0, y1), 60)
+        tracks.append(np.vstack((a, b[1:]))[:: 1 if k % 2 else -1])
+    return tracks
+
+
+def test_the_flow_through_a_doorway_goes_square_through_it_whatever_pair_met():
+    tracks = doorway_flow()
+    slant = np.array([1.0, 0.5]) / np.hypot(1.0, 0.5)  # a pair met at a slant
+    axis = lanes.flow_axis(np.zeros(2), slant, tracks)
+    assert abs(np.linalg.norm(axis) - 1.0) < 1e-9 and axis[0] > 0.97
+    assert np.allclose(lanes.flow_axis(np.zeros(2), -slant, tracks), -axis)  # its way kept
+
+
+def test_a_doorway_holds_its_flow_and_the_open_does_not():
+    door, mid, axis = doorway_flow(), np.zeros(2), np.array([1.0, 0.0])
+    assert lanes.confined(mid, axis, door)
+    assert not lanes.confined(mid, axis, doorway_flow(spread=3.0))  # the same walks, no wall
+
+
+def test_a_place_found_again_is_the_same_place():
+    a = (np.array([0.0, 0.0]), np.array([1.0, 0.0]))
+    assert lanes.same_place(a, (np.array([0.4, 0.3]), np.array([-0.98, 0.2])))
+    assert not lanes.same_place(a, (np.array([1.5, 0.0]), np.array([1.0, 0.0])))
+    assert not lanes.same_place(a, (np.array([0.2, 0.0]), np.array([0.0, 1.0])))
+
+
+def test_lanes_stay_the_same_over_passes_and_narrow_ones_lose_the_sway():
+    """Two head-on walkers give a place; a re-plan round the strips with the sway finds no
+    path, one without it does. A second head-on pair at that place later makes no new place
+    and re-plans no one."""
+    a = line((-5.0, 0.0), (5.0, 0.0), 121)
+    b = line((5.0, 0.0), (-5.0, 0.0), 121)
+    tracks, widths, places = [a, b], [], []
+
+    def replan(i, polygons):
+        edge = min(np.abs(p[:, 1]).min() for p in polygons)  # the strip's edge past the middle
+        widths.append(round(float(edge), 3))
+        if edge > 0.05:
+            return None  # too narrow with the sway
+        return tracks[i] + np.array([0.0, 0.3 if i else -0.3]), None
+
+    placed = {0: (0, a), 1: (0, b)}
+    met = [{"a": 0, "b": 1, "frame": 60}]
+    versions = [0, 0]
+    out = lanes.form(placed, met, tracks, {}, replan, versions, 0.55, 0.25, places)
+    assert sorted(out) == [0, 1] and len(places) == 1 and versions == [1, 1]
+    assert widths == [0.075, 0.025, 0.075, 0.025]  # with the sway, then without
+    assert out[0][1][:, 1].max() < 0 < out[1][1][:, 1].min()
+    again = lanes.form(placed, met, tracks, {0: 1, 1: 1}, replan, versions, 0.55, 0.25, places)
+    assert again == {} and len(places) == 1 and len(widths) == 4

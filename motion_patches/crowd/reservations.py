@@ -1,0 +1,241 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""The space-time reservation table of a crowd: where each character placed walks on each
+frame and where it stands before and after, looked up by cell (:class:`Reservations`)."""
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+_OFF = 1 << 20  # cell indices are shifted by this into a key's 21-bit fields
+
+
+class _Sorted:
+    """Reserved root positions (frame, xy, owner) sorted by an int64 key, in runs: each
+    reservation is a run of its own, and the newest run is merged into the one before
+    while that one holds at most four times as much (a log-structured merge). Runs grow
+    geometrically, so there are O(log N) of them to look through and every entry is
+    copied O(log N) times in all, whatever the size of the crowd. An owner's entries
+    always lie in one run (in key order), so what a look-up finds of one owner comes in
+    the order of the queries."""
+
+    _COLUMNS = ("key", "frame", "xy", "owner")
+
+    def __init__(self):
+        self.runs = []
+
+    @property
+    def size(self):
+        return sum(run["key"].size for run in self.runs)
+
+    def insert(self, key, frame, xy, owner):
+        order = np.argsort(key, kind="stable")
+        run = {
+            "key": key[order],
+            "frame": frame[order],
+            "xy": xy[order],
+            "owner": np.full(key.size, owner, np.int32),
+        }
+        self.runs.append(run)
+        while len(self.runs) > 1 and self.runs[-2]["key"].size <= 4 * self.runs[-1]["key"].size:
+            new = self.runs.pop()
+            old = self.runs.pop()
+            both = {c: np.concatenate((old[c], new[c])) for c in self._COLUMNS}
+            order = np.argsort(both["key"], kind="stable")
+            self.runs.append({c: both[c][order] for c in self._COLUMNS})
+
+    def remove(self, owner):
+        for i, run in enumerate(self.runs):
+            keep = run["owner"] != owner
+            if not keep.all():
+                self.runs[i] = {c: run[c][keep] for c in self._COLUMNS}
+        self.runs = [run for run in self.runs if run["key"].size]
+
+    def near(self, q):
+        """(query index, frame, xy, owner) of every entry whose key is one of ``q``."""
+        out = []
+        for run in self.runs:
+            lo = np.searchsorted(run["key"], q, "left")
+            n = np.searchsorted(run["key"], q, "right") - lo
+            hit = np.nonzero(n)[0]
+            if hit.size:
+                n = n[hit]
+                ent = np.repeat(lo[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
+                got = (run["frame"][ent], run["xy"][ent], run["owner"][ent])
+                out.append((np.repeat(hit, n), *got))
+        if not out:
+            return np.empty(0, int), np.empty(0, np.int64), np.empty((0, 2)), np.empty(0, int)
+        return tuple(np.concatenate(c) for c in zip(*out))
+
+
+class Reservations:
+    """A space-time reservation table (prioritised planning: Silver's cooperative
+    pathfinding, with frames as time steps): every reserved character holds the cells its
+    root passes through on each frame of its walk, and two standing spots, its start until
+    it leaves and its goal from its arrival on. A character placed later is checked against
+    them all: its walk against the others' walks and spots, its own spots against both.
+
+    Cells are ``spacing`` and :attr:`SLACK` wide, so two roots closer than that are in the
+    same cell or neighbours (nine cells to look in); a sparse table (sorted int64 keys of
+    frame and cell) keeps memory to the frames walked, whatever the size of the plaza.
+    Lookups are vectorised over frames."""
+
+    def __init__(self, spacing):
+        self.spacing = float(spacing)
+        self.cell = self.spacing + self.SLACK
+        self.moving = _Sorted()  # keyed by (frame, cell)
+        self.spot_keys = np.empty(0, np.int64)  # standing spots: sorted cell keys
+        self.spots = np.empty((0, 5), float)  # x, y, first frame, end frame (inf), owner
+        self.by_cell = _Sorted()  # moving again, keyed by cell alone
+        self.placed = {}  # index -> (delay, track)
+        self.horizon = 0
+
+    def _cells(self, xy):
+        return np.floor(np.asarray(xy, float) / self.cell).astype(np.int64) + _OFF
+
+    @staticmethod
+    def _key(t, c):
+        return (np.asarray(t, np.int64) << 42) | (c[..., 0] << 21) | c[..., 1]
+
+    SLACK = 0.05  # metres cells are wider than the spacing: the most :meth:`busy` adds
+    _RING = np.array([(i, j) for i in range(-1, 2) for j in range(-1, 2)], np.int64)
+    _RING_KEYS = (_RING[:, 0] << 21) + _RING[:, 1]  # added to a cell key: the cells round it
+
+    def _moving_near(self, t, xy):
+        """(query row, xy, owner) of moving entries on frame ``t[row]`` in the cell of
+        ``xy[row]`` or next to it."""
+        if not self.moving.size or not len(t):
+            return np.empty(0, int), np.empty((0, 2)), np.empty(0, int)
+        c = self._cells(xy)[:, None, :] + self._RING[None]
+        q = self._key(np.repeat(np.asarray(t)[:, None], len(self._RING), 1), c).ravel()
+        rows, _, where, owner = self.moving.near(q)
+        return rows // len(self._RING), where, owner
+
+    def _spots_near(self, xy):
+        """Indices of standing spots in the cells of the points ``xy`` or next to them."""
+        if not self.spot_keys.size:
+            return np.empty(0, int)
+        c = self._cells(xy)
+        c = np.unique(c[:, 0] << 21 | c[:, 1])  # the cells of the points, once each
+        q = np.unique((c[:, None] + self._RING_KEYS[None]).ravel())
+        lo = np.searchsorted(self.spot_keys, q, "left")
+        n = np.searchsorted(self.spot_keys, q, "right") - lo
+        hit = np.nonzero(n)[0]
+        if not hit.size:
+            return np.empty(0, int)
+        n = n[hit]  # disjoint ranges of the sorted keys, in order: already sorted and unique
+        return np.repeat(lo[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
+
+    def busy(self, track: np.ndarray, frames: int, margin: float = 0.01) -> np.ndarray:
+        """(len(track), frames) bool: ``track[k]`` closer than the spacing (and ``margin``)
+        to a reserved root on frame ``t`` (walking then, or standing at its start or goal
+        then), for every frame from 0; the last column stands for every frame after it.
+        Found from the cells about the track over all frames at once (the entries sorted by
+        cell), so its cost follows the traffic near the track, not the frames searched."""
+        if margin > self.SLACK:
+            raise ValueError(f"a margin of at most {self.SLACK} m, not {margin}")
+        track = np.asarray(track, float)
+        n, s2 = len(track), (self.spacing + margin) ** 2
+        out = np.zeros((n, frames + 2), np.int32)
+        if self.by_cell.size:
+            c = self._cells(track)[:, None, :] + self._RING[None]
+            rows, when, where, _ = self.by_cell.near((c[..., 0] << 21 | c[..., 1]).ravel())
+            if rows.size:
+                rows = rows // len(self._RING)
+                d = where - track[rows]
+                close = np.einsum("ij,ij->i", d, d) < s2
+                t = np.minimum(when[close], frames)
+                np.add.at(out, (rows[close], t), 1)
+                np.add.at(out, (rows[close], t + 1), -1)
+        near = self._spots_near(track)
+        if near.size:  # standing: a span of frames each
+            sp = self.spots[near]
+            d = track[:, None, :] - sp[None, :, :2]
+            k, j = np.nonzero(np.einsum("kjx,kjx->kj", d, d) < s2)
+            lo = np.minimum(sp[j, 2], frames).astype(int)
+            hi = np.minimum(sp[j, 3], frames + 1).astype(int)
+            keep = lo < hi
+            np.add.at(out, (k[keep], lo[keep]), 1)
+            np.add.at(out, (k[keep], hi[keep]), -1)
+        return (np.cumsum(out, axis=1) > 0)[:, : frames + 1]
+
+    def check(self, track: ArrayLike, delay: int = 0) -> dict[int, tuple[np.ndarray, int, float]]:
+        """Conflicts of a character walking ``track`` (frames, 2) from frame ``delay`` on,
+        standing at its first point before and at its last point after: {other index:
+        (frames too close (sorted array), closest frame, distance there)}."""
+        track = np.asarray(track, float)
+        d, n, s = int(delay), len(track), self.spacing
+        found = []  # (other, frame, distance) arrays
+        # walk against walks
+        t = np.arange(d, d + n)
+        rows, where, owner = self._moving_near(t, track)
+        if rows.size:
+            dist = np.linalg.norm(where - track[rows], axis=1)
+            close = dist < s
+            found.append((owner[close], t[rows[close]], dist[close]))
+        # my start (before I leave) and goal (after I arrive) against the others' walks
+        end = max(self.horizon, d + n)
+        for frames, xy in ((np.arange(0, d), track[0]), (np.arange(d + n, end), track[-1])):
+            if frames.size:
+                rows, where, owner = self._moving_near(
+                    frames, np.broadcast_to(xy, (frames.size, 2))
+                )
+                if rows.size:
+                    dist = np.linalg.norm(where - xy, axis=1)
+                    close = dist < s
+                    found.append((owner[close], frames[rows[close]], dist[close]))
+        # everything of mine against the others' standing spots
+        near = self._spots_near(track)
+        if near.size:
+            sp = self.spots[near]
+            dist = np.linalg.norm(track[:, None, :] - sp[None, :, :2], axis=2)  # (n, S)
+            when = t[:, None]
+            close = (dist < s) & (when >= sp[None, :, 2]) & (when < sp[None, :, 3])
+            r, k = np.nonzero(close)
+            found.append((sp[k, 4].astype(int), t[r], dist[r, k]))
+            for (a, b), xy in (((0, d), track[0]), ((d + n, np.inf), track[-1])):
+                dist = np.linalg.norm(sp[:, :2] - xy, axis=1)
+                lo, hi = np.maximum(sp[:, 2], a), np.minimum(sp[:, 3], b)
+                for k in np.nonzero((dist < s) & (lo < hi))[0]:  # both standing: every frame
+                    frames = np.arange(int(lo[k]), int(min(hi[k], max(end, lo[k] + 1))))
+                    found.append(
+                        (np.full(frames.size, int(sp[k, 4])), frames, np.full(frames.size, dist[k]))
+                    )
+        out = {}
+        if not found:
+            return out
+        who = np.concatenate([f[0] for f in found]).astype(int)
+        when = np.concatenate([f[1] for f in found]).astype(np.int64)
+        dist = np.concatenate([f[2] for f in found])
+        for j in np.unique(who):
+            m = who == j
+            k = int(np.argmin(dist[m]))
+            out[int(j)] = (np.unique(when[m]), int(when[m][k]), float(dist[m][k]))
+        return out
+
+    def reserve(self, index: int, track: ArrayLike, delay: int = 0) -> None:
+        """Hold ``track``'s cells over its frames and its two standing spots for ``index``."""
+        track = np.asarray(track, float)
+        d, n = int(delay), len(track)
+        t = np.arange(d, d + n)
+        c = self._cells(track)
+        self.moving.insert(self._key(t, c), t, track, index)
+        self.by_cell.insert(c[:, 0] << 21 | c[:, 1], t, track, index)
+        spots = np.array([[*track[0], 0, d, index], [*track[-1], d + n, np.inf, index]], float)
+        spots = spots[spots[:, 2] < spots[:, 3]]
+        c = self._cells(spots[:, :2])
+        skeys = c[:, 0] << 21 | c[:, 1]
+        order = np.argsort(skeys)  # np.insert keeps the given order at one position
+        skeys, spots = skeys[order], spots[order]
+        at = np.searchsorted(self.spot_keys, skeys)
+        self.spot_keys = np.insert(self.spot_keys, at, skeys)
+        self.spots = np.insert(self.spots, at, spots, axis=0)
+        self.placed[index] = (d, track)
+        self.horizon = max(self.horizon, d + n)
+
+    def remove(self, index: int) -> None:
+        """Free everything ``index`` holds (the others keep their places)."""
+        self.moving.remove(index)
+        self.by_cell.remove(index)
+        keep = self.spots[:, 4] != index
+        self.spot_keys, self.spots = self.spot_keys[keep], self.spots[keep]
+        del self.placed[index]
+        self.horizon = max((d + len(t) for d, t in self.placed.values()), default=0)

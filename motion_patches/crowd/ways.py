@@ -1,0 +1,66 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Where the characters still to be placed walk: a walker held up does not stop in their way.
+
+The resolver places a crowd one character at a time (:func:`~.crowd.resolve`); one held up
+by those before it may stand still for a while in an idle hold. Where it stands, everyone
+placed after it whose path runs there must wait for it to walk on, and in a doorway or a
+corridor that is everyone: a hold in the opening stops the flow through it, the waits add
+up along the crowd and the last ones find no time left. Crowd tools have walkers wait
+before a bottleneck, not in it; so here a character holds only where none of those still
+to be placed walks (:meth:`Ways.crossed`), found from the paths all of them were planned
+on. It may still wait at its start, and holds anywhere once the others are all placed.
+"""
+
+import numpy as np
+
+_OFF = 1 << 20  # cell indices shifted into a key's 21-bit fields (as the reservation table)
+_RING = np.array([(i << 21) + j for i in range(-1, 2) for j in range(-1, 2)], np.int64)
+STRIDE = 4  # every this many frames of a path are kept (about 0.2 m apart at a walk)
+BETWEEN_M = 0.1  # the most a frame of a path lies from the nearest point kept of it
+
+
+class Ways:
+    """The ground tracks of a crowd's characters, a point every :data:`STRIDE` frames,
+    sorted by the cell they lie in (``spacing`` and :data:`BETWEEN_M` wide: a point within
+    that of another lies in its cell or a neighbour)."""
+
+    def __init__(self, tracks: list[np.ndarray], spacing: float):
+        pts, owner = [], []
+        for i, t in enumerate(tracks):
+            t = np.asarray(t, float)[:, :2]
+            kept = np.vstack((t[::STRIDE], t[-1:]))
+            pts.append(kept)
+            owner.append(np.full(len(kept), i, np.int32))
+        self.reach = self.cell = float(spacing) + BETWEEN_M
+        xy = np.concatenate(pts) if pts else np.empty((0, 2))
+        own = np.concatenate(owner) if owner else np.empty(0, np.int32)
+        key = self._keys(xy)
+        order = np.argsort(key, kind="stable")
+        self.key, self.xy, self.owner = key[order], xy[order], own[order]
+
+    def _keys(self, xy):
+        c = np.floor(np.asarray(xy, float) / self.cell).astype(np.int64) + _OFF
+        return c[:, 0] << 21 | c[:, 1]
+
+    def crossed(self, track: np.ndarray, waiting: np.ndarray) -> np.ndarray:
+        """Bool per frame of ``track``: within the spacing of the path of a character
+        ``waiting`` (bool per character) to be placed."""
+        track = np.asarray(track, float)[:, :2]
+        out = np.zeros(len(track), bool)
+        if not self.key.size or not waiting.any():
+            return out
+        q = (self._keys(track)[:, None] + _RING[None]).ravel()
+        lo = np.searchsorted(self.key, q, "left")
+        n = np.searchsorted(self.key, q, "right") - lo
+        hit = np.nonzero(n)[0]
+        if not hit.size:
+            return out
+        n = n[hit]
+        ent = np.repeat(lo[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
+        rows = np.repeat(hit // len(_RING), n)
+        keep = waiting[self.owner[ent]]
+        rows, ent = rows[keep], ent[keep]
+        d = self.xy[ent] - track[rows]
+        close = np.einsum("ij,ij->i", d, d) < self.reach**2
+        out[rows[close]] = True
+        return out
