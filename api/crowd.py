@@ -4,7 +4,6 @@ standing spots, then kept apart in time by holds, waits and re-routes."""
 
 from __future__ import annotations
 
-import os
 import time
 from collections.abc import Callable, Iterable
 from concurrent.futures import ThreadPoolExecutor
@@ -593,7 +592,10 @@ def _moving_conflicts(c, planned, schedules):
 
 
 AHEAD = 4  # characters whose writes are prepared while one is written
-FITTERS = max(1, min(2, os.cpu_count() or 1))  # threads preparing them (numpy frees the GIL)
+# One thread prepares them: the main thread, writing through Blender, needs the GIL most of
+# the time; a second preparing thread slowed it more than it gained (bench_blender, 200
+# characters on 2 cores: writing 6.0 s with one, 7.4 s with two or three).
+FITTERS = 1
 
 
 def _write_all(c, planned, schedules, progress=None):
@@ -602,7 +604,7 @@ def _write_all(c, planned, schedules, progress=None):
     between two characters, those written are put back.
 
     What a write computes before it touches Blender (the foot lock, the body action's
-    keys: :func:`_prepared`) is made for the next characters in threads while one is
+    keys: :func:`_prepared`) is made for the next characters in a thread while one is
     written; Blender's data is only touched here, in order."""
     written = {}
     for (n, plan, _, placed, _), s in zip(planned, schedules):
