@@ -88,14 +88,7 @@ class SampleSteps:
         self.open_tab("18-sample-sidebar")
         (x, top, w, h), (left, right) = self.sidebar()
         self.s.click(left + 60, top + 13)  # fold the Locomotion panel, as before
-        self.s.py("""
-for ob in bpy.context.scene.objects:
-    ob.select_set(False)
-w = bpy.data.objects["Walker"]
-w.select_set(True)
-bpy.context.view_layer.objects.active = w
-result = 1""")
-        self.settle()
+        self.select_walker()
         self.press("motion_patches.plan_path", cols=(0.25,))
         self.press("motion_patches.analyse_motion", timeout=300, below="motion_patches.plan_path")
         fig = self.s.py("""

@@ -582,7 +582,8 @@ result = max((ev.matrix_world @ Vector(c)).z for c in ev.bound_box)""")
             )
         return float(found[0].group(1)), float(found[0].group(2))
 
-    def plan(self):
+    def select_walker(self):
+        """Only the Walker selected, and active: what the Planning buttons then act on."""
         self.s.py("""
 for ob in bpy.context.scene.objects:
     ob.select_set(False)
@@ -591,6 +592,9 @@ w.select_set(True)
 bpy.context.view_layer.objects.active = w
 result = 1""")
         self.settle()
+
+    def plan(self):
+        self.select_walker()
         since = len(self.log_lines())
         self.press("motion_patches.plan_path", cols=(0.25,))
         res = self.s.py("""
