@@ -15,7 +15,7 @@ hidden.
 """
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -300,12 +300,17 @@ def _resolve_once(
     rounds,
     stages,
     versions,
+    fixed=None,
 ):
     """One pass of :func:`resolve` placing the characters in ``order``; ``versions``
-    counts each character's re-plans over all passes (its next one's number)."""
+    counts each character's re-plans over all passes (its next one's number). ``fixed``
+    {character: schedule}: characters kept as they are, reserved before the others."""
     table = Reservations(spacing)
     schedules, conflicts = [None] * len(tracks), []
     paths, waiting = ways.Ways(tracks, spacing), np.ones(len(tracks), bool)
+    for i, s in (fixed or {}).items():
+        table.reserve(i, s.track, s.delay)
+        schedules[i], waiting[i] = s, False
 
     def clear(track, mask):  # holds only out of the way of those still to be placed
         return None if mask is None else np.asarray(mask, bool) & ~paths.crossed(track, waiting)
@@ -464,14 +469,17 @@ def resolve(
 
     When conflicts are left, each character still too close is first mended locally
     (:func:`_repair`: freed with those it meets, placed before them and all re-timed), and
-    what is still left makes the crowd be resolved again from the start with the
-    characters that met them placed first (prioritised planning's restart with raised
-    priorities), at most ``restarts`` times, and the pass with the fewest frames too close
-    is kept. Before a restart, a counter-flow left meeting head-on in a narrow way is split
-    into lanes (:func:`lanes.form`), the same over the passes that follow. What is left is
-    reported: [{"a", "b" (indices, ``a`` placed first), "frame" (closest), "first_frame",
-    "frames", "distance_m"}]. :attr:`Schedule.rank` is each character's place in the order
-    of the pass kept."""
+    what is still left makes the crowd be resolved again from the start with the characters
+    that met them placed first (prioritised planning's restart with raised priorities), at
+    most ``restarts`` times, and the pass with the fewest frames too close is kept. In a
+    large crowd a restart places again only the neighbourhood of the pairs left
+    (:func:`_neighbourhood`), the others kept as in the best pass so far, placed before
+    them: its cost is that of the neighbourhood, not of the crowd. Before a restart, a
+    counter-flow left meeting head-on in a narrow way is split into lanes
+    (:func:`lanes.form`), the same over the passes that follow. What is left is reported:
+    [{"a", "b" (indices, ``a`` placed first), "frame" (closest), "first_frame", "frames",
+    "distance_m"}]. :attr:`Schedule.rank` is each character's place in the order of the pass
+    kept."""
     ramp = int(ramp if ramp is not None else round(fps)) // 2 * 2
     max_hold = max_delay if max_hold is None else max_hold
     step = max(int(step), 1)
@@ -481,9 +489,10 @@ def resolve(
     strips = {}  # {character: the strips keeping it in its lane}, kept when it is re-routed
     places = []  # the lanes' places (midpoint, axis), the same over the passes
     on_lane = replan and (lambda i, discs: replan(i, strips.get(i, []) + discs))
+    fixed = None  # the characters a restart keeps as they were (None: none)
     for _ in range(restarts + 1):
         schedules, conflicts, table = _resolve_once(
-            order,
+            [i for i in order if fixed is None or i not in fixed],
             tracks,
             on_lane,
             spacing,
@@ -497,6 +506,7 @@ def resolve(
             rounds,
             stages,
             versions,
+            fixed,
         )
         for rank, i in enumerate(order):
             schedules[i].rank = rank
@@ -509,6 +519,7 @@ def resolve(
             best = (left, schedules, conflicts)
         if not conflicts:
             break
+        formed = {}
         if replan is not None:  # lanes where pairs meet head-on, for the passes that follow
             formed = lanes.form(
                 table.placed, conflicts, tracks, laned, replan, versions, spacing, radius, places
@@ -517,7 +528,41 @@ def resolve(
                 laned[i], tracks[i], holdable[i], strips[i] = version, track, mask, lane
         first = list(dict.fromkeys(c["b"] for c in conflicts))
         order = first + [i for i in order if i not in first]
+        seeds = {c[k] for c in conflicts + best[2] for k in ("a", "b")} | set(formed)
+        hood = _neighbourhood(tracks, best[1], seeds, spacing)
+        if hood is None:  # most of the crowd: all of it placed again
+            fixed = None
+        else:  # the rest kept as in the best pass, placed before
+            fixed = {i: replace(best[1][i]) for i in range(len(tracks)) if i not in hood}
+            kept = sorted(fixed, key=lambda i: fixed[i].rank)
+            order = kept + [i for i in order if i in hood]
     return best[1], best[2]
+
+
+LOCAL_SHARE = 0.5  # a restart placing more of the crowd than this places all of it again
+LOCAL_RINGS = 2  # how many steps out from those left too close a restart reaches
+
+
+def _neighbourhood(tracks, schedules, seeds, spacing):
+    """The characters a restart places again, or None for all of them: ``seeds`` and every
+    character whose path (as planned, ``tracks``, or as walked in ``schedules``) comes
+    within the spacing of theirs, and of those, :data:`LOCAL_RINGS` steps out. Nobody
+    further can meet them whenever either walks, so in a large crowd the pairs left are
+    cleared by a restart among their neighbours, the others kept where they were placed
+    (prioritised planning's restart, at the cost of a neighbourhood, not of the crowd)."""
+    n = len(tracks)
+    paths = ways.Ways([*tracks, *(s.track for s in schedules)], spacing)
+    hood, edge = set(seeds), set(seeds)
+    for _ in range(LOCAL_RINGS):
+        met = set()
+        for i in edge:
+            for track in (tracks[i], schedules[i].track):
+                met.update(int(j) % n for j in paths.met(track))
+        edge = met - hood
+        hood |= edge
+        if len(hood) > LOCAL_SHARE * n:
+            return None
+    return hood
 
 
 def conflicts_of(

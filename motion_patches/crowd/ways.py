@@ -42,25 +42,36 @@ class Ways:
         c = np.floor(np.asarray(xy, float) / self.cell).astype(np.int64) + _OFF
         return c[:, 0] << 21 | c[:, 1]
 
-    def crossed(self, track: np.ndarray, waiting: np.ndarray) -> np.ndarray:
-        """Bool per frame of ``track``: within the spacing of the path of a character
-        ``waiting`` (bool per character) to be placed."""
-        track = np.asarray(track, float)[:, :2]
-        out = np.zeros(len(track), bool)
-        if not self.key.size or not waiting.any():
-            return out
+    def _close(self, track: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(frame of ``track``, point kept) of every kept point within the spacing of it."""
+        if not self.key.size or not len(track):
+            return np.empty(0, int), np.empty(0, int)
         q = (self._keys(track)[:, None] + _RING[None]).ravel()
         lo = np.searchsorted(self.key, q, "left")
         n = np.searchsorted(self.key, q, "right") - lo
         hit = np.nonzero(n)[0]
         if not hit.size:
-            return out
+            return np.empty(0, int), np.empty(0, int)
         n = n[hit]
         ent = np.repeat(lo[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
         rows = np.repeat(hit // len(_RING), n)
-        keep = waiting[self.owner[ent]]
-        rows, ent = rows[keep], ent[keep]
         d = self.xy[ent] - track[rows]
         close = np.einsum("ij,ij->i", d, d) < self.reach**2
-        out[rows[close]] = True
+        return rows[close], ent[close]
+
+    def crossed(self, track: np.ndarray, waiting: np.ndarray) -> np.ndarray:
+        """Bool per frame of ``track``: within the spacing of the path of a character
+        ``waiting`` (bool per character) to be placed."""
+        track = np.asarray(track, float)[:, :2]
+        out = np.zeros(len(track), bool)
+        if not waiting.any():
+            return out
+        rows, ent = self._close(track)
+        out[rows[waiting[self.owner[ent]]]] = True
         return out
+
+    def met(self, track: np.ndarray) -> np.ndarray:
+        """The characters (sorted indices) whose paths come within the spacing of ``track``
+        somewhere: the only ones it can meet, whenever either walks."""
+        _, ent = self._close(np.asarray(track, float)[:, :2])
+        return np.unique(self.owner[ent])

@@ -117,6 +117,57 @@ def test_a_goal_on_someone_elses_path_is_reported_by_pair_and_frame():
     assert list(brute) == [(0, 1)] and len(brute[(0, 1)]) == c["frames"]
 
 
+def test_a_restart_in_a_large_crowd_places_again_only_the_neighbours_of_those_left(monkeypatch):
+    """a and b stay too close whatever the order (b ends standing on a's path, no wait
+    long enough); ten others walk on their own far away. Each restart places again only
+    a, b and those whose paths come near theirs (none), the rest kept as they were, and
+    ends where restarting the whole crowd ends."""
+    a = line((-5.0, 0.0), (5.0, 0.0), 101)
+    b = line((0.0, -2.0), (0.0, 0.0), 21)
+    far = [line((20.0 + 3 * k, 10.0), (20.0 + 3 * k, 18.0), 80) for k in range(10)]
+    tracks = [*far[:5], a, *far[5:], b]
+    placed = []
+    once = crowd._resolve_once
+
+    def spy(order, *args):
+        placed.append(sorted(order))
+        return once(order, *args)
+
+    monkeypatch.setattr(crowd, "_resolve_once", spy)
+    sched, left = crowd.resolve(tracks, lambda i, d: None, 0.5, 0.25, 30.0, 30, 3)
+    assert placed[0] == list(range(12)) and len(placed) == 5  # the first pass, 4 restarts
+    assert all(order == [5, 11] for order in placed[1:])
+    assert [(c["a"], c["b"]) for c in left] in ([(5, 11)], [(11, 5)])
+    assert all((s.delay, s.holds) == (0, ()) for k, s in enumerate(sched) if k not in (5, 11))
+    assert sorted(s.rank for s in sched) == list(range(12))
+    placed.clear()
+    monkeypatch.setattr(crowd, "LOCAL_SHARE", 0.0)  # every restart places the whole crowd
+    whole, whole_left = crowd.resolve(tracks, lambda i, d: None, 0.5, 0.25, 30.0, 30, 3)
+    assert all(order == list(range(12)) for order in placed)
+    assert [(c["a"], c["b"], c["frames"]) for c in whole_left] == [
+        (c["a"], c["b"], c["frames"]) for c in left
+    ]
+    assert [(s.delay, s.holds) for s in whole] == [(s.delay, s.holds) for s in sched]
+
+
+def test_the_neighbourhood_of_a_restart_reaches_those_whose_paths_come_near():
+    """Paths 0.4 m apart in a chain: one step out per ring, nobody further; a character
+    re-routed meets those near the way it walks now as well as near its plan; a
+    neighbourhood of more than half the crowd is the whole crowd (None)."""
+    tracks = [line((0.0, 0.4 * k), (10.0, 0.4 * k), 101) for k in range(8)]
+    sched = [crowd.Schedule(0, (), 0, t) for t in tracks]
+    assert crowd._neighbourhood(tracks, sched, {0}, 0.5) == set(range(crowd.LOCAL_RINGS + 1))
+    assert crowd._neighbourhood(tracks, sched, {0, 7}, 0.5) is None  # 6 of 8
+    aside = line((0.0, -3.3), (10.0, -3.3), 101)  # near nobody's plan
+    sched[7] = crowd.Schedule(0, (), 1, line((0.0, -3.0), (10.0, -3.0), 101))  # 7 re-routed
+    away = line((0.0, 50.0), (10.0, 50.0), 101)
+    more = [aside] * 4 + [away] * 4
+    got = crowd._neighbourhood(
+        tracks + more, sched + [crowd.Schedule(0, (), 0, t) for t in more], {7}, 0.5
+    )
+    assert got == {5, 6, 7, 8, 9, 10, 11}
+
+
 def test_far_apart_characters_neither_wait_nor_hold():
     tracks = [line((x, 0.0), (x, 8.0), 80) for x in (0.0, 3.0, 6.0)]
     sched, conflicts = crowd.resolve(
