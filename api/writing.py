@@ -7,6 +7,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 
 import bpy
+import numpy as np
 
 from ..adapter import nla, storage
 from ..motion_patches.kinematics import contacts, foot_lock, scene_rate
@@ -81,6 +82,24 @@ def _prepared(skel, placed, settings: PlanSettings, fps, plan, units):
     own = nla.own_pieces(plan)
     body = nla.body_keys(skel, world, locked, bounds, own, motions, *units) if own else None
     return world, locked, body
+
+
+def _walked_round(env, ground, scale, margin):
+    """{name: footprint in the scene's metres} of the props of ``env`` (the planner's world,
+    ``scale`` times smaller) whose bounds come within ``margin`` of the bounds of the path
+    ``ground`` (F, 2+): those the plan walked round, which the overlay draws (with the
+    lattice round the path) and the analysis checks the root against. Listing every prop
+    of a large scene in every character's record would grow a crowd's file with the crowd
+    times the props."""
+    obstacles = list(env.obstacles.values())
+    if not obstacles:
+        return {}
+    xy = np.asarray(ground, float)[:, :2]
+    polys = [o.polygon * scale for o in obstacles]
+    lo = np.array([p.min(axis=0) for p in polys])
+    hi = np.array([p.max(axis=0) for p in polys])
+    near = (lo <= xy.max(axis=0) + margin).all(axis=1) & (hi >= xy.min(axis=0) - margin).all(axis=1)
+    return {obstacles[k].name: polys[k].tolist() for k in np.nonzero(near)[0]}
 
 
 def _write(
@@ -166,7 +185,10 @@ def _write(
                 [s["start"], s["end"], transitions.piece_layer(p, patch.layer)]
                 for s, p in zip(strips, plan.pieces)
             ],
-            "obstacles": {o.name: (o.polygon * scale).tolist() for o in env.obstacles.values()},
+            # the overlay's lattice reaches two tiles past the path's bounds, turned
+            "obstacles": _walked_round(
+                env, world.ground, scale, settings.radius + 3.0 * patch.side * scale
+            ),
         },
     )
     storage.forget_analysis(character)  # the Analysis panel must not show the last plan's

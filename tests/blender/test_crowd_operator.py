@@ -6,7 +6,7 @@ import bpy
 import numpy as np
 import pytest
 
-from scene_helpers import empty, prop_box, walker_from
+from scene_helpers import empty, pillar, prop_box, walker_from
 
 
 def open_walk(walk_blend):
@@ -125,3 +125,29 @@ def test_two_characters_to_one_seat_or_a_goal_never_free_are_refused(walk_blend,
         api.plan_crowd(scene, [(a, goal), (b, near)])
     for ob in (a, b):
         assert ob.animation_data is None or not ob.animation_data.nla_tracks
+
+
+def test_a_plan_record_lists_the_props_near_its_path_not_every_prop(walk_blend, addon_module):
+    """Two walkers cross a prop each; forty pillars stand 40 m away. Each record lists the
+    prop it walked round (the overlay draws it, the analysis checks the root against it),
+    none of the far pillars: a crowd's records do not grow with the scene's props. The
+    analysis still finds no root inside a prop, and the overlay still draws the near one."""
+    api = addon_module.api
+    scene, src = open_walk(walk_blend)
+    for k in range(40):
+        pillar(f"Far{k}", 40.0 + (k % 8), 40.0 + (k // 8))
+    prop_box("CrateA", 3.0, 0.0, (0.6, 0.6, 1.0))
+    prop_box("CrateB", 3.0, 4.0, (0.6, 0.6, 1.0))
+    a = walker_from(src, "A", (0.0, 0.0, 0.0))
+    b = walker_from(src, "B", (0.0, 4.0, 0.0))
+    res = api.plan_crowd(
+        scene, [(a, empty("GA", 6.5, 0.0, 0.0)), (b, empty("GB", 6.5, 4.0, 0.0))], frame_start=1
+    )
+    assert len(res.plans) == 2 and not res.conflicts
+    for ob, mine in ((a, "CrateA"), (b, "CrateB")):
+        listed = api.load_plan_record(ob)[0]["obstacles"]
+        assert mine in listed and not any(n.startswith("Far") for n in listed), sorted(listed)
+        assert api.analyse(bpy.context, ob)["frames_root_inside_obstacle"] == 0
+    drawn = api.overlay.plan_drawings(scene)
+    assert len(drawn) == 2 and all(1 <= len(d.obstacles) <= 2 for d in drawn)
+    assert all(d.occluded for d in drawn)  # the lattice cells the near crate covers
