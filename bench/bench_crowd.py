@@ -23,6 +23,12 @@ The scale targets: 1,000 characters in under 60 s, 10,000 in under 15 minutes wi
 (``--sizes 10000 --workers 2 --no-trace --scenes ""``), resolution costing about as much per
 character at 100, 1,000 and 10,000.
 
+``--written 1000`` plans the plaza of that size again through ``api.plan_crowd`` in Blender
+(the props as meshes on their footprints, the characters copies of the baked source, goals
+as empties; its members on ``--written-workers`` Dask workers, 2 by default) and saves the
+.blend before and after: seconds planning + resolving, writing, saving, and the file's
+growth per character-second (Blender 4.5 saves uncompressed, 5.0 and later compressed).
+
 Then two dense scenes at a 24 fps scene from the 30 fps patch (``--scenes``, the ones
 tests/core/test_crowd_dense.py checks, built by it): a four-way crossing of 40 among seven
 pillars on a 21 m plaza and a counter-flow of 40 through a 2 m doorway. Each is measured on
@@ -38,6 +44,7 @@ import json
 import pstats
 import resource
 import sys
+import tempfile
 import time
 import tracemalloc
 from pathlib import Path
@@ -92,6 +99,18 @@ def parse_args(argv=None):
         action="store_true",
         help="skip the second, traced resolution (its peak is then not measured; tracing "
         "doubles the resolution's time, long at 10,000 characters)",
+    )
+    p.add_argument(
+        "--written",
+        default="",
+        help="crowd sizes also planned, resolved and written into a .blend by api.plan_crowd "
+        "in Blender on the same plaza, the file saved (comma-separated; empty: none)",
+    )
+    p.add_argument(
+        "--written-workers",
+        type=int,
+        default=2,
+        help="Dask LocalCluster workers of the written crowds (0: in Blender's process)",
     )
     p.add_argument("--json", type=Path, help="also write the full results here")
     args = p.parse_args(argv)
@@ -275,6 +294,111 @@ def run_crowd(patch, n, args):
     }
 
 
+def blender_plaza(bpy, bb, api, env, ends, source):
+    """The bench plaza built in Blender the way a user builds one: every prop a mesh
+    standing on its footprint (pillars as cylinders' prisms, benches as boxes), the
+    characters copies of the baked source facing their start heading, goals as empties
+    facing -Y along the goal heading. Returns [(armature, goal)] in the plaza's order."""
+    for ob in env.obstacles.values():
+        poly = np.asarray(ob.polygon, float)
+        k = len(poly)
+        verts = [(x, y, z) for z in (0.0, 1.0) for x, y in poly]
+        faces = [tuple(range(k))[::-1], tuple(range(k, 2 * k))]
+        faces += [(i, (i + 1) % k, k + (i + 1) % k, k + i) for i in range(k)]
+        mesh = bpy.data.meshes.new(ob.name)
+        mesh.from_pydata(verts, [], faces)
+        bpy.context.scene.collection.objects.link(bpy.data.objects.new(ob.name, mesh))
+    pairs = []
+    for m, (start, goal) in enumerate(ends):
+        arm = bb.character(bpy, source, f"C{m:05d}", start[0], start[1])
+        arm.rotation_euler = (0.0, 0.0, start[2] + np.pi / 2)  # the rest faces -Y
+        pairs.append((arm, bb.goal_empty(bpy, f"G{m:05d}", goal[0], goal[1], goal[2])))
+    return pairs
+
+
+def run_written(n, args):
+    """The plaza of ``n`` planned, resolved and written into a .blend by
+    ``api.plan_crowd`` in Blender (its members on a Dask LocalCluster of ``--written-workers``
+    processes), the file saved before and after: seconds by stage, the file's growth per
+    character-second, conflicts left."""
+    import bench_blender as bb  # Blender's part of the benches: started only when asked
+    import blender_session
+
+    if "bpy" not in sys.modules:
+        blender_session.start()
+    bpy = sys.modules["bpy"]
+    api = sys.modules[f"bl_ext.{blender_session.REPO_MODULE}.motion_patches"].api
+    scene, source = bb.baked_scene(bpy, api, args.mocap)
+    env, ends, _ = plaza(api.storage.load_patch(scene), n, args)  # the same plaza
+    pairs = blender_plaza(bpy, bb, api, env, ends, source)
+    folder = Path(tempfile.mkdtemp(prefix="bench_crowd-"))
+    bpy.ops.wm.save_as_mainfile(filepath=str(folder / "before.blend"))
+    writes = []
+    write = api.crowd._write_all
+
+    def timed_write(*a, **kw):
+        t = time.perf_counter()
+        try:
+            return write(*a, **kw)
+        finally:
+            writes.append(time.perf_counter() - t)
+
+    api.crowd._write_all = timed_write  # what plan_crowd calls
+    t0 = time.perf_counter()
+    try:
+        with api.cluster_executor(args.written_workers or None) as executor:
+            res = api.plan_crowd(scene, pairs, frame_start=1, executor=executor)
+    finally:
+        api.crowd._write_all = write
+    total = time.perf_counter() - t0
+    t1 = time.perf_counter()
+    bpy.ops.wm.save_as_mainfile(filepath=str(folder / "after.blend"))
+    save = time.perf_counter() - t1
+    fps = api.scene_fps(scene)
+    char_s = sum((p.frame_end - p.frame_start) / fps for p in res.plans)
+    grown = (folder / "after.blend").stat().st_size - (folder / "before.blend").stat().st_size
+    for f in folder.iterdir():
+        f.unlink()
+    folder.rmdir()
+    return {
+        "characters": n,
+        "planned": len(res.plans),
+        "failed": len(res.failed),
+        "conflicts_left": len(res.conflicts),
+        "workers": args.written_workers,
+        "seconds": {
+            "plan_resolve": total - sum(writes),
+            "write": sum(writes),
+            "planned_resolved_written": total,
+            "save": save,
+            "with_save": total + save,
+        },
+        "character_seconds": char_s,
+        "file_kb_per_character_second": grown / 1024 / max(char_s, 1e-9),
+        "blender": bpy.app.version_string,
+        "process_max_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+    }
+
+
+def written_markdown(rows):
+    out = [
+        "| characters | Blender | workers | planned | conflicts left | plan + resolve s "
+        "| write s | planned, resolved and written s | save s | with the save s "
+        "| KB per character-second | max RSS MB |",
+        "|" + "---|" * 12,
+    ]
+    for r in rows:
+        s = r["seconds"]
+        out.append(
+            f"| {r['characters']} | {r['blender']} | {r['workers']} "
+            f"| {r['planned']}/{r['characters']} | {r['conflicts_left']} "
+            f"| {s['plan_resolve']:.1f} | {s['write']:.1f} | {s['planned_resolved_written']:.1f} "
+            f"| {s['save']:.1f} | {s['with_save']:.1f} "
+            f"| {r['file_kb_per_character_second']:.1f} | {r['process_max_rss_mb']:.0f} |"
+        )
+    return "\n".join(out)
+
+
 SCENES = {"four-way": (dense.fourway, 4.0), "doorway": (dense.doorway, 15.0)}
 
 
@@ -375,6 +499,12 @@ def main(argv=None):
             print(buf.getvalue())
         print(f"  {json.dumps(r)}", flush=True)
         res["crowds"].append(r)
+    res["written"] = []
+    for n in sorted(int(s) for s in args.written.split(",") if s):
+        print(f"{n} characters written in Blender ...", flush=True)
+        r = run_written(n, args)
+        print(f"  {json.dumps(r)}", flush=True)
+        res["written"].append(r)
     res["scenes"] = []
     for name in [s for s in args.scenes.split(",") if s]:
         print(f"{name} ...", flush=True)
@@ -382,9 +512,12 @@ def main(argv=None):
         print(f"  {json.dumps(r)}", flush=True)
         res["scenes"].append(r)
     print()
-    print(json.dumps({k: res[k] for k in ("machine", "crowds", "scenes")}))
+    print(json.dumps({k: res[k] for k in ("machine", "crowds", "written", "scenes")}))
     print()
     print(markdown(res["crowds"]))
+    if res["written"]:
+        print()
+        print(written_markdown(res["written"]))
     if res["scenes"]:
         print()
         print(scene_markdown(res["scenes"]))
