@@ -267,6 +267,7 @@ def write_plan(
     layer_keys=None,
     segments=None,
     body=None,
+    root=None,
 ):
     """Write a plan's strips and root trajectory on ``obj``; returns strip records.
 
@@ -286,7 +287,7 @@ def write_plan(
     play that patch's shared segment actions, on the one motion track. ``segments``:
     :func:`segment_index` of the file, kept up to date here (one for many writes).
     ``body``: :func:`body_keys` of this plan, fitted already (see :func:`own_pieces`,
-    :func:`write_units`)."""
+    :func:`write_units`); ``root``: :func:`root_keys` of it, fitted already."""
     skel = rig.target if rig is not None else patch.gait.skeleton
     modes, unit = write_units(obj, skel)
     if bounds is None:
@@ -355,29 +356,18 @@ def write_plan(
 
     root_action, root_slot = compat.new_action(f"MP {obj.name} root")
     root_action[CHARACTER_KEY] = obj.name
-    heading = np.unwrap(world.ground[:, 2]) - facing_angle(skel)
-    frames = np.arange(world.frames, dtype=float)
-    z0 = float(obj.location[2])
-    curves = [
-        ("location", i, "Object Transforms", v)
-        for i, v in enumerate((world.ground[:, 0], world.ground[:, 1], np.full(world.frames, z0)))
-    ]
-    # A turn about Z only: (0, 0, heading) is that turn in every Euler order, (heading, +Z)
-    # in axis-angle; the heading is unwrapped, so no channel jumps by a turn.
-    zero = np.zeros(world.frames)
-    tilt = rig_io.world_tilt(obj)
-    if tilt is not None:  # the turn over the armature's own tilt
-        rot_path, rot_values = _tilted_rotation(obj.rotation_mode, heading, tilt)
-    elif obj.rotation_mode == "QUATERNION":
-        q = quat.make_continuous(quat.about_z(heading), axis=0)
-        rot_path, rot_values = "rotation_quaternion", q.T
-    elif obj.rotation_mode == "AXIS_ANGLE":
-        rot_path, rot_values = "rotation_axis_angle", (heading, zero, zero, zero + 1.0)
-    else:
-        rot_path, rot_values = "rotation_euler", (zero, zero, heading)
-    curves += [(rot_path, i, "Object Transforms", v) for i, v in enumerate(rot_values)]
+    if root is None:
+        root = root_keys(skel, world, root_units(obj))
     # on the scene's frames, its strip unscaled: nothing plays between them
-    act_io.key_curves(root_action, root_slot, frames, curves, _finer(act_io.COMPACT), between=False)
+    act_io.key_curves(
+        root_action,
+        root_slot,
+        root["frames"],
+        root["curves"],
+        _finer(act_io.COMPACT),
+        between=False,
+        fitted=root["fitted"],
+    )
     root_track = ad.nla_tracks.new()
     root_track.name = TRACK_ROOT
     rs = root_track.strips.new(f"{obj.name} root", first, root_action)
@@ -391,6 +381,45 @@ def write_plan(
     obj[TRACKS_KEY] = json.dumps(owned)
     _claim_actions(obj, ad, owned)
     return strips, stashed
+
+
+def root_units(obj):
+    """(height, rotation mode, tilt or None) of the armature object ``obj``: what
+    :func:`root_keys` needs from Blender, read before the fit."""
+    return float(obj.location[2]), obj.rotation_mode, rig_io.world_tilt(obj)
+
+
+def root_keys(skel, world, units):
+    """The keys of a character's root action (its object's location and turn over the
+    plan's ``world`` motion, on the scene's frames) fitted, touching no Blender data (a
+    crowd fits the next characters' while one is written): {"frames", "curves",
+    "fitted"}. ``units``: :func:`root_units` of the character."""
+    z0, rotation_mode, tilt = units
+    heading = np.unwrap(world.ground[:, 2]) - facing_angle(skel)
+    frames = np.arange(world.frames, dtype=float)
+    curves = [
+        ("location", i, "Object Transforms", v)
+        for i, v in enumerate((world.ground[:, 0], world.ground[:, 1], np.full(world.frames, z0)))
+    ]
+    # A turn about Z only: (0, 0, heading) is that turn in every Euler order, (heading, +Z)
+    # in axis-angle; the heading is unwrapped, so no channel jumps by a turn.
+    zero = np.zeros(world.frames)
+    if tilt is not None:  # the turn over the armature's own tilt
+        rot_path, rot_values = _tilted_rotation(rotation_mode, heading, tilt)
+    elif rotation_mode == "QUATERNION":
+        q = quat.make_continuous(quat.about_z(heading), axis=0)
+        rot_path, rot_values = "rotation_quaternion", q.T
+    elif rotation_mode == "AXIS_ANGLE":
+        rot_path, rot_values = "rotation_axis_angle", (heading, zero, zero, zero + 1.0)
+    else:
+        rot_path, rot_values = "rotation_euler", (zero, zero, heading)
+    curves += [(rot_path, i, "Object Transforms", v) for i, v in enumerate(rot_values)]
+    tol = _finer(act_io.COMPACT)
+    return {
+        "frames": frames,
+        "curves": curves,
+        "fitted": act_io.fit_curves(frames, curves, tol, between=False),
+    }
 
 
 def _tilted_rotation(mode, heading, tilt):

@@ -623,8 +623,11 @@ def _write_all(c, planned, schedules, progress=None):
             n, plan, _, placed, _ = planned[k]
             rig = c.rigs[n]
             skel = rig.target if rig is not None else c.patch.gait.skeleton
-            units = nla.write_units(c.pairs[n][0], skel)  # read here: Blender's data
-            ahead[k] = pool.submit(_prepared, skel, placed, c.settings, c.fps, plan, units)
+            ob = c.pairs[n][0]
+            units, root_units = nla.write_units(ob, skel), nla.root_units(ob)  # Blender's data
+            ahead[k] = pool.submit(
+                _prepared, skel, placed, c.settings, c.fps, plan, units, root_units
+            )
 
         try:
             for k in range(min(AHEAD, len(planned))):

@@ -60,13 +60,13 @@ def _fit_frame_range(scene):
         scene[FRAME_RANGE_KEY] = [start, end]
 
 
-def _prepared(skel, placed, settings: PlanSettings, fps, plan, units):
+def _prepared(skel, placed, settings: PlanSettings, fps, plan, units, root_units):
     """What writing a plan computes before it touches Blender (a crowd makes the next
     characters' while one is written): (the motion on the scene's frames with the
     contacts that hold, its rotations with the feet locked or None, the body action's
-    fitted keys, :func:`nla.body_keys`, or None). ``placed``: :func:`_placed`; ``fps``:
-    the scene's rate (the motion's frames); ``units``: :func:`nla.write_units` of the
-    character."""
+    fitted keys, :func:`nla.body_keys`, or None; the root action's, :func:`nla.root_keys`).
+    ``placed``: :func:`_placed`; ``fps``: the scene's rate (the motion's frames); ``units``,
+    ``root_units``: :func:`nla.write_units`, :func:`nla.root_units` of the character."""
     motions, bounds, world = placed
     # Feet moving fast while labelled planted (through a blend) are not planted: neither
     # pinned nor measured as skating (foot_lock.still_contacts). Both read the motion as
@@ -81,7 +81,7 @@ def _prepared(skel, placed, settings: PlanSettings, fps, plan, units):
     locked = foot_lock.lock_feet(skel, world, posed=posed, fps=fps) if settings.foot_lock else None
     own = nla.own_pieces(plan)
     body = nla.body_keys(skel, world, locked, bounds, own, motions, *units) if own else None
-    return world, locked, body
+    return world, locked, body, nla.root_keys(skel, world, root_units)
 
 
 def _walked_round(env, ground, scale, margin):
@@ -134,9 +134,9 @@ def _write(
     skel = rig.target if rig is not None else patch.gait.skeleton
     motions, bounds, _ = placed
     if prepared is None:
-        units = nla.write_units(character, skel)
-        prepared = _prepared(skel, placed, settings, scene_fps(scene), plan, units)
-    world, locked, body = prepared
+        units, root_units = nla.write_units(character, skel), nla.root_units(character)
+        prepared = _prepared(skel, placed, settings, scene_fps(scene), plan, units, root_units)
+    world, locked, body, root = prepared
     strips, stashed = nla.write_plan(
         bpy,
         character,
@@ -152,6 +152,7 @@ def _write(
         layer_keys,
         segments,
         body,
+        root,
     )
     root = root_positions(world.ground, world.root_local)  # the hips
     foot = contacts.foot_joints(skel)
