@@ -268,6 +268,7 @@ def write_plan(
     segments=None,
     body=None,
     root=None,
+    lock_later=False,
 ):
     """Write a plan's strips and root trajectory on ``obj``; returns strip records.
 
@@ -287,7 +288,10 @@ def write_plan(
     play that patch's shared segment actions, on the one motion track. ``segments``:
     :func:`segment_index` of the file, kept up to date here (one for many writes).
     ``body``: :func:`body_keys` of this plan, fitted already (see :func:`own_pieces`,
-    :func:`write_units`); ``root``: :func:`root_keys` of it, fitted already."""
+    :func:`write_units`); ``root``: :func:`root_keys` of it, fitted already.
+    ``lock_later``: the foot lock's curves are returned too, (strips, stashed, lock or None),
+    not written: a crowd fits them while the next character is written and writes them
+    after (:func:`fit_foot_lock`, :func:`finish_foot_lock`)."""
     skel = rig.target if rig is not None else patch.gait.skeleton
     modes, unit = write_units(obj, skel)
     if bounds is None:
@@ -375,12 +379,26 @@ def write_plan(
     rs.extrapolation = "HOLD"
     rs.blend_in = rs.blend_out = 0.0
     owned = [TRACK_MOTION, TRACK_ROOT]
+    lock = None
     if locked is not None:
-        _write_foot_lock(obj, skel, world, locked, frame_start, modes, played, body)
-        owned.append(TRACK_FOOT)
+        lock = foot_lock_curves(obj, skel, world, locked, frame_start, modes, played, body)
+        if not lock_later:
+            write_foot_lock(obj, lock)
+            owned.append(TRACK_FOOT)
     obj[TRACKS_KEY] = json.dumps(owned)
     _claim_actions(obj, ad, owned)
-    return strips, stashed
+    return (strips, stashed, lock) if lock_later else (strips, stashed)
+
+
+def finish_foot_lock(obj, lock, fitted=None):
+    """Write the foot lock a plan written with ``lock_later`` left (:func:`write_plan`) and
+    keep its track and action as the plan's own."""
+    write_foot_lock(obj, lock, fitted)
+    owned = json.loads(obj.get(TRACKS_KEY, "[]")) + [TRACK_FOOT]
+    obj[TRACKS_KEY] = json.dumps(owned)
+    made = json.loads(obj.get(ACTIONS_KEY, "{}"))
+    _claim_actions(obj, obj.animation_data, [TRACK_FOOT])
+    obj[ACTIONS_KEY] = json.dumps({**made, **json.loads(obj[ACTIONS_KEY])})
 
 
 def root_units(obj):
@@ -582,8 +600,9 @@ def _lower_channels(frames_of, bones, mode, n_frames, cache=None):
     return out
 
 
-def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=(), body=None):
-    """The foot lock as an Add strip above the motion, so segment actions stay shared.
+def foot_lock_curves(obj, skel, world, locked, frame_start, modes=None, played=(), body=None):
+    """The foot lock's curves (frames, curves, values, first frame), to be written as an Add
+    strip above the motion (:func:`write_foot_lock`), so segment actions stay shared.
 
     Blender's Add blend (influence 1) adds each channel value, ``lower + delta``, in every
     rotation mode: the four quaternion components (the sum is normalised when the pose is
@@ -609,8 +628,6 @@ def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=(
         moved[frames_of.pop((body[0], body[1]))[0]] = False
     turned = moved.any(axis=0)
     changed, moved = legs[turned], moved[:, turned]
-    action, slot = compat.new_action(f"MP {obj.name} foot lock")
-    action[CHARACTER_KEY] = obj.name
     frames = np.arange(world.frames, dtype=float)
     cache, curves, columns = {}, [], []
     by_mode = {}
@@ -629,8 +646,31 @@ def _write_foot_lock(obj, skel, world, locked, frame_start, modes=None, played=(
             for c in range(delta.shape[-1])
         ]
     values = np.concatenate(columns, axis=1) if columns else None
+    return frames, curves, values, int(frame_start)
+
+
+def fit_foot_lock(lock):
+    """The keys of a foot lock (:func:`foot_lock_curves`) fitted, touching no Blender data
+    (a crowd fits one while the next character is written)."""
+    frames, curves, values, _ = lock
+    return act_io.fit_curves(frames, curves, _finer(act_io.COMPACT), values, between=False)
+
+
+def write_foot_lock(obj, lock, fitted=None):
+    """The foot lock :func:`foot_lock_curves` made, as its Add strip on a track above the
+    character's others (``fitted``: :func:`fit_foot_lock` of it, made already)."""
+    frames, curves, values, frame_start = lock
+    action, slot = compat.new_action(f"MP {obj.name} foot lock")
+    action[CHARACTER_KEY] = obj.name
     act_io.key_curves(
-        action, slot, frames, curves, _finer(act_io.COMPACT), values=values, between=False
+        action,
+        slot,
+        frames,
+        curves,
+        _finer(act_io.COMPACT),
+        values=values,
+        between=False,
+        fitted=fitted,
     )
     track = obj.animation_data.nla_tracks.new()
     track.name = TRACK_FOOT

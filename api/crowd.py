@@ -603,9 +603,11 @@ def _write_all(c, planned, schedules, progress=None):
     first is written when one cannot be), the frame range fitted once after; cancelled
     between two characters, those written are put back.
 
-    What a write computes before it touches Blender (the foot lock, the body action's
-    keys: :func:`_prepared`) is made for the next characters in a thread while one is
-    written; Blender's data is only touched here, in order."""
+    What a write computes before it touches Blender (the foot lock, the body and root
+    actions' keys: :func:`_prepared`) is made for the next characters in a thread while one
+    is written, and so are the foot-lock strips' keys (they need the motion strips below
+    them written): those strips are written last. Blender's data is only touched here, in
+    order."""
     written = {}
     for (n, plan, _, placed, _), s in zip(planned, schedules):
         _writable(c.pairs[n][0], c.first + s.delay, placed[2].frames)
@@ -617,7 +619,7 @@ def _write_all(c, planned, schedules, progress=None):
     ):
         segments = nla.segment_index(bpy)  # the shared segment actions, found once
         pool = ThreadPoolExecutor(max_workers=FITTERS)
-        ahead = {}
+        ahead, locks = {}, []  # locks: (character, foot lock, its fit) written last
 
         def prepare(k):
             n, plan, _, placed, _ = planned[k]
@@ -639,7 +641,7 @@ def _write_all(c, planned, schedules, progress=None):
                     prepare(k + AHEAD)
                 env = _world_of(c, c.sizes[n]).env
                 with _without(env, c.own[n]):  # the plan record lists what it walked around
-                    written[n] = _write(
+                    written[n], lock = _write(
                         c.scene,
                         c.pairs[n][0],
                         c.patch,
@@ -653,9 +655,17 @@ def _write_all(c, planned, schedules, progress=None):
                         fit=False,
                         segments=segments,
                         prepared=prepared,
+                        lock_later=True,
                     )
+                if lock is not None:  # fitted while the next ones are written
+                    locks.append((c.pairs[n][0], lock, pool.submit(nla.fit_foot_lock, lock)))
                 if progress is not None:
-                    progress(0.9 + 0.1 * (k + 1) / len(planned))
+                    progress(0.9 + 0.08 * (k + 1) / len(planned))
+            for k, (ob, lock, fitted) in enumerate(locks):
+                check_cancelled(c.cancelled, CANCELLED)
+                nla.finish_foot_lock(ob, lock, fitted.result())
+                if progress is not None:
+                    progress(0.98 + 0.02 * (k + 1) / len(locks))
         finally:
             pool.shutdown(wait=True, cancel_futures=True)
         if written:

@@ -118,6 +118,7 @@ def _write(
     from_here=False,
     segments=None,
     prepared=None,
+    lock_later=False,
 ):
     """NLA strips and the plan record of one planned character (``placed``: its motion,
     :func:`_placed`; ``env``: the planner's world, shrunk by the character's size; ``settings``: the
@@ -127,7 +128,9 @@ def _write(
     ``from_here``: the plan started where the character is now, not where it stood.
     ``segments``: the file's shared segment actions (:func:`nla.segment_index`) when several
     characters are written in a row (a crowd): found once, not once per character.
-    ``prepared``: :func:`_prepared` of this character and plan, made already."""
+    ``prepared``: :func:`_prepared` of this character and plan, made already.
+    ``lock_later``: the foot lock is not written but returned, (result, lock or None), for
+    :func:`nla.finish_foot_lock` (a crowd fits it while the next character is written)."""
     stood = _start_matrix(character, from_here)  # read before the record is replaced
     scale = _size(rig)
     goal_state = _shrunk(plan.goal, 1.0 / scale)  # the facing reached when any would do
@@ -137,7 +140,7 @@ def _write(
         units, root_units = nla.write_units(character, skel), nla.root_units(character)
         prepared = _prepared(skel, placed, settings, scene_fps(scene), plan, units, root_units)
     world, locked, body, root = prepared
-    strips, stashed = nla.write_plan(
+    strips, stashed, *lock = nla.write_plan(
         bpy,
         character,
         patch,
@@ -153,6 +156,7 @@ def _write(
         segments,
         body,
         root,
+        lock_later,
     )
     root = root_positions(world.ground, world.root_local)  # the hips
     foot = contacts.foot_joints(skel)
@@ -195,7 +199,7 @@ def _write(
     storage.forget_analysis(character)  # the Analysis panel must not show the last plan's
     if fit:
         _fit_frame_range(scene)
-    return PlanResult(
+    result = PlanResult(
         character.name,
         frame_start,
         frame_end,
@@ -209,3 +213,4 @@ def _write(
         path_length(world.ground),
         tuple(goal_state),
     )
+    return (result, lock[0]) if lock_later else result

@@ -2,6 +2,8 @@
 """Duplicate Crowd (issue 17): a source armature copied into a linked crowd and planned,
 and crowd requests that cannot be carried out refused with the scene unchanged."""
 
+import json
+
 import bpy
 import numpy as np
 import pytest
@@ -151,3 +153,27 @@ def test_a_plan_record_lists_the_props_near_its_path_not_every_prop(walk_blend, 
     drawn = api.overlay.plan_drawings(scene)
     assert len(drawn) == 2 and all(1 <= len(d.obstacles) <= 2 for d in drawn)
     assert all(d.occluded for d in drawn)  # the lattice cells the near crate covers
+
+
+def test_a_crowd_writes_each_foot_lock_on_top_and_a_re_plan_replaces_it(walk_blend, addon_module):
+    """A crowd writes its characters' foot-lock strips after all of them (their keys fitted
+    meanwhile): each on the top track, its action kept as the character's own, so planning
+    the crowd again replaces it (one foot-lock action per character, none left over)."""
+    api = addon_module.api
+    nla = addon_module.adapter.nla
+    scene, src = open_walk(walk_blend)
+    a = walker_from(src, "A", (0.0, 0.0, 0.0))
+    b = walker_from(src, "B", (0.0, 3.0, 0.0))
+    pairs = [(a, empty("GA", 6.0, 0.5, 0.0)), (b, empty("GB", 6.0, 3.5, 0.0))]
+    for _ in range(2):
+        res = api.plan_crowd(scene, pairs, frame_start=1)
+        assert len(res.plans) == 2
+        for ob in (a, b):
+            tracks = [t.name for t in ob.animation_data.nla_tracks]
+            assert tracks[-1] == nla.TRACK_FOOT and nla.TRACK_MOTION in tracks
+            lock = ob.animation_data.nla_tracks[nla.TRACK_FOOT].strips[0].action
+            assert lock.name == f"MP {ob.name} foot lock"
+            owned = json.loads(ob[nla.ACTIONS_KEY]).values()
+            assert lock.name in owned and f"MP {ob.name} root" in owned
+    names = [x.name for x in bpy.data.actions if "foot lock" in x.name]
+    assert sorted(names) == ["MP A foot lock", "MP B foot lock"]

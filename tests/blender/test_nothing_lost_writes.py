@@ -179,7 +179,7 @@ def test_a_write_that_fails_half_way_is_undone(planned, addon_module, monkeypatc
     if active_action:
         char.animation_data.action = bpy.data.actions["16_15"]
     before = scene_state()
-    monkeypatch.setattr(addon_module.adapter.nla, "_write_foot_lock", failing_foot_lock)
+    monkeypatch.setattr(addon_module.adapter.nla, "write_foot_lock", failing_foot_lock)
     with pytest.raises(RuntimeError, match="simulated"):
         addon_module.api.plan_path(scene, char, goal)
     assert_same(before, scene_state())
@@ -197,7 +197,7 @@ def test_the_operator_reports_an_unexpected_failure_and_keeps_the_scene(
         ob.select_set(ob == char)
     bpy.context.view_layer.objects.active = char
     before = scene_state()
-    monkeypatch.setattr(addon_module.adapter.nla, "_write_foot_lock", failing_foot_lock)
+    monkeypatch.setattr(addon_module.adapter.nla, "write_foot_lock", failing_foot_lock)
     with pytest.raises(RuntimeError, match="Internal error.*simulated"):
         bpy.ops.motion_patches.plan_path()
     after = scene_state()
