@@ -207,6 +207,7 @@ def follow(
     eased: tuple[bool, bool] = (True, True),
     phases: np.ndarray | None = None,
     poses: bool = True,
+    at: int | None = None,
 ) -> Motion:
     """Motion of the gait along ``curve``.
 
@@ -215,13 +216,17 @@ def follow(
     (on one of ``phases`` if given); with ``cycles="to node"`` it starts at the phase (of
     ``phases``) that makes it end on the node pose.
     ``poses`` False: the ground frames and root alone (what a layout check measures), the
-    body left out (the root bone's rotation and the contacts of the first loop stand in
-    for it): the blended poses are most of the work.
+    body left out (no joint; the contacts of the first loop): the blended poses are most
+    of the work.
+    ``at``: frame ``at`` of that motion alone (-1: its last), a motion of one frame; each
+    frame is posed on its own, so it is the same frame the whole motion has.
     """
     k, s, ease = frame_arclengths(gait, curve, cycles, start_phase, eased, phases)
     x, y, h, _ = curve.at(s)
     weights = gait.weights(np.interp(s, curve.s, curve.kappa * ease))
     weights = held_weights(weights, max(int(round(gait.frames * WEIGHT_WINDOW)), 0))
+    if at is not None:
+        k, x, y, h, weights = np.asarray(k)[[at]], x[[at]], y[[at]], h[[at]], weights[[at]]
     if poses:
         root, rot, contacts = gait.pose(k, weights)
     else:
@@ -229,5 +234,5 @@ def follow(
         root = np.zeros((ph.size, 3))
         for i, lp in enumerate(gait.loops):
             root += lp.root_local[ph] * weights[:, i : i + 1]
-        rot, contacts = gait.loops[0].rotations[ph, :1], gait.loops[0].contacts[ph]
+        rot, contacts = gait.loops[0].rotations[ph, :0], gait.loops[0].contacts[ph]
     return Motion(np.column_stack((x, y, h)), root, rot, contacts)

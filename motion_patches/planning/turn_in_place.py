@@ -113,10 +113,14 @@ def turn_motion(
     heading: float,
     delta: float,
     previous: Motion | None = None,
+    pinned: bool = True,
 ) -> Motion:
     """Motion of turning on the spot at ``xy`` from ``heading`` by ``delta``; with the
     ``previous`` motion (what the character did before) the turn starts on the loop frame
-    nearest its last pose. Not eased: the caller eases it in and out (:mod:`.retime`)."""
+    nearest its last pose. Not eased: the caller eases it in and out (:mod:`.retime`).
+    ``pinned`` False: the feet as the loop plays them, not pinned where they are put down
+    (:func:`stride_removed` turns the legs alone: the frames, ground and root are the same,
+    all a layout check measures)."""
     loop = turn_loop(gait, delta)
     phase = (
         0
@@ -129,7 +133,7 @@ def turn_motion(
     root = loop.root_local[ph].copy()
     root[:, :2] *= SWAY  # stepping on the spot shifts the weight less than striding
     m = Motion(ground, root, loop.rotations[ph].copy(), loop.contacts[ph])
-    return stride_removed(gait.skeleton, m)
+    return stride_removed(gait.skeleton, m) if pinned else m
 
 
 def stride_removed(skel: Skeleton, motion: Motion) -> Motion:
