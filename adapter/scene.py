@@ -117,9 +117,12 @@ def owners(obstacle_names):
     return list(dict.fromkeys(owner(n) for n in obstacle_names))
 
 
-def obstacles(scene, depsgraph, exclude=()):
+def obstacles(scene, depsgraph, exclude=(), known=None):
     """Obstacles of every visible mesh object in the scene but ``exclude`` and the
-    characters' proxy bodies (:mod:`.bodies`: display only, they walk with their owner)."""
+    characters' proxy bodies (:mod:`.bodies`: display only, they walk with their owner).
+    ``known``: a dict of footprints already read from this unchanged scene (object name ->
+    parts), filled as objects are read: the pairs of one layout check each read the same
+    meshes, less their own excludes."""
     out = []
     skip = {o.name for o in exclude}
     for obj in scene.objects:
@@ -127,7 +130,12 @@ def obstacles(scene, depsgraph, exclude=()):
             continue
         if bodies.is_part(obj):
             continue
-        polys = footprint_parts(obj, depsgraph)
+        if known is None:
+            polys = footprint_parts(obj, depsgraph)
+        else:
+            if obj.name not in known:
+                known[obj.name] = footprint_parts(obj, depsgraph)
+            polys = [p.copy() for p in known[obj.name]]
         out += [Obstacle(part_name(obj.name, k, len(polys)), p) for k, p in enumerate(polys)]
     return out
 
