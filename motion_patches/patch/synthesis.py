@@ -86,17 +86,27 @@ def _ease(s, length, ramp_len, eased):
 def double_support(gait: Gait) -> np.ndarray:
     """Phases of the straight loop in the middle of each stretch with both feet planted
     (a heel or toe of each; ascending, empty for a gait that has none, as a run): where a
-    walk can stop with the last step landed, or start with a foot about to lift."""
-    c = np.asarray(gait.straight.contacts, bool)
+    walk can stop with the last step landed, or start with a foot about to lift. Kept on
+    the gait for as long as its straight loop's contacts are the same (read only): every
+    piece of a plan's motion asks for them."""
+    lp = gait.straight
+    kept = gait.__dict__.get("_double_support")
+    if kept is not None and kept[0] is lp and kept[1] is lp.contacts:
+        return kept[2]
+    c = np.asarray(lp.contacts, bool)
     both = (c[:, 0] | c[:, 1]) & (c[:, 2] | c[:, 3])
     n = both.size
     if both.all() or not both.any():
-        return np.zeros(0, int)
-    shift = int(np.argmin(both))  # a frame with one foot up: no stretch wraps past it
-    rolled = np.roll(both, -shift)
-    d = np.diff(np.concatenate(([0], rolled.astype(int), [0])))
-    starts, ends = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
-    return np.sort(((starts + ends - 1) // 2 + shift) % n)
+        out = np.zeros(0, int)
+    else:
+        shift = int(np.argmin(both))  # a frame with one foot up: no stretch wraps past it
+        rolled = np.roll(both, -shift)
+        d = np.diff(np.concatenate(([0], rolled.astype(int), [0])))
+        starts, ends = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
+        out = np.sort(((starts + ends - 1) // 2 + shift) % n)
+    out.flags.writeable = False
+    gait.__dict__["_double_support"] = (lp, lp.contacts, out)
+    return out
 
 
 def _stretched(phase_at: np.ndarray, total: float) -> np.ndarray:

@@ -68,7 +68,7 @@ def turn_loop(gait: Gait, delta: float) -> Loop:
 def matching_phase(loop: Loop, root_local: np.ndarray, rotations: np.ndarray) -> int:
     """The frame of ``loop`` whose pose is nearest a pose (root (3,), rotations (J, 4)):
     the phase the turn continues from, so the feet carry on the stride they were in."""
-    f = pose_features(loop.root_local, loop.rotations)
+    f = loop.pose_features()
     x = pose_features(root_local[None], rotations[None])[0]
     return int(np.argmin(np.sum((f - x) ** 2, axis=1)))
 
