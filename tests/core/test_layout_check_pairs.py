@@ -106,6 +106,15 @@ def test_pairs_get_the_figures_of_a_fresh_plan_and_an_unchanged_world_reuses_the
     assert first["length_m"] == pytest.approx(np.linalg.norm(steps, axis=1).sum(), abs=0)
     again = layout_check.plan_pair(tasks[0], walk_patch, worlds)
     assert again["reused"] and {**again, "reused": False} == first
+    # the figures forgotten, the planner kept: planned again by it, to the same figures
+    planner = layout_check.planner_in(walk_patch, worlds[tasks[0]["world"]])[1]
+    layout_check.forget(planners=False)
+    warm = layout_check.plan_pair(tasks[0], walk_patch, worlds)
+    assert layout_check.planner_in(walk_patch, worlds[tasks[0]["world"]])[1] is planner
+    assert not warm["reused"]
+    assert {k: v for k, v in warm.items() if k != "plan_seconds"} == {
+        k: v for k, v in first.items() if k != "plan_seconds"
+    }
     # a pillar moved 1 cm: another world, planned again
     moved = [box("P0", PILLARS[0].polygon[:, 0].mean() + 0.01, PILLARS[0].polygon[:, 1].mean())]
     tasks2, worlds2 = tasks_and_worlds([moved + obstacles[1:]], [(start, goal)])
