@@ -93,6 +93,13 @@ def footprint_parts(obj, depsgraph, band=BODY_BAND):
     return [p.copy() for p in parts]
 
 
+def forget_footprints():
+    """Drop every kept footprint (a benchmark's cold check; a process that wants its memory
+    back)."""
+    _shapes.clear()
+    _placed.clear()
+
+
 def _placed_arrays(obj, depsgraph):
     """:func:`mesh_arrays` with the world matrix's x, y translation left out, and that
     translation ((x, y) as a float pair)."""
