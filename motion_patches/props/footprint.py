@@ -162,7 +162,10 @@ def parts(
         pos = np.arange(len(fv)) - first
         nxt = fv[first + (pos + 1) % np.repeat(ft, ft)]
         e = np.sort(np.column_stack((fv, nxt)), axis=1)
-        uniq, inverse, counts = np.unique(e, axis=0, return_inverse=True, return_counts=True)
+        # each edge as one integer (rows compared whole): unique on them is a plain sort
+        _, inverse, counts = np.unique(
+            e[:, 0] * n + e[:, 1], return_inverse=True, return_counts=True
+        )
         bad = counts[inverse.ravel()] != 2
         open_islands = set(label[e[bad, 0]].tolist())
     in_band_face = (zmax >= band[0]) & (zmin <= band[1])
@@ -238,8 +241,9 @@ def _bounds_hull(xy, elements, hull):
     p, q = xy[flat], xy[flat[after]]
     twice_area = np.add.reduceat(p[:, 0] * q[:, 1] - p[:, 1] * q[:, 0], starts)
     ccw = np.repeat(twice_area > 0, sizes)
-    points, ids = np.unique(p, axis=0, return_inverse=True)
-    ids = ids.reshape(-1)
+    # plan positions as complex numbers: unique on them sorts by x then y, as on rows
+    points, ids = np.unique(p[:, 0] + 1j * p[:, 1], return_inverse=True)
+    points, ids = np.column_stack((points.real, points.imag)), ids.reshape(-1)
     a, b = ids[ccw], ids[after][ccw]
     a, b = a[a != b], b[a != b]
     if not len(a):
