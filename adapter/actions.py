@@ -50,7 +50,13 @@ def skeleton_of(armature_obj):
     names = [b.name for b in order]
     index = {n: i for i, n in enumerate(names)}
     parents = np.array([index[b.parent.name] if b.parent else -1 for b in order])
-    rest = np.array([np.array(b.matrix_local) for b in order])
+    # Every bone's matrix at once, in Blender's own type (a matrix at a time through
+    # mathutils costs 100x more); Blender stores a matrix column by column.
+    flat = np.empty(len(bones) * 16, np.float32)
+    bones.foreach_get("matrix_local", flat)
+    stored = {b.name: i for i, b in enumerate(bones)}
+    local = flat.reshape(-1, 4, 4).transpose(0, 2, 1).astype(float)
+    rest = local[[stored[n] for n in names]]
     if np.sum(parents < 0) != 1:
         raise ValueError(
             f"armature '{armature_obj.name}' has {np.sum(parents < 0)} root bones; one is needed"

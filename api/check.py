@@ -21,6 +21,7 @@ from .common import (
     _check_character,
     _check_far,
     _limit_text,
+    _same_place,
     _shrunk,
     _size,
     _some_names,
@@ -148,16 +149,16 @@ def _skate_by_layer(meta, frames, feet, fps, planted):
 
 
 def _resolve(scene, place, what, patch):
-    """(state, object or None) for the name of an object of ``scene`` or [x, y,
+    """(state, object or None, size) for the name of an object of ``scene`` or [x, y,
     heading_deg]; a start that is an armature starts where its own skeleton stands (it may
-    be retargeted)."""
+    be retargeted) and plans in the world shrunk by its size (:func:`_size`; 1 otherwise)."""
     if what == "exclude":
         ob = scene.objects.get(place)
         if ob is None:
             raise MotionPatchesError(f"layout spec: no object named '{place}' to exclude")
-        return None, ob
+        return None, ob, 1.0
     if not isinstance(place, str):
-        return np.array([place[0], place[1], math.radians(place[2])]), None
+        return np.array([place[0], place[1], math.radians(place[2])]), None, 1.0
     ob = scene.objects.get(place)
     if ob is None:
         raise MotionPatchesError(
@@ -167,8 +168,8 @@ def _resolve(scene, place, what, patch):
     if what == "character" or (what == "start" and ob.type == "ARMATURE"):
         rig = _check_character(ob, patch)  # the rule plan_path applies to its character
         skel = rig.target if rig else patch.gait.skeleton
-        return scene_io.character_state(ob, skel, _start_matrix(ob)), ob
-    return scene_io.ground_state(ob), ob
+        return scene_io.character_state(ob, skel, _start_matrix(ob)), ob, _size(rig)
+    return scene_io.ground_state(ob), ob, 1.0
 
 
 def planned_pairs(
@@ -246,16 +247,11 @@ def check_layout(
     jobs: list = []
     refused: dict[int, str] = {}
     for p in spec["pairs"]:
-        start, sob = _resolve(
+        # A retargeted character plans in the world shrunk by its size (see _size).
+        start, sob, size = _resolve(
             scene, p["start"], "character" if p.get("character") else "start", patch
         )
-        goal, gob = _resolve(scene, p["goal"], "goal", patch)
-        # A retargeted character plans in the world shrunk by its size (see _size).
-        size = (
-            _size(_check_character(sob, patch))
-            if sob is not None and sob.type == "ARMATURE"
-            else 1.0
-        )
+        goal, gob, _ = _resolve(scene, p["goal"], "goal", patch)
         # Not obstacles: the start and goal objects with their children (a character's own
         # body mesh) and whatever the spec excludes.
         exclude = {}
@@ -267,25 +263,27 @@ def check_layout(
                     exclude[o.name] = o
         # Coordinates no plan can take are bad input (the spec's), not a failed pair.
         facing_goal = goal if p["goal_facing"] != "any" else np.array([*goal[:2], np.nan])
+        planner_start, planner_goal = _shrunk(start, size), _shrunk(facing_goal, size)
         try:
             _check_far(
-                _shrunk(start, size),
-                _shrunk(facing_goal, size),
+                planner_start,
+                planner_goal,
                 f"pair '{p['name']}'",
                 size,
                 same_place=False,  # a goal where it stands: that pair fails, reported
             )
         except MotionPatchesError as exc:
             raise MotionPatchesError(f"layout spec: {exc}") from None
-        try:  # a goal where it stands: nothing to plan, that pair fails (reported)
-            _check_far(_shrunk(start, size), _shrunk(facing_goal, size), "start", size)
-        except MotionPatchesError as exc:
-            refused[len(jobs)] = str(exc)
+        # a goal where it stands: nothing to plan, that pair fails (reported)
+        same = _same_place(planner_start, planner_goal, "start", size)
+        if same:
+            refused[len(jobs)] = same
         jobs.append((p, start, sob, goal, gob, exclude, size))
     worlds, tasks, props = {}, [], {}
+    known: dict[str, list] = {}  # footprints read once for every pair (scene_io.obstacles)
     for p, start, sob, goal, gob, exclude, size in jobs:
         allow = bool(p["limits"]["allow_traversal"])
-        obstacles = scene_io.obstacles(scene, depsgraph, tuple(exclude.values()))
+        obstacles = scene_io.obstacles(scene, depsgraph, tuple(exclude.values()), known)
         if size != 1.0:  # the planner's world, shrunk by the character's size
             obstacles = [Obstacle(ob.name, ob.polygon / size) for ob in obstacles]
         if size not in props:  # tagged props offer traversals

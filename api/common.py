@@ -167,12 +167,22 @@ def _check_far(start, goal, who, scale=1.0, same_place=True):
             f"the goal of {who} is {d:,.0f} m from its start; one plan "
             f"walks at most {MAX_DISTANCE:,.0f} m: plan the walk in legs"
         )
+    refused = _same_place(start, goal, who, scale) if same_place else None
+    if refused:
+        raise MotionPatchesError(refused)
+
+
+def _same_place(start, goal, who, scale=1.0):
+    """Why a goal where the start is (same place, same facing) is refused, or None (states
+    as :func:`_check_far` takes them)."""
+    d = float(np.hypot(*(np.asarray(goal[:2], float) - np.asarray(start[:2], float)))) * scale
     turn = abs((float(goal[2]) - float(start[2]) + np.pi) % (2 * np.pi) - np.pi)
-    if same_place and d < SAME_PLACE and (np.isnan(goal[2]) or turn < SAME_FACING):
-        raise MotionPatchesError(
+    if d < SAME_PLACE and (np.isnan(goal[2]) or turn < SAME_FACING):
+        return (
             f"the goal of {who} is where it stands ({d * 100:.0f} cm away, "
             f"facing the same way): there is nothing to plan"
         )
+    return None
 
 
 def _limit_text(nodes):

@@ -131,7 +131,10 @@ def make_continuous(q: np.ndarray, axis: int = 0) -> np.ndarray:
     Blender interpolates quaternion channels component-wise, so a sign flip between keys
     would swing the bone through a wrong pose; this keeps keyed curves smooth.
     """
-    q = np.moveaxis(np.array(q, float), axis, 0)
+    q = np.array(q, float)
+    if q.size == 0:  # no joint: nothing to flip
+        return q
+    q = np.moveaxis(q, axis, 0)
     if q.shape[0] < 2:
         return np.moveaxis(q, 0, axis)
     # Frame i flips when an odd number of the steps since the last step with a zero dot
@@ -151,6 +154,8 @@ def make_continuous(q: np.ndarray, axis: int = 0) -> np.ndarray:
 
 def slerp(a: np.ndarray, b: np.ndarray, t: ArrayLike) -> np.ndarray:
     """Spherical interpolation, t broadcast over leading axes (shortest arc)."""
+    if np.size(a) == 0:  # no joint (a motion measured without its body): nothing to do
+        return np.zeros(np.broadcast_shapes(np.shape(a), np.shape(b)))
     a = normalize(a)
     b = normalize(b)
     t = np.asarray(t, float)[..., None]

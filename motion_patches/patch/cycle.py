@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from ..kinematics import quat
+from ..kinematics import poses, quat
 from ..kinematics.clip import Clip, sample
 from ..kinematics.contacts import foot_contacts, strikes
 from ..kinematics.inplace import facing_yaw, to_inplace
@@ -43,6 +43,16 @@ class Loop:
     @property
     def curvature(self) -> float:
         return self.turn / self.cycle_distance
+
+    def pose_features(self) -> np.ndarray:
+        """(N, D) :func:`~..kinematics.poses.pose_features` of every frame, kept on the loop
+        (stitching and turns on the spot look poses up in it again and again)."""
+        got = self.__dict__.get("_pose_features")
+        if got is None:
+            got = self.__dict__["_pose_features"] = poses.pose_features(
+                self.root_local, self.rotations
+            )
+        return got
 
     def to_dict(self, prefix: str) -> dict[str, Any]:
         return {

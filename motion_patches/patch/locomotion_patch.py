@@ -125,10 +125,11 @@ class LocomotionPatch:
         p0, d0, p1, d1 = self.endpoints(np.asarray(segs))
         return curves.hermite_curves(p0, d0, p1, d1, self.seg_scale[segs])
 
-    def motion(self, seg: int, poses: bool = True) -> Motion:
+    def motion(self, seg: int, poses: bool = True, at: int | None = None) -> Motion:
         """Synthesised in-place motion of one segment, in patch coordinates (``poses``
-        False: ground and root only, :func:`follow`)."""
-        return follow(self.gait, self.curve(seg), cycles=int(self.seg_cycles[seg]), poses=poses)
+        False: ground and root only; ``at``: that frame alone; :func:`follow`)."""
+        cycles = int(self.seg_cycles[seg])
+        return follow(self.gait, self.curve(seg), cycles=cycles, poses=poses, at=at)
 
     def all_ground(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Every segment's ground frames stacked (T, 3), arc lengths (T,), and each

@@ -86,17 +86,27 @@ def _ease(s, length, ramp_len, eased):
 def double_support(gait: Gait) -> np.ndarray:
     """Phases of the straight loop in the middle of each stretch with both feet planted
     (a heel or toe of each; ascending, empty for a gait that has none, as a run): where a
-    walk can stop with the last step landed, or start with a foot about to lift."""
-    c = np.asarray(gait.straight.contacts, bool)
+    walk can stop with the last step landed, or start with a foot about to lift. Kept on
+    the gait for as long as its straight loop's contacts are the same (read only): every
+    piece of a plan's motion asks for them."""
+    lp = gait.straight
+    kept = gait.__dict__.get("_double_support")
+    if kept is not None and kept[0] is lp and kept[1] is lp.contacts:
+        return kept[2]
+    c = np.asarray(lp.contacts, bool)
     both = (c[:, 0] | c[:, 1]) & (c[:, 2] | c[:, 3])
     n = both.size
     if both.all() or not both.any():
-        return np.zeros(0, int)
-    shift = int(np.argmin(both))  # a frame with one foot up: no stretch wraps past it
-    rolled = np.roll(both, -shift)
-    d = np.diff(np.concatenate(([0], rolled.astype(int), [0])))
-    starts, ends = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
-    return np.sort(((starts + ends - 1) // 2 + shift) % n)
+        out = np.zeros(0, int)
+    else:
+        shift = int(np.argmin(both))  # a frame with one foot up: no stretch wraps past it
+        rolled = np.roll(both, -shift)
+        d = np.diff(np.concatenate(([0], rolled.astype(int), [0])))
+        starts, ends = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
+        out = np.sort(((starts + ends - 1) // 2 + shift) % n)
+    out.flags.writeable = False
+    gait.__dict__["_double_support"] = (lp, lp.contacts, out)
+    return out
 
 
 def _stretched(phase_at: np.ndarray, total: float) -> np.ndarray:
@@ -207,6 +217,7 @@ def follow(
     eased: tuple[bool, bool] = (True, True),
     phases: np.ndarray | None = None,
     poses: bool = True,
+    at: int | None = None,
 ) -> Motion:
     """Motion of the gait along ``curve``.
 
@@ -215,13 +226,17 @@ def follow(
     (on one of ``phases`` if given); with ``cycles="to node"`` it starts at the phase (of
     ``phases``) that makes it end on the node pose.
     ``poses`` False: the ground frames and root alone (what a layout check measures), the
-    body left out (the root bone's rotation and the contacts of the first loop stand in
-    for it): the blended poses are most of the work.
+    body left out (no joint; the contacts of the first loop): the blended poses are most
+    of the work.
+    ``at``: frame ``at`` of that motion alone (-1: its last), a motion of one frame; each
+    frame is posed on its own, so it is the same frame the whole motion has.
     """
     k, s, ease = frame_arclengths(gait, curve, cycles, start_phase, eased, phases)
     x, y, h, _ = curve.at(s)
     weights = gait.weights(np.interp(s, curve.s, curve.kappa * ease))
     weights = held_weights(weights, max(int(round(gait.frames * WEIGHT_WINDOW)), 0))
+    if at is not None:
+        k, x, y, h, weights = np.asarray(k)[[at]], x[[at]], y[[at]], h[[at]], weights[[at]]
     if poses:
         root, rot, contacts = gait.pose(k, weights)
     else:
@@ -229,5 +244,5 @@ def follow(
         root = np.zeros((ph.size, 3))
         for i, lp in enumerate(gait.loops):
             root += lp.root_local[ph] * weights[:, i : i + 1]
-        rot, contacts = gait.loops[0].rotations[ph, :1], gait.loops[0].contacts[ph]
+        rot, contacts = gait.loops[0].rotations[ph, :0], gait.loops[0].contacts[ph]
     return Motion(np.column_stack((x, y, h)), root, rot, contacts)

@@ -114,9 +114,14 @@ def planner_in(patch: LocomotionPatch, w: World) -> tuple[Environment, SegmentPl
     return env, planner, _kept[k][3]
 
 
-def forget() -> None:
-    """Drop every kept planner (tests; a process that wants its memory back)."""
-    _kept.clear()
+def forget(planners: bool = True) -> None:
+    """Drop every kept planner (tests; a process that wants its memory back); with
+    ``planners`` False only the figures kept in them, so pairs asked again are planned
+    again by warm planners (a benchmark's plan of an unchanged scene)."""
+    if planners:
+        _kept.clear()
+    for hit in _kept.values():
+        hit[3].clear()
 
 
 def plan_pair(task: dict, patch: LocomotionPatch, worlds: dict[str, World]) -> dict:

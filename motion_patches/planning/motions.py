@@ -29,16 +29,20 @@ def plan_motions(
     turn on the spot continues from the pose the walk before it stopped in; the walk
     slows to a stop at the goal and the turn eases in and out.
 
-    ``poses`` False: the same frames, ground and root, without the body (one joint stands
-    in for it), for what only measures the motion (a layout check's seconds and metres).
-    A turn still starts from the full pose before it, as it picks its phase by that pose."""
+    ``poses`` False: the same frames, ground and root, without the body (no joint: nothing
+    is slerped), for what only measures the motion (a layout check's seconds and metres).
+    A turn still starts from the full pose before it, as it picks its phase by that pose:
+    the last frame of the piece before is posed (that frame alone), and a turn's feet are
+    pinned only when another turn starts from its last pose."""
     ms: list[Motion] = []
     full = None  # the last piece's motion with its body (poses False: for a turn after it)
-    for i, p in enumerate(plan.pieces):
+    pieces = plan.pieces
+    for i, p in enumerate(pieces):
         if p.kind == "turn":
             if not poses and ms and full is None:
-                full = piece_motion(patch, plan.pieces[i - 1], standing)
-            m = turn_motion(patch, p, (full if not poses else ms[-1]) if ms else None)
+                full = piece_motion(patch, pieces[i - 1], standing, last=True)
+            pinned = poses or (i + 1 < len(pieces) and pieces[i + 1].kind == "turn")
+            m = turn_motion(patch, p, (full if not poses else ms[-1]) if ms else None, pinned)
             full = m
         else:
             m = piece_motion(patch, p, standing, poses)
@@ -102,11 +106,14 @@ def flat_feet(gait: Gait) -> stand.FlatFeet:
     return got
 
 
-def turn_motion(patch: LocomotionPatch, piece: Piece, previous: Motion | None = None) -> Motion:
-    """World-space motion of a turn on the spot (kind "turn"), continuing ``previous``."""
+def turn_motion(
+    patch: LocomotionPatch, piece: Piece, previous: Motion | None = None, pinned: bool = True
+) -> Motion:
+    """World-space motion of a turn on the spot (kind "turn"), continuing ``previous``
+    (``pinned``: :func:`.turn_in_place.turn_motion`'s)."""
     assert piece.turn is not None, "a turn piece has its turn"
     x, y, heading, delta = piece.turn
-    return turn_in_place.turn_motion(patch.gait, (x, y), heading, delta, previous)
+    return turn_in_place.turn_motion(patch.gait, (x, y), heading, delta, previous, pinned)
 
 
 def hips_to(motion: Motion, xy: Sequence[float] | np.ndarray, window: int) -> Motion:
@@ -179,38 +186,48 @@ def interaction_states(
 
 
 def _bodiless(m: Motion) -> Motion:
-    """``m`` with its first joint alone (:func:`plan_motions` without poses)."""
-    if m.rotations.shape[1] == 1:
+    """``m`` without its joints (:func:`plan_motions` without poses)."""
+    if m.rotations.shape[1] == 0:
         return m
-    return Motion(m.ground, m.root_local, m.rotations[:, :1], m.contacts)
+    return Motion(m.ground, m.root_local, m.rotations[:, :0], m.contacts)
 
 
 def piece_motion(
-    patch: LocomotionPatch, piece: Piece, standing: bool = False, poses: bool = True
+    patch: LocomotionPatch,
+    piece: Piece,
+    standing: bool = False,
+    poses: bool = True,
+    last: bool = False,
 ) -> Motion:
     """World-space motion of one planned piece (not eased; see :func:`plan_motions`);
     with ``standing`` a start (goal) connector starts (ends) on a double-support phase
     (:func:`~..patch.synthesis.double_support`), where a stand is eased from (into);
-    ``poses`` False: walking pieces without their body (:func:`..patch.synthesis.follow`)."""
+    ``poses`` False: walking pieces without their body (:func:`..patch.synthesis.follow`);
+    ``last``: its last frame alone (a walking piece posed on that frame only)."""
     if piece.kind == "turn":
-        return turn_motion(patch, piece)
+        m = turn_motion(patch, piece)
+        return sliced(m, m.frames - 1, m.frames - 1) if last else m
     phases = double_support(patch.gait) if standing else None
-    m = _local_piece_motion(patch, piece, phases, poses)
+    m = _local_piece_motion(patch, piece, phases, poses, -1 if last else None)
     return m if piece.frame == IDENTITY else m.transformed(*piece.frame)
 
 
-def _local_piece_motion(patch, piece, phases=None, poses=True):
+def _local_piece_motion(patch, piece, phases=None, poses=True, at=None):
+    """The piece's motion in its plan frame; ``at`` -1: its last frame alone."""
     if piece.kind in ("segment", "part"):
-        m = patch.motion(piece.segment, poses)
         if piece.kind == "part":
-            m = sliced(m, *piece.frames)
+            m = patch.motion(piece.segment, poses, piece.frames[1] if at == -1 else None)
+            m = m if at == -1 else sliced(m, *piece.frames)
+        else:
+            m = patch.motion(piece.segment, poses, at)
         return m.transformed(piece.tile[0] * patch.side, piece.tile[1] * patch.side)
     if piece.kind in ("traversal", "interaction"):
-        return piece.prop.world_clip(piece.prop.clips[piece.clip_index])
+        m = piece.prop.world_clip(piece.prop.clips[piece.clip_index])
+        return m if at is None else sliced(m, m.frames - 1, m.frames - 1)
     if piece.kind == "start":
-        return follow(patch.gait, piece.curve, cycles="to node", phases=phases, poses=poses)
+        return follow(patch.gait, piece.curve, "to node", phases=phases, poses=poses, at=at)
     if piece.kind == "shortcut":
-        return follow(patch.gait, piece.curve, cycles=piece.cycles, poses=poses)
+        return follow(patch.gait, piece.curve, cycles=piece.cycles, poses=poses, at=at)
     return follow(
-        patch.gait, piece.curve, cycles=None, eased=(True, False), phases=phases, poses=poses
+        patch.gait, piece.curve, None, eased=(True, False), phases=phases, poses=poses, at=at
     )

@@ -64,9 +64,7 @@ def phase_pose_distance(
     key = (np.asarray(motion_frame_root).tobytes(), np.asarray(motion_frame_rot).tobytes())
     got = memo.get(key)
     if got is None:
-        f = lp.__dict__.get("_pose_features")
-        if f is None:
-            f = lp.__dict__["_pose_features"] = poses.pose_features(lp.root_local, lp.rotations)
+        f = lp.pose_features()
         t = poses.pose_features(motion_frame_root[None], motion_frame_rot[None])[0]
         got = memo[key] = np.sqrt(((f - t) ** 2).sum(axis=1))
     return got

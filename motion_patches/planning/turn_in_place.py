@@ -68,7 +68,7 @@ def turn_loop(gait: Gait, delta: float) -> Loop:
 def matching_phase(loop: Loop, root_local: np.ndarray, rotations: np.ndarray) -> int:
     """The frame of ``loop`` whose pose is nearest a pose (root (3,), rotations (J, 4)):
     the phase the turn continues from, so the feet carry on the stride they were in."""
-    f = pose_features(loop.root_local, loop.rotations)
+    f = loop.pose_features()
     x = pose_features(root_local[None], rotations[None])[0]
     return int(np.argmin(np.sum((f - x) ** 2, axis=1)))
 
@@ -113,10 +113,14 @@ def turn_motion(
     heading: float,
     delta: float,
     previous: Motion | None = None,
+    pinned: bool = True,
 ) -> Motion:
     """Motion of turning on the spot at ``xy`` from ``heading`` by ``delta``; with the
     ``previous`` motion (what the character did before) the turn starts on the loop frame
-    nearest its last pose. Not eased: the caller eases it in and out (:mod:`.retime`)."""
+    nearest its last pose. Not eased: the caller eases it in and out (:mod:`.retime`).
+    ``pinned`` False: the feet as the loop plays them, not pinned where they are put down
+    (:func:`stride_removed` turns the legs alone: the frames, ground and root are the same,
+    all a layout check measures)."""
     loop = turn_loop(gait, delta)
     phase = (
         0
@@ -129,7 +133,7 @@ def turn_motion(
     root = loop.root_local[ph].copy()
     root[:, :2] *= SWAY  # stepping on the spot shifts the weight less than striding
     m = Motion(ground, root, loop.rotations[ph].copy(), loop.contacts[ph])
-    return stride_removed(gait.skeleton, m)
+    return stride_removed(gait.skeleton, m) if pinned else m
 
 
 def stride_removed(skel: Skeleton, motion: Motion) -> Motion:

@@ -162,16 +162,28 @@ def parts(
         pos = np.arange(len(fv)) - first
         nxt = fv[first + (pos + 1) % np.repeat(ft, ft)]
         e = np.sort(np.column_stack((fv, nxt)), axis=1)
-        uniq, inverse, counts = np.unique(e, axis=0, return_inverse=True, return_counts=True)
+        # each edge as one integer (rows compared whole): unique on them is a plain sort
+        _, inverse, counts = np.unique(
+            e[:, 0] * n + e[:, 1], return_inverse=True, return_counts=True
+        )
         bad = counts[inverse.ravel()] != 2
         open_islands = set(label[e[bad, 0]].tolist())
     in_band_face = (zmax >= band[0]) & (zmin <= band[1])
+    # Islands in label order; each one's vertices and faces in index order (one sort each).
+    vorder = np.argsort(label, kind="stable")
+    islands, vfirst = np.unique(label[vorder], return_index=True)
+    vbounds = np.append(vfirst, n)
+    top = np.maximum.reduceat(z[vorder], vfirst)
+    bottom = np.minimum.reduceat(z[vorder], vfirst)
+    face_island = label[fv[fs]] if len(fs) else np.zeros(0, np.int64)
+    forder = np.argsort(face_island, kind="stable")
+    fbounds = np.searchsorted(face_island[forder], np.append(islands, n))
     out = []
-    for isl in np.unique(label):
-        verts = np.flatnonzero(label == isl)
-        if z[verts].max() < band[0] or z[verts].min() > band[1]:
+    for k, isl in enumerate(islands):
+        if top[k] < band[0] or bottom[k] > band[1]:
             continue
-        faces = np.flatnonzero(label[fv[fs]] == isl) if len(fs) else np.zeros(0, np.int64)
+        verts = vorder[vbounds[k] : vbounds[k + 1]]
+        faces = forder[fbounds[k] : fbounds[k + 1]]
         if isl in open_islands:
             faces = faces[in_band_face[faces]]
         if len(faces):
@@ -187,7 +199,7 @@ def parts(
 def _island_parts(xy, elements):
     """Convex parts of one island whose elements (faces) are vertex index arrays."""
     hull = outline(xy[np.concatenate(elements)])
-    if len(elements) == 1:
+    if len(elements) == 1 or _bounds_hull(xy, elements, hull):
         return [hull]
     if len(elements) > MAX_PARTS:
         lo, hi = hull.min(axis=0), hull.max(axis=0)
@@ -202,3 +214,55 @@ def _island_parts(xy, elements):
     if _covered(polys, hull):
         return [hull]
     return polys
+
+
+def _bounds_hull(xy, elements, hull):
+    """True when the faces that wind counter-clockwise in plan (``elements``: vertex index
+    loops) join into exactly the hull's boundary, each hull edge once: a convex solid's
+    upper faces (a box's top, a cylinder's cap). Then their plan covers the hull, and the
+    island is its hull without outlining each face and sampling the cover (:func:`_covered`).
+
+    Why that is the general rule's answer: winding numbers add over edge chains. The faces'
+    boundaries summed, an edge walked both ways cancelling, are the hull's boundary, which
+    winds once round every point inside the hull; so every such point has a face winding
+    round it, and lies in that face's outline. :func:`_covered` then finds every sample
+    covered and the general rule returns the hull too. Edges are matched on plan positions
+    (vertices one above the other are one point; a vertical face adds nothing) and compared
+    with the hull's corners as :func:`..environment.convex_hull` rounds them; anything else
+    (collinear points on the boundary, a grown thin hull, a concave island) answers False
+    and the general rule decides."""
+    flat = np.concatenate(elements)
+    sizes = np.array([len(e) for e in elements])
+    if not len(flat) or sizes.min() < 3:
+        return False
+    starts = np.concatenate(([0], np.cumsum(sizes)[:-1]))
+    after = np.arange(1, len(flat) + 1)
+    after[starts + sizes - 1] = starts  # each loop closes on its first vertex
+    p, q = xy[flat], xy[flat[after]]
+    twice_area = np.add.reduceat(p[:, 0] * q[:, 1] - p[:, 1] * q[:, 0], starts)
+    ccw = np.repeat(twice_area > 0, sizes)
+    # plan positions as complex numbers: unique on them sorts by x then y, as on rows
+    points, ids = np.unique(p[:, 0] + 1j * p[:, 1], return_inverse=True)
+    points, ids = np.column_stack((points.real, points.imag)), ids.reshape(-1)
+    a, b = ids[ccw], ids[after][ccw]
+    a, b = a[a != b], b[a != b]
+    if not len(a):
+        return False
+    m = len(points)
+    keys, counts = np.unique(a * m + b, return_counts=True)
+    rev = (keys % m) * m + keys // m  # the same edge walked the other way
+    at = np.minimum(np.searchsorted(keys, rev), len(keys) - 1)
+    net = counts - np.where(keys[at] == rev, counts[at], 0)
+    left = keys[net > 0]
+    if (net > 1).any() or len(left) != len(hull):
+        return False
+    corner = {tuple(c): i for i, c in enumerate(hull.tolist())}
+    rounded = points.round(9).tolist()
+    src = [corner.get(tuple(rounded[k // m]), -1) for k in left]
+    dst = [corner.get(tuple(rounded[k % m]), -1) for k in left]
+    h = len(hull)
+    return (
+        min(src + dst) >= 0
+        and len(set(src)) == h
+        and all(d == (s + 1) % h for s, d in zip(src, dst))
+    )

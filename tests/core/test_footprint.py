@@ -2,6 +2,7 @@
 """Footprints of meshes as a user models them: thin walls block, rooms stay open."""
 
 import numpy as np
+import pytest
 
 from motion_patches.props import footprint as fp
 from motion_patches.props.environment import Environment, Obstacle
@@ -160,3 +161,205 @@ def test_outline_of_nothing_is_none_and_of_a_point_a_small_square():
     assert fp.outline(np.zeros((0, 2))) is None
     sq = fp.outline(np.array([[1.0, 1.0]]))
     assert len(sq) == 4 and np.isclose(fp.area(sq), fp.MIN_THICKNESS**2)
+
+
+# -- the hull fast path against the rule as it was --------------------------------------------
+
+
+def parts_before(vertices, fv=(), fs=(), ft=(), edges=(), band=fp.BODY_BAND):
+    """:func:`fp.parts` as it was before islands were grouped by one sort and a hull bounded
+    by its faces was taken without sampling the cover: the reference the new code must
+    match, polygon for polygon."""
+    v = np.asarray(vertices, float).reshape(-1, 3)
+    n = len(v)
+    fv = np.asarray(fv, np.int64).ravel()
+    fs = np.asarray(fs, np.int64).ravel()
+    ft = np.asarray(ft, np.int64).ravel()
+    first = np.repeat(fs, ft)
+    ed = np.asarray(edges, np.int64).reshape(-1, 2)
+    pairs = [np.column_stack((fv[first], fv)), ed]
+    used = np.zeros(n, bool)
+    used[fv] = True
+    used[ed.ravel()] = True
+    loose = np.flatnonzero(~used)
+    if len(loose) > 1:
+        pairs.append(np.column_stack((np.full(len(loose) - 1, loose[0]), loose[1:])))
+    label = fp._components(n, np.concatenate(pairs))
+    z = v[:, 2]
+    zmin = np.minimum.reduceat(z[fv], fs) if len(fs) else np.zeros(0)
+    zmax = np.maximum.reduceat(z[fv], fs) if len(fs) else np.zeros(0)
+    open_islands = set()
+    if len(fs):
+        pos = np.arange(len(fv)) - first
+        nxt = fv[first + (pos + 1) % np.repeat(ft, ft)]
+        e = np.sort(np.column_stack((fv, nxt)), axis=1)
+        _, inverse, counts = np.unique(e, axis=0, return_inverse=True, return_counts=True)
+        open_islands = set(label[e[counts[inverse.ravel()] != 2, 0]].tolist())
+    in_band_face = (zmax >= band[0]) & (zmin <= band[1])
+    out = []
+    for isl in np.unique(label):
+        verts = np.flatnonzero(label == isl)
+        if z[verts].max() < band[0] or z[verts].min() > band[1]:
+            continue
+        faces = np.flatnonzero(label[fv[fs]] == isl) if len(fs) else np.zeros(0, np.int64)
+        if isl in open_islands:
+            faces = faces[in_band_face[faces]]
+        if len(faces):
+            elements = [fv[fs[f] : fs[f] + ft[f]] for f in faces]
+        else:
+            elements = [verts[(z[verts] >= band[0]) & (z[verts] <= band[1])]]
+            if not len(elements[0]):
+                elements = [verts]
+        xy = v[:, :2]
+        hull = fp.outline(xy[np.concatenate(elements)])
+        if len(elements) == 1:
+            out.append(hull)
+            continue
+        if len(elements) > fp.MAX_PARTS:
+            lo, hi = hull.min(axis=0), hull.max(axis=0)
+            cell = np.maximum((hi - lo) / fp.GROUP_CELLS, 1e-6)
+            centre = np.array([xy[e].mean(axis=0) for e in elements])
+            key = np.floor((centre - lo) / cell).astype(np.int64)
+            key = key[:, 0] * (fp.GROUP_CELLS + 1) + key[:, 1]
+            elements = [
+                np.concatenate([elements[i] for i in np.flatnonzero(key == k)])
+                for k in np.unique(key)
+            ]
+        polys = [fp.outline(xy[e]) for e in elements]
+        out += [hull] if fp._covered(polys, hull) else polys
+    return out
+
+
+def cylinder(sides=32, r=0.25, z0=0.0, z1=2.0, x=0.0, y=0.0):
+    """Blender's cylinder: ``sides`` quads round, each cap one n-gon (triangulated as a fan,
+    as Blender's loop triangles are)."""
+    a = np.linspace(0.0, 2 * np.pi, sides, endpoint=False)
+    ring = np.column_stack((x + r * np.cos(a), y + r * np.sin(a)))
+    return prism(ring, z0, z1, [(0, i, i + 1) for i in range(1, sides - 1)])
+
+
+def l_prism(x=0.0, y=0.0):
+    ell = np.array([[0, 0], [3, 0], [3, 0.2], [0.2, 0.2], [0.2, 3], [0, 3]], float) + (x, y)
+    return prism(ell, 0, 2, [(0, 1, 2), (0, 2, 3), (0, 3, 4), (0, 4, 5)])
+
+
+def joined(*meshes):
+    """One mesh of several (its islands)."""
+    v, fv, fs, ft, shift, offset = [], [], [], [], 0, 0
+    for mv, mfv, mfs, mft in meshes:
+        v.append(mv)
+        fv.append(mfv + shift)
+        fs.append(mfs + offset)
+        ft.append(mft)
+        shift, offset = shift + len(mv), offset + len(mfv)
+    return np.vstack(v), np.concatenate(fv), np.concatenate(fs), np.concatenate(ft)
+
+
+def placed(m, turn=0.0, scale=(1.0, 1.0, 1.0), tilt=(0.0, 0.0), at=(0.0, 0.0, 0.0)):
+    """The mesh as an object's matrix puts it in the world: scaled, tilted about x then y,
+    turned about z, moved."""
+    c, s = np.cos(turn), np.sin(turn)
+    cx, sx, cy, sy = np.cos(tilt[0]), np.sin(tilt[0]), np.cos(tilt[1]), np.sin(tilt[1])
+    rz = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+    rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    return (m[0] * scale) @ (rz @ ry @ rx).T + at, *m[1:]
+
+
+def flipped(m):
+    """The mesh with every face's winding reversed (normals pointing in)."""
+    v, fv, fs, ft = m
+    return v, np.concatenate([fv[a : a + t][::-1] for a, t in zip(fs, ft)]), fs, ft
+
+
+MESHES = {
+    "box": box(0, 0, 1, 2),
+    "cylinder": cylinder(),
+    "cylinder, n-gon caps": (
+        lambda v, fv, fs, ft: mesh(
+            v,
+            [tuple(fv[a : a + t]) for a, t in zip(fs, ft)][: 2 * 32]
+            + [tuple(range(31, -1, -1)), tuple(range(32, 64))],
+        )
+    )(*cylinder()),
+    "cylinder of 200 sides (grouped)": cylinder(200, r=1.0),
+    "tall closed box (caps out of the band)": box(0, 0, 4, 4, 0.0, 3.0),
+    "box, normals in": flipped(box(0, 0, 1, 2)),
+    "open tube (no caps)": prism(cylinder()[0][:32, :2], 0.0, 2.0, [], caps=False),
+    "L-shaped wall": l_prism(),
+    "room of planes": room_of_planes(),
+    "two boxes": joined(box(0, 0, 1, 1), box(3, 0, 4, 1)),
+    "a box and an L": joined(box(-3, -3, -2, -2), l_prism(1, 1)),
+    "cylinder turned and scaled": placed(cylinder(), 0.7, (1.5, 0.4, 1.1), at=(3, -2, 0)),
+    "box turned, scaled and tilted": placed(box(0, 0, 1, 2), 0.3, (2.0, 0.5, 1.0), (0.4, 0.2)),
+    "box tilted about x": placed(box(0, 0, 1, 2), 0.3, tilt=(0.4, 0.0)),
+    # the top cut in two: its boundary has a corner on the hull's edges, where the hull has none
+    "box, top in two halves": mesh(
+        [(0, 0, 0), (1, 0, 0), (1, 2, 0), (0, 2, 0), (0, 0, 2), (0.5, 0, 2), (1, 0, 2)]
+        + [(1, 2, 2), (0.5, 2, 2), (0, 2, 2)],
+        [(0, 3, 2, 1), (4, 5, 8, 9), (5, 6, 7, 8), (0, 1, 6, 5, 4), (1, 2, 7, 6)]
+        + [(2, 3, 9, 8, 7), (3, 0, 4, 9)],
+    ),
+    "L turned and scaled": placed(l_prism(), -1.1, (0.8, 1.3, 1.0), at=(-1, 4, 0)),
+    "cylinder tilted on its side": placed(
+        cylinder(r=0.5), 0.2, tilt=(np.pi / 2, 0.0), at=(0, 0, 0.6)
+    ),
+}
+
+
+@pytest.mark.parametrize("name", list(MESHES))
+def test_footprints_are_the_polygons_the_rule_made_before(name):
+    got = fp.parts(*MESHES[name])
+    want = parts_before(*MESHES[name])
+    assert len(got) == len(want) > 0
+    for g, w in zip(got, want):
+        np.testing.assert_array_equal(g, w)
+
+
+@pytest.mark.parametrize(
+    "name, sampled",
+    [
+        ("box", False),
+        ("cylinder", False),
+        ("cylinder, n-gon caps", False),
+        ("cylinder of 200 sides (grouped)", False),
+        ("box, normals in", False),
+        ("cylinder turned and scaled", False),
+        ("box turned, scaled and tilted", False),
+        ("two boxes", False),
+        ("box tilted about x", False),
+        ("box, top in two halves", True),
+        ("L-shaped wall", True),
+        ("a box and an L", True),
+    ],
+)
+def test_a_convex_solid_is_its_hull_without_sampling_the_cover(monkeypatch, name, sampled):
+    calls = []
+    covered = fp._covered
+    monkeypatch.setattr(fp, "_covered", lambda *a: calls.append(1) or covered(*a))
+    fp.parts(*MESHES[name])
+    assert bool(calls) == sampled
+
+
+def test_random_prisms_convex_or_not_keep_their_footprints(monkeypatch):
+    """Prisms on random outlines (convex ones, and stars: concave), each placed by a
+    random matrix: the same polygons as before, the cover sampled for none of the convex."""
+    rng = np.random.default_rng(3)
+    calls, sampled = [], []
+    covered = fp._covered
+    monkeypatch.setattr(fp, "_covered", lambda *a: calls.append(1) or covered(*a))
+    for k in range(40):
+        n = int(rng.integers(3, 24))
+        a = np.sort(rng.uniform(0.0, 2 * np.pi, n))
+        r = rng.uniform(0.2, 1.5) * (1.0 if k % 2 else rng.uniform(0.4, 1.0, n))
+        ring = np.column_stack((r * np.cos(a), r * np.sin(a)))
+        m = prism(ring, 0.0, rng.uniform(0.3, 2.5), [(0, i, i + 1) for i in range(1, n - 1)])
+        m = placed(m, rng.uniform(-3, 3), rng.uniform(0.3, 2.0, 3), rng.uniform(-0.5, 0.5, 2))
+        calls.clear()
+        got = fp.parts(*m)
+        sampled += [k] if calls else []
+        want = parts_before(*m)
+        assert len(got) == len(want)
+        for g, w in zip(got, want):
+            np.testing.assert_array_equal(g, w)
+    assert not [k for k in sampled if k % 2] and len(sampled) >= 10

@@ -6,9 +6,11 @@ and figures reused only for the same world, and the same answers on a Dask worke
 import numpy as np
 import pytest
 
+from motion_patches.kinematics import quat
 from motion_patches.kinematics.motion import concatenate
 from motion_patches.planning import layout_check
-from motion_patches.planning.planner import SegmentPlanner, plan_motions
+from motion_patches.planning.pieces import Piece
+from motion_patches.planning.planner import SegmentPlanner, piece_motion, plan_motions
 from motion_patches.props.environment import Environment, Obstacle
 
 
@@ -45,9 +47,32 @@ def test_motion_without_poses_has_the_frames_and_ground_of_the_full_one(
     np.testing.assert_array_equal(light.ground, full.ground)
     # the hips' sway the same; their height settles into the stand with the body only
     np.testing.assert_array_equal(light.root_local[:, :2], full.root_local[:, :2])
-    assert light.rotations.shape[1] == 1 < full.rotations.shape[1]
+    assert light.rotations.shape[1] == 0 < full.rotations.shape[1]
     if goal[2] == np.pi and not obstacles:
         assert any(p.kind == "turn" for p in plan.pieces)
+
+
+def test_a_pieces_last_frame_alone_is_the_last_frame_of_its_whole_motion(walk_patch):
+    """What a turn after a piece starts from (a light plan poses that frame alone): the
+    connectors of a plan that ends turning, a segment and a part of one."""
+    plan = planned(walk_patch, *PAIRS[3])
+    assert [p.kind for p in plan.pieces][-1] == "turn"
+    pieces = [p for p in plan.pieces if p.kind != "turn"] + [
+        Piece("segment", segment=7, tile=(1, -2)),
+        Piece("part", segment=7, tile=(1, -2), frames=(2, 12)),
+    ]
+    for piece in pieces:
+        for standing in (False, True):
+            whole = piece_motion(walk_patch, piece, standing)
+            last = piece_motion(walk_patch, piece, standing, last=True)
+            assert last.frames == 1
+            np.testing.assert_array_equal(last.ground[0], whole.ground[-1])
+            np.testing.assert_array_equal(last.root_local[0], whole.root_local[-1])
+            np.testing.assert_array_equal(last.contacts[0], whole.contacts[-1])
+            # each rotation as the same quaternion (a whole motion's signs are made continuous)
+            np.testing.assert_array_equal(
+                quat.log(last.rotations[0]), quat.log(whole.rotations[-1])
+            )
 
 
 def test_interaction_clips_keep_frames_and_ground_without_poses(walk_patch, stand_walk_sit):
@@ -81,6 +106,15 @@ def test_pairs_get_the_figures_of_a_fresh_plan_and_an_unchanged_world_reuses_the
     assert first["length_m"] == pytest.approx(np.linalg.norm(steps, axis=1).sum(), abs=0)
     again = layout_check.plan_pair(tasks[0], walk_patch, worlds)
     assert again["reused"] and {**again, "reused": False} == first
+    # the figures forgotten, the planner kept: planned again by it, to the same figures
+    planner = layout_check.planner_in(walk_patch, worlds[tasks[0]["world"]])[1]
+    layout_check.forget(planners=False)
+    warm = layout_check.plan_pair(tasks[0], walk_patch, worlds)
+    assert layout_check.planner_in(walk_patch, worlds[tasks[0]["world"]])[1] is planner
+    assert not warm["reused"]
+    assert {k: v for k, v in warm.items() if k != "plan_seconds"} == {
+        k: v for k, v in first.items() if k != "plan_seconds"
+    }
     # a pillar moved 1 cm: another world, planned again
     moved = [box("P0", PILLARS[0].polygon[:, 0].mean() + 0.01, PILLARS[0].polygon[:, 1].mean())]
     tasks2, worlds2 = tasks_and_worlds([moved + obstacles[1:]], [(start, goal)])
