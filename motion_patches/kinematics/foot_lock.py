@@ -288,8 +288,8 @@ def held_yaw(
     toe alone a foot pivots about the toe, which the turn does not move).
 
     Space-curve following turns the body, and the foot with it, on every frame: pinned by
-    its ankle, a foot still yawing swept its toe 3 to 9 cm/s across the floor (CMU subject
-    16's walk keeps yawing a planted left foot 10 degrees on a straight line)."""
+    its ankle, a foot still yawing swept its toe 3 to 9 cm/s across the floor (the subject-16
+    walk patch yaws a planted left foot 10 degrees in a stance on a straight line)."""
     ankle_on = np.asarray(ankle_on, bool)
     v = np.asarray(toe_xy, float) - np.asarray(ankle_xy, float)
     heading = np.unwrap(np.arctan2(v[:, 1], v[:, 0]))
