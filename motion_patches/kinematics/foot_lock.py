@@ -254,7 +254,9 @@ def heel_down(ankle_z: np.ndarray, ankle_on: np.ndarray, toe_on: np.ndarray) -> 
     ``HEEL_RISE`` above the lowest it was in the run, the toe planted, to the run's end (its
     first frame stays). A foot rolling onto its toe turns about the toe, not the ankle: an
     ankle pinned while its heel rises drags the toe back along the floor (the speed the
-    contacts are labelled by lets a rising ankle stay planted for a few frames)."""
+    contacts are labelled by lets a rising ankle stay planted for a few frames). A run
+    reaching the motion's last frame is the stand it ends in (a back foot's heel raised):
+    handed to the toe, its ankle ended 0.8 cm further from standing in the demo."""
     ankle_on = np.asarray(ankle_on, bool).copy()
     a, b = runs(ankle_on)
     if not a.size:
@@ -270,6 +272,7 @@ def heel_down(ankle_z: np.ndarray, ankle_on: np.ndarray, toe_on: np.ndarray) -> 
     down = np.full(n + 1, -1)
     down[frames] = np.where(up, -1, frames)
     last = np.maximum(np.maximum.reduceat(down, ends)[::2], a)
+    last[b == n] = n  # a heel still down on the motion's last frame stands: it stays
     ankle_on[frames[frames > last[run]]] = False
     return ankle_on
 

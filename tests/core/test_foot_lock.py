@@ -393,8 +393,8 @@ def test_a_slow_toe_is_kept_out_of_the_floor_only():
 def test_a_rising_heel_hands_over_to_the_toe():
     """The frames ending a heel run with the heel more than HEEL_RISE above the lowest it
     was in the run, the toe planted, are the toe's alone; a heel rising with its toe off the
-    floor, or one that comes down again, keeps its frames, and a run keeps its first frame
-    (a heel coming down from above)."""
+    floor, one that comes down again or one still down on the motion's last frame keeps its
+    frames, and a run keeps its first frame (a heel coming down from above)."""
     z = np.array([0.2, 0.1, 0.08, 0.08, 0.08, 0.08, 0.085, 0.088, 0.11, 0.13, 0.16])
     heel = np.array([0, 1, 1, 1, 1, 1, 1, 1, 1, 1, 0], bool)
     toe = np.ones(len(z), bool)
@@ -405,6 +405,8 @@ def test_a_rising_heel_hands_over_to_the_toe():
     dip[9] = 0.08  # down again on the run's last frame: the frames before it stay
     assert np.array_equal(foot_lock.heel_down(dip, heel, toe), heel)
     assert np.array_equal(foot_lock.heel_down(np.full(3, 0.5), [1, 0, 0], toe[:3]), [1, 0, 0])
+    # a heel down to the motion's last frame is a stand (a back foot's heel up): it stays
+    assert np.array_equal(foot_lock.heel_down(z[:10], heel[:10], toe[:10]), heel[:10])
 
 
 def test_a_planted_foot_keeps_its_heading():
