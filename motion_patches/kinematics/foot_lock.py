@@ -10,6 +10,12 @@ and the foot's own world orientation are kept, so only the thigh and shin channe
 and bone lengths cannot.
 The correction eases in and out over a few frames around each run, so nothing pops.
 
+As a plan is written (with its frame rate) the foot is held whole while its heel is down:
+its heading too (:func:`held_yaw`: the body keeps turning above a planted foot, and a foot
+pinned by its ankle but still yawing swept its toe across the floor), the leg turned in its
+hip socket to carry it; and a heel rising at the end of its run hands over to the toe
+(:func:`heel_down`), which a foot rolling off the floor turns about.
+
 The lock is solved on the skeleton that plays the motion, from the motion as played there:
 a character on another rig than the patch's is locked on its own legs, in metres, after
 retargeting. Such a rig's swinging toes pass lower than the recording's (other thigh and
@@ -37,6 +43,8 @@ SWING_CLEARANCE = 0.015  # metres a swinging toe is kept above its planted heigh
 SWING_SPEED = (0.5, 1.0)  # m/s: a toe slower than the first is not swinging, one faster
 # than the second is in full
 LIFT_FRAMES = 2  # frames either side a swing's lift is spread over
+HEEL_RISE = 0.01  # metres a heel rises above its lowest in a run before the toe holds
+HELD_TURN = np.radians(10.0)  # the most a planted foot's heading is held against the body's
 
 
 def leg_chains(skel: Skeleton) -> list[tuple[int, int, int, int]]:
@@ -239,6 +247,74 @@ def swing_lift(toe: np.ndarray, ankle_on: np.ndarray, toe_on: np.ndarray, fps: f
     window = np.lib.stride_tricks.sliding_window_view(np.pad(need, r), 2 * r + 1)
     top = np.pad(window.max(axis=1), r, mode="edge")
     return np.lib.stride_tricks.sliding_window_view(top, 2 * r + 1).mean(axis=1)
+
+
+def heel_down(ankle_z: np.ndarray, ankle_on: np.ndarray, toe_on: np.ndarray) -> np.ndarray:
+    """(F,) ``ankle_on`` without the frames that end a heel run with the heel up: more than
+    ``HEEL_RISE`` above the lowest it was in the run, the toe planted, to the run's end (its
+    first frame stays). A foot rolling onto its toe turns about the toe, not the ankle: an
+    ankle pinned while its heel rises drags the toe back along the floor (the speed the
+    contacts are labelled by lets a rising ankle stay planted for a few frames). A run
+    reaching the motion's last frame is the stand it ends in (a back foot's heel raised):
+    handed to the toe, its ankle ended 0.8 cm further from standing in the demo."""
+    ankle_on = np.asarray(ankle_on, bool).copy()
+    a, b = runs(ankle_on)
+    if not a.size:
+        return ankle_on
+    z = np.asarray(ankle_z, float)
+    n = len(z)
+    ends = np.stack((a, b), 1).ravel()
+    lowest = np.minimum.reduceat(np.append(z, np.inf), ends)[::2]
+    run = np.repeat(np.arange(a.size), b - a)
+    frames = np.flatnonzero(ankle_on)
+    up = (z[frames] > lowest[run] + HEEL_RISE) & np.asarray(toe_on, bool)[frames]
+    # the last frame of each run that is down (or its first): the heel is up after it
+    down = np.full(n + 1, -1)
+    down[frames] = np.where(up, -1, frames)
+    last = np.maximum(np.maximum.reduceat(down, ends)[::2], a)
+    last[b == n] = n  # a heel still down on the motion's last frame stands: it stays
+    ankle_on[frames[frames > last[run]]] = False
+    return ankle_on
+
+
+def held_yaw(
+    ankle_xy: np.ndarray,
+    toe_xy: np.ndarray,
+    ankle_on: np.ndarray,
+    toe_on: np.ndarray,
+    blend: int = BLEND_FRAMES,
+) -> np.ndarray:
+    """(F,) turns (radians, about the vertical through the ankle) that keep a foot from
+    yawing while its heel is down: each contact's foot is held at the mean heading (ankle
+    to toe) of its heel-down frames, never turned more than ``HELD_TURN`` (a foot the body
+    turns further pivots), the turn fading out over ``blend`` frames outside them (on its
+    toe alone a foot pivots about the toe, which the turn does not move).
+
+    Space-curve following turns the body, and the foot with it, on every frame: pinned by
+    its ankle, a foot still yawing swept its toe 3 to 9 cm/s across the floor (the subject-16
+    walk patch yaws a planted left foot 10 degrees in a stance on a straight line)."""
+    ankle_on = np.asarray(ankle_on, bool)
+    v = np.asarray(toe_xy, float) - np.asarray(ankle_xy, float)
+    heading = np.unwrap(np.arctan2(v[:, 1], v[:, 0]))
+    turn = np.zeros((len(v), 1))
+    on = ankle_on | np.asarray(toe_on, bool)
+    a, b = runs(on)
+    if a.size:
+        ends = np.stack((a, b), 1).ravel()
+        count = np.add.reduceat(np.append(ankle_on, False).astype(float), ends)[::2]
+        total = np.add.reduceat(np.append(heading * ankle_on, 0.0), ends)[::2]
+        mean = (total / np.maximum(count, 1.0))[np.repeat(np.arange(a.size), b - a)]
+        frames = np.flatnonzero(on)  # the contacts' frames, in order: one mean each
+        heel = ankle_on[frames]
+        turn[frames[heel], 0] = mean[heel] - heading[frames[heel]]
+    return _faded(np.clip(turn, -HELD_TURN, HELD_TURN), ankle_on, blend)[:, 0]
+
+
+def _turned(ankle_xy, toe_xy, yaw):
+    """``toe_xy`` (..., F, 2) turned by ``yaw`` (..., F) about ``ankle_xy``."""
+    v = toe_xy - ankle_xy
+    c, s = np.cos(yaw), np.sin(yaw)
+    return ankle_xy + np.stack((c * v[..., 0] - s * v[..., 1], s * v[..., 0] + c * v[..., 1]), -1)
 
 
 def _both_planted_offsets(ankle_xy, toe_xy, contacts, blend=BLEND_FRAMES):
@@ -483,16 +559,20 @@ def lock_feet(
     """Rotation channels (F, J, 4) of ``world`` (a Motion) with planted feet pinned.
 
     Only the hip (thigh) and knee (shin) channels of each leg change, and the ankle's so
-    that the foot keeps its world orientation. Both legs are solved at once, on every
+    that the foot keeps its world orientation (with ``fps``, turned about the vertical by
+    :func:`held_yaw`). Both legs are solved at once, on every
     frame a correction applies to, on the legs' bones alone (:func:`_leg_skeleton`).
     ``offsets`` is a function
     (side, ankle xy (F, 2), toe xy (F, 2)) -> (F, 2) horizontal ankle corrections
     replacing :func:`planted_offsets` (a turn in place moves its feet its own way). A plan
     pins its feet on :func:`still_contacts`; ``posed``: the legs posed (:func:`pose_legs`).
-    With ``fps`` (the motion's frame rate) swinging toes are also kept clear of the floor
-    (:func:`swing_lift`). ``skel`` is the skeleton that plays the motion (a character's
-    own rig, in metres) and ``world`` the motion as played on it: the lock is solved on
-    that rig's legs and proportions, from its own feet.
+    With ``fps`` (the motion's frame rate), as a plan is written, swinging toes are also
+    kept clear of the floor (:func:`swing_lift`), a heel rising at the end of its run hands
+    over to the toe (:func:`heel_down`) and a foot keeps its heading while its heel is down
+    (:func:`held_yaw`: the whole leg turned about the line from the hip to the ankle's
+    target, the foot about the vertical). ``skel`` is the skeleton that plays the motion
+    (a character's own rig, in metres) and ``world`` the motion as played on it: the lock
+    is solved on that rig's legs and proportions, from its own feet.
 
     The new channels are the old ones turned: a bone whose world rotation is left-
     multiplied by a turn T, under a parent turned by P, gets the channel
@@ -506,17 +586,26 @@ def lock_feet(
     ground = np.asarray(world.ground, float)
     g, p = posed or _leg_positions(legs, world, with_frames=True)
     hip, knee, ankle, toe = legs.legs.T  # (2,) each: left, right
+    yaw = np.zeros((2, n))
     if corrections is None:
-        d = _both_planted_offsets(p[ankle, :, :2], p[toe, :, :2], world.contacts, blend)
+        c = np.array(world.contacts, bool)
+        toe_xy = p[toe, :, :2]
+        if fps is not None:
+            for s in range(2):
+                c[:, 2 * s] = heel_down(p[ankle[s], :, 2], c[:, 2 * s], c[:, 2 * s + 1])
+                yaw[s] = held_yaw(
+                    p[ankle[s], :, :2], toe_xy[s], c[:, 2 * s], c[:, 2 * s + 1], blend
+                )
+            toe_xy = _turned(p[ankle, :, :2], toe_xy, yaw)
+        d = _both_planted_offsets(p[ankle, :, :2], toe_xy, c, blend)
     else:
         d = np.stack([corrections(s, p[ankle[s], :, :2], p[toe[s], :, :2]) for s in range(2)])
     if fps is not None and corrections is None:
-        c = np.asarray(world.contacts, bool)
         moved = p[toe].copy()
-        moved[..., :2] += d
+        moved[..., :2] = toe_xy + d
         dz = [swing_lift(moved[s], c[:, 2 * s], c[:, 2 * s + 1], fps) for s in range(2)]
         d = np.concatenate((d, np.stack(dz)[..., None]), axis=-1)
-    moving = np.sqrt(np.einsum("sfi,sfi->sf", d, d)) > 1e-7  # (2, F)
+    moving = (np.sqrt(np.einsum("sfi,sfi->sf", d, d)) > 1e-7) | (np.abs(yaw) > 1e-9)  # (2, F)
     if not moving.any():
         return quat.make_continuous(world.rotations.copy(), axis=0)
 
@@ -535,13 +624,21 @@ def lock_feet(
     swing[rows], bend[rows] = _ik_turns(
         both(p[hip])[rows], both(p[knee])[rows], both(p[ankle])[rows], target, hinge, forward
     )
+    # a held heading turns the whole leg about the line from the hip to the ankle's target
+    # (the thigh rotates in its socket, the knee with it; the ankle stays on the target)
+    axis, _ = _unit(target - both(p[hip])[rows])
+    swing[rows] = quat.mul(_axis_angle_quat(axis, both(yaw)[rows]), swing[rows])
     swing, bend = swing.reshape(2, n, 4), bend.reshape(2, n, 4)
     changed = [j for side in range(2) if moving[side].any() for j, _ in legs.bones[side]]
     out = world.rotations.copy()
     local = out[:, changed].astype(float)  # (F, K, 4)
     # the turn of each bone relative to its parent's (thigh: the swing; shin: the bend under
-    # the swung thigh; ankle: back to its world rotation; limb segments: none)
-    rel = {"thigh": swing, "shin": bend, "ankle": quat.conj(quat.mul(swing, bend))}
+    # the swung thigh; ankle: back to its world rotation, turned by the held heading; limb
+    # segments: none)
+    # the foot's held heading: a turn about the world's vertical (the ankle's world turn)
+    held = np.zeros((2, n, 4))
+    held[..., 0], held[..., 3] = np.cos(0.5 * yaw), np.sin(0.5 * yaw)
+    rel = {"thigh": swing, "shin": bend, "ankle": quat.mul(quat.conj(quat.mul(swing, bend)), held)}
     at, turns, sides, kinds = [], [], [], []  # the turned bones: place in local, bone in sub
     for i, (side, (j, turn)) in enumerate(
         (side, b) for side in range(2) if moving[side].any() for b in legs.bones[side]

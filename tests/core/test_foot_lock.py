@@ -225,31 +225,34 @@ def lock_feet_frame_by_frame(skel, world, blend=foot_lock.BLEND_FRAMES, fps=None
     """lock_feet as a loop over frames and legs: the whole skeleton's world matrices, the
     IK of each frame on its own, the turned bones' channels from their new world
     rotations (skeleton.local_rotations_from_global); with ``fps`` the ankle's target also
-    raised by the swing lift."""
+    raised by the swing lift, a heel rising at the end of its run handed over to the toe
+    and the foot's heading held while its heel is down (the leg turned about the line from
+    the hip to the ankle's target, the foot about the vertical)."""
     from motion_patches.kinematics.skeleton import local_rotations_from_global
 
     m = world.world_matrices(skel)
     g, p = m[..., :3, :3].copy(), m[..., :3, 3]
     chains = foot_lock.leg_chains(skel)
     changed = []
+    up = np.array([0.0, 0.0, 1.0])
     for s, (hip, knee, ankle, toe) in enumerate(chains):
-        d = foot_lock.planted_offsets(
-            p[:, ankle, :2],
-            p[:, toe, :2],
-            world.contacts[:, 2 * s],
-            world.contacts[:, 2 * s + 1],
-            blend,
-        )
+        heel_on, toe_on = world.contacts[:, 2 * s], world.contacts[:, 2 * s + 1]
+        yaw = np.zeros(world.frames)
+        toe_p = p[:, toe].copy()
+        if fps is not None:
+            heel_on = foot_lock.heel_down(p[:, ankle, 2], heel_on, toe_on)
+            yaw = foot_lock.held_yaw(p[:, ankle, :2], p[:, toe, :2], heel_on, toe_on, blend)
+            for f in range(world.frames):
+                toe_p[f] = p[f, ankle] + _turn(up, yaw[f]) @ (p[f, toe] - p[f, ankle])
+        d = foot_lock.planted_offsets(p[:, ankle, :2], toe_p[:, :2], heel_on, toe_on, blend)
         d = np.column_stack((d, np.zeros(world.frames)))
         if fps is not None:
-            moved_toe = p[:, toe] + d
-            c = world.contacts
-            d[:, 2] = foot_lock.swing_lift(moved_toe, c[:, 2 * s], c[:, 2 * s + 1], fps)
+            d[:, 2] = foot_lock.swing_lift(toe_p + d, heel_on, toe_on, fps)
         thigh = [hip] + foot_lock._segments(skel, knee, hip)
         shin = [knee] + foot_lock._segments(skel, ankle, knee)
         moved = False
         for f in range(world.frames):
-            if np.linalg.norm(d[f]) <= 1e-7:
+            if np.linalg.norm(d[f]) <= 1e-7 and abs(yaw[f]) <= 1e-9:
                 continue
             moved = True
             target = p[f, ankle] + d[f]
@@ -262,10 +265,13 @@ def lock_feet_frame_by_frame(skel, world, blend=foot_lock.BLEND_FRAMES, fps=None
                 g[f, hip, :, 0],
                 np.array([np.cos(h), np.sin(h), 0.0]),
             )
+            axis = (target - p[f, hip]) / np.linalg.norm(target - p[f, hip])
+            twist = _turn(axis, yaw[f])
             for j in thigh:
-                g[f, j] = r_thigh @ g[f, j]
+                g[f, j] = twist @ r_thigh @ g[f, j]
             for j in shin:
-                g[f, j] = r_shin @ g[f, j]
+                g[f, j] = twist @ r_shin @ g[f, j]
+            g[f, ankle] = _turn(up, yaw[f]) @ g[f, ankle]
         if moved:
             changed += thigh + shin + [ankle]
     local = local_rotations_from_global(skel, g)
@@ -382,3 +388,85 @@ def test_a_slow_toe_is_kept_out_of_the_floor_only():
     assert z.min() >= 0.02 - 1e-12
     deepest = np.argmin(toe[:, 2])
     assert z[deepest] < 0.02 + 0.5 * foot_lock.SWING_CLEARANCE
+
+
+def test_a_rising_heel_hands_over_to_the_toe():
+    """The frames ending a heel run with the heel more than HEEL_RISE above the lowest it
+    was in the run, the toe planted, are the toe's alone; a heel rising with its toe off the
+    floor, one that comes down again or one still down on the motion's last frame keeps its
+    frames, and a run keeps its first frame (a heel coming down from above)."""
+    z = np.array([0.2, 0.1, 0.08, 0.08, 0.08, 0.08, 0.085, 0.088, 0.11, 0.13, 0.16])
+    heel = np.array([0, 1, 1, 1, 1, 1, 1, 1, 1, 1, 0], bool)
+    toe = np.ones(len(z), bool)
+    got = foot_lock.heel_down(z, heel, toe)
+    assert np.array_equal(np.flatnonzero(got), np.arange(1, 8))  # up 3 cm from frame 8
+    assert np.array_equal(foot_lock.heel_down(z, heel, np.zeros(len(z), bool)), heel)
+    dip = z.copy()
+    dip[9] = 0.08  # down again on the run's last frame: the frames before it stay
+    assert np.array_equal(foot_lock.heel_down(dip, heel, toe), heel)
+    assert np.array_equal(foot_lock.heel_down(np.full(3, 0.5), [1, 0, 0], toe[:3]), [1, 0, 0])
+    # a heel down to the motion's last frame is a stand (a back foot's heel up): it stays
+    assert np.array_equal(foot_lock.heel_down(z[:10], heel[:10], toe[:10]), heel[:10])
+
+
+def test_a_planted_foot_keeps_its_heading():
+    """A foot yawing while its heel is down is held at the mean heading of its heel-down
+    frames, never turned more than HELD_TURN, the turn fading out over the blend frames
+    around them (outside them nothing turns); a contact on its toe alone is not held."""
+    n, blend = 40, foot_lock.BLEND_FRAMES
+    heel = np.zeros(n, bool)
+    heel[10:26] = True
+    toe_on = heel.copy()
+    toe_on[26:30] = True  # heel up, on the toe
+    ankle = np.zeros((n, 2))
+    for drift in (np.radians(12.0), np.radians(60.0)):  # over the heel run
+        heading = np.linspace(-0.5, 0.5, n) * drift * n / 16
+        toe = np.column_stack((np.cos(heading), np.sin(heading))) * 0.12
+        yaw = foot_lock.held_yaw(ankle, toe, heel, toe_on, blend)
+        held = heading + yaw
+        mean = heading[heel].mean()
+        want = heading[heel] + np.clip(
+            mean - heading[heel], -foot_lock.HELD_TURN, foot_lock.HELD_TURN
+        )
+        assert np.allclose(held[heel], want)
+        assert np.abs(yaw).max() <= foot_lock.HELD_TURN + 1e-12
+        assert np.all(yaw[: 10 - blend] == 0) and np.all(yaw[26 + blend :] == 0)
+        # eased: a step no larger than the smoothstep's steepest plus the heading's own
+        ease = 1.5 / (blend + 1) * foot_lock.HELD_TURN + np.abs(np.diff(heading)).max()
+        assert np.abs(np.diff(yaw)).max() <= ease
+    assert np.ptp(held[heel]) > 0  # a 60 deg drift is held only 10 deg either way
+    tip = foot_lock.held_yaw(ankle, toe, np.zeros(n, bool), toe_on, blend)
+    assert not tip.any()
+
+
+def test_written_feet_do_not_sweep_their_toes_while_the_heel_is_down(walk_patch, walk):
+    """On the planned walk that turns, locked as a plan is written (with its frame rate):
+    the foot's heading on its heel-down frames is the held one (the synthesised heading
+    turned by held_yaw), and the toe slides less than half as fast there as under the pin
+    alone, whose foot keeps yawing with the body (the toe 12 cm out sweeping across)."""
+    skel, fps = walk_patch.gait.skeleton, 30.0
+    _, posed = foot_lock.pose_legs(skel, walk)
+    legs = foot_lock._legs(skel)
+    pinned = Motion(walk.ground, walk.root_local, foot_lock.lock_feet(skel, walk), walk.contacts)
+    written = Motion(
+        walk.ground, walk.root_local, foot_lock.lock_feet(skel, walk, fps=fps), walk.contacts
+    )
+    wp, ww = pinned.world_matrices(skel)[..., :3, 3], written.world_matrices(skel)[..., :3, 3]
+    for s, (_, _, ankle, toe) in enumerate(foot_lock.leg_chains(skel)):
+        a, t = legs.legs[s, 2], legs.legs[s, 3]
+        heel = foot_lock.heel_down(
+            posed[a, :, 2], walk.contacts[:, 2 * s], walk.contacts[:, 2 * s + 1]
+        )
+        yaw = foot_lock.held_yaw(
+            posed[a, :, :2], posed[t, :, :2], heel, walk.contacts[:, 2 * s + 1]
+        )
+        v0, v = posed[t, :, :2] - posed[a, :, :2], ww[:, toe, :2] - ww[:, ankle, :2]
+        want = np.arctan2(v0[:, 1], v0[:, 0]) + yaw
+        got = np.arctan2(v[:, 1], v[:, 0])
+        assert np.allclose(np.angle(np.exp(1j * (got - want)))[heel], 0.0, atol=1e-6)
+        both = heel[1:] & heel[:-1]
+
+        def slide(w):
+            return np.linalg.norm(np.diff(w[:, toe, :2], axis=0), axis=1)[both].mean()
+
+        assert slide(ww) < 0.5 * slide(wp)
