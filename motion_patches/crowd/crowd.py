@@ -61,8 +61,11 @@ def standing_spots(
     if spacing <= 0:
         return []
     grow = max(spacing - radius, 0.05)
-    mine = np.array([ends[n][0][:2], ends[n][1][:2]], float)
-    both = np.array([[s[:2], g[:2]] for s, g in ends], float)  # (characters, start / goal, 2)
+    if isinstance(ends, np.ndarray):  # (characters, start / goal, 2+) already
+        both = ends[:, :, :2]
+    else:
+        both = np.array([[s[:2], g[:2]] for s, g in ends], float)  # (characters, start / goal, 2)
+    mine = both[n]
     if every:
         index = np.arange(2 * len(ends))
     else:

@@ -59,6 +59,7 @@ class MemberWorld:
     spot_names: Sequence = ()
     spacing: float = 0.0
     _planner: SegmentPlanner | None = field(default=None, repr=False, compare=False)
+    _rank_xy: tuple | None = field(default=None, repr=False, compare=False)
 
     @property
     def planner(self) -> SegmentPlanner:
@@ -67,13 +68,22 @@ class MemberWorld:
         return self._planner
 
     @property
+    def rank_xy(self) -> np.ndarray:
+        """(members, start / goal, 2) of ``rank_ends``: made once, not per member (a crowd of
+        10,000 spent a third of a member's plan rebuilding it)."""
+        if self._rank_xy is None or self._rank_xy[0] is not self.rank_ends:
+            xy = np.array([[s[:2], g[:2]] for s, g in self.rank_ends], float).reshape(-1, 2, 2)
+            self._rank_xy = (self.rank_ends, xy)
+        return self._rank_xy[1]
+
+    @property
     def ramp(self) -> int:
         """Frames of a hold's slow-down and speed-up together (even)."""
         return hold_ramp(self.scene_fps)
 
     def __getstate__(self) -> dict:
         state = dict(self.__dict__)
-        state["_planner"] = None  # made again where it is used
+        state["_planner"] = state["_rank_xy"] = None  # made again where it is used
         return state
 
 
@@ -247,7 +257,7 @@ def spots_of(task: MemberTask, world: MemberWorld, every: bool = True) -> list[O
     box = plan_box(task.ends[0], task.ends[1], world.planner)
     if box is not None:
         box = (box[0] * task.size, box[1] * task.size)  # in the world of size 1
-    found = standing_spots(world.rank_ends, task.rank, world.spacing, radius, box, every)
+    found = standing_spots(world.rank_xy, task.rank, world.spacing, radius, box, every)
     return [
         Obstacle(f"{world.spot_names[k // 2]} {('start', 'goal')[k % 2]}", poly / task.size)
         for k, poly in found
