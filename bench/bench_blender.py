@@ -430,6 +430,8 @@ def section_crowd(bpy, addon, args):
     char_s = sum((p.frame_end - p.frame_start) / fps for p in res.plans)
     growth = (saved.stat().st_size - before) / 1024 / max(char_s, 1e-9)
     strips = sum(len(p.strips) for p in res.plans)
+    for failed in res.failed:  # said, not only counted
+        print(f"  not planned: {failed}", flush=True)
     out = {
         "characters": len(pairs),
         "planned": len(res.plans),

@@ -41,6 +41,7 @@ import argparse
 import cProfile
 import io
 import json
+import pickle
 import pstats
 import resource
 import sys
@@ -111,6 +112,13 @@ def parse_args(argv=None):
         type=int,
         default=2,
         help="Dask LocalCluster workers of the written crowds (0: in Blender's process)",
+    )
+    p.add_argument(
+        "--members-cache",
+        type=Path,
+        help="a folder: each size's members are kept there once planned and read back after "
+        "(the same members for the resolution of another version of the code; the members' "
+        "seconds are then not measured)",
     )
     p.add_argument("--json", type=Path, help="also write the full results here")
     args = p.parse_args(argv)
@@ -207,13 +215,20 @@ def run_crowd(patch, n, args):
     fps = patch.gait.fps
     ramp = members.MemberWorld(patch, env, [], PlanSettings(), scene_fps=fps).ramp
     by_workers, answers = {}, None
-    for w in args.workers:
+    cache = args.members_cache and args.members_cache / f"members_{n}_{args.seed}.pkl"
+    if cache and cache.exists():  # the same members, to compare resolutions side by side
+        answers = pickle.loads(cache.read_bytes())
+        by_workers = {w: {"members_s": float("nan"), "cluster_start_s": 0.0} for w in args.workers}
+    for w in args.workers if answers is None else ():
         got, secs, started = plan_members(patch, env, ends, w)
         by_workers[w] = {"members_s": secs, "cluster_start_s": started}
         if answers is None:
             answers = got
         elif fingerprint(got) != fingerprint(answers):
             raise SystemExit(f"{w} workers planned other members than {args.workers[0]}")
+    if cache and not cache.exists():
+        cache.parent.mkdir(parents=True, exist_ok=True)
+        cache.write_bytes(pickle.dumps(answers))
     planned = [a for a in answers if isinstance(a, members.Member)]
     tracks = [a.root_track for a in planned]
     masks = [a.holdable for a in planned]
