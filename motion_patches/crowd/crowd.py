@@ -34,6 +34,12 @@ def disc(centre: Sequence[float] | np.ndarray, radius: float, sides: int = 12) -
     return np.column_stack((centre[0] + r * np.cos(a), centre[1] + r * np.sin(a)))
 
 
+# metres a standing spot's disc is grown beyond the spacing: the planner keeps its radius
+# from a footprint to within a few millimetres (grown corners are polygons), and a path
+# round another's start kept 0.495-0.499 m from it, where 0.5 was asked (10,000 characters)
+SPOT_MARGIN = 0.01
+
+
 def standing_spots(
     ends: Sequence[tuple[Sequence[float], Sequence[float]]],
     n: int,
@@ -60,7 +66,7 @@ def standing_spots(
     given: where its plan never looks."""
     if spacing <= 0:
         return []
-    grow = max(spacing - radius, 0.05)
+    grow = max(spacing - radius, 0.05) + SPOT_MARGIN
     if isinstance(ends, np.ndarray):  # (characters, start / goal, 2+) already
         both = ends[:, :, :2]
     else:
@@ -476,8 +482,9 @@ def resolve(
     that met them placed first (prioritised planning's restart with raised priorities), at
     most ``restarts`` times, and the pass with the fewest frames too close is kept. In a
     large crowd a restart places again only the neighbourhood of the pairs left
-    (:func:`_neighbourhood`), the others kept as in the best pass so far, placed before
-    them: its cost is that of the neighbourhood, not of the crowd. Before a restart, a
+    (:func:`_neighbourhood`, a ring further after each that gained nothing), the others kept
+    as in the best pass so far, placed before them: its cost is that of the neighbourhood,
+    not of the crowd. Before a restart, a
     counter-flow left meeting head-on in a narrow way is split into lanes
     (:func:`lanes.form`), the same over the passes that follow. What is left is reported:
     [{"a", "b" (indices, ``a`` placed first), "frame" (closest), "first_frame", "frames",
@@ -493,6 +500,7 @@ def resolve(
     places = []  # the lanes' places (midpoint, axis), the same over the passes
     on_lane = replan and (lambda i, discs: replan(i, strips.get(i, []) + discs))
     fixed = None  # the characters a restart keeps as they were (None: none)
+    wider = 0  # rings added to a restart's neighbourhood, one per restart that gained nothing
     for _ in range(restarts + 1):
         schedules, conflicts, table = _resolve_once(
             [i for i in order if fixed is None or i not in fixed],
@@ -520,6 +528,8 @@ def resolve(
         left = sum(c["frames"] for c in conflicts)
         if best is None or left < best[0]:
             best = (left, schedules, conflicts)
+        elif fixed is not None:  # a restart among neighbours that gained nothing: reach further
+            wider += 1
         if not conflicts:
             break
         formed = {}
@@ -532,7 +542,7 @@ def resolve(
         first = list(dict.fromkeys(c["b"] for c in conflicts))
         order = first + [i for i in order if i not in first]
         seeds = {c[k] for c in conflicts + best[2] for k in ("a", "b")} | set(formed)
-        hood = _neighbourhood(tracks, best[1], seeds, spacing)
+        hood = _neighbourhood(tracks, best[1], seeds, spacing, LOCAL_RINGS + wider)
         if hood is None:  # most of the crowd: all of it placed again
             fixed = None
         else:  # the rest kept as in the best pass, placed before
@@ -546,17 +556,17 @@ LOCAL_SHARE = 0.5  # a restart placing more of the crowd than this places all of
 LOCAL_RINGS = 2  # how many steps out from those left too close a restart reaches
 
 
-def _neighbourhood(tracks, schedules, seeds, spacing):
+def _neighbourhood(tracks, schedules, seeds, spacing, rings=LOCAL_RINGS):
     """The characters a restart places again, or None for all of them: ``seeds`` and every
     character whose path (as planned, ``tracks``, or as walked in ``schedules``) comes
-    within the spacing of theirs, and of those, :data:`LOCAL_RINGS` steps out. Nobody
+    within the spacing of theirs, and of those, ``rings`` steps out. Nobody
     further can meet them whenever either walks, so in a large crowd the pairs left are
     cleared by a restart among their neighbours, the others kept where they were placed
     (prioritised planning's restart, at the cost of a neighbourhood, not of the crowd)."""
     n = len(tracks)
     paths = ways.Ways([*tracks, *(s.track for s in schedules)], spacing)
     hood, edge = set(seeds), set(seeds)
-    for _ in range(LOCAL_RINGS):
+    for _ in range(rings):
         met = set()
         for i in edge:
             for track in (tracks[i], schedules[i].track):

@@ -256,7 +256,7 @@ def test_standing_spots_are_every_start_and_goal_else_those_passed_in_priority_o
     spots = crowd.standing_spots(ends, 1, spacing=1.0, radius=0.25, every=False)
     assert [k for k, _ in spots] == [1, 4]
     r = np.linalg.norm(spots[0][1] - (10, 0), axis=1)  # a polygon round the 0.75 m disc
-    assert np.allclose(r, 0.75 / np.cos(np.pi / 12))
+    assert np.allclose(r, (0.75 + crowd.SPOT_MARGIN) / np.cos(np.pi / 12))  # and a margin
     ends[0] = ((0, 0, 0), (10, 3.5, 0))  # a goal by its own goal is left out
     assert [k for k, _ in crowd.standing_spots(ends, 1, 1.0, 0.25)] == [0, 4, 5]
     assert [k for k, _ in crowd.standing_spots(ends, 1, 1.0, 0.25, every=False)] == [4]
