@@ -41,7 +41,7 @@ SPOT_MARGIN = 0.01
 
 
 def standing_spots(
-    ends: Sequence[tuple[Sequence[float], Sequence[float]]],
+    ends: Sequence[tuple[Sequence[float], Sequence[float]]] | np.ndarray,
     n: int,
     spacing: float,
     radius: float,
