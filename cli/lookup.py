@@ -64,10 +64,14 @@ def save_target(args):
 
 
 def save_blend(path):
+    """Save the .blend to ``path`` (None: nothing), compressed: Blender 5.0 and later save
+    compressed by default, 4.5 does not, and a crowd's file is then about five times larger
+    (docs/benchmarks.md). Blender keeps a file's compression on later saves (File > Save As
+    > Compress turns it off)."""
     if path is None:
         return None
     try:
-        bpy.ops.wm.save_as_mainfile(filepath=str(path))
+        bpy.ops.wm.save_as_mainfile(filepath=str(path), compress=True)
     except RuntimeError as exc:
         raise BadInput(f"could not save {path}: {str(exc).strip().splitlines()[-1]}") from None
     return str(path)

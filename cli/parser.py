@@ -413,7 +413,11 @@ def _bodies_option(p, who):
 
 def _save_options(p):
     g = p.add_mutually_exclusive_group()
-    g.add_argument("--save", metavar="OUT.blend", help="save the .blend here on success")
     g.add_argument(
-        "--save-in-place", action="store_true", help="save over the open .blend on success"
+        "--save", metavar="OUT.blend", help="save the .blend here on success (compressed)"
+    )
+    g.add_argument(
+        "--save-in-place",
+        action="store_true",
+        help="save over the open .blend on success (compressed)",
     )

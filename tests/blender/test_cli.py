@@ -312,6 +312,7 @@ def test_plan_saves_nla_and_analyse_reports_figures(cli, capsys, layout, tmp_pat
     )
     assert doc["length_m"] > np.hypot(7.1, 4.7) and doc["seconds_of_motion"] > 5
     assert doc["saved"] == str(out) and out.is_file()
+    assert out.read_bytes()[:4] == b"\x28\xb5\x2f\xfd"  # saved compressed (zstd), 4.5 too
 
     # analyse on the plan in memory, and the saved file holds the same NLA
     code, doc, err = call_json(cli, capsys, "analyse", "--character", "Walker")
