@@ -551,7 +551,8 @@ def _body_action(obj, keys):
 FINER = 16.0  # the root's and foot lock's angle tolerance is this much finer (lengths: 4)
 # How much the root's and foot lock's error may change from one scene frame to the next, as
 # a fraction of their tolerance: a planted foot moves with it. Any change within the
-# tolerance made feet slide 0.6 cm/s more in a 60 fps scene; half of it, 0.02 (bench_files).
+# tolerance made planted feet slide 3.13 cm/s in a 60 fps scene, 2.35 with half of it (2.34
+# with the keys before their slopes were fitted; bench_files' crowd of three at 30/60).
 STEADY = 0.5
 
 

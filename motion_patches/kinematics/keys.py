@@ -143,7 +143,7 @@ def plan_columns(values: ArrayLike, tol: float) -> list[tuple[str, np.ndarray | 
 # interval between keys are its own, fitted by least squares to the plan on the frames (and
 # half frames) inside it. A key costs the same 72 bytes whatever its handles, and an interval
 # with two free slopes fits two more values than one whose slopes are the plan's own at its
-# ends: a captured walk needs a third of the keys (bench/bench_files.py).
+# ends: a captured walk's bodies need 0.41x the keys (bench/bench_files.py).
 
 DEGREE = np.pi / 180.0
 ANGLE = 0.5 * DEGREE  # how far a bone's played rotation may be from the plan
@@ -155,7 +155,7 @@ PULL = 1e-4
 # An interval longer than this many frames that misses by more than SPLIT_MISS times the
 # tolerance takes keys on the middles of both sides of its worst point too: a walk's
 # channels need a key every few frames, and halving a long interval one key at a time
-# took a third of the fit's time (the keys found are as many, bench_files).
+# took a third of the fit's time (the keys found are about as many, bench_files).
 SPLIT_LONG = 16
 SPLIT_MISS = 8.0
 
@@ -345,7 +345,8 @@ class _Intervals:
     def fit(self, a, b, u, limit=False):
         """Fit intervals (a, b) of units ``u`` (S,); keep the slopes and what is played of
         those within tolerance (and, unless ``limit``, of those a frame long, where no key
-        can be added). Returns the others' (indices into the S, their worst points)."""
+        can be added). Returns the others' (indices into the S, their worst points, their
+        worst errors over the tolerance)."""
         missed, worst_at, worst_of = [np.zeros(0, int)], [np.zeros(0, int)], [np.zeros(0)]
         inside = self.step * (b - a) > 1
         kinds = self.kind_of[u]
@@ -451,8 +452,7 @@ def cubic_keys(
     units that give up are those where it reaches ``give_up_at``. ``pull``: how much the
     fitted slopes are drawn to the plan's own (:data:`PULL`). ``steady``: the error of a
     lone column (not of rotations) may also change by at most that much of its tolerance
-    from one point to the next (keys on, or samples of, a channel that carries a planted
-    foot), None: any.
+    from one point to the next (a channel that carries a planted foot), None: any.
 
     Returns {"keep": (F, C) bool kept frames, "values" (F, C) the keys take on each frame,
     "slopes" and "slopes_in" (F, C) the slopes of each key's right and left handles,
@@ -476,20 +476,23 @@ def cubic_keys(
         # a frame, or the half frame's neighbour that is not the interval's end
         frame = point // fit.step if fit.step == 1 else (point + 1) // 2
         frame = np.where(frame >= b, point // 2, frame)
+        # every interval's ends and new keys (cut) by interval (cid), to be paired up in order
         ids = np.arange(a.size)
-        cut, cid = [a, b, frame], [ids, ids, ids]
+        cuts, cids = [a, b, frame], [ids, ids, ids]
         long = (b - a > SPLIT_LONG) & (worst > SPLIT_MISS)
         for lo, hi in ((a, frame), (frame, b)):
             mid = (lo + hi) // 2
             ok = long & (mid > lo) & (mid < hi)
-            cut.append(mid[ok])
-            cid.append(ids[ok])
-        cut, cid = np.concatenate(cut), np.concatenate(cid)
+            cuts.append(mid[ok])
+            cids.append(ids[ok])
+        cut, cid = np.concatenate(cuts), np.concatenate(cids)
         inner = np.ones(cut.size, bool)
         inner[: 2 * a.size] = False
         keep_u[cut[inner], u[cid[inner]]] = True
-        if give_up_at is not None:
-            gave_up |= keep_u.sum(axis=0) >= give_up_at
+        if give_up_at is not None:  # the units that took a key and now keep that many
+            took = np.zeros(n_units, bool)
+            took[u[cid[inner]]] = True
+            gave_up |= took & (keep_u.sum(axis=0) >= give_up_at)
         order = np.lexsort((cut, cid))
         cut, cid = cut[order], cid[order]
         pair = cid[1:] == cid[:-1]
