@@ -360,10 +360,12 @@ FREE = 0  # Keyframe.handle_left_type / handle_right_type enum value of 'FREE'
 class Tolerance:
     """How far a compactly stored action may play from the plan: ``angle`` (radians) for
     a bone's rotation, ``length`` (metres) for a location (cubic keys,
-    :func:`motion_patches.kinematics.keys.cubic_keys`)."""
+    :func:`motion_patches.kinematics.keys.cubic_keys`). ``steady``: also how much a
+    channel's error may change from one frame to the next, as a fraction of the tolerance
+    (None: any)."""
 
-    def __init__(self, angle=key_plan.ANGLE, length=key_plan.LENGTH):
-        self.angle, self.length = float(angle), float(length)
+    def __init__(self, angle=key_plan.ANGLE, length=key_plan.LENGTH, steady=None):
+        self.angle, self.length, self.steady = float(angle), float(length), steady
 
 
 # The root bone's keys are this much finer than the others': the whole body hangs from it,
@@ -408,6 +410,7 @@ def fit_curves(frames, curves, tol, values=None, rotations=(), between=True):
         rotations,
         between,
         give_up_at=samples if _whole(frames) else None,
+        steady=tol.steady,
     )
 
 
@@ -488,7 +491,11 @@ def key_curves(
                     how = "samples"
                 else:
                     _key_cubic(
-                        fc, frames[kept], cubic["values"][kept, c], cubic["slopes"][kept, c] / step
+                        fc,
+                        frames[kept],
+                        cubic["values"][kept, c],
+                        cubic["slopes"][kept, c] / step,
+                        cubic["slopes_in"][kept, c] / step,
                     )
                     out.append(fc)
                     continue
@@ -512,10 +519,11 @@ def key_curves(
     return out
 
 
-def _key_cubic(fc, x, y, m):
-    """Bezier keys on frames ``x`` with values ``y`` and slopes ``m`` (per frame): free
-    handles a third of the way to the neighbouring keys, so that Blender plays the Hermite
-    cubic between keys (:func:`motion_patches.kinematics.keys.hermite`)."""
+def _key_cubic(fc, x, y, m, m_in):
+    """Bezier keys on frames ``x`` with values ``y``, the slopes ``m`` (per frame) of their
+    right handles and ``m_in`` of their left ones: free handles a third of the way to the
+    neighbouring keys, so that Blender plays the Hermite cubic between keys
+    (:func:`motion_patches.kinematics.keys.hermite`)."""
     n = x.size
     gap = np.diff(x)
     before = np.concatenate((gap[:1], gap)) / 3.0 if n > 1 else np.ones(1)
@@ -526,7 +534,7 @@ def _key_cubic(fc, x, y, m):
     kp.foreach_set("interpolation", np.full(n, BEZIER, np.int32))
     kp.foreach_set("handle_left_type", np.full(n, FREE, np.int32))
     kp.foreach_set("handle_right_type", np.full(n, FREE, np.int32))
-    left = np.column_stack((x - before, y - m * before))
+    left = np.column_stack((x - before, y - m_in * before))
     right = np.column_stack((x + after, y + m * after))
     kp.foreach_set("handle_left", left.astype(np.float32).ravel())
     kp.foreach_set("handle_right", right.astype(np.float32).ravel())
@@ -534,16 +542,17 @@ def _key_cubic(fc, x, y, m):
 
 
 def curve_keys(fc):
-    """(N, 3) frames, values and slopes (per frame; NaN where the segment a key starts is
-    not Bezier) of an F-curve's keys, or its samples (linear) when it was converted to
-    samples: what :func:`motion_patches.kinematics.keys.hermite` plays as Blender does for
-    keys written by :func:`key_curves`."""
+    """(N, 4) frames, values, and the slopes (per frame) of the right and left handles
+    (NaN where the segment a key starts is not Bezier) of an F-curve's keys, or its samples
+    (linear) when it was converted to samples: what
+    :func:`motion_patches.kinematics.keys.hermite` plays as Blender does for keys written by
+    :func:`key_curves`."""
     kp = fc.keyframe_points
     if not len(kp):
         co = np.empty(2 * len(fc.sampled_points), np.float32)
         fc.sampled_points.foreach_get("co", co)
         co = co.reshape(-1, 2).astype(float)
-        return np.column_stack((co, np.full(len(co), np.nan)))
+        return np.column_stack((co, np.full((len(co), 2), np.nan)))
     n = len(kp)
     co, hl, hr = (np.empty(2 * n, np.float32) for _ in range(3))
     kp.foreach_get("co", co)
@@ -554,14 +563,10 @@ def curve_keys(fc):
     co, hl, hr = (a.reshape(-1, 2).astype(float) for a in (co, hl, hr))
     dx = hr[:, 0] - co[:, 0]
     slope = np.where(dx > 0, (hr[:, 1] - co[:, 1]) / np.where(dx > 0, dx, 1.0), 0.0)
-    # the slope a segment ends with is the end key's left handle's
     dxl = co[:, 0] - hl[:, 0]
     slope_in = np.where(dxl > 0, (co[:, 1] - hl[:, 1]) / np.where(dxl > 0, dxl, 1.0), slope)
     bez = ipo == BEZIER
-    # cubic keys written here have one slope each side; keep the right one where a
-    # segment starts, the left where the last one ends
-    slope[-1] = slope_in[-1]
-    return np.column_stack((co, np.where(bez, slope, np.nan)))
+    return np.column_stack((co, np.where(bez, slope, np.nan), slope_in))
 
 
 def curve_points(fc):
@@ -622,7 +627,7 @@ def pose_curves(skel, root_location, rotations, modes=None, tol=None):
             ]
     values = np.concatenate(columns, axis=1)
     if isinstance(tol, Tolerance):  # the root's location: finer too (rotations judged apart)
-        tol = Tolerance(tol.angle, tol.length / ROOT_FINER)
+        tol = Tolerance(tol.angle, tol.length / ROOT_FINER, tol.steady)
     return curves, values, tol, groups
 
 
@@ -668,12 +673,12 @@ def read_bones(action, slot, bones, mode, frames, cache=None):
             out[:, ks, cs] = values[:, pick].T
             continue
         for k, i, co in curves:
-            out[:, k, i] = key_plan.hermite(co[:, 0], co[:, 1], co[:, 2], frames)
+            out[:, k, i] = key_plan.hermite(co[:, 0], co[:, 1], co[:, 2], frames, co[:, 3])
     return out
 
 
 def _channel_points(action, slot, bone, mode, size, cache=None):
-    """[(N, 3) keys (:func:`curve_keys`) or None] of the curves of a bone's ``mode``
+    """[(N, 4) keys (:func:`curve_keys`) or None] of the curves of a bone's ``mode``
     channel in an action."""
     path = f'pose.bones["{bone}"].{rotation_path(mode)}'
     key = (action.name, slot.handle if slot is not None else None, path)

@@ -459,7 +459,7 @@ def _in_units(tol, unit):
     """``tol`` for locations keyed in the armature's units (``unit`` metres each): its
     length, in metres, divided by it, so a centimetre rig is held as a metre rig is."""
     if isinstance(tol, act_io.Tolerance) and unit != 1.0:
-        return act_io.Tolerance(tol.angle, tol.length / unit)
+        return act_io.Tolerance(tol.angle, tol.length / unit, tol.steady)
     return tol
 
 
@@ -549,6 +549,11 @@ def _body_action(obj, keys):
 
 
 FINER = 16.0  # the root's and foot lock's angle tolerance is this much finer (lengths: 4)
+# How much the root's and foot lock's error may change from one scene frame to the next, as
+# a fraction of their tolerance: a planted foot moves with it. Any change within the
+# tolerance made planted feet slide 3.13 cm/s in a 60 fps scene, 2.35 with half of it (2.34
+# with the keys before their slopes were fitted; bench_files' crowd of three at 30/60).
+STEADY = 0.5
 
 
 def _finer(tol):
@@ -556,9 +561,9 @@ def _finer(tol):
     alone (a quaternion turns by up to four component errors), the heading turns the whole
     body, the ground track carries a planted foot with the hips and the foot lock holds it
     (at a quarter of the angle the feet drifted 2 mm from the plan; at a sixteenth 0.5 mm,
-    bench_files); few curves."""
+    bench_files), and steady from frame to frame (:data:`STEADY`); few curves."""
     if isinstance(tol, act_io.Tolerance):
-        return act_io.Tolerance(tol.angle / FINER, tol.length / 4.0)
+        return act_io.Tolerance(tol.angle / FINER, tol.length / 4.0, STEADY)
     return tol
 
 

@@ -65,7 +65,7 @@ def save_target(args):
 
 def save_blend(path):
     """Save the .blend to ``path`` (None: nothing), compressed: Blender 5.0 and later save
-    compressed by default, 4.5 does not, and a crowd's file is then about five times larger
+    compressed by default, 4.5 does not, and a crowd's file is then about six times larger
     (docs/benchmarks.md). Blender keeps a file's compression on later saves (File > Save As
     > Compress turns it off)."""
     if path is None:

@@ -134,20 +134,36 @@ def plan_columns(values: ArrayLike, tol: float) -> list[tuple[str, np.ndarray | 
 # A Bezier key whose handles sit a third of the way to its neighbouring keys (in frames)
 # makes Blender's curve between two keys a cubic in the frame itself (the Bezier's x is then
 # linear in its parameter): the Hermite cubic through the two keys' values with the slopes
-# their handles give. So the curve Blender plays is known exactly here, and keys are kept
-# only where that cubic strays from the planned values by more than a tolerance given in
-# what shows (degrees of a bone's rotation, millimetres of the hips). A walk needs a few
-# such keys a second per channel where linear keys need one on most frames.
+# the first key's right handle and the second key's left handle give. So the curve Blender
+# plays is known exactly here, and keys are kept only where that cubic strays from the
+# planned values by more than a tolerance given in what shows (degrees of a bone's rotation,
+# millimetres of the hips).
+#
+# A key's two handles are free (Blender's FREE handle type): the two slopes of every
+# interval between keys are its own, fitted by least squares to the plan on the frames (and
+# half frames) inside it. A key costs the same 72 bytes whatever its handles, and an interval
+# with two free slopes fits two more values than one whose slopes are the plan's own at its
+# ends: a captured walk's bodies need 0.41x the keys (bench/bench_files.py).
 
 DEGREE = np.pi / 180.0
 ANGLE = 0.5 * DEGREE  # how far a bone's played rotation may be from the plan
 LENGTH = 1e-3  # how far a played location may be from the plan, metres
 CURVE_BYTES = 330  # an F-curve's own blocks in a .blend (struct, path, key array head): estimated
+# How much an interval's fitted slopes are drawn to the plan's own at its ends (relative to
+# the frames inside): settles the slopes of intervals with fewer frames inside than slopes.
+PULL = 1e-4
+# An interval longer than this many frames that misses by more than SPLIT_MISS times the
+# tolerance takes keys on the middles of both sides of its worst point too: a walk's
+# channels need a key every few frames, and halving a long interval one key at a time
+# took a third of the fit's time (the keys found are about as many, bench_files).
+SPLIT_LONG = 16
+SPLIT_MISS = 8.0
 
 
 def slopes(values: ArrayLike) -> np.ndarray:
     """(F, C) per-frame slopes of ``values`` (F, C): central differences, one-sided at the
-    ends. The slope each cubic key takes on its frame."""
+    ends. The plan's own slope on each frame (its course between frames, and what an
+    interval's fitted slopes are drawn to)."""
     v = np.asarray(values, float)
     out = np.zeros_like(v)
     if len(v) > 1:
@@ -157,12 +173,16 @@ def slopes(values: ArrayLike) -> np.ndarray:
     return out
 
 
-def hermite(x: ArrayLike, y: ArrayLike, m: ArrayLike, at: ArrayLike) -> np.ndarray:
+def hermite(
+    x: ArrayLike, y: ArrayLike, m: ArrayLike, at: ArrayLike, m_in: ArrayLike | None = None
+) -> np.ndarray:
     """Values at frames ``at`` of the curve Blender plays through keys on frames ``x`` (K,)
-    with values ``y`` (K,) and slopes ``m`` (K,) per frame (handles at a third of each
-    interval): the Hermite cubic between keys, the end keys' values outside. A NaN slope
-    marks a linear key (the segment it starts is a line)."""
+    with values ``y`` (K,), slopes ``m`` (K,) per frame of their right handles and ``m_in``
+    of their left ones (default ``m``; handles at a third of each interval): the Hermite
+    cubic between keys, the end keys' values outside. A NaN slope ``m`` marks a linear key
+    (the segment it starts is a line)."""
     x, y, m = (np.asarray(a, float) for a in (x, y, m))
+    m_in = m if m_in is None else np.asarray(m_in, float)
     at = np.asarray(at, float)
     if x.size == 1:
         return np.full(at.shape, y[0])
@@ -170,7 +190,7 @@ def hermite(x: ArrayLike, y: ArrayLike, m: ArrayLike, at: ArrayLike) -> np.ndarr
     h = x[i + 1] - x[i]
     t = np.clip((at - x[i]) / h, 0.0, 1.0)
     y0, y1 = y[i], y[i + 1]
-    m0, m1 = m[i] * h, m[i + 1] * h
+    m0, m1 = m[i] * h, m_in[i + 1] * h
     t2, t3 = t * t, t * t * t
     cubic = (
         (2 * t3 - 3 * t2 + 1) * y0
@@ -181,52 +201,15 @@ def hermite(x: ArrayLike, y: ArrayLike, m: ArrayLike, at: ArrayLike) -> np.ndarr
     return np.where(np.isnan(m[i]), y0 + (y1 - y0) * t, cubic)
 
 
-def _around(keep: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(2F - 1, C) the key at or before, and the key after, each frame and half frame
-    (the last key for points on or past it), of the kept frames ``keep`` (F, C)."""
-    n = len(keep)
-    idx = np.arange(n)[:, None]
-    prev = np.maximum.accumulate(np.where(keep, idx, 0), axis=0)
-    nxt = np.minimum.accumulate(np.where(keep, idx, n - 1)[::-1], axis=0)[::-1]
-    f = np.arange(2 * n - 1) // 2  # the frame at or before each point
-    return prev[f], nxt[np.minimum(f + 1, n - 1)]
-
-
-def _dense(
-    v: np.ndarray, m: np.ndarray, keep: np.ndarray | None, around=None, points=None
-) -> np.ndarray:
-    """(2F - 1, C) what the cubic keys ``keep`` (F, C) of ``v`` with slopes ``m`` play on
-    every frame and half frame, all columns at once (``around``: :func:`_around` of
-    ``keep``, when known; ``points``: only those of the 2F - 1 points, whose ``around``
-    it then is)."""
-    n, c = v.shape
-    if points is None:
-        points = np.arange(2 * n - 1)
-    if around is None:
-        assert keep is not None
-        lo, hi = _around(keep)
-        lo, hi = lo[points], hi[points]
-    else:
-        lo, hi = around
-    at = points[:, None] / 2.0
-    h = np.maximum(hi - lo, 1)
-    t = np.clip((at - lo) / h, 0.0, 1.0)
-    i0, i1 = lo * c + np.arange(c), hi * c + np.arange(c)  # flat indices: one gather each
-    vf, mf = v.ravel(), m.ravel()
-    y0 = vf[i0]
-    d = vf[i1] - y0
-    m0, m1 = mf[i0] * h, mf[i1] * h
-    # the Hermite cubic of :func:`hermite`, in Horner's form
-    return y0 + t * (m0 + t * ((3.0 * d - 2.0 * m0 - m1) + t * (m0 + m1 - 2.0 * d)))
-
-
-def _reference(v: np.ndarray, m: np.ndarray) -> np.ndarray:
+def _reference(v: np.ndarray) -> np.ndarray:
     """(2F - 1, C) the plan on every frame and half frame: the values, and between frames
-    the cubic through the two frames with the slopes ``m`` (the motion's own smooth
-    course, not the line between frames, which cuts every bend by its curvature)."""
+    the line between them, what keys on every frame play (bench_files measures against
+    those). Judged against the plan's own cubic there instead (central slopes), fitted
+    slopes put a captured arm 0.6 degrees from the line at a half frame where the two
+    are a degree apart, as they are at a few in a hundred."""
     out = np.empty((2 * len(v) - 1,) + v.shape[1:])
     out[0::2] = v
-    out[1::2] = 0.5 * (v[:-1] + v[1:]) + 0.125 * (m[:-1] - m[1:])
+    out[1::2] = 0.5 * (v[:-1] + v[1:])
     return out
 
 
@@ -283,12 +266,168 @@ def _units_of(n_cols, tol, rotations):
     return units, n + lone.size
 
 
+def _power_sums(n):
+    """(7, S) sums of j**k / n**k over j = 1 .. n - 1, for k = 0 .. 6 (Faulhaber)."""
+    m = n - 1.0
+    m1, m2 = m * (m + 1.0), 2.0 * m + 1.0
+    raw = (
+        m,
+        m1 / 2.0,
+        m1 * m2 / 6.0,
+        m1 * m1 / 4.0,
+        m1 * m2 * (3.0 * m1 - 1.0) / 30.0,
+        m1 * m1 * (2.0 * m1 - 1.0) / 12.0,
+        m1 * m2 * (3.0 * m1 * m1 - 3.0 * m1 + 1.0) / 42.0,
+    )
+    return np.array([x / n**k for k, x in enumerate(raw)])
+
+
+_GRAM = [np.zeros((3, 0))]  # _gram of 0, 1, 2, ... points, grown as longer intervals come
+
+
+def _gram(n):
+    """The sums of the products of the two slopes' weights (:meth:`_Intervals._fit_kind`)
+    over the points inside intervals of ``n`` (S,) points: (s00, s01, s11), each (S,).
+    With t = j / n: t (1 - t)**2 and t**2 (t - 1), so polynomials in j, summed in closed
+    form instead of point by point (and kept, by ``n``, between calls)."""
+    table = _GRAM[0]
+    if n.max() >= table.shape[1]:
+        s = _power_sums(np.arange(1, 2 * int(n.max()) + 64, dtype=float))
+        table = np.zeros((3, s.shape[1] + 1))
+        table[0, 1:] = s[2] - 4 * s[3] + 6 * s[4] - 4 * s[5] + s[6]  # t**2 (1 - t)**4
+        table[1, 1:] = -(s[3] - 3 * s[4] + 3 * s[5] - s[6])  # -t**3 (1 - t)**3
+        table[2, 1:] = s[4] - 2 * s[5] + s[6]  # t**4 (1 - t)**2
+        _GRAM[0] = table
+    return table[:, n]
+
+
+class _Kind:
+    """Units of one kind (a :class:`Rotations`, or the lone columns), each a row: their
+    columns (U, k), and per unit the values, plan slopes, plan on the judged points, what
+    the keys play there and the fitted slopes, as (U, frames or points, k) arrays."""
+
+    def __init__(self, cols, v, m, ref, judge, to_quat):
+        self.cols, self.judge, self.to_quat = cols, judge, to_quat
+        self.v, self.m = (np.ascontiguousarray(x[:, cols].transpose(1, 0, 2)) for x in (v, m))
+        self.ref = np.ascontiguousarray(ref[:, cols].transpose(1, 0, 2))
+        # a rotation's plan as quaternions; its error is judged from their dot product
+        self.ref_q = None if to_quat is None else to_quat(self.ref)
+        self.played = self.ref.copy()  # on keys (and before any fit) the plan itself
+        self.m_out, self.m_in = self.m.copy(), self.m.copy()
+
+
+class _Intervals:
+    """The plan of one :func:`cubic_keys` call, and the fit of intervals between keys:
+    each interval's two slopes (per column) by least squares on the points inside it,
+    judged as its unit is (a rotation by the angle it plays, any other column alone)."""
+
+    def __init__(self, v, tol, rotations, between, units, n_units, pull=PULL, steady=None):
+        self.v, self.m, self.pull, self.steady = v, slopes(v), pull, steady
+        self.step = 2 if between else 1  # points per frame: frames, and half frames
+        ref = _reference(v) if len(v) else v
+        self.ref = ref if between else ref[0::2]
+        self.kinds = []
+        kind_of, row_of = np.zeros(n_units, int), np.zeros(n_units, int)
+        for r in rotations:
+            if r.columns.size:
+                u = units[r.columns[:, 0]]
+                kind_of[u], row_of[u] = len(self.kinds), np.arange(u.size)
+                # within the angle A: |dot| of the unit quaternions at least cos(A / 2)
+                judge = 1.0 - np.cos(0.5 * r.angle)
+                self.kinds.append(_Kind(r.columns, v, self.m, self.ref, judge, r.to_quat))
+        lone = np.flatnonzero(units < 0)
+        if lone.size:
+            u = -units[lone] - 1
+            kind_of[u], row_of[u] = len(self.kinds), np.arange(u.size)
+            self.kinds.append(_Kind(lone[:, None], v, self.m, self.ref, tol[lone], None))
+        self.kind_of, self.row_of = kind_of, row_of
+
+    def fit(self, a, b, u, limit=False):
+        """Fit intervals (a, b) of units ``u`` (S,); keep the slopes and what is played of
+        those within tolerance (and, unless ``limit``, of those a frame long, where no key
+        can be added). Returns the others' (indices into the S, their worst points, their
+        worst errors over the tolerance)."""
+        missed, worst_at, worst_of = [np.zeros(0, int)], [np.zeros(0, int)], [np.zeros(0)]
+        inside = self.step * (b - a) > 1
+        kinds = self.kind_of[u]
+        for g in np.unique(kinds[inside]):
+            which = np.flatnonzero(inside & (kinds == g))
+            ok, point, worst = self._fit_kind(
+                self.kinds[g], a[which], b[which], self.row_of[u[which]]
+            )
+            if not limit:
+                ok |= b[which] - a[which] <= 1
+            missed.append(which[~ok])
+            worst_at.append(point[~ok])
+            worst_of.append(worst[~ok])
+        return np.concatenate(missed), np.concatenate(worst_at), np.concatenate(worst_of)
+
+    def _fit_kind(self, kind, a, b, row):
+        n = self.step * (b - a)  # an interval's points, its end's included
+        inside = n - 1
+        first = np.cumsum(inside) - inside
+        seg = np.repeat(np.arange(a.size), inside)
+        offset = np.arange(first[-1] + inside[-1]) - np.repeat(first, inside)
+        p = offset + np.repeat(self.step * a + 1, inside)
+        t = (offset + 1.0) / np.repeat(n, inside)
+        t2 = t * t
+        up = t2 * (3.0 - 2.0 * t)  # the Hermite basis: y1's weight (y0's is 1 - up)
+        w0 = t * (1.0 - t) ** 2  # slope 0's and slope 1's, the slopes per interval
+        w1 = t2 * (t - 1.0)
+        rs = row[seg]
+        ya, yb = kind.v[row, a], kind.v[row, b]
+        ref = kind.ref[rs, p]
+        base = ya[seg] + up[:, None] * (yb - ya)[seg]
+        r = ref - base
+        # least squares, each slope drawn to the plan's own by PULL: [[s00, s01], [s01, s11]]
+        s00, s01, s11 = (x[:, None] for x in _gram(n))
+        h = (b - a)[:, None].astype(float)
+        q0 = np.add.reduceat(w0[:, None] * r, first) + self.pull * h * kind.m[row, a]
+        q1 = np.add.reduceat(w1[:, None] * r, first) + self.pull * h * kind.m[row, b]
+        g00, g11 = s00 + self.pull, s11 + self.pull
+        det = g00 * g11 - s01 * s01
+        m0 = (g11 * q0 - s01 * q1) / det
+        m1 = (g00 * q1 - s01 * q0) / det
+        played = base + w0[:, None] * m0[seg] + w1[:, None] * m1[seg]
+        if kind.to_quat is None:
+            off = (played[:, 0] - ref[:, 0]) / kind.judge[rs]
+            err = np.abs(off)
+            if self.steady is not None:  # and its change from point to point (0 on keys)
+                step = np.diff(off, prepend=0.0)
+                step[first] = off[first]
+                last = first + inside - 1
+                err = np.maximum(err, np.abs(step) / self.steady)
+                err[last] = np.maximum(err[last], np.abs(off[last]) / self.steady)
+        else:
+            dot = np.abs(np.einsum("pk,pk->p", kind.to_quat(played), kind.ref_q[rs, p]))
+            err = (1.0 - dot) / kind.judge
+        worst = np.maximum.reduceat(err, first)
+        ok = worst <= 1.0
+        at = np.flatnonzero(err == worst[seg])
+        at = at[np.r_[True, seg[at[1:]] != seg[at[:-1]]]]  # the first worst of each
+        kind.m_out[row[ok], a[ok]] = m0[ok] / h[ok]
+        kind.m_in[row[ok], b[ok]] = m1[ok] / h[ok]
+        mine = ok[seg]
+        kind.played[rs[mine], p[mine]] = played[mine]
+        return ok, p[at], worst
+
+    def gather(self, name, n_cols):
+        """(points or frames, C) one of the kinds' per-unit arrays, by column."""
+        arrays = [getattr(k, name) for k in self.kinds]
+        out = np.empty((arrays[0].shape[1] if arrays else 0, n_cols))
+        for k, x in zip(self.kinds, arrays):
+            out[:, k.cols] = x.transpose(1, 0, 2)
+        return out
+
+
 def cubic_keys(
     values: ArrayLike,
     tol: ArrayLike,
     rotations: tuple = (),
     between: bool = True,
     give_up_at: int | None = None,
+    pull: float = PULL,
+    steady: float | None = None,
 ) -> dict:
     """Cubic keys of every column of ``values`` (F, C) within tolerance: ``tol`` (C,) per
     column (or one for all) in the column's units, except the columns of ``rotations``
@@ -296,105 +435,126 @@ def cubic_keys(
 
     Checked on every frame and, with ``between``, every half frame (a strip scaled to
     another scene rate plays the keys between frames): against the values, and between
-    frames against the plan's own cubic there (:func:`_reference`). A unit (one column,
-    or a bone's rotation columns) starts with keys on its first and last frames; each
-    interval that misses anywhere gets a key on its worst frame, until none misses. Then
-    a column whose unit stays within tolerance when it is held at its mid-range is made
-    constant (one key).
+    frames against the line between them (:func:`_reference`). A unit (one column, or a
+    bone's rotation columns) starts with keys on its first and last frames, each key on its
+    frame's value; each interval between keys takes the two slopes that fit it best (least
+    squares, :class:`_Intervals`: a key's left and right slopes differ), and one that misses
+    anywhere gets a key on its worst frame (and, when long and far off, on the middles of
+    both sides of it: :data:`SPLIT_LONG`), until none misses. Then keys are taken out,
+    every other key of a unit at a time, where the interval over both of its sides fits,
+    until none can be. Then a column whose unit stays within tolerance when it is held at
+    its mid-range is made constant (one key).
 
-    ``give_up_at``: a unit that keeps that many frames stops taking keys (it costs more
-    than one sample a frame and is stored as samples: its ``keep`` is then partial, and
-    it is held against the plan as samples play, exact on frames and linear between).
+    ``give_up_at``: a unit that keeps that many frames while keys are added stops taking
+    keys (it costs more than one sample a frame and is stored as samples: its ``keep`` is
+    then partial, and it plays the plan itself, exact on frames and linear between).
+    ``inserted`` says how many keys each column's unit had before any was taken out: the
+    units that give up are those where it reaches ``give_up_at``. ``pull``: how much the
+    fitted slopes are drawn to the plan's own (:data:`PULL`). ``steady``: the error of a
+    lone column (not of rotations) may also change by at most that much of its tolerance
+    from one point to the next (a channel that carries a planted foot), None: any.
 
-    Returns {"keep": (F, C) bool kept frames, "values" and "slopes" (F, C) the keys take
-    on each frame, "constant": (C,) bool, "value": (C,) the constant's value,
-    "gave_up": (C,) bool the columns to store as samples}."""
+    Returns {"keep": (F, C) bool kept frames, "values" (F, C) the keys take on each frame,
+    "slopes" and "slopes_in" (F, C) the slopes of each key's right and left handles,
+    "constant": (C,) bool, "value": (C,) the constant's value, "gave_up": (C,) bool the
+    columns to store as samples, "inserted": (C,) keys before any was taken out}."""
     v = np.asarray(values, float)
     n, c = v.shape
     tol = np.broadcast_to(np.asarray(tol, float), (c,)).copy()
     units, n_units = _units_of(c, tol, rotations)
     col_unit = np.where(units < 0, -units - 1, units)
-    m = slopes(v)
-    v_key = v
-    ref = _reference(v, m)
-    # the points judged: every frame and, with ``between``, every half frame
-    points = np.arange(0, 2 * n - 1, 1 if between else 2)
-    judged = ref[points]
+    fit = _Intervals(v, tol, rotations, between, units, n_units, pull, steady)
     keep_u = np.zeros((n, n_units), bool)
     keep_u[[0, -1]] = True
-    # a unit whose every interval fits keeps fitting (its keys no longer change): only the
-    # units that took a key last pass are played and judged again
-    active = np.ones(n_units, bool)
     gave_up = np.zeros(n_units, bool)
-    played = np.empty((points.size, c))
-    while n > 2:
-        act = np.flatnonzero(active)
-        cols = np.flatnonzero(active[col_unit])
-        lo, hi = _around(keep_u[:, act])
-        lo, hi = lo[points], hi[points]
-        at = np.cumsum(active) - 1  # a unit's place among the active ones
-        on = at[col_unit[cols]]
-        played[:, cols] = _dense(v_key[:, cols], m[:, cols], None, (lo[:, on], hi[:, on]), points)
-        err = _unit_errors(played, judged, tol, rotations, units, n_units, active)[:, act]
-        # between two keys a frame apart no key can be added: what is played there stays
-        err[hi - lo <= 1] = 0.0
-        # the worst point of each interval between keys, per unit: points of one interval
-        # are consecutive, so each interval is one run of the unit-major flattening
-        flat_err = err.T.ravel()
-        seg = (lo + np.arange(act.size) * n).T.ravel()
-        new = np.r_[True, seg[1:] != seg[:-1]]
-        run = np.cumsum(new) - 1
-        worst = np.maximum.reduceat(flat_err, np.flatnonzero(new))
-        hit = np.flatnonzero((flat_err > 1.0) & (flat_err == worst[run]))
-        if not hit.size:
-            break
-        hit = hit[np.r_[True, run[hit[1:]] != run[hit[:-1]]]]  # the first worst of a run
-        k, point = np.divmod(hit, points.size)
-        point = points[point]
-        unit = act[k]
-        # a frame, or the half frame's neighbour that is no key yet
-        frame = (point + 1) // 2
-        frame = np.where(keep_u[frame, unit], point // 2, frame)
-        keep_u[frame, unit] = True
-        active[:] = False
-        active[unit] = True
+
+    # keys added where intervals miss
+    a, b, u = np.zeros(n_units, int), np.full(n_units, max(n - 1, 0)), np.arange(n_units)
+    while a.size and n > 1:
+        which, point, worst = fit.fit(a, b, u)
+        a, b, u = a[which], b[which], u[which]
+        # a frame, or the half frame's neighbour that is not the interval's end
+        frame = point // fit.step if fit.step == 1 else (point + 1) // 2
+        frame = np.where(frame >= b, point // 2, frame)
+        # every interval's ends and new keys (cut) by interval (cid), to be paired up in order
+        ids = np.arange(a.size)
+        cuts, cids = [a, b, frame], [ids, ids, ids]
+        long = (b - a > SPLIT_LONG) & (worst > SPLIT_MISS)
+        for lo, hi in ((a, frame), (frame, b)):
+            mid = (lo + hi) // 2
+            ok = long & (mid > lo) & (mid < hi)
+            cuts.append(mid[ok])
+            cids.append(ids[ok])
+        cut, cid = np.concatenate(cuts), np.concatenate(cids)
+        inner = np.ones(cut.size, bool)
+        inner[: 2 * a.size] = False
+        keep_u[cut[inner], u[cid[inner]]] = True
+        if give_up_at is not None:  # the units that took a key and now keep that many
+            took = np.zeros(n_units, bool)
+            took[u[cid[inner]]] = True
+            gave_up |= took & (keep_u.sum(axis=0) >= give_up_at)
+        order = np.lexsort((cut, cid))
+        cut, cid = cut[order], cid[order]
+        pair = cid[1:] == cid[:-1]
+        a, b, u = cut[:-1][pair], cut[1:][pair], u[cid[:-1][pair]]
         if give_up_at is not None:
-            gave_up |= active & (keep_u.sum(axis=0) >= give_up_at)
-            active &= ~gave_up
-            if not active.any():
-                break
+            go_on = ~gave_up[u]
+            a, b, u = a[go_on], b[go_on], u[go_on]
+    inserted = keep_u.sum(axis=0)
+    # keys taken out where the interval over both sides of one fits: every other key of a
+    # unit at a time (their intervals do not overlap), each tried again only once a
+    # neighbour of it has gone
+    stale = keep_u & (~gave_up & (inserted > 2))[None]
+    parity = 1
+    while True:
+        ku, kf = np.nonzero(keep_u.T)
+        start = np.r_[True, ku[1:] != ku[:-1]]
+        end = np.r_[ku[1:] != ku[:-1], True]
+        tried = ~start & ~end & stale[kf, ku]
+        if not tried.any():
+            break
+        pos = np.arange(ku.size) - np.maximum.accumulate(np.where(start, np.arange(ku.size), 0))
+        cand = np.flatnonzero(tried & (pos % 2 == parity))
+        parity ^= 1
+        if not cand.size:
+            continue
+        which, _, _ = fit.fit(kf[cand - 1], kf[cand + 1], ku[cand], limit=True)
+        stale[kf[cand], ku[cand]] = False
+        gone = np.ones(cand.size, bool)
+        gone[which] = False
+        gone = cand[gone]
+        keep_u[kf[gone], ku[gone]] = False
+        for side in (gone - 1, gone + 1):
+            stale[kf[side], ku[side]] = True
+
     keep = keep_u[:, col_unit]
+    played = fit.gather("played", c) if n else v
     constant = np.zeros(c, bool)
     value = 0.5 * (v.max(axis=0) + v.min(axis=0)) if n else np.zeros(c)
-    # columns held at their mid-range, one position of every rotation unit at a time
-    order = [[j] for j in np.flatnonzero(units < 0)]
-    width = max((r.columns.shape[1] for r in rotations), default=0)
-    order += [[r.columns[:, k] for r in rotations if k < r.columns.shape[1]] for k in range(width)]
-    played = _dense(v_key, m, keep, points=points) if n else v
+    judged = fit.ref
     sampled = gave_up[col_unit]
-    if n and sampled.any():  # samples: the values on frames, linear between
-        samples = np.empty((2 * n - 1, int(sampled.sum())))
-        samples[0::2] = v[:, sampled]
-        samples[1::2] = 0.5 * (v[:-1, sampled] + v[1:, sampled])
-        played[:, sampled] = samples[points]
-    # points between keys a frame apart keep what those keys play (see above)
-    excused = np.zeros(0, bool)
-    if n:
-        lo, hi = _around(keep_u)
-        excused = hi - lo <= 1
-        excused[1::2, gave_up] = True  # nor between samples
-        excused[0::2] = False  # frames themselves are never excused
-        excused = excused[points]
-    for group in order:
-        cols = np.concatenate([np.ravel(g) for g in group]) if group else np.zeros(0, int)
-        if not cols.size or not n:
+    played[:, sampled] = judged[:, sampled]  # samples play the plan (a line between frames)
+    # columns held at their mid-range: every lone column at once (each its own unit), then
+    # one position of every rotation unit at a time
+    lone = np.flatnonzero(units < 0) if n else np.zeros(0, int)
+    if lone.size:
+        off = (value[lone] - judged[:, lone]) / tol[lone]
+        err = np.abs(off)
+        if steady is not None:
+            err[1:] = np.maximum(err[1:], np.abs(np.diff(off, axis=0)) / steady)
+        take = lone[err.max(axis=0) <= 1.0]
+        played[:, take] = value[take]
+        constant[take] = True
+    width = max((r.columns.shape[1] for r in rotations), default=0)
+    for k in range(width if n else 0):
+        cols = np.concatenate([r.columns[:, k] for r in rotations if k < r.columns.shape[1]])
+        if not cols.size:
             continue
         trial = played.copy()
         trial[:, cols] = value[cols]
         touched = np.zeros(n_units, bool)
         touched[col_unit[cols]] = True
         err = _unit_errors(trial, judged, tol, rotations, units, n_units, touched)
-        err[excused] = 0.0
         ok = err.max(axis=0) <= 1.0
         take = cols[ok[col_unit[cols]]]
         played[:, take] = value[take]
@@ -403,11 +563,13 @@ def cubic_keys(
     keep[0, constant] = True
     return {
         "keep": keep,
-        "values": v_key,
-        "slopes": m,
+        "values": v,
+        "slopes": fit.gather("m_out", c) if n else v,
+        "slopes_in": fit.gather("m_in", c) if n else v,
         "constant": constant,
         "value": value,
         "gave_up": sampled & ~constant,
+        "inserted": inserted[col_unit],
     }
 
 
@@ -421,7 +583,7 @@ def play(values: ArrayLike, fit: dict, at: ArrayLike) -> np.ndarray:
             out[:, j] = fit["value"][j]
             continue
         k = np.flatnonzero(fit["keep"][:, j])
-        out[:, j] = hermite(k, fit["values"][k, j], fit["slopes"][k, j], at)
+        out[:, j] = hermite(k, fit["values"][k, j], fit["slopes"][k, j], at, fit["slopes_in"][k, j])
     return out
 
 

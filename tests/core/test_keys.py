@@ -166,6 +166,19 @@ def test_hermite_is_the_bezier_blender_plays():
     assert keys.hermite(x, y, m, [x[0] - 5])[0] == y[0]  # constant outside the keys
 
 
+def test_hermite_plays_free_handles_as_blender():
+    """Each key's left and right handles with slopes of their own (FREE handles): between
+    two keys Blender plays the first's right handle and the second's left one."""
+    rng = np.random.default_rng(6)
+    x = np.cumsum(rng.integers(1, 9, 8)).astype(float)
+    y, m, m_in = rng.normal(size=8), rng.normal(size=8), rng.normal(size=8)
+    at = np.linspace(x[0], x[-1], 301)
+    got = keys.hermite(x, y, m, at, m_in)
+    i = np.clip(np.searchsorted(x, at, side="right") - 1, 0, 6)
+    want = bezier_as_blender(x[i], y[i], x[i + 1], y[i + 1], m[i], m_in[i + 1], at)
+    assert np.allclose(got, want, atol=1e-9)
+
+
 def walk_rotations(n, fps, rng):
     """Bone rotations (F, J, 4) of a swinging walk with capture noise of ~0.1 degree."""
     t = np.arange(n)[:, None] / fps
@@ -228,7 +241,8 @@ def test_a_smooth_channel_needs_a_few_keys_a_second():
 @pytest.mark.parametrize("between", [True, False])
 def test_giving_up_on_cubic_keys_changes_no_choice_of_the_others(between):
     """A unit that reaches the cost of samples stops taking keys (it is stored as samples):
-    exactly the units whose full fit keeps that many frames give up, and every other
+    exactly the units whose full fit took that many keys (before any was taken out) give
+    up, every unit the full fit keeps that many keys on is among them, and every other
     column keeps the very keys the full fit keeps."""
     rng = np.random.default_rng(3)
     n = 120
@@ -242,9 +256,10 @@ def test_giving_up_on_cubic_keys_changes_no_choice_of_the_others(between):
     limit = -(-n * keys.SAMPLE_BYTES // keys.KEY_BYTES)
     full = keys.cubic_keys(values, tol, (rot,), between)
     part = keys.cubic_keys(values, tol, (rot,), between, give_up_at=limit)
-    heavy = (full["keep"].sum(axis=0) >= limit) & ~full["constant"]
+    heavy = (full["inserted"] >= limit) & ~full["constant"]
     assert heavy.any() and (~heavy & ~full["constant"]).any()  # both kinds are here
     assert np.array_equal(part["gave_up"], heavy & ~part["constant"])
+    assert not ((full["keep"].sum(axis=0) >= limit) & ~full["constant"] & ~heavy).any()
     kept = ~heavy
     assert np.array_equal(part["keep"][:, kept], full["keep"][:, kept])
     assert np.array_equal(part["constant"][kept], full["constant"][kept])
@@ -260,3 +275,69 @@ def test_keys_judged_on_frames_only_hold_there():
     both = keys.cubic_keys(v, 1e-3)
     assert np.abs(keys.play(v, on, t) - v).max() <= 1e-3 * (1 + 1e-9)
     assert on["keep"].sum() <= both["keep"].sum()
+
+
+def test_each_interval_plays_the_cubic_nearest_the_plan():
+    """Between two keys the two slopes are the interval's own: the least-squares fit of
+    the Hermite cubic through the keys to the plan on the frames inside (drawn to the plan's
+    own slopes only by a hair), not the plan's slopes at the keys."""
+    rng = np.random.default_rng(11)
+    t = np.arange(150)
+    v = (np.sin(t * 0.13) + 0.02 * rng.normal(size=150))[:, None]
+    fit = keys.cubic_keys(v, 0.01, between=False)
+    k = np.flatnonzero(fit["keep"][:, 0])
+    assert 2 < k.size < 75
+    worse = 0
+    for a, b in zip(k[:-1], k[1:]):
+        inner = np.arange(a + 1, b)
+        if inner.size < 2:
+            continue
+        u = (inner - a) / (b - a)
+        basis = np.column_stack(((b - a) * u * (1 - u) ** 2, (b - a) * u * u * (u - 1)))
+        line = v[a, 0] + (3 * u * u - 2 * u**3) * (v[b, 0] - v[a, 0])
+        best = np.linalg.lstsq(basis, v[inner, 0] - line, rcond=None)[0]
+        got = np.array([fit["slopes"][a, 0], fit["slopes_in"][b, 0]])
+        # the cubic played inside: the least-squares one (the hair of pull aside)
+        assert np.abs(basis @ (got - best)).max() <= 1e-3, (a, b)
+        own = keys.slopes(v)[[a, b], 0]
+        worse += np.sum((basis @ own - v[inner, 0] + line) ** 2) > np.sum(
+            (basis @ got - v[inner, 0] + line) ** 2
+        )
+    assert worse > 0  # the plan's own slopes fit worse somewhere
+
+
+def test_no_key_is_left_that_could_go():
+    """After keys are taken out, every key but the ends is needed: the interval over both
+    of its sides, fitted as any interval is, misses the tolerance somewhere."""
+    rng = np.random.default_rng(12)
+    t = np.arange(200)
+    v = np.column_stack((np.sin(t * 0.1), np.cos(t * 0.037))) + 0.003 * rng.normal(size=(200, 2))
+    tol = 0.01
+    fit = keys.cubic_keys(v, tol, between=False)
+    for c in range(2):
+        k = np.flatnonzero(fit["keep"][:, c])
+        assert k.size > 3
+        for i in range(1, k.size - 1):
+            a, b = k[i - 1], k[i + 1]
+            alone = keys.cubic_keys(v[a : b + 1, c : c + 1], tol, between=False)
+            assert alone["inserted"][0] > 2, (c, k[i])  # the interval alone needs a key
+
+
+@pytest.mark.parametrize("steady", [None, 0.5])
+def test_a_steady_fit_changes_its_error_little_from_frame_to_frame(steady):
+    """``steady``: what the keys play is off the plan by at most the tolerance, and that
+    offset changes by at most ``steady`` times the tolerance from one frame to the next (a
+    planted foot carried by the channel does not jitter). Without it the offset jumps."""
+    rng = np.random.default_rng(13)
+    t = np.arange(240)
+    v = np.column_stack((0.01 * t + 0.002 * np.sin(t * 1.7), np.sin(t * 0.05)))
+    v += 0.0003 * rng.normal(size=v.shape)
+    tol = 1e-3
+    fit = keys.cubic_keys(v, tol, between=False, steady=steady)
+    off = keys.play(v, fit, t) - v
+    assert np.abs(off).max() <= tol * (1 + 1e-9)
+    jump = np.abs(np.diff(off, axis=0)).max()
+    if steady is None:
+        assert jump > 0.5 * tol
+    else:
+        assert jump <= steady * tol * (1 + 1e-9)
