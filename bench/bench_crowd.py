@@ -264,6 +264,16 @@ def run_crowd(patch, n, args):
     t0 = time.perf_counter()
     final = crowd.conflicts_of(finals, delays, SPACING)
     t_check = time.perf_counter() - t0
+    for c in final:  # said, not only counted: who, where they start and end, how close
+        a, b = (index[c[k]] for k in ("a", "b"))
+        print(
+            f"  left: characters {a} and {b} {c['distance_m']:.3f} m apart on frame "
+            f"{c['frame']} ({c['frames']} frames); {a} from {np.round(ends[a][0][:2], 2)} to "
+            f"{np.round(ends[a][1][:2], 2)} waiting {delays[c['a']]}, {b} from "
+            f"{np.round(ends[b][0][:2], 2)} to {np.round(ends[b][1][:2], 2)} waiting "
+            f"{delays[c['b']]}",
+            flush=True,
+        )
     # memory of resolution and check, traced (a second run: tracing slows it)
     peak = float("nan")
     if not args.no_trace:
