@@ -36,6 +36,7 @@ shared with other work it moves far less from run to run than the wall-clock tim
 """
 
 import argparse
+import contextlib
 import cProfile
 import io
 import json
@@ -384,6 +385,28 @@ def blender_floor(bpy, addon, source, chars):
     return replay(True), replay(False)
 
 
+@contextlib.contextmanager
+def crowd_writes_timed(api):
+    """A list filled with the seconds of each crowd's writes (``api.crowd._write_all``,
+    what ``plan_crowd`` calls: the writes, with what is prepared for them meanwhile) made
+    inside the ``with``."""
+    writes = []
+    write = api.crowd._write_all
+
+    def timed_write(*a, **kw):
+        t = time.perf_counter()
+        try:
+            return write(*a, **kw)
+        finally:
+            writes.append(time.perf_counter() - t)
+
+    api.crowd._write_all = timed_write
+    try:
+        yield writes
+    finally:
+        api.crowd._write_all = write
+
+
 def section_crowd(bpy, addon, args):
     """plan_crowd of ``args.crowd`` characters (10 lanes per column), end to end."""
     api = addon.api
@@ -399,28 +422,14 @@ def section_crowd(bpy, addon, args):
                 )
             )
         pillar(bpy, f"P{i}", 14.0 * i + 11.0, -1.5)
-    t0 = time.perf_counter()
-    writes = []
-    write = api.crowd._write_all  # the writes, with what is prepared for them meanwhile
-
-    def timed_write(*a, **kw):
-        t = time.perf_counter()
-        try:
-            return write(*a, **kw)
-        finally:
-            writes.append(time.perf_counter() - t)
-
-    api.crowd._write_all = timed_write  # what plan_crowd calls
     bpy.ops.wm.save_as_mainfile(filepath=str(Path(tempfile.gettempdir()) / "bench_crowd0.blend"))
     before = (Path(tempfile.gettempdir()) / "bench_crowd0.blend").stat().st_size
     t0 = time.perf_counter()
-    try:
+    with crowd_writes_timed(api) as writes:
         with api.cluster_executor(args.workers or None) as executor:
             res = profiled(
                 args.profile, api.plan_crowd, scene, pairs, frame_start=1, executor=executor
             )
-    finally:
-        api.crowd._write_all = write
     total = time.perf_counter() - t0
     saved = Path(tempfile.gettempdir()) / "bench_crowd1.blend"
     t1 = time.perf_counter()

@@ -358,23 +358,10 @@ def run_written(n, args):
     pairs = blender_plaza(bpy, bb, api, env, ends, source)
     folder = Path(tempfile.mkdtemp(prefix="bench_crowd-"))
     bpy.ops.wm.save_as_mainfile(filepath=str(folder / "before.blend"))
-    writes = []
-    write = api.crowd._write_all
-
-    def timed_write(*a, **kw):
-        t = time.perf_counter()
-        try:
-            return write(*a, **kw)
-        finally:
-            writes.append(time.perf_counter() - t)
-
-    api.crowd._write_all = timed_write  # what plan_crowd calls
     t0 = time.perf_counter()
-    try:
+    with bb.crowd_writes_timed(api) as writes:
         with api.cluster_executor(args.written_workers or None) as executor:
             res = api.plan_crowd(scene, pairs, frame_start=1, executor=executor)
-    finally:
-        api.crowd._write_all = write
     total = time.perf_counter() - t0
     t1 = time.perf_counter()
     bpy.ops.wm.save_as_mainfile(filepath=str(folder / "after.blend"))
