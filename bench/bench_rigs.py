@@ -43,6 +43,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
 sys.path.insert(0, str(REPO / "tools"))
+sys.path[:0] = [str(REPO / "tests"), str(REPO / "tests" / "blender")]  # the tests' rigs
 import blender_session  # noqa: E402
 
 CMU_SCALE = 0.056444
@@ -58,22 +59,6 @@ SCENES = {
     "pillars": {"goal": (6.6, 3.7, 0.3), "pillars": [(2.6, 0.7), (4.1, 2.7)], "walls": []},
     "uturn": {"goal": (0.0, -2.0, np.pi), "pillars": [], "walls": [((-3.5, -1.0), (2.5, -1.0))]},
 }
-
-# Mixamo names of CMU bones (as tests/rig_names.py; the legs and spine are what matter).
-MIXAMO = {
-    "Hips": "mixamorig:Hips",
-    "LowerBack": "mixamorig:Spine",
-    "Spine": "mixamorig:Spine1",
-    "Spine1": "mixamorig:Spine2",
-    "Neck": "mixamorig:Neck",
-    "Neck1": "mixamorig:NeckTwist",
-    "Head": "mixamorig:Head",
-    "LHipJoint": "mixamorig:LeftHipRoot",
-    "RHipJoint": "mixamorig:RightHipRoot",
-}
-for _side in ("Left", "Right"):
-    for _b in ("UpLeg", "Leg", "Foot", "ToeBase", "Shoulder", "Arm", "ForeArm", "Hand"):
-        MIXAMO[_side + _b] = f"mixamorig:{_side}{_b}"
 
 
 def parse_args(argv=None):
@@ -109,31 +94,29 @@ def baked_scene(bpy, api, mocap):
     return scene, arm
 
 
-def bvh_rig(bpy, mocap, name, units=1.0, mixamo=False):
-    """Subject 2 through Blender's BVH importer at its defaults, animation cleared; with
-    ``mixamo`` as an FBX importer leaves a Mixamo character (``units`` per metre)."""
+def bvh_rig(bpy, mocap, name):
+    """Subject 2 through Blender's BVH importer at its defaults, animation cleared."""
     before = set(bpy.data.objects)
     assert bpy.ops.import_anim.bvh(
         filepath=str(Path(mocap) / "cmu" / "02_01.bvh"),
-        global_scale=CMU_SCALE * units,
+        global_scale=CMU_SCALE,
         update_scene_fps=False,
     ) == {"FINISHED"}
     (ob,) = [o for o in bpy.data.objects if o not in before]
     ob.name = name
     ob.animation_data_clear()
-    if mixamo:
-        for old, new in MIXAMO.items():
-            ob.data.bones[old].name = new
-        for pb in ob.pose.bones:
-            pb.rotation_mode = "QUATERNION"
-        bpy.context.view_layer.objects.active = ob
-        for o in bpy.context.selected_objects:
-            o.select_set(False)
-        ob.select_set(True)
-        ob.rotation_euler = (-np.pi / 2, 0.0, 0.0)
-        bpy.ops.object.transform_apply(location=False, rotation=True, scale=False)
-        ob.rotation_euler = (np.pi / 2, 0.0, 0.0)
-        ob.scale = (1.0 / units,) * 3
+    bpy.context.view_layer.update()
+    return ob
+
+
+def mixamo_rig(bpy, mocap, name):
+    """Subject 2 as Blender's FBX importer leaves a Mixamo character (centimetre bones,
+    Y-up data under a 90 degree X rotation, object scale 0.01), built as the Blender tests
+    build it (tests/blender/scene_helpers.py), standing at the origin."""
+    import scene_helpers  # needs bpy, which the session started
+
+    ob = scene_helpers.fbx_like_mixamo(Path(mocap), name, rel="cmu/02_01.bvh")
+    ob.location = (0.0, 0.0, 0.0)
     bpy.context.view_layer.update()
     return ob
 
@@ -265,7 +248,7 @@ def main(argv=None):
             if rig_name == "s2":
                 rig = bvh_rig(bpy, args.mocap, "S2")
             elif rig_name == "mixamo":
-                rig = bvh_rig(bpy, args.mocap, "Mixamo cm", units=100.0, mixamo=True)
+                rig = mixamo_rig(bpy, args.mocap, "Mixamo cm")
             else:
                 rig = own_rig(bpy, source)
             goal, made = build_scene(bpy, addon, rig, SCENES[scene_name], scene_name)
