@@ -20,7 +20,9 @@ Blender session that never asks for one does not need it.
 """
 
 import os
+import pickle
 import tempfile
+import threading
 import uuid
 import zipfile
 from collections.abc import Callable, Sequence
@@ -38,9 +40,28 @@ def chunks(n: int, parts: int) -> list[range]:
     return [range(a, b) for a, b in zip(edges[:-1], edges[1:]) if b > a]
 
 
-def run_chunk(fn: Callable, items: Sequence, shared: dict) -> list:
-    """``[fn(item, **shared) for item in items]``: one task's share of a map."""
+def run_chunk(fn: Callable, items: Sequence, shared: dict, token: str | None = None) -> list:
+    """``[fn(item, **shared) for item in items]``: one task's share of a map. With ``token``
+    the shared inputs come pickled (:meth:`DaskCluster.map`) and are unpickled once per
+    worker process and map."""
+    if token is not None:
+        shared = _unpacked(token, shared)
     return [fn(item, **shared) for item in items]
+
+
+_UNPACKED: dict = {}  # {token: shared inputs} of the map this worker process runs now
+_UNPACKING = threading.Lock()
+
+
+def _unpacked(token: str, packed: dict) -> dict:
+    """The shared inputs of map ``token`` in this process, unpickled on its first task (an
+    earlier map's let go)."""
+    with _UNPACKING:
+        got = _UNPACKED.get(token)
+        if got is None:
+            _UNPACKED.clear()
+            got = _UNPACKED[token] = {k: pickle.loads(v) for k, v in packed.items()}
+        return got
 
 
 class InProcess:
@@ -140,7 +161,12 @@ class DaskCluster:
         items = list(items)
         if not items:
             return []
-        scattered = {k: self.client.scatter(v, broadcast=True) for k, v in shared.items()}
+        # Scattered as pickled bytes, unpickled in each worker's own copy: a broadcast is
+        # copied on from worker to worker while tasks already run, and a task filling a
+        # cache in the world (a gait's loops, say) while it was pickled again for the next
+        # worker broke the copy ("dictionary changed size during iteration", 10,000 members).
+        packed = {k: pickle.dumps(v, protocol=pickle.HIGHEST_PROTOCOL) for k, v in shared.items()}
+        scattered = {k: self.client.scatter(v, broadcast=True) for k, v in packed.items()}
         parts = (
             chunks(len(items), 4 * max(self.workers, 1))
             if chunk is None
@@ -157,6 +183,7 @@ class DaskCluster:
                 fn,
                 [items[i] for i in r],
                 scattered,
+                tag,
                 key=f"{getattr(fn, '__name__', 'task')}-{tag}-{k}",
                 pure=False,
                 workers=None if addresses[0] is None else [addresses[k % len(addresses)]],

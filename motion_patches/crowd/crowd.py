@@ -34,9 +34,10 @@ def disc(centre: Sequence[float] | np.ndarray, radius: float, sides: int = 12) -
     return np.column_stack((centre[0] + r * np.cos(a), centre[1] + r * np.sin(a)))
 
 
-# metres a standing spot's disc is grown beyond the spacing: the planner keeps its radius
-# from a footprint to within a few millimetres (grown corners are polygons), and a path
-# round another's start kept 0.495-0.499 m from it, where 0.5 was asked (10,000 characters)
+# metres a standing spot's disc is grown beyond the spacing, besides the hips' sway (the
+# ``margin`` of :func:`standing_spots`): the planner keeps its radius from a footprint to
+# within a few millimetres (grown corners are polygons), and a path round another's start
+# kept 0.495-0.499 m from it, where 0.5 was asked (10,000 characters)
 SPOT_MARGIN = 0.01
 
 
@@ -47,6 +48,7 @@ def standing_spots(
     radius: float,
     box: tuple[np.ndarray, np.ndarray] | None = None,
     every: bool = True,
+    margin: float = SPOT_MARGIN,
 ) -> list[tuple[int, np.ndarray]]:
     """[(index, polygon)] of the spots character ``n`` walks around, as discs that keep
     ``spacing`` between roots once grown by the planner's ``radius``: with ``every``, the
@@ -63,10 +65,12 @@ def standing_spots(
     are for a walker they box in. ``ends`` [(start, goal)] are (x, y, heading) states; a
     spot within that distance of ``n``'s own start or goal is left out (it could not start
     or arrive at all), and so is one whose disc lies wholly outside ``box`` (lo, hi) when
-    given: where its plan never looks."""
+    given: where its plan never looks. ``margin``: metres each disc is grown beyond the
+    spacing (the planner's slack, and the hips' sway about the path planned: the crowd
+    keeps the hips apart, the planner the ground track)."""
     if spacing <= 0:
         return []
-    grow = max(spacing - radius, 0.05) + SPOT_MARGIN
+    grow = max(spacing - radius, 0.05) + margin
     if isinstance(ends, np.ndarray):  # (characters, start / goal, 2+) already
         both = ends[:, :, :2]
     else:

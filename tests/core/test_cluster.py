@@ -101,10 +101,47 @@ def test_chunks_cover_every_item_once_in_order():
                 assert max(sizes) - min(sizes) <= 1
 
 
+def test_a_worker_unpickles_a_maps_shared_inputs_once_and_lets_an_earlier_maps_go():
+    """Shared inputs travel pickled and each worker process unpickles its own copy once per
+    map: a task may fill caches in it while Dask copies the scattered bytes on to another
+    worker."""
+    import pickle
+
+    world = {"cache": {}}
+    packed = {"world": pickle.dumps(world)}
+    seen = cluster.run_chunk(lambda i, world: id(world), [0, 1], packed, "map-a")
+    again = cluster.run_chunk(lambda i, world: id(world), [2], packed, "map-a")
+    assert len(set(seen + again)) == 1  # one copy for the map's tasks here
+    first = cluster._unpacked("map-a", packed)
+    first["world"]["cache"]["filled"] = True  # a task fills a cache: the bytes stay as sent
+    assert pickle.loads(packed["world"]) == {"cache": {}}
+    other = cluster._unpacked("map-b", packed)
+    assert other["world"] == {"cache": {}} and list(cluster._UNPACKED) == ["map-b"]
+
+
 def test_members_in_process_are_planned_and_kept_off_the_standing_spots(in_process, crossing12):
     world, tasks = crossing12
     assert len(in_process) == len(tasks) == 12
     assert all(cost > 0 for _, cost, *_ in in_process)
+
+
+def test_members_keep_their_hips_the_spacing_from_where_the_others_stand(crossing12):
+    """Each walker's root (the hips, what the crowd keeps apart) passes every other's start
+    and goal at least the spacing away (but those on its own ends, where it stands itself):
+    the standing spots are grown by the hips' sway about the path planned."""
+    world, tasks = crossing12
+    assert 0.005 < members.hips_sway(world.patch.gait) < 0.05  # a captured walk: ~2 cm
+    xy = world.rank_xy
+    closest = []
+    for t in tasks:
+        got = members.plan_member(t, world)
+        assert isinstance(got, members.Member), got
+        spots = np.delete(xy, t.entry, axis=0).reshape(-1, 2)
+        own = np.linalg.norm(spots[:, None] - xy[t.entry][None], axis=2).min(axis=1)
+        spots = spots[own > 2 * SPACING]
+        d = np.linalg.norm(got.root_track[:, None, :] - spots[None], axis=2)
+        closest.append(d.min())
+    assert min(closest) >= SPACING, closest
 
 
 @pytest.mark.parametrize("workers", [1, 2])
