@@ -91,15 +91,15 @@ def _walked_round(env, ground, scale, margin):
     lattice round the path) and the analysis checks the root against. Listing every prop
     of a large scene in every character's record would grow a crowd's file with the crowd
     times the props."""
-    obstacles = list(env.obstacles.values())
-    if not obstacles:
+    if not env.obstacles:
         return {}
     xy = np.asarray(ground, float)[:, :2]
-    polys = [o.polygon * scale for o in obstacles]
-    lo = np.array([p.min(axis=0) for p in polys])
-    hi = np.array([p.max(axis=0) for p in polys])
-    near = (lo <= xy.max(axis=0) + margin).all(axis=1) & (hi >= xy.min(axis=0) - margin).all(axis=1)
-    return {obstacles[k].name: polys[k].tolist() for k in np.nonzero(near)[0]}
+    # looked up by tile, not prop by prop: a crowd in a plaza of 360 props spent 5 ms a
+    # character here
+    near = set(
+        env.names_in_box((xy.min(axis=0) - margin) / scale, (xy.max(axis=0) + margin) / scale)
+    )
+    return {n: (ob.polygon * scale).tolist() for n, ob in env.obstacles.items() if n in near}
 
 
 def _write(

@@ -217,7 +217,8 @@ def run_crowd(patch, n, args):
     by_workers, answers = {}, None
     cache = args.members_cache and args.members_cache / f"members_{n}_{args.seed}.pkl"
     if cache and cache.exists():  # the same members, to compare resolutions side by side
-        answers = pickle.loads(cache.read_bytes())
+        with open(cache, "rb") as f:  # streamed: 10,000 members are 2.4 GB pickled
+            answers = pickle.load(f)
         by_workers = {w: {"members_s": float("nan"), "cluster_start_s": 0.0} for w in args.workers}
     for w in args.workers if answers is None else ():
         got, secs, started = plan_members(patch, env, ends, w)
@@ -228,7 +229,8 @@ def run_crowd(patch, n, args):
             raise SystemExit(f"{w} workers planned other members than {args.workers[0]}")
     if cache and not cache.exists():
         cache.parent.mkdir(parents=True, exist_ok=True)
-        cache.write_bytes(pickle.dumps(answers))
+        with open(cache, "wb") as f:
+            pickle.dump(answers, f, protocol=pickle.HIGHEST_PROTOCOL)
     planned = [a for a in answers if isinstance(a, members.Member)]
     tracks = [a.root_track for a in planned]
     masks = [a.holdable for a in planned]
