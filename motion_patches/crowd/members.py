@@ -339,15 +339,28 @@ def round_spots(task: MemberTask, world: MemberWorld, ghosts: bool) -> Plan:
             for ob in spots:
                 env.remove(ob.name)
 
-    tries = [spots_of(task, world, every=True)]
-    if tries[0]:
-        fewer = spots_of(task, world, every=False)
-        tries += [fewer] if len(fewer) < len(tries[0]) else []
-        tries += [[]] if tries[-1] and not ghosts else []
-    for spots in tries[:-1]:
-        with contextlib.suppress(PlanError):
+    def tries():
+        """The spots of each try in turn: the fewer ones are only looked up when the plan
+        round every spot fails (it rarely does)."""
+        every = spots_of(task, world, every=True)
+        yield every
+        if every:
+            fewer = spots_of(task, world, every=False)
+            last = every
+            if len(fewer) < len(every):
+                yield fewer
+                last = fewer
+            if last and not ghosts:
+                yield []
+
+    refused = None
+    for spots in tries():
+        try:
             return planned(spots)
-    return planned(tries[-1])
+        except PlanError as exc:
+            refused = exc
+    assert refused is not None, "the first try is always made"
+    raise refused
 
 
 def plan_members(tasks: Sequence[MemberTask], world: MemberWorld) -> list:
