@@ -44,51 +44,47 @@ def words(
     a, b = _mod2pi(h0 - th), _mod2pi(h1 - th)
     sa, sb, ca, cb = np.sin(a), np.sin(b), np.cos(a), np.cos(b)
     cab = np.cos(a - b)
-    out = np.full((6, d.size, 3), np.nan)
+    # Each word's three lengths written straight into its rows, NaN where it does not
+    # exist (the same values as stacking them and masking: a third of the time).
+    out = np.empty((6, d.size, 3))
+    dd, sab, sapb = d * d, sa - sb, sa + sb
+
+    def put(w, ok, t, p, q):
+        row = out[w]
+        row[:, 0], row[:, 1], row[:, 2] = t, p, q
+        row[~ok] = np.nan
+
     with np.errstate(invalid="ignore"):
         # LSL
-        p2 = 2 + d * d - 2 * cab + 2 * d * (sa - sb)
+        p2 = 2 + dd - 2 * cab + 2 * d * sab
         t1 = np.arctan2(cb - ca, d + sa - sb)
-        ok = p2 >= 0
-        out[0] = np.where(
-            ok[:, None], np.stack((_mod2pi(-a + t1), np.sqrt(p2), _mod2pi(b - t1)), -1), np.nan
-        )
+        put(0, p2 >= 0, _mod2pi(-a + t1), np.sqrt(p2), _mod2pi(b - t1))
         # RSR
-        p2 = 2 + d * d - 2 * cab + 2 * d * (sb - sa)
+        p2 = 2 + dd - 2 * cab + 2 * d * (sb - sa)
         t1 = np.arctan2(ca - cb, d - sa + sb)
-        ok = p2 >= 0
-        out[1] = np.where(
-            ok[:, None], np.stack((_mod2pi(a - t1), np.sqrt(p2), _mod2pi(-b + t1)), -1), np.nan
-        )
+        put(1, p2 >= 0, _mod2pi(a - t1), np.sqrt(p2), _mod2pi(-b + t1))
         # LSR
-        p2 = -2 + d * d + 2 * cab + 2 * d * (sa + sb)
+        p2 = -2 + dd + 2 * cab + 2 * d * sapb
         p = np.sqrt(p2)
         t2 = np.arctan2(-ca - cb, d + sa + sb) - np.arctan2(-2.0, p)
-        ok = p2 >= 0
-        out[2] = np.where(
-            ok[:, None], np.stack((_mod2pi(-a + t2), p, _mod2pi(-_mod2pi(b) + t2)), -1), np.nan
-        )
+        put(2, p2 >= 0, _mod2pi(-a + t2), p, _mod2pi(-_mod2pi(b) + t2))
         # RSL
-        p2 = d * d - 2 + 2 * cab - 2 * d * (sa + sb)
+        p2 = dd - 2 + 2 * cab - 2 * d * sapb
         p = np.sqrt(p2)
         t2 = np.arctan2(ca + cb, d - sa - sb) - np.arctan2(2.0, p)
-        ok = p2 >= 0
-        out[3] = np.where(ok[:, None], np.stack((_mod2pi(a - t2), p, _mod2pi(b - t2)), -1), np.nan)
+        put(3, p2 >= 0, _mod2pi(a - t2), p, _mod2pi(b - t2))
         # RLR
-        tmp = (6 - d * d + 2 * cab + 2 * d * (sa - sb)) / 8
-        ok = np.abs(tmp) <= 1
+        tmp = (6 - dd + 2 * cab + 2 * d * sab) / 8
         p = _mod2pi(2 * np.pi - np.arccos(np.clip(tmp, -1, 1)))
         t = _mod2pi(a - np.arctan2(ca - cb, d - sa + sb) + p / 2)
-        out[4] = np.where(ok[:, None], np.stack((t, p, _mod2pi(a - b - t + p)), -1), np.nan)
+        put(4, np.abs(tmp) <= 1, t, p, _mod2pi(a - b - t + p))
         # LRL
-        tmp = (6 - d * d + 2 * cab + 2 * d * (sb - sa)) / 8
-        ok = np.abs(tmp) <= 1
+        tmp = (6 - dd + 2 * cab + 2 * d * (sb - sa)) / 8
         p = _mod2pi(2 * np.pi - np.arccos(np.clip(tmp, -1, 1)))
         t = _mod2pi(-a - np.arctan2(ca - cb, d + sa - sb) + p / 2)
-        out[5] = np.where(
-            ok[:, None], np.stack((t, p, _mod2pi(_mod2pi(b) - a - t + p)), -1), np.nan
-        )
-    return out * (radius[:, None] if radius.ndim else radius)
+        put(5, np.abs(tmp) <= 1, t, p, _mod2pi(_mod2pi(b) - a - t + p))
+    out *= radius[:, None] if radius.ndim else radius
+    return out
 
 
 def turns(lengths: np.ndarray, radius: float | np.ndarray) -> np.ndarray:
