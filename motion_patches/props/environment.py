@@ -127,9 +127,10 @@ def convex_closest(points: np.ndarray, polygon: np.ndarray) -> tuple[np.ndarray,
     points = np.asarray(points, float)
     poly = np.asarray(polygon, float)
     px, py = points[:, 0], points[:, 1]
-    e = np.roll(poly, -1, axis=0) - poly
+    e = np.concatenate((poly[1:], poly[:1])) - poly
     keep = np.einsum("ij,ij->i", e, e) > 1e-18
-    poly, e = poly[keep], e[keep]
+    if not keep.all():
+        poly, e = poly[keep], e[keep]
     if poly.shape[0] < 3:  # a point or a segment: its vertices and edge directly
         poly = np.asarray(polygon, float)[: max(poly.shape[0], 1)]
         a, b = poly[0], poly[-1]
@@ -139,18 +140,21 @@ def convex_closest(points: np.ndarray, polygon: np.ndarray) -> tuple[np.ndarray,
         return np.linalg.norm(points - q, axis=1), q
     if np.sum(poly[:, 0] * e[:, 1] - poly[:, 1] * e[:, 0]) < 0:  # clockwise: turn it round
         poly = poly[::-1]
-        e = np.roll(poly, -1, axis=0) - poly
+        e = np.concatenate((poly[1:], poly[:1])) - poly
     length2 = np.einsum("ij,ij->i", e, e)
     normal = np.column_stack((e[:, 1], -e[:, 0])) / np.sqrt(length2)[:, None]  # outward
-    nx, ny = normal[:, 0], normal[:, 1]
     beyond = points @ normal.T - np.einsum("ij,ij->i", normal, poly)[None]  # (N, V)
     i = np.argmax(beyond, axis=1)
-    far = np.take_along_axis(beyond, i[:, None], axis=1)[:, 0]
-    t = ((px - poly[i, 0]) * e[i, 0] + (py - poly[i, 1]) * e[i, 1]) / length2[i]
-    on_edge = (t >= 0.0) & (t <= 1.0) & (far > 0.0)
+    far = beyond[np.arange(i.size), i]
+    # Per-vertex values gathered once each (1-D takes: cheaper than 2-D indexing).
+    vx, vy = poly[:, 0].take(i), poly[:, 1].take(i)
+    ex, ey = e[:, 0].take(i), e[:, 1].take(i)
+    t = ((px - vx) * ex + (py - vy) * ey) / length2.take(i)
+    out = far > 0.0
+    on_edge = (t >= 0.0) & (t <= 1.0) & out
     d = np.where(on_edge, far, 0.0)
-    qx, qy = px - d * nx[i], py - d * ny[i]
-    corner = np.flatnonzero(~on_edge & (far > 0.0))
+    qx, qy = px - d * normal[:, 0].take(i), py - d * normal[:, 1].take(i)
+    corner = np.flatnonzero(~on_edge & out)
     if corner.size:
         cx, cy = px[corner], py[corner]
         gx, gy = cx[:, None] - poly[None, :, 0], cy[:, None] - poly[None, :, 1]
@@ -481,10 +485,11 @@ class Environment:
             fx1, fy1 = np.floor((ob.hi + self.cap) / h).astype(int) + 1
             xs = (np.arange(fx0, fx1 + 1) + 0.5) * h
             ys = (np.arange(fy0, fy1 + 1) + 0.5) * h
-            px, py = np.meshgrid(xs, ys)
-            centres = np.column_stack((px.ravel(), py.ravel()))
-            d, q = convex_closest(centres, ob.polygon)
             shape = (ys.size, xs.size)
+            centres = np.empty(shape + (2,))
+            centres[..., 0], centres[..., 1] = xs[None], ys[:, None]
+            centres = centres.reshape(-1, 2)
+            d, q = convex_closest(centres, ob.polygon)
             got = self._ob_raster[name] = (
                 int(fx0),
                 int(fy0),
