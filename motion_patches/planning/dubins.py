@@ -129,17 +129,21 @@ def samples(
     n = np.maximum(np.ceil(total / SAMPLE_SPACING).astype(int), 2) + 1
     first = np.concatenate(([0], np.cumsum(n)))
     owner = np.repeat(np.arange(c), n)
-    i = np.arange(first[-1]) - first[owner]
-    s = i * (total / (n - 1))[owner]
-    last = i == n[owner] - 1
+    # Per-path values spread to the samples by 1-D takes (cheaper than 2-D indexing).
+    i = np.arange(first[-1]) - first[:-1].take(owner)
+    s = i * (total / (n - 1)).take(owner)
+    last = i == (n - 1).take(owner)
     s[last] = total[owner[last]]
     # Which of the three parts each sample lies on; a part of zero length owns none (the
     # last sample belongs to the last part that has a length).
     part = np.minimum(
-        (bounds[owner, 0] <= s).astype(int) + (bounds[owner, 1] <= s) + (total[owner] <= s), 2
+        (bounds[:, 0].take(owner) <= s).astype(int)
+        + (bounds[:, 1].take(owner) <= s)
+        + (total.take(owner) <= s),
+        2,
     )
-    part = np.where((part == 2) & (lengths[owner, 2] <= 0.0), 1, part)
-    part = np.where((part == 1) & (lengths[owner, 1] <= 0.0), 0, part)
+    part = np.where((part == 2) & (lengths[:, 2].take(owner) <= 0.0), 1, part)
+    part = np.where((part == 1) & (lengths[:, 1].take(owner) <= 0.0), 0, part)
     kap = SIGNS[word] / radius[:, None]  # (C, 3)
     x, y, h = [p0[:, 0]], [p0[:, 1]], [h0]
     for k in (0, 1):
@@ -147,11 +151,12 @@ def samples(
         x.append(nx)
         y.append(ny)
         h.append(nh)
-    x, y, h = np.stack(x, 1), np.stack(y, 1), np.stack(h, 1)  # (C, 3) state at each part
-    begin = np.column_stack((np.zeros(c), bounds[:, :2]))[owner, part]
-    u = s - begin
-    px, py, ph = _advance(x[owner, part], y[owner, part], h[owner, part], kap[owner, part], u)
-    return s, np.column_stack((px, py)), ph, kap[owner, part], first
+    at = owner * 3 + part  # (path, part) of each sample in the (C, 3) arrays, flattened
+    x, y, h = (np.stack(v, 1).reshape(-1).take(at) for v in (x, y, h))  # state at its part
+    begin = np.column_stack((np.zeros(c), bounds[:, :2])).reshape(-1).take(at)
+    k = kap.reshape(-1).take(at)
+    px, py, ph = _advance(x, y, h, k, s - begin)
+    return s, np.column_stack((px, py)), ph, k, first
 
 
 def curve(p0: np.ndarray, h0: float, word: int | str, lengths: np.ndarray, radius: float) -> Curve:
