@@ -88,6 +88,12 @@ def convex_hull(points: ArrayLike) -> np.ndarray:
     return np.array(lower[:-1] + upper[:-1])
 
 
+def _next(polygon):
+    """Each vertex's successor (N, 2): ``np.roll(polygon, -1, axis=0)`` at a third of its
+    cost on a few vertices."""
+    return np.concatenate((polygon[1:], polygon[:1]))
+
+
 def _segment_distance(points, a, b):
     """Distance of points (N, 2) to segments a (E, 2) -> b (E, 2): (N, E)."""
     ab = b - a
@@ -104,7 +110,7 @@ def _segment_distance(points, a, b):
 def inside_convex(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
     """(N,) True where points lie inside a counter-clockwise convex polygon."""
     a = polygon
-    b = np.roll(polygon, -1, axis=0)
+    b = _next(polygon)
     cross = (b - a)[None, :, 0] * (points[:, None, 1] - a[None, :, 1]) - (b - a)[None, :, 1] * (
         points[:, None, 0] - a[None, :, 0]
     )
@@ -114,7 +120,7 @@ def inside_convex(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
 def distance_to_polygon(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
     """(N,) distance from points to a convex polygon (0 inside)."""
     points = np.atleast_2d(np.asarray(points, float))
-    d = _segment_distance(points, polygon, np.roll(polygon, -1, axis=0)).min(axis=1)
+    d = _segment_distance(points, polygon, _next(polygon)).min(axis=1)
     return np.where(inside_convex(points, polygon), 0.0, d)
 
 
@@ -167,8 +173,8 @@ def convex_closest(points: np.ndarray, polygon: np.ndarray) -> tuple[np.ndarray,
 
 def _edges_cross(poly_a, poly_b):
     """True when any edge of one polygon properly crosses an edge of the other."""
-    a0, a1 = poly_a, np.roll(poly_a, -1, axis=0)
-    b0, b1 = poly_b, np.roll(poly_b, -1, axis=0)
+    a0, a1 = poly_a, _next(poly_a)
+    b0, b1 = poly_b, _next(poly_b)
 
     def orient(p, q, r):
         return (q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1]) - (q[..., 1] - p[..., 1]) * (
@@ -188,8 +194,8 @@ def polygons_within(poly_a: np.ndarray, poly_b: np.ndarray, radius: float) -> bo
         return True
     if _edges_cross(poly_a, poly_b):  # a thin fence across a cell has no vertex inside it
         return True
-    da = _segment_distance(poly_a, poly_b, np.roll(poly_b, -1, axis=0)).min()
-    db = _segment_distance(poly_b, poly_a, np.roll(poly_a, -1, axis=0)).min()
+    da = _segment_distance(poly_a, poly_b, _next(poly_b)).min()
+    db = _segment_distance(poly_b, poly_a, _next(poly_a)).min()
     return min(da, db) < radius
 
 
@@ -513,8 +519,11 @@ class Environment:
         (i0, j0), (n, m) = self._grid_origin, self._grid.shape
         gi, gj = tx - i0, ty - j0
         inside = (gi >= 0) & (gi < n) & (gj >= 0) & (gj < m)
-        slot = np.full(tx.size, -1, np.int64)
-        slot[inside] = self._grid[gi[inside], gj[inside]]
+        if inside.all():
+            slot = self._grid[gi, gj]
+        else:
+            slot = np.full(tx.size, -1, np.int64)
+            slot[inside] = self._grid[gi[inside], gj[inside]]
         missing = slot < 0
         if missing.any():
             for t in set(zip(tx[missing].tolist(), ty[missing].tolist())):
