@@ -60,6 +60,7 @@ class MemberWorld:
     spacing: float = 0.0
     _planner: SegmentPlanner | None = field(default=None, repr=False, compare=False)
     _rank_xy: tuple | None = field(default=None, repr=False, compare=False)
+    _spots: tuple | None = field(default=None, repr=False, compare=False)
 
     @property
     def planner(self) -> SegmentPlanner:
@@ -76,6 +77,20 @@ class MemberWorld:
             self._rank_xy = (self.rank_ends, xy)
         return self._rank_xy[1]
 
+    def spot_obstacles(self) -> dict:
+        """{(spot index, size): obstacle} of the standing spots made so far: a spot is the
+        same obstacle for every member of a size (a crowd of 10,000 made each member's
+        few hundred anew). Dropped when the ranks, names, spacing or radius change."""
+        key = (self.rank_ends, self.spot_names, self.spacing, self.settings.radius)
+        got = self._spots
+        if (
+            got is None
+            or any(a is not b for a, b in zip(got[0][:2], key[:2]))
+            or (got[0][2:] != key[2:])
+        ):
+            got = self._spots = (key, {})
+        return got[1]
+
     @property
     def ramp(self) -> int:
         """Frames of a hold's slow-down and speed-up together (even)."""
@@ -83,7 +98,7 @@ class MemberWorld:
 
     def __getstate__(self) -> dict:
         state = dict(self.__dict__)
-        state["_planner"] = state["_rank_xy"] = None  # made again where it is used
+        state["_planner"] = state["_rank_xy"] = state["_spots"] = None  # made where used
         return state
 
 
@@ -268,10 +283,14 @@ def spots_of(task: MemberTask, world: MemberWorld, every: bool = True) -> list[O
         box = (box[0] * task.size, box[1] * task.size)  # in the world of size 1
     margin = SPOT_MARGIN + hips_sway(world.patch.gait) * task.size
     found = standing_spots(world.rank_xy, task.rank, world.spacing, radius, box, every, margin)
-    return [
-        Obstacle(f"{world.spot_names[k // 2]} {('start', 'goal')[k % 2]}", poly / task.size)
-        for k, poly in found
-    ]
+    made, out = world.spot_obstacles(), []
+    for k, poly in found:
+        ob = made.get((k, task.size))
+        if ob is None:
+            name = f"{world.spot_names[k // 2]} {('start', 'goal')[k % 2]}"
+            ob = made[(k, task.size)] = Obstacle(name, poly / task.size)
+        out.append(ob)
+    return out
 
 
 def plan_box(
@@ -349,15 +368,28 @@ def round_spots(task: MemberTask, world: MemberWorld, ghosts: bool) -> Plan:
             for ob in spots:
                 env.remove(ob.name)
 
-    tries = [spots_of(task, world, every=True)]
-    if tries[0]:
-        fewer = spots_of(task, world, every=False)
-        tries += [fewer] if len(fewer) < len(tries[0]) else []
-        tries += [[]] if tries[-1] and not ghosts else []
-    for spots in tries[:-1]:
-        with contextlib.suppress(PlanError):
+    def tries():
+        """The spots of each try in turn: the fewer ones are only looked up when the plan
+        round every spot fails (it rarely does)."""
+        every = spots_of(task, world, every=True)
+        yield every
+        if every:
+            fewer = spots_of(task, world, every=False)
+            last = every
+            if len(fewer) < len(every):
+                yield fewer
+                last = fewer
+            if last and not ghosts:
+                yield []
+
+    refused = None
+    for spots in tries():
+        try:
             return planned(spots)
-    return planned(tries[-1])
+        except PlanError as exc:
+            refused = exc
+    assert refused is not None, "the first try is always made"
+    raise refused
 
 
 def plan_members(tasks: Sequence[MemberTask], world: MemberWorld) -> list:

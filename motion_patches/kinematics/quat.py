@@ -158,17 +158,27 @@ def slerp(a: np.ndarray, b: np.ndarray, t: ArrayLike) -> np.ndarray:
         return np.zeros(np.broadcast_shapes(np.shape(a), np.shape(b)))
     a = normalize(a)
     b = normalize(b)
-    t = np.asarray(t, float)[..., None]
-    d = np.sum(a * b, axis=-1, keepdims=True)
-    b = np.where(d < 0, -b, b)
-    d = np.abs(d)
+    t = np.asarray(t, float)
+    # Per quaternion, component by component: the same sums as summing the last axis
+    # (see :func:`normalize`), without broadcasting (..., 1) weights over (..., 4) arrays
+    # (numpy's slowest case: half the time of a slerp went there).
+    d = a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
+    d = d + a[..., 3] * b[..., 3]
+    away = d < 0
+    if away.any():  # (skipped where it would change nothing)
+        b = np.where(away[..., None], -b, b)
+        d = np.abs(d)
     close = d > 0.9995
     theta = np.arccos(np.clip(d, -1.0, 1.0))
     s = np.sin(theta)
     s = np.where(close, 1.0, s)
     wa = np.where(close, 1.0 - t, np.sin((1.0 - t) * theta) / s)
     wb = np.where(close, t, np.sin(t * theta) / s)
-    return normalize(wa * a + wb * b)
+    shape = np.broadcast_shapes(wa.shape, a.shape[:-1], b.shape[:-1])
+    out = np.empty(shape + (4,))
+    for k in range(4):
+        out[..., k] = wa * a[..., k] + wb * b[..., k]
+    return normalize(out)
 
 
 def log(q: np.ndarray) -> np.ndarray:

@@ -32,6 +32,11 @@ class FlatFeet:
     toe: np.ndarray  # (2,)
     rotation: np.ndarray  # (2, 3, 3)
 
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        state.pop("_stands", None)  # remembered stands (:func:`stand_of`): made where used
+        return state
+
 
 def _in_place(skel, root_local, rotations):
     """World matrices (F, J, 4, 4) of in-place poses (the ground frame at the origin)."""
@@ -130,6 +135,27 @@ def standing(
     return root, rot
 
 
+STANDS_KEPT = 4096  # stands remembered per feet (about 2 kB each)
+
+
+def stand_of(
+    skel: Skeleton, root_local: np.ndarray, rotations: np.ndarray, feet: FlatFeet
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`standing`, remembered on ``feet`` per skeleton and pose (the first
+    ``STANDS_KEPT``): the walks of a crowd start and stop on a few hundred poses of the
+    gait's frames (three stands in four were made before). Copies: the same arrays as
+    :func:`standing` gives."""
+    root, rot = np.asarray(root_local, float), np.asarray(rotations, float)
+    key = (root.shape, rot.shape, root.tobytes(), rot.tobytes())
+    kept = feet.__dict__.setdefault("_stands", {})
+    got = kept.get(key)
+    if got is None or got[0] is not skel:
+        got = (skel, *standing(skel, root, rot, feet))
+        if len(kept) < STANDS_KEPT:
+            kept[key] = got
+    return got[1].copy(), got[2].copy()
+
+
 def _between(skel, upper, lower):
     """The bones from ``upper`` down to the one above ``lower`` (a leg bone and its limb
     segments), parents first."""
@@ -158,7 +184,7 @@ def settled(
     for on, i, t in ((start, 0, 1.0 - f / k), (end, n - 1, 1.0 - (n - 1 - f) / k)):
         if not on:
             continue
-        s_root, s_rot = standing(skel, motion.root_local[i], motion.rotations[i], feet)
+        s_root, s_rot = stand_of(skel, motion.root_local[i], motion.rotations[i], feet)
         t = np.clip(t, 0.0, 1.0)
         wgt = t * t * (3.0 - 2.0 * t)
         some = np.flatnonzero(wgt > 0)

@@ -44,51 +44,47 @@ def words(
     a, b = _mod2pi(h0 - th), _mod2pi(h1 - th)
     sa, sb, ca, cb = np.sin(a), np.sin(b), np.cos(a), np.cos(b)
     cab = np.cos(a - b)
-    out = np.full((6, d.size, 3), np.nan)
+    # Each word's three lengths written straight into its rows, NaN where it does not
+    # exist (the same values as stacking them and masking: a third of the time).
+    out = np.empty((6, d.size, 3))
+    dd, sab, sapb = d * d, sa - sb, sa + sb
+
+    def put(w, ok, t, p, q):
+        row = out[w]
+        row[:, 0], row[:, 1], row[:, 2] = t, p, q
+        row[~ok] = np.nan
+
     with np.errstate(invalid="ignore"):
         # LSL
-        p2 = 2 + d * d - 2 * cab + 2 * d * (sa - sb)
+        p2 = 2 + dd - 2 * cab + 2 * d * sab
         t1 = np.arctan2(cb - ca, d + sa - sb)
-        ok = p2 >= 0
-        out[0] = np.where(
-            ok[:, None], np.stack((_mod2pi(-a + t1), np.sqrt(p2), _mod2pi(b - t1)), -1), np.nan
-        )
+        put(0, p2 >= 0, _mod2pi(-a + t1), np.sqrt(p2), _mod2pi(b - t1))
         # RSR
-        p2 = 2 + d * d - 2 * cab + 2 * d * (sb - sa)
+        p2 = 2 + dd - 2 * cab + 2 * d * (sb - sa)
         t1 = np.arctan2(ca - cb, d - sa + sb)
-        ok = p2 >= 0
-        out[1] = np.where(
-            ok[:, None], np.stack((_mod2pi(a - t1), np.sqrt(p2), _mod2pi(-b + t1)), -1), np.nan
-        )
+        put(1, p2 >= 0, _mod2pi(a - t1), np.sqrt(p2), _mod2pi(-b + t1))
         # LSR
-        p2 = -2 + d * d + 2 * cab + 2 * d * (sa + sb)
+        p2 = -2 + dd + 2 * cab + 2 * d * sapb
         p = np.sqrt(p2)
         t2 = np.arctan2(-ca - cb, d + sa + sb) - np.arctan2(-2.0, p)
-        ok = p2 >= 0
-        out[2] = np.where(
-            ok[:, None], np.stack((_mod2pi(-a + t2), p, _mod2pi(-_mod2pi(b) + t2)), -1), np.nan
-        )
+        put(2, p2 >= 0, _mod2pi(-a + t2), p, _mod2pi(-_mod2pi(b) + t2))
         # RSL
-        p2 = d * d - 2 + 2 * cab - 2 * d * (sa + sb)
+        p2 = dd - 2 + 2 * cab - 2 * d * sapb
         p = np.sqrt(p2)
         t2 = np.arctan2(ca + cb, d - sa - sb) - np.arctan2(2.0, p)
-        ok = p2 >= 0
-        out[3] = np.where(ok[:, None], np.stack((_mod2pi(a - t2), p, _mod2pi(b - t2)), -1), np.nan)
+        put(3, p2 >= 0, _mod2pi(a - t2), p, _mod2pi(b - t2))
         # RLR
-        tmp = (6 - d * d + 2 * cab + 2 * d * (sa - sb)) / 8
-        ok = np.abs(tmp) <= 1
+        tmp = (6 - dd + 2 * cab + 2 * d * sab) / 8
         p = _mod2pi(2 * np.pi - np.arccos(np.clip(tmp, -1, 1)))
         t = _mod2pi(a - np.arctan2(ca - cb, d - sa + sb) + p / 2)
-        out[4] = np.where(ok[:, None], np.stack((t, p, _mod2pi(a - b - t + p)), -1), np.nan)
+        put(4, np.abs(tmp) <= 1, t, p, _mod2pi(a - b - t + p))
         # LRL
-        tmp = (6 - d * d + 2 * cab + 2 * d * (sb - sa)) / 8
-        ok = np.abs(tmp) <= 1
+        tmp = (6 - dd + 2 * cab + 2 * d * (sb - sa)) / 8
         p = _mod2pi(2 * np.pi - np.arccos(np.clip(tmp, -1, 1)))
         t = _mod2pi(-a - np.arctan2(ca - cb, d + sa - sb) + p / 2)
-        out[5] = np.where(
-            ok[:, None], np.stack((t, p, _mod2pi(_mod2pi(b) - a - t + p)), -1), np.nan
-        )
-    return out * (radius[:, None] if radius.ndim else radius)
+        put(5, np.abs(tmp) <= 1, t, p, _mod2pi(_mod2pi(b) - a - t + p))
+    out *= radius[:, None] if radius.ndim else radius
+    return out
 
 
 def turns(lengths: np.ndarray, radius: float | np.ndarray) -> np.ndarray:
@@ -133,17 +129,21 @@ def samples(
     n = np.maximum(np.ceil(total / SAMPLE_SPACING).astype(int), 2) + 1
     first = np.concatenate(([0], np.cumsum(n)))
     owner = np.repeat(np.arange(c), n)
-    i = np.arange(first[-1]) - first[owner]
-    s = i * (total / (n - 1))[owner]
-    last = i == n[owner] - 1
+    # Per-path values spread to the samples by 1-D takes (cheaper than 2-D indexing).
+    i = np.arange(first[-1]) - first[:-1].take(owner)
+    s = i * (total / (n - 1)).take(owner)
+    last = i == (n - 1).take(owner)
     s[last] = total[owner[last]]
     # Which of the three parts each sample lies on; a part of zero length owns none (the
     # last sample belongs to the last part that has a length).
     part = np.minimum(
-        (bounds[owner, 0] <= s).astype(int) + (bounds[owner, 1] <= s) + (total[owner] <= s), 2
+        (bounds[:, 0].take(owner) <= s).astype(int)
+        + (bounds[:, 1].take(owner) <= s)
+        + (total.take(owner) <= s),
+        2,
     )
-    part = np.where((part == 2) & (lengths[owner, 2] <= 0.0), 1, part)
-    part = np.where((part == 1) & (lengths[owner, 1] <= 0.0), 0, part)
+    part = np.where((part == 2) & (lengths[:, 2].take(owner) <= 0.0), 1, part)
+    part = np.where((part == 1) & (lengths[:, 1].take(owner) <= 0.0), 0, part)
     kap = SIGNS[word] / radius[:, None]  # (C, 3)
     x, y, h = [p0[:, 0]], [p0[:, 1]], [h0]
     for k in (0, 1):
@@ -151,11 +151,12 @@ def samples(
         x.append(nx)
         y.append(ny)
         h.append(nh)
-    x, y, h = np.stack(x, 1), np.stack(y, 1), np.stack(h, 1)  # (C, 3) state at each part
-    begin = np.column_stack((np.zeros(c), bounds[:, :2]))[owner, part]
-    u = s - begin
-    px, py, ph = _advance(x[owner, part], y[owner, part], h[owner, part], kap[owner, part], u)
-    return s, np.column_stack((px, py)), ph, kap[owner, part], first
+    at = owner * 3 + part  # (path, part) of each sample in the (C, 3) arrays, flattened
+    x, y, h = (np.stack(v, 1).reshape(-1).take(at) for v in (x, y, h))  # state at its part
+    begin = np.column_stack((np.zeros(c), bounds[:, :2])).reshape(-1).take(at)
+    k = kap.reshape(-1).take(at)
+    px, py, ph = _advance(x, y, h, k, s - begin)
+    return s, np.column_stack((px, py)), ph, k, first
 
 
 def curve(p0: np.ndarray, h0: float, word: int | str, lengths: np.ndarray, radius: float) -> Curve:

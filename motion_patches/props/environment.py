@@ -88,6 +88,12 @@ def convex_hull(points: ArrayLike) -> np.ndarray:
     return np.array(lower[:-1] + upper[:-1])
 
 
+def _next(polygon):
+    """Each vertex's successor (N, 2): ``np.roll(polygon, -1, axis=0)`` at a third of its
+    cost on a few vertices."""
+    return np.concatenate((polygon[1:], polygon[:1]))
+
+
 def _segment_distance(points, a, b):
     """Distance of points (N, 2) to segments a (E, 2) -> b (E, 2): (N, E)."""
     ab = b - a
@@ -104,7 +110,7 @@ def _segment_distance(points, a, b):
 def inside_convex(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
     """(N,) True where points lie inside a counter-clockwise convex polygon."""
     a = polygon
-    b = np.roll(polygon, -1, axis=0)
+    b = _next(polygon)
     cross = (b - a)[None, :, 0] * (points[:, None, 1] - a[None, :, 1]) - (b - a)[None, :, 1] * (
         points[:, None, 0] - a[None, :, 0]
     )
@@ -114,7 +120,7 @@ def inside_convex(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
 def distance_to_polygon(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
     """(N,) distance from points to a convex polygon (0 inside)."""
     points = np.atleast_2d(np.asarray(points, float))
-    d = _segment_distance(points, polygon, np.roll(polygon, -1, axis=0)).min(axis=1)
+    d = _segment_distance(points, polygon, _next(polygon)).min(axis=1)
     return np.where(inside_convex(points, polygon), 0.0, d)
 
 
@@ -127,9 +133,10 @@ def convex_closest(points: np.ndarray, polygon: np.ndarray) -> tuple[np.ndarray,
     points = np.asarray(points, float)
     poly = np.asarray(polygon, float)
     px, py = points[:, 0], points[:, 1]
-    e = np.roll(poly, -1, axis=0) - poly
+    e = np.concatenate((poly[1:], poly[:1])) - poly
     keep = np.einsum("ij,ij->i", e, e) > 1e-18
-    poly, e = poly[keep], e[keep]
+    if not keep.all():
+        poly, e = poly[keep], e[keep]
     if poly.shape[0] < 3:  # a point or a segment: its vertices and edge directly
         poly = np.asarray(polygon, float)[: max(poly.shape[0], 1)]
         a, b = poly[0], poly[-1]
@@ -139,18 +146,21 @@ def convex_closest(points: np.ndarray, polygon: np.ndarray) -> tuple[np.ndarray,
         return np.linalg.norm(points - q, axis=1), q
     if np.sum(poly[:, 0] * e[:, 1] - poly[:, 1] * e[:, 0]) < 0:  # clockwise: turn it round
         poly = poly[::-1]
-        e = np.roll(poly, -1, axis=0) - poly
+        e = np.concatenate((poly[1:], poly[:1])) - poly
     length2 = np.einsum("ij,ij->i", e, e)
     normal = np.column_stack((e[:, 1], -e[:, 0])) / np.sqrt(length2)[:, None]  # outward
-    nx, ny = normal[:, 0], normal[:, 1]
     beyond = points @ normal.T - np.einsum("ij,ij->i", normal, poly)[None]  # (N, V)
     i = np.argmax(beyond, axis=1)
-    far = np.take_along_axis(beyond, i[:, None], axis=1)[:, 0]
-    t = ((px - poly[i, 0]) * e[i, 0] + (py - poly[i, 1]) * e[i, 1]) / length2[i]
-    on_edge = (t >= 0.0) & (t <= 1.0) & (far > 0.0)
+    far = beyond[np.arange(i.size), i]
+    # Per-vertex values gathered once each (1-D takes: cheaper than 2-D indexing).
+    vx, vy = poly[:, 0].take(i), poly[:, 1].take(i)
+    ex, ey = e[:, 0].take(i), e[:, 1].take(i)
+    t = ((px - vx) * ex + (py - vy) * ey) / length2.take(i)
+    out = far > 0.0
+    on_edge = (t >= 0.0) & (t <= 1.0) & out
     d = np.where(on_edge, far, 0.0)
-    qx, qy = px - d * nx[i], py - d * ny[i]
-    corner = np.flatnonzero(~on_edge & (far > 0.0))
+    qx, qy = px - d * normal[:, 0].take(i), py - d * normal[:, 1].take(i)
+    corner = np.flatnonzero(~on_edge & out)
     if corner.size:
         cx, cy = px[corner], py[corner]
         gx, gy = cx[:, None] - poly[None, :, 0], cy[:, None] - poly[None, :, 1]
@@ -163,8 +173,8 @@ def convex_closest(points: np.ndarray, polygon: np.ndarray) -> tuple[np.ndarray,
 
 def _edges_cross(poly_a, poly_b):
     """True when any edge of one polygon properly crosses an edge of the other."""
-    a0, a1 = poly_a, np.roll(poly_a, -1, axis=0)
-    b0, b1 = poly_b, np.roll(poly_b, -1, axis=0)
+    a0, a1 = poly_a, _next(poly_a)
+    b0, b1 = poly_b, _next(poly_b)
 
     def orient(p, q, r):
         return (q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1]) - (q[..., 1] - p[..., 1]) * (
@@ -184,8 +194,8 @@ def polygons_within(poly_a: np.ndarray, poly_b: np.ndarray, radius: float) -> bo
         return True
     if _edges_cross(poly_a, poly_b):  # a thin fence across a cell has no vertex inside it
         return True
-    da = _segment_distance(poly_a, poly_b, np.roll(poly_b, -1, axis=0)).min()
-    db = _segment_distance(poly_b, poly_a, np.roll(poly_a, -1, axis=0)).min()
+    da = _segment_distance(poly_a, poly_b, _next(poly_b)).min()
+    db = _segment_distance(poly_b, poly_a, _next(poly_a)).min()
     return min(da, db) < radius
 
 
@@ -481,10 +491,11 @@ class Environment:
             fx1, fy1 = np.floor((ob.hi + self.cap) / h).astype(int) + 1
             xs = (np.arange(fx0, fx1 + 1) + 0.5) * h
             ys = (np.arange(fy0, fy1 + 1) + 0.5) * h
-            px, py = np.meshgrid(xs, ys)
-            centres = np.column_stack((px.ravel(), py.ravel()))
-            d, q = convex_closest(centres, ob.polygon)
             shape = (ys.size, xs.size)
+            centres = np.empty(shape + (2,))
+            centres[..., 0], centres[..., 1] = xs[None], ys[:, None]
+            centres = centres.reshape(-1, 2)
+            d, q = convex_closest(centres, ob.polygon)
             got = self._ob_raster[name] = (
                 int(fx0),
                 int(fy0),
@@ -508,8 +519,11 @@ class Environment:
         (i0, j0), (n, m) = self._grid_origin, self._grid.shape
         gi, gj = tx - i0, ty - j0
         inside = (gi >= 0) & (gi < n) & (gj >= 0) & (gj < m)
-        slot = np.full(tx.size, -1, np.int64)
-        slot[inside] = self._grid[gi[inside], gj[inside]]
+        if inside.all():
+            slot = self._grid[gi, gj]
+        else:
+            slot = np.full(tx.size, -1, np.int64)
+            slot[inside] = self._grid[gi[inside], gj[inside]]
         missing = slot < 0
         if missing.any():
             for t in set(zip(tx[missing].tolist(), ty[missing].tolist())):

@@ -3,6 +3,7 @@
 LocalCluster of one and of two workers, and on a real `dask scheduler` with two
 `dask worker` processes over TCP of which one is killed mid-run."""
 
+import pickle
 import subprocess
 import sys
 import time
@@ -142,6 +143,27 @@ def test_members_keep_their_hips_the_spacing_from_where_the_others_stand(crossin
         d = np.linalg.norm(got.root_track[:, None, :] - spots[None], axis=2)
         closest.append(d.min())
     assert min(closest) >= SPACING, closest
+
+
+def test_standing_spots_are_made_once_per_world_and_again_when_the_ranks_change(walk_patch):
+    world, tasks = crossing(walk_patch)
+    first = members.spots_of(tasks[0], world)
+    assert first and members.spots_of(tasks[0], world) == first  # the same obstacles
+    again = members.spots_of(tasks[1], world)
+    shared = {ob.name for ob in first} & {ob.name for ob in again}
+    assert shared and all(
+        a is b for a in first for b in again if a.name == b.name
+    )  # another member of the size takes the same spot obstacles
+    assert pickle.loads(pickle.dumps(world))._spots is None  # made again where used
+    moved = [(s + np.array([0.5, 0.0, 0.0]), g) for s, g in world.rank_ends]
+    world.rank_ends = moved
+    after = members.spots_of(tasks[0], world)
+    assert [ob.name for ob in after] and all(
+        not np.array_equal(a.polygon, b.polygon)
+        for a in after
+        for b in first
+        if a.name == b.name and a.name.endswith("start")
+    )
 
 
 @pytest.mark.parametrize("workers", [1, 2])

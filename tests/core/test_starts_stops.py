@@ -3,13 +3,15 @@
 both feet down on the first and the last frame, measured on the joints' positions as a
 plan is written (contacts kept where the feet are still, feet locked)."""
 
+import pickle
+
 import numpy as np
 import pytest
 
-from motion_patches.kinematics import foot_lock
+from motion_patches.kinematics import foot_lock, stand
 from motion_patches.kinematics.contacts import foot_joints
 from motion_patches.kinematics.motion import Motion, concatenate
-from motion_patches.planning.motions import stand_note
+from motion_patches.planning.motions import flat_feet, stand_note
 from motion_patches.planning.planner import SegmentPlanner, plan_motions
 from motion_patches.props.environment import Environment, Obstacle
 
@@ -94,3 +96,21 @@ def test_a_plan_starts_and_ends_standing_on_both_feet(walk_patch, name):
         toes, on = p[part][:, [1, 3]], planted[part][:, [1, 3]]
         step = np.linalg.norm(np.diff(toes, axis=0), axis=-1)[on[1:] & on[:-1]]
         assert step.max() < TOE_STEP, step.max()
+
+
+def test_a_stand_is_made_once_per_pose_and_given_as_standing_makes_it(walk_patch):
+    gait = walk_patch.gait
+    feet = flat_feet(gait)
+    lp, skel = gait.straight, gait.skeleton
+    root, rot = lp.root_local[3], lp.rotations[3]
+    made = stand.standing(skel, root, rot, feet)
+    first = stand.stand_of(skel, root, rot, feet)
+    again = stand.stand_of(skel, root, rot, feet)
+    for a, b, c in zip(made, first, again):
+        assert a.tobytes() == b.tobytes() == c.tobytes()
+    assert again[1] is not first[1]  # copies: a caller cannot change the one remembered
+    kept = feet.__dict__["_stands"]
+    assert len(kept) >= 1
+    other = stand.stand_of(skel, lp.root_local[9], lp.rotations[9], feet)
+    assert len(kept) >= 2 and other[1].tobytes() != first[1].tobytes()
+    assert "_stands" not in pickle.loads(pickle.dumps(feet)).__dict__  # made where used
