@@ -15,42 +15,71 @@ class _Sorted:
     geometrically, so there are O(log N) of them to look through and every entry is
     copied O(log N) times in all, whatever the size of the crowd. An owner's entries
     always lie in one run (in key order), so what a look-up finds of one owner comes in
-    the order of the queries."""
+    the order of the queries.
 
-    _COLUMNS = ("key", "frame", "xy", "owner")
+    A removal only marks the reservation's entries dead (each entry carries the number of
+    the reservation that made it); look-ups pass them over, merges leave them out, and all
+    runs are swept once the dead outnumber the living. Removing by scanning every run cost
+    a resolution of 10,000 characters a fifth of its time (each re-timing removes one)."""
+
+    _COLUMNS = ("key", "frame", "xy", "owner", "stamp")
 
     def __init__(self):
         self.runs = []
-
-    @property
-    def size(self):
-        return sum(run["key"].size for run in self.runs)
+        self.size = 0  # living entries
+        self._dead = 0
+        self._alive = np.zeros(64, bool)  # by reservation number
+        self._count = np.zeros(64, np.int64)  # entries of each reservation
+        self._stamp = {}  # owner -> the numbers of its living reservations
+        self._next = 0
 
     def insert(self, key, frame, xy, owner):
+        stamp = self._next
+        self._next += 1
+        if stamp >= self._alive.size:
+            self._alive = np.concatenate((self._alive, np.zeros(self._alive.size, bool)))
+            self._count = np.concatenate((self._count, np.zeros(self._count.size, np.int64)))
+        self._alive[stamp], self._count[stamp] = True, key.size
+        self._stamp.setdefault(owner, []).append(stamp)
+        self.size += key.size
         order = np.argsort(key, kind="stable")
         run = {
             "key": key[order],
             "frame": frame[order],
             "xy": xy[order],
             "owner": np.full(key.size, owner, np.int32),
+            "stamp": np.full(key.size, stamp, np.int32),
         }
         self.runs.append(run)
         while len(self.runs) > 1 and self.runs[-2]["key"].size <= 4 * self.runs[-1]["key"].size:
             new = self.runs.pop()
             old = self.runs.pop()
             both = {c: np.concatenate((old[c], new[c])) for c in self._COLUMNS}
+            living = self._alive[both["stamp"]]
+            if not living.all():  # the dead left out
+                self._dead -= int(living.size - np.count_nonzero(living))
+                both = {c: both[c][living] for c in self._COLUMNS}
             order = np.argsort(both["key"], kind="stable")
             self.runs.append({c: both[c][order] for c in self._COLUMNS})
 
     def remove(self, owner):
-        for i, run in enumerate(self.runs):
-            keep = run["owner"] != owner
-            if not keep.all():
-                self.runs[i] = {c: run[c][keep] for c in self._COLUMNS}
-        self.runs = [run for run in self.runs if run["key"].size]
+        stamps = self._stamp.pop(owner, [])
+        if not stamps:
+            return
+        self._alive[stamps] = False
+        n = int(self._count[stamps].sum())
+        self.size -= n
+        self._dead += n
+        if self._dead > self.size:  # swept: look-ups stay in proportion to the living
+            for i, run in enumerate(self.runs):
+                living = self._alive[run["stamp"]]
+                if not living.all():
+                    self.runs[i] = {c: run[c][living] for c in self._COLUMNS}
+            self.runs = [run for run in self.runs if run["key"].size]
+            self._dead = 0
 
     def near(self, q):
-        """(query index, frame, xy, owner) of every entry whose key is one of ``q``."""
+        """(query index, frame, xy, owner) of every living entry whose key is one of ``q``."""
         out = []
         for run in self.runs:
             lo = np.searchsorted(run["key"], q, "left")
@@ -59,8 +88,12 @@ class _Sorted:
             if hit.size:
                 n = n[hit]
                 ent = np.repeat(lo[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
+                rows = np.repeat(hit, n)
+                if self._dead:
+                    living = self._alive[run["stamp"][ent]]
+                    ent, rows = ent[living], rows[living]
                 got = (run["frame"][ent], run["xy"][ent], run["owner"][ent])
-                out.append((np.repeat(hit, n), *got))
+                out.append((rows, *got))
         if not out:
             return np.empty(0, int), np.empty(0, np.int64), np.empty((0, 2)), np.empty(0, int)
         return tuple(np.concatenate(c) for c in zip(*out))

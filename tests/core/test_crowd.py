@@ -294,6 +294,40 @@ def test_reservations_find_the_same_after_many_merges():
     assert np.array_equal(table.busy(probe, 60), fresh.busy(probe, 60))
 
 
+def test_reservations_removed_and_placed_again_find_what_a_fresh_table_finds():
+    """A removal marks its entries dead (passed over, left out of merges, swept once the
+    dead outnumber the living); an index placed again after its removal is found at its new
+    place only, whatever the runs hold."""
+    rng = np.random.default_rng(7)
+
+    def walk():
+        return np.cumsum(rng.normal(0, 0.05, (40, 2)), axis=0) + rng.uniform(0, 3, 2)
+
+    tracks = {i: walk() for i in range(60)}
+    table = crowd.Reservations(0.5)
+    for i, t in tracks.items():
+        table.reserve(i, t, i % 7)
+    probe = np.cumsum(rng.normal(0, 0.05, (50, 2)), axis=0) + 1.5
+    for round_ in range(3):
+        # the first round removes most (the dead outnumber the living: all runs swept)
+        for i in rng.choice(sorted(tracks), 45 if round_ == 0 else 15, replace=False).tolist():
+            table.remove(i)
+            if (i + round_) % 3:  # placed again elsewhere, or left out
+                tracks[i] = walk()
+                table.reserve(i, tracks[i], i % 5)
+            else:
+                tracks.pop(i, None)
+        fresh = crowd.Reservations(0.5)
+        for i in sorted(tracks):
+            fresh.reserve(i, tracks[i], table.placed[i][0])
+        assert table.moving.size == fresh.moving.size == sum(len(t) for t in tracks.values())
+        got, want = table.check(probe, 3), fresh.check(probe, 3)
+        assert got.keys() == want.keys() and len(got) > 3
+        for j in got:
+            assert np.array_equal(got[j][0], want[j][0]) and got[j][1:] == want[j][1:]
+        assert np.array_equal(table.busy(probe, 60), fresh.busy(probe, 60))
+
+
 def test_an_empty_crowd_is_handled():
     assert crowd.resolve([], None, 0.5, 0.25, 30.0, 30, 3) == ([], [])
 
