@@ -21,7 +21,7 @@ from ..kinematics.inplace import root_positions
 from ..kinematics.motion import Motion
 from ..kinematics.retarget import RigMap
 from ..kinematics.scene_rate import placed
-from ..planning import causes, moving_props, plan_frame
+from ..planning import body_clearance, causes, moving_props, plan_frame
 from ..planning.pieces import Plan, PlanError
 from ..planning.planner import SegmentPlanner, plan_motions, planner_for, with_interactions
 from ..planning.settings import PlanSettings
@@ -262,15 +262,6 @@ def unpacked(motions: list) -> list:
     ]
 
 
-def hips_sway(gait: Any) -> float:
-    """How far the root swings sideways off the ground track, at most, over the gait's
-    straight loop (about 2 cm in a captured walk): a walker keeps its path, not its hips,
-    clear of another's standing spot, and the crowd keeps hips apart (a path round another's
-    start grown by 1 cm still passed 0.499 m from it, where 0.5 was asked, among 10,000)."""
-    root = np.asarray(gait.straight.root_local, float)
-    return float(np.abs(root[:, 1]).max()) if root.size else 0.0
-
-
 def spots_of(task: MemberTask, world: MemberWorld, every: bool = True) -> list[Obstacle]:
     """Where the others stand still (:func:`~.crowd.standing_spots` of its rank: with
     ``every``, every other's start and goal, else those it walks by if the crowd walks in
@@ -281,7 +272,10 @@ def spots_of(task: MemberTask, world: MemberWorld, every: bool = True) -> list[O
     box = plan_box(task.ends[0], task.ends[1], world.planner)
     if box is not None:
         box = (box[0] * task.size, box[1] * task.size)  # in the world of size 1
-    margin = SPOT_MARGIN + hips_sway(world.patch.gait) * task.size
+    # the hips' sway about the path (a path round another's start grown by 1 cm still
+    # passed 0.499 m from it, where 0.5 was asked, among 10,000): the crowd keeps hips apart
+    gait = world.patch.gait
+    margin = SPOT_MARGIN + body_clearance.sway(gait, [gait.straight]) * task.size
     found = standing_spots(world.rank_xy, task.rank, world.spacing, radius, box, every, margin)
     made, out = world.spot_obstacles(), []
     for k, poly in found:

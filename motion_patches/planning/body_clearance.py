@@ -9,7 +9,7 @@ which are meant to come close) is planned again with the radius grown by the gai
 only those plans pay for it, the rest keep the shortest way.
 """
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -24,9 +24,11 @@ from .planner import SegmentPlanner
 CLIPS = ("traversal", "interaction")
 
 
-def sway(gait: Gait) -> float:
-    """Metres: how far the hips get from the ground path in any loop of the gait."""
-    return float(max(np.linalg.norm(lp.root_local[:, :2], axis=1).max() for lp in gait.loops))
+def sway(gait: Gait, loops: Sequence | None = None) -> float:
+    """Metres: how far the hips get from the ground path in any loop of the gait (or of
+    ``loops``, some of them: a crowd's standing spots take the straight loop's)."""
+    every = gait.loops if loops is None else loops
+    return float(max(np.linalg.norm(lp.root_local[:, :2], axis=1).max() for lp in every))
 
 
 def hips_too_close(

@@ -13,6 +13,7 @@ import pytest
 
 from motion_patches import cluster
 from motion_patches.crowd import members
+from motion_patches.planning import body_clearance
 from motion_patches.planning.settings import PlanSettings
 from motion_patches.props.environment import Environment, Obstacle
 
@@ -131,7 +132,8 @@ def test_members_keep_their_hips_the_spacing_from_where_the_others_stand(crossin
     and goal at least the spacing away (but those on its own ends, where it stands itself):
     the standing spots are grown by the hips' sway about the path planned."""
     world, tasks = crossing12
-    assert 0.005 < members.hips_sway(world.patch.gait) < 0.05  # a captured walk: ~2 cm
+    gait = world.patch.gait
+    assert 0.005 < body_clearance.sway(gait, [gait.straight]) < 0.05  # a captured walk: ~2 cm
     xy = world.rank_xy
     closest = []
     for t in tasks:
