@@ -17,10 +17,19 @@ import uuid
 
 import numpy as np
 
-from ..motion_patches.kinematics import foot_lock, quat
-from ..motion_patches.kinematics.inplace import rest_facing, root_channel_to_ground
-from ..motion_patches.kinematics.motion import Motion
-from ..motion_patches.kinematics.skeleton import per_skeleton, root_position_to_location
+from ..motion_patches.kinematics import foot_lock
+from ..motion_patches.kinematics.rig_keys import (  # noqa: F401 (the adapter's names for them)
+    FINER,
+    STEADY,
+    body_keys,
+    facing_angle,
+    finer,
+    fit_foot_lock,
+    in_units,
+    inplace_channels,
+    own_pieces,
+    root_keys,
+)
 from . import actions as act_io
 from . import compat
 from . import rig as rig_io
@@ -35,38 +44,6 @@ CHARACTER_KEY = "motion_patches_character"
 ACTIONS_KEY = "motion_patches_actions"  # object: {action id: name} of what planning made for it
 ACTION_ID = "motion_patches_id"  # action: its id, kept by its character under ACTIONS_KEY
 STASH_PREFIX = TRACK_PREFIX + "stash: "
-
-
-@per_skeleton
-def facing_angle(skel):
-    """The rig's rest facing as an angle from +X (every action and root track of a write
-    turns by it)."""
-    f = rest_facing(skel)
-    return float(np.arctan2(f[1], f[0]))
-
-
-def inplace_channels(skel, motion, unit=1.0):
-    """Root location channels (F, 3) and rotations (F, J, 4) for an object whose Z rotation
-    is the ground heading minus the rig's rest facing. ``unit``: the armature's world
-    scale (:func:`~.rig.world_scale`; ``skel`` and ``motion`` are in metres, the root's
-    location channel in the armature's own units, so it is divided by it).
-
-    That object is the motion's ground frame turned by -facing, so the body relative to it
-    is the motion's own in-place channels turned by +facing: the root's position about Z,
-    and its rotation by the same turn conjugated into the root's rest frame (what
-    ``to_world`` then ``to_inplace`` against the object's headings gives, without the round
-    trip through the world)."""
-    facing = facing_angle(skel)
-    c, s = np.cos(facing), np.sin(facing)
-    x, y, z = np.asarray(motion.root_local, float).T
-    local = np.stack((c * x - s * y, s * x + c * y, z), 1)
-    rot = np.array(motion.rotations, float)
-    r = skel.root
-    rot[:, r] = root_channel_to_ground(skel, rot[:, r], -facing)
-    loc = root_position_to_location(skel, local)
-    if unit != 1.0:
-        loc = loc / unit
-    return loc, quat.make_continuous(rot, axis=0)
 
 
 def check_rig(obj, skel, floor=0.0):
@@ -246,9 +223,7 @@ def _inplace_action(name, skel, motion, tags, modes=None, unit=1.0):
     for k, v in tags.items():
         action[k] = v
     frames = np.arange(motion.frames, dtype=float)
-    act_io.key_pose(
-        action, slot, skel, frames, loc, rot, modes, tol=_in_units(act_io.COMPACT, unit)
-    )
+    act_io.key_pose(action, slot, skel, frames, loc, rot, modes, tol=in_units(act_io.COMPACT, unit))
     return action, slot
 
 
@@ -309,7 +284,7 @@ def write_plan(
     index = segment_index(bpy) if segments is None else segments
     own = own_pieces(plan)
     if own and body is None:
-        body = body_keys(skel, world, locked, bounds, own, motions, modes, unit)
+        body = body_keys(skel, world, locked, bounds, own, motions, modes, unit, act_io.COMPACT)
     body = _body_action(obj, body) if own else None
     for n, (piece, m) in enumerate(zip(plan.pieces, motions)):
         start, end = first + int(bounds[n]), first + int(bounds[n + 1])
@@ -361,14 +336,14 @@ def write_plan(
     root_action, root_slot = compat.new_action(f"MP {obj.name} root")
     root_action[CHARACTER_KEY] = obj.name
     if root is None:
-        root = root_keys(skel, world, root_units(obj))
+        root = root_keys(skel, world, root_units(obj), act_io.COMPACT)
     # on the scene's frames, its strip unscaled: nothing plays between them
     act_io.key_curves(
         root_action,
         root_slot,
         root["frames"],
         root["curves"],
-        _finer(act_io.COMPACT),
+        finer(act_io.COMPACT),
         between=False,
         fitted=root["fitted"],
     )
@@ -407,122 +382,10 @@ def root_units(obj):
     return float(obj.location[2]), obj.rotation_mode, rig_io.world_tilt(obj)
 
 
-def root_keys(skel, world, units):
-    """The keys of a character's root action (its object's location and turn over the
-    plan's ``world`` motion, on the scene's frames) fitted, touching no Blender data (a
-    crowd fits the next characters' while one is written): {"frames", "curves",
-    "fitted"}. ``units``: :func:`root_units` of the character."""
-    z0, rotation_mode, tilt = units
-    heading = np.unwrap(world.ground[:, 2]) - facing_angle(skel)
-    frames = np.arange(world.frames, dtype=float)
-    curves = [
-        ("location", i, "Object Transforms", v)
-        for i, v in enumerate((world.ground[:, 0], world.ground[:, 1], np.full(world.frames, z0)))
-    ]
-    # A turn about Z only: (0, 0, heading) is that turn in every Euler order, (heading, +Z)
-    # in axis-angle; the heading is unwrapped, so no channel jumps by a turn.
-    zero = np.zeros(world.frames)
-    if tilt is not None:  # the turn over the armature's own tilt
-        rot_path, rot_values = _tilted_rotation(rotation_mode, heading, tilt)
-    elif rotation_mode == "QUATERNION":
-        q = quat.make_continuous(quat.about_z(heading), axis=0)
-        rot_path, rot_values = "rotation_quaternion", q.T
-    elif rotation_mode == "AXIS_ANGLE":
-        rot_path, rot_values = "rotation_axis_angle", (heading, zero, zero, zero + 1.0)
-    else:
-        rot_path, rot_values = "rotation_euler", (zero, zero, heading)
-    curves += [(rot_path, i, "Object Transforms", v) for i, v in enumerate(rot_values)]
-    tol = _finer(act_io.COMPACT)
-    return {
-        "frames": frames,
-        "curves": curves,
-        "fitted": act_io.fit_curves(frames, curves, tol, between=False),
-    }
-
-
-def _tilted_rotation(mode, heading, tilt):
-    """(property, channel rows) of the object rotation ``Rz(heading) @ tilt`` per frame in
-    rotation ``mode``, each frame's channels the ones nearest the frame before (no jump by a
-    turn; the first nearest the tilt's own)."""
-    q = quat.mul(quat.about_z(heading), quat.from_matrix(tilt)[None])
-    q = quat.make_continuous(q, axis=0)
-    if mode == "QUATERNION":
-        return "rotation_quaternion", q.T
-    out = np.empty((len(q), act_io.rest_channels(mode).size))
-    prev = act_io.closest_channels(q[:1], mode, act_io.rest_channels(mode)[None])[0]
-    for f in range(len(q)):
-        prev = out[f] = act_io.closest_channels(q[f : f + 1], mode, prev[None])[0]
-    return act_io.rotation_path(mode), out.T
-
-
-def _in_units(tol, unit):
-    """``tol`` for locations keyed in the armature's units (``unit`` metres each): its
-    length, in metres, divided by it, so a centimetre rig is held as a metre rig is."""
-    if isinstance(tol, act_io.Tolerance) and unit != 1.0:
-        return act_io.Tolerance(tol.angle, tol.length / unit, tol.steady)
-    return tol
-
-
-def own_pieces(plan):
-    """The pieces of ``plan`` only its character plays (all but segments): its body action's."""
-    return [n for n, p in enumerate(plan.pieces) if p.kind != "segment"]
-
-
 def write_units(obj, skel):
     """(rotation modes, world scale) of the armature ``obj`` playing ``skel``: what
     :func:`body_keys` needs from Blender, read before the fit."""
     return rig_rotation_modes(obj, skel), rig_io.world_scale(obj)
-
-
-def body_keys(skel, world, locked, bounds, own, motions, modes, unit=1.0):
-    """The keys of a character's body action (:func:`_body_action`) fitted, touching no
-    Blender data (a crowd fits the next characters' while one is written): {"frames",
-    "curves", "values", "tol", "rotations", "between", "fitted", "ranges", "scene_keys"}.
-
-    Keyed at the lower of the scene's and the patch's rates, so no piece has more keys
-    than frames played or planned: at the scene's (not above the patch's) from ``world``
-    with the feet already locked (``locked``; these frames then need no foot-lock
-    correction, and no scaled strip plays keys between frames); above the patch's rate from
-    the pieces' own ``motions`` at the patch's, their strips scaled as segments' are.
-    ``ranges``: {piece: (first action frame, strip scale, frames)}."""
-    scene_keys = sum(int(bounds[n + 1] - bounds[n]) for n in own) <= sum(
-        motions[n].frames - 1 for n in own
-    )
-    if scene_keys:
-        rot = world.rotations if locked is None else locked
-        pose = Motion(world.ground, world.root_local, rot, world.contacts)
-        loc, rot = inplace_channels(skel, pose, unit)
-        rows = [np.arange(int(bounds[n]), int(bounds[n + 1]) + 1) for n in own]
-        loc = np.concatenate([loc[r] for r in rows])
-        rot = np.concatenate([rot[r] for r in rows])
-    else:
-        parts = [inplace_channels(skel, motions[n], unit) for n in own]
-        rows = [p[0] for p in parts]
-        loc = np.concatenate(rows)
-        rot = np.concatenate([p[1] for p in parts])
-    ranges, at = {}, 0
-    for n, r in zip(own, rows):
-        span = int(bounds[n + 1] - bounds[n])
-        ranges[n] = (at, 1.0 if scene_keys else span / float(max(len(r) - 1, 1)), len(r))
-        at += len(r)
-    frames = np.arange(len(loc), dtype=float)
-    rot = quat.make_continuous(rot, axis=0)
-    curves, values, tol, groups = act_io.pose_curves(
-        skel, loc, rot, modes, _in_units(act_io.COMPACT, unit)
-    )
-    # keyed on the scene's frames, its strips unscaled play nothing between them
-    between = not scene_keys
-    return {
-        "frames": frames,
-        "curves": curves,
-        "values": values,
-        "tol": tol,
-        "rotations": groups,
-        "between": between,
-        "fitted": act_io.fit_curves(frames, curves, tol, values, groups, between),
-        "ranges": ranges,
-        "scene_keys": scene_keys,
-    }
 
 
 def _body_action(obj, keys):
@@ -546,25 +409,6 @@ def _body_action(obj, keys):
         fitted=keys["fitted"],
     )
     return action, slot, keys["ranges"], keys["scene_keys"]
-
-
-FINER = 16.0  # the root's and foot lock's angle tolerance is this much finer (lengths: 4)
-# How much the root's and foot lock's error may change from one scene frame to the next, as
-# a fraction of their tolerance: a planted foot moves with it. Any change within the
-# tolerance made planted feet slide 3.13 cm/s in a 60 fps scene, 2.35 with half of it (2.34
-# with the keys before their slopes were fitted; bench_files' crowd of three at 30/60).
-STEADY = 0.5
-
-
-def _finer(tol):
-    """A finer ``tol`` for the root and foot-lock curves: each of their channels is judged
-    alone (a quaternion turns by up to four component errors), the heading turns the whole
-    body, the ground track carries a planted foot with the hips and the foot lock holds it
-    (at a quarter of the angle the feet drifted 2 mm from the plan; at a sixteenth 0.5 mm,
-    bench_files), and steady from frame to frame (:data:`STEADY`); few curves."""
-    if isinstance(tol, act_io.Tolerance):
-        return act_io.Tolerance(tol.angle / FINER, tol.length / 4.0, STEADY)
-    return tol
 
 
 def _played_frames(played, n_frames):
@@ -654,13 +498,6 @@ def foot_lock_curves(obj, skel, world, locked, frame_start, modes=None, played=(
     return frames, curves, values, int(frame_start)
 
 
-def fit_foot_lock(lock):
-    """The keys of a foot lock (:func:`foot_lock_curves`) fitted, touching no Blender data
-    (a crowd fits one while the next character is written)."""
-    frames, curves, values, _ = lock
-    return act_io.fit_curves(frames, curves, _finer(act_io.COMPACT), values, between=False)
-
-
 def write_foot_lock(obj, lock, fitted=None):
     """The foot lock :func:`foot_lock_curves` made, as its Add strip on a track above the
     character's others (``fitted``: :func:`fit_foot_lock` of it, made already)."""
@@ -672,7 +509,7 @@ def write_foot_lock(obj, lock, fitted=None):
         slot,
         frames,
         curves,
-        _finer(act_io.COMPACT),
+        finer(act_io.COMPACT),
         values=values,
         between=False,
         fitted=fitted,

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterable
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from functools import partial
 from typing import Any
@@ -14,12 +13,13 @@ from typing import Any
 import bpy
 import numpy as np
 
+from ..adapter import actions as act_io
 from ..adapter import moving as moving_io
 from ..adapter import nla, transaction
 from ..adapter import scene as scene_io
 from ..motion_patches import cluster
 from ..motion_patches.crowd import crowd, members
-from ..motion_patches.kinematics import scene_rate
+from ..motion_patches.kinematics import rig_keys, scene_rate
 from ..motion_patches.planning import moving_props
 from ..motion_patches.planning.settings import PlanSettings
 from ..motion_patches.props.environment import Obstacle
@@ -50,7 +50,7 @@ from .solve import (
     _without,
     _writable,
 )
-from .writing import FRAME_RANGE_KEY, _fit_frame_range, _placed, _prepared, _write
+from .writing import FRAME_RANGE_KEY, _fit_frame_range, _placed, _prepared_args, _write
 
 CROWD_RESOLVE_SLACK = 0.05  # metres the crowd is resolved wider than its spacing (see plan_crowd)
 CROWD_SPOT = "\x00crowd spot "  # obstacle names of other characters' standing spots
@@ -591,11 +591,12 @@ def _moving_conflicts(c, planned, schedules):
     return out
 
 
-AHEAD = 4  # characters whose writes are prepared while one is written
-# One thread prepares them: the main thread, writing through Blender, needs the GIL most of
-# the time; a second preparing thread slowed it more than it gained (bench_blender, 200
-# characters on 2 cores: writing 6.0 s with one, 7.4 s with two or three).
-FITTERS = 1
+AHEAD = 4  # characters whose writes are prepared while one is written (per worker: 2)
+# In process, one thread prepares them (cluster.InProcess.pool): the main thread, writing
+# through Blender, needs the GIL most of the time; a second preparing thread slowed it more
+# than it gained (bench_blender, 200 characters on 2 cores: writing 6.0 s with one, 7.4 s
+# with two or three). On a cluster its workers prepare them.
+AHEAD_PER_WORKER = 8
 
 
 def _write_all(c, planned, schedules, progress=None):
@@ -604,9 +605,10 @@ def _write_all(c, planned, schedules, progress=None):
     between two characters, those written are put back.
 
     What a write computes before it touches Blender (the foot lock, the body and root
-    actions' keys: :func:`_prepared`) is made for the next characters in a thread while one
-    is written, and so are the foot-lock strips' keys (they need the motion strips below
-    them written): those strips are written last. Blender's data is only touched here, in
+    actions' keys: :func:`~motion_patches.kinematics.rig_keys.prepare`) is made for the next
+    characters while one is written, on ``c.executor``'s workers (in process: in a thread),
+    and so are the foot-lock strips' keys (they need the motion strips below them
+    written): those strips are written last. Blender's data is only touched here, in
     order."""
     written = {}
     for (n, plan, _, placed, _), s in zip(planned, schedules):
@@ -618,27 +620,27 @@ def _write_all(c, planned, schedules, progress=None):
         (PLAN_KEY, ANALYSIS_KEY, FRAME_RANGE_KEY),
     ):
         segments = nla.segment_index(bpy)  # the shared segment actions, found once
-        pool = ThreadPoolExecutor(max_workers=FITTERS)
+        pool = c.executor.pool()
         ahead, locks = {}, []  # locks: (character, foot lock, its fit) written last
+        depth = max(AHEAD, AHEAD_PER_WORKER * c.executor.workers)
 
         def prepare(k):
             n, plan, _, placed, _ = planned[k]
             rig = c.rigs[n]
             skel = rig.target if rig is not None else c.patch.gait.skeleton
-            ob = c.pairs[n][0]
-            units, root_units = nla.write_units(ob, skel), nla.root_units(ob)  # Blender's data
-            ahead[k] = pool.submit(
-                _prepared, skel, placed, c.settings, c.fps, plan, units, root_units
-            )
+            args = _prepared_args(c.pairs[n][0], skel, placed, c.settings, c.fps, plan)
+            ahead[k] = pool.submit(rig_keys.prepare_packed, *args)
 
         try:
-            for k in range(min(AHEAD, len(planned))):
+            for k in range(min(depth, len(planned))):
                 prepare(k)
             for k, ((n, plan, _, placed, _), s) in enumerate(zip(planned, schedules)):
                 check_cancelled(c.cancelled, CANCELLED)
-                prepared = ahead.pop(k).result()
-                if k + AHEAD < len(planned):
-                    prepare(k + AHEAD)
+                rig = c.rigs[n]
+                skel = rig.target if rig is not None else c.patch.gait.skeleton
+                prepared = rig_keys.unpack(ahead.pop(k).result(), skel, placed[2])
+                if k + depth < len(planned):
+                    prepare(k + depth)
                 env = _world_of(c, c.sizes[n]).env
                 with _without(env, c.own[n]):  # the plan record lists what it walked around
                     written[n], lock = _write(
@@ -658,7 +660,13 @@ def _write_all(c, planned, schedules, progress=None):
                         lock_later=True,
                     )
                 if lock is not None:  # fitted while the next ones are written
-                    locks.append((c.pairs[n][0], lock, pool.submit(nla.fit_foot_lock, lock)))
+                    locks.append(
+                        (
+                            c.pairs[n][0],
+                            lock,
+                            pool.submit(rig_keys.fit_foot_lock, lock, act_io.COMPACT),
+                        )
+                    )
                 if progress is not None:
                     progress(0.9 + 0.08 * (k + 1) / len(planned))
             for k, (ob, lock, fitted) in enumerate(locks):

@@ -9,10 +9,10 @@ from collections.abc import Iterable, Sequence
 import bpy
 import numpy as np
 
+from ..adapter import actions as act_io
 from ..adapter import nla, storage
-from ..motion_patches.kinematics import contacts, foot_lock, scene_rate
+from ..motion_patches.kinematics import contacts, rig_keys, scene_rate
 from ..motion_patches.kinematics.inplace import root_positions
-from ..motion_patches.kinematics.motion import Motion
 from ..motion_patches.planning import transitions
 from ..motion_patches.planning.settings import PlanSettings
 from .common import _shrunk, _size, path_length, scene_fps
@@ -60,28 +60,13 @@ def _fit_frame_range(scene):
         scene[FRAME_RANGE_KEY] = [start, end]
 
 
-def _prepared(skel, placed, settings: PlanSettings, fps, plan, units, root_units):
-    """What writing a plan computes before it touches Blender (a crowd makes the next
-    characters' while one is written): (the motion on the scene's frames with the
-    contacts that hold, its rotations with the feet locked or None, the body action's
-    fitted keys, :func:`nla.body_keys`, or None; the root action's, :func:`nla.root_keys`).
-    ``placed``: :func:`_placed`; ``fps``: the scene's rate (the motion's frames); ``units``,
-    ``root_units``: :func:`nla.write_units`, :func:`nla.root_units` of the character."""
-    motions, bounds, world = placed
-    # Feet moving fast while labelled planted (through a blend) are not planted: neither
-    # pinned nor measured as skating (foot_lock.still_contacts). Both read the motion as
-    # the character plays it: on its own rig (``skel``), at the scene's rate.
-    posed = foot_lock.pose_legs(skel, world)
-    world = Motion(
-        world.ground,
-        world.root_local,
-        world.rotations,
-        foot_lock.still_contacts(skel, world, fps, posed),
-    )
-    locked = foot_lock.lock_feet(skel, world, posed=posed, fps=fps) if settings.foot_lock else None
-    own = nla.own_pieces(plan)
-    body = nla.body_keys(skel, world, locked, bounds, own, motions, *units) if own else None
-    return world, locked, body, nla.root_keys(skel, world, root_units)
+def _prepared_args(character, skel, placed, settings: PlanSettings, fps, plan):
+    """The arguments of :func:`~motion_patches.kinematics.rig_keys.prepare` for one
+    character (what writing its plan computes before it touches Blender): Blender's data
+    it needs (rotation modes, scale, height, tilt) and the storage tolerance, read here,
+    so the rest can run anywhere (a crowd fits its characters' keys on its workers)."""
+    units, root_units = nla.write_units(character, skel), nla.root_units(character)
+    return (skel, placed, bool(settings.foot_lock), fps, plan, units, root_units, act_io.COMPACT)
 
 
 def _walked_round(env, ground, scale, margin):
@@ -128,7 +113,8 @@ def _write(
     ``from_here``: the plan started where the character is now, not where it stood.
     ``segments``: the file's shared segment actions (:func:`nla.segment_index`) when several
     characters are written in a row (a crowd): found once, not once per character.
-    ``prepared``: :func:`_prepared` of this character and plan, made already.
+    ``prepared``: :func:`~motion_patches.kinematics.rig_keys.prepare` of this character
+    and plan, made already.
     ``lock_later``: the foot lock is not written but returned, (result, lock or None), for
     :func:`nla.finish_foot_lock` (a crowd fits it while the next character is written)."""
     stood = _start_matrix(character, from_here)  # read before the record is replaced
@@ -137,8 +123,9 @@ def _write(
     skel = rig.target if rig is not None else patch.gait.skeleton
     motions, bounds, _ = placed
     if prepared is None:
-        units, root_units = nla.write_units(character, skel), nla.root_units(character)
-        prepared = _prepared(skel, placed, settings, scene_fps(scene), plan, units, root_units)
+        prepared = rig_keys.prepare(
+            *_prepared_args(character, skel, placed, settings, scene_fps(scene), plan)
+        )
     world, locked, body, root = prepared
     strips, stashed, *lock = nla.write_plan(
         bpy,

@@ -24,8 +24,10 @@ import pickle
 import tempfile
 import threading
 import uuid
+import weakref
 import zipfile
 from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -85,6 +87,12 @@ class InProcess:
             if progress is not None:
                 progress(len(out) / len(items))
         return out
+
+    def pool(self) -> "ThreadPoolExecutor":
+        """Tasks submitted one at a time (``submit(fn, *args)``, a future's ``result()``) and
+        run beside the caller: here in one thread (numpy work holds the GIL often: more
+        threads slowed a crowd's writing, which needs it too). ``shutdown()`` when done."""
+        return ThreadPoolExecutor(max_workers=1)
 
     def close(self) -> None:
         pass
@@ -210,6 +218,12 @@ class DaskCluster:
             out.extend(part)
         return out
 
+    def pool(self) -> "_DaskPool":
+        """Tasks submitted one at a time (``submit(fn, *args)``, a future's ``result()``),
+        run on the workers while the caller goes on: a crowd's keys are fitted there while
+        Blender writes the characters before. ``shutdown()`` when done."""
+        return _DaskPool(self.client)
+
     def close(self) -> None:
         self.client.close()
         if self.cluster is not None:
@@ -221,6 +235,28 @@ class DaskCluster:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+class _DaskPool:
+    """Tasks submitted one by one to a Dask client (:meth:`DaskCluster.pool`). Their futures
+    are only looked after weakly (a result stays on its worker while a future holds it):
+    those the caller still holds unfinished are cancelled at :meth:`shutdown`."""
+
+    def __init__(self, client: Any) -> None:
+        self.client = client
+        self.futures: weakref.WeakSet = weakref.WeakSet()
+
+    def submit(self, fn: Callable, *args: Any) -> Any:
+        f = self.client.submit(fn, *args, pure=False)
+        self.futures.add(f)
+        return f
+
+    def shutdown(self, wait: bool = True, cancel_futures: bool = False) -> None:
+        if cancel_futures:
+            pending = [f for f in self.futures if not f.done()]
+            if pending:
+                self.client.cancel(pending)
+        self.futures = weakref.WeakSet()
 
 
 def executor(workers: int | None = None, scheduler: str | None = None) -> "InProcess | DaskCluster":

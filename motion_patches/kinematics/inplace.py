@@ -40,7 +40,9 @@ def _root_rest(skel):
     return quat.from_matrix(skel.rest[skel.root, :3, :3])
 
 
-def root_channel_to_ground(skel: Skeleton, root_rot: np.ndarray, heading: np.ndarray) -> np.ndarray:
+def root_channel_to_ground(
+    skel: Skeleton, root_rot: np.ndarray, heading: float | np.ndarray
+) -> np.ndarray:
     """Root rotation channels relative to a ground frame turned by ``heading``."""
     q_rest = _root_rest(skel)
     # basis' = rest^-1 * Rz(-heading) * rest * basis; the turn before the basis is made

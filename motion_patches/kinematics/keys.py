@@ -15,6 +15,7 @@ channel is stored the cheapest way that plays back the same values:
 so the choice changes the file, not the motion.
 """
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -423,7 +424,7 @@ class _Intervals:
 def cubic_keys(
     values: ArrayLike,
     tol: ArrayLike,
-    rotations: tuple = (),
+    rotations: Sequence = (),
     between: bool = True,
     give_up_at: int | None = None,
     pull: float = PULL,

@@ -669,11 +669,13 @@ def test_crowd_plans_everyone_and_keeps_them_apart(cli, capsys, crossing, tmp_pa
 def test_crowd_on_a_local_dask_cluster_plans_what_it_plans_in_process(
     cli, capsys, crossing, tmp_path
 ):
-    """--workers 2: the members' paths are planned on a Dask LocalCluster of two worker
-    processes (no Blender in them); the written crowd is the same as planned in process:
-    the same strips, frames and costs, and through the depsgraph the same root motion."""
+    """--workers 2: the members' paths are planned, and the characters' keys fitted, on a
+    Dask LocalCluster of two worker processes (no Blender in them); the written crowd is
+    the same as planned in process: the same strips, frames and costs, and through the
+    depsgraph the same root motion and every bone's rotation, to the bit."""
     pairs = ["--pair", "East", "EastGoal", "--pair", "North", "NorthGoal"]
-    docs, roots = [], []
+    names = ["East", "North"]
+    docs, roots, bones = [], [], []
     for extra in ([], ["--workers", "2"]):
         out = tmp_path / f"crowd{len(docs)}.blend"
         code, doc, err = call_json(
@@ -696,6 +698,10 @@ def test_crowd_on_a_local_dask_cluster_plans_what_it_plans_in_process(
         open_blend(out)
         end = max(p["frame_end"] for p in doc["planned"])
         roots.append(evaluated_roots(cli, ["East", "North"], range(1, end + 1)))
+        sample = cli.api.evaluate.sample_armature
+        bones.append(
+            [sample(bpy.context, bpy.data.objects[n], range(1, end + 1), [])[2] for n in names]
+        )
     assert docs[1]["workers"] == 2 and docs[0]["workers"] is None
 
     def plans(doc):
@@ -705,6 +711,8 @@ def test_crowd_on_a_local_dask_cluster_plans_what_it_plans_in_process(
     assert plans(docs[0]) == plans(docs[1])
     assert docs[0]["delays_frames"] == docs[1]["delays_frames"]
     assert np.array_equal(roots[0], roots[1])
+    for here, there in zip(*bones):  # every pose bone's rotation on every frame
+        assert here.shape[1] > 20 and np.array_equal(here, there)
 
 
 def test_crowd_interrupted_exits_130_and_saves_nothing(

@@ -13,6 +13,7 @@ import pytest
 
 from motion_patches import cluster
 from motion_patches.crowd import members
+from motion_patches.kinematics import keys
 from motion_patches.planning import body_clearance
 from motion_patches.planning.settings import PlanSettings
 from motion_patches.props.environment import Environment, Obstacle
@@ -174,7 +175,28 @@ def test_a_local_cluster_plans_the_same_members(crossing12, in_process, workers)
     with cluster.DaskCluster(workers=workers) as ex:
         assert ex.workers == workers
         got = ex.map(members.plan_member, tasks, world=world)
+        fitted = _fitted_in(ex)
     assert fingerprint(got) == in_process
+    _same_fits(fitted, _fitted_in(cluster.InProcess()))
+
+
+def _fitted_in(ex):
+    """Cubic keys of three curves fitted in ``ex``'s pool (what a crowd's writing sends
+    there, a character at a time), several asked for before the first answer is taken."""
+    values = np.cumsum(np.random.default_rng(3).normal(size=(90, 3)), axis=0)
+    pool = ex.pool()
+    try:
+        futures = [pool.submit(keys.cubic_keys, values * s, 0.05) for s in (1.0, 2.0, 3.0)]
+        return [f.result() for f in futures]
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _same_fits(a, b):
+    assert len(a) == len(b) == 3
+    for x, y in zip(a, b):
+        assert x.keys() == y.keys() and x["keep"].sum() > 2
+        assert all(np.array_equal(x[k], y[k]) for k in x)
 
 
 def _wait_for(path, timeout=60.0):
