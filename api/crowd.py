@@ -196,7 +196,7 @@ def plan_crowd(
     # what is reported is checked on the motion written, whatever resolved it
     ranked = sorted(range(len(planned)), key=lambda k: schedules[k].rank)  # order kept
     conflicts = crowd.conflicts_of(
-        [_root_track(planned[k][3]) for k in ranked],
+        [planned[k][3] for k in ranked],
         [schedules[k].delay for k in ranked],
         c.spacing,
     )
@@ -482,14 +482,18 @@ def _task(c, n, ghosts=()):
 
 
 def _entry(c, member):
-    """[n, plan, raw piece motions, placed motion, holdable frames] of a member."""
+    """[n, plan, piece motions (:func:`members.packed`), root track, holdable frames] of a
+    member: the root track (:func:`_root_track` of its placed motion) is all the crowd's
+    resolution reads; the motion is placed on the character again when written
+    (:func:`_write_all`), so a crowd of 1,000 does not hold every member's placed motion
+    (~0.8 MB each) until then."""
     m = member
-    raw = members.unpacked(m.raw)
-    return [m.entry, m.plan, raw, _placed(c.scene, c.patch, c.rigs[m.entry], raw), m.holdable]
+    track = _root_track(_placed(c.scene, c.patch, c.rigs[m.entry], members.unpacked(m.raw)))
+    return [m.entry, m.plan, m.raw, track, m.holdable]
 
 
 def _plan_each(c, progress):
-    """(planned: [[n, plan, raw, placed, holdable]] in priority order, failed: [(name,
+    """(planned: [[n, plan, raw, root track, holdable]] in priority order, failed: [(name,
     why)]): each entry planned round the others' standing spots, on ``c.executor``."""
     tasks = [_task(c, n) for n in c.order]
     answers = {}
@@ -528,7 +532,7 @@ def _replan(c, versions, k, ghosts):
     if isinstance(a, members.NoPlan):
         return None
     versions[k].append(_entry(c, a))
-    return _root_track(versions[k][-1][3]), versions[k][-1][4]
+    return versions[k][-1][3], versions[k][-1][4]
 
 
 def _resolve(c, planned):
@@ -538,7 +542,7 @@ def _resolve(c, planned):
     # Resolved a little wider than reported: a hold is laid into the written motion by a time
     # warp, which may bring a pair a few millimetres nearer than the track the table saw.
     schedules, _ = crowd.resolve(
-        [_root_track(p[3]) for p in planned],
+        [p[3] for p in planned],
         partial(_replan, c, versions),
         c.spacing + CROWD_RESOLVE_SLACK,
         c.settings.radius,
@@ -557,13 +561,14 @@ def _lay_holds(c, planned, schedules):
     holds = {}
     for p, s in zip(planned, schedules):
         if s.holds:
+            p[2] = members.unpacked(p[2])
             at = []
             for k, h in s.holds:
                 rate = c.fps / c.patch.gait.fps  # scene frames per patch frame
                 bounds = scene_rate.piece_bounds([m.frames for m in p[2]], rate)[1]
                 p[1], p[2] = _with_hold(p[1], p[2], bounds, k, h, c.ramp, rate)
                 at = [(f + h + c.ramp if f > k else f, n) for f, n in at] + [(k, h)]
-            p[3] = _placed(c.scene, c.patch, c.rigs[p[0]], p[2])
+            p[3] = _root_track(_placed(c.scene, c.patch, c.rigs[p[0]], p[2]))
             holds[c.pairs[p[0]][0].name] = sorted(at)
     return holds
 
@@ -578,7 +583,7 @@ def _moving_conflicts(c, planned, schedules):
             continue
         wait = s.delay / c.fps
         for x in moving_props.conflicts(
-            p[2], w.tracks, w.planner.world_env.radius, c.patch.gait.fps, wait
+            members.unpacked(p[2]), w.tracks, w.planner.world_env.radius, c.patch.gait.fps, wait
         ):
             out.append(
                 {
@@ -611,8 +616,8 @@ def _write_all(c, planned, schedules, progress=None):
     written): those strips are written last. Blender's data is only touched here, in
     order."""
     written = {}
-    for (n, plan, _, placed, _), s in zip(planned, schedules):
-        _writable(c.pairs[n][0], c.first + s.delay, placed[2].frames)
+    for (n, _, _, track, _), s in zip(planned, schedules):
+        _writable(c.pairs[n][0], c.first + s.delay, len(track))
     with transaction.kept(
         bpy,
         c.scene,
@@ -625,20 +630,22 @@ def _write_all(c, planned, schedules, progress=None):
         depth = max(AHEAD, AHEAD_PER_WORKER * c.executor.workers)
 
         def prepare(k):
-            n, plan, _, placed, _ = planned[k]
+            n, plan, raw, _, _ = planned[k]
             rig = c.rigs[n]
             skel = rig.target if rig is not None else c.patch.gait.skeleton
+            placed = _placed(c.scene, c.patch, rig, members.unpacked(raw))
             args = _prepared_args(c.pairs[n][0], skel, placed, c.settings, c.fps, plan)
-            ahead[k] = pool.submit(rig_keys.prepare_packed, *args)
+            ahead[k] = (placed, pool.submit(rig_keys.prepare_packed, *args))
 
         try:
             for k in range(min(depth, len(planned))):
                 prepare(k)
-            for k, ((n, plan, _, placed, _), s) in enumerate(zip(planned, schedules)):
+            for k, ((n, plan, *_), s) in enumerate(zip(planned, schedules)):
                 check_cancelled(c.cancelled, CANCELLED)
                 rig = c.rigs[n]
                 skel = rig.target if rig is not None else c.patch.gait.skeleton
-                prepared = rig_keys.unpack(ahead.pop(k).result(), skel, placed[2])
+                placed, packed = ahead.pop(k)
+                prepared = rig_keys.unpack(packed.result(), skel, placed[2])
                 if k + depth < len(planned):
                     prepare(k + depth)
                 env = _world_of(c, c.sizes[n]).env
@@ -659,6 +666,9 @@ def _write_all(c, planned, schedules, progress=None):
                         prepared=prepared,
                         lock_later=True,
                     )
+                # written: its motions are let go, not held to the end beside the actions
+                # Blender makes of them
+                planned[k][2] = placed = prepared = None
                 if lock is not None:  # fitted while the next ones are written
                     locks.append(
                         (

