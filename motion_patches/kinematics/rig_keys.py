@@ -240,7 +240,7 @@ def prepare(
 def prepare_packed(*args: Any) -> tuple:
     """:func:`prepare` as a worker sends it back (:func:`unpack`): what the writer has
     already (the motion's rotations, the bones the lock leaves alone, what the keys leave
-    between them) left out, a quarter of the bytes."""
+    between them) left out: about a third of the bytes."""
     world, locked, body, root = prepare(*args)
     skel = args[0]
     legs = None if locked is None else locked[:, foot_lock.locked_bones(skel)]

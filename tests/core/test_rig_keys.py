@@ -1,0 +1,110 @@
+"""The keys of a planned character fitted without Blender (kinematics/rig_keys.py): what a
+crowd's Dask worker sends back (packed) gives the writer the very arrays it reads, and the
+channels of every rotation mode turn back into the rotations they were made from."""
+
+import pickle
+
+import numpy as np
+import pytest
+from test_cluster import crossing
+
+from motion_patches.crowd import members
+from motion_patches.kinematics import channels, foot_lock, keys, quat, rig_keys, scene_rate
+from motion_patches.kinematics.pose_keys import Tolerance
+
+MODES = ["QUATERNION", "AXIS_ANGLE", *channels.EULER_ORDERS]
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_channels_of_every_mode_play_the_rotations_back_continuously(mode):
+    """A bone turning through several whole turns about a wandering axis: its channels
+    give the same rotations back, and no channel jumps by a turn, a quaternion's sign, the
+    other Euler solution or an axis's sign from frame to frame (each a jump of pi or more;
+    Euler angles near gimbal lock and the axis leaving the rest one may move fast)."""
+    t = np.linspace(0.0, 1.0, 400)
+    axis = np.stack((np.cos(3 * t), np.sin(5 * t), 0.5 + t), axis=1)
+    axis /= np.linalg.norm(axis, axis=1, keepdims=True)
+    angle = 5.0 * np.pi * t
+    q = np.concatenate((np.cos(angle / 2)[:, None], np.sin(angle / 2)[:, None] * axis), 1)
+    ch = channels.rotation_channels(q, mode)
+    back = channels.channels_to_quat(ch, mode)
+    assert np.abs(np.abs(np.sum(back * q, axis=1)) - 1.0).max() < 1e-12
+    assert np.abs(np.diff(ch, axis=0)).max() < 1.5  # radians (or quaternion units) a frame
+
+
+@pytest.fixture(scope="module")
+def planned(walk_patch):
+    """Three members of the small crossing, planned and placed at 24 fps, as a crowd holds
+    them before they are written."""
+    world, tasks = crossing(walk_patch)
+    out = []
+    for task in tasks[:3]:
+        m = members.plan_member(task, world)
+        assert isinstance(m, members.Member), m
+        placed = scene_rate.placed(walk_patch, None, members.unpacked(m.raw), 24.0)
+        out.append((m.plan, placed))
+    return out
+
+
+def test_a_workers_packed_answer_unpacks_to_what_the_writer_reads(walk_patch, planned):
+    """prepare_packed, through pickle as a worker sends it, then unpack: the same motion and
+    contacts, the same locked legs, the same root keys and the body keys on every kept frame
+    as prepare in process; and under half the bytes."""
+    skel = walk_patch.gait.skeleton
+    modes = {name: "XYZ" for name in skel.names[::3]}  # some bones keyed as Euler angles
+    legs = foot_lock.locked_bones(skel)
+    for plan, placed in planned:
+        args = (skel, placed, True, 24.0, plan, (modes, 1.0), (0.0, "XYZ", None), Tolerance())
+        here = rig_keys.prepare(*args)
+        packed = pickle.dumps(rig_keys.prepare_packed(*args), protocol=pickle.HIGHEST_PROTOCOL)
+        assert len(packed) < 0.5 * len(pickle.dumps(here, protocol=pickle.HIGHEST_PROTOCOL))
+        there = rig_keys.unpack(pickle.loads(packed), skel, placed[2])
+        for k in ("ground", "root_local", "rotations", "contacts"):
+            assert np.array_equal(getattr(here[0], k), getattr(there[0], k))
+        assert np.array_equal(here[1][:, legs], there[1][:, legs])
+        assert not np.array_equal(here[1][:, legs], placed[2].rotations[:, legs])  # locked
+        root_here, root_there = here[3]["curves"], there[3]["curves"]
+        assert [c[:3] for c in root_here] == [c[:3] for c in root_there]
+        assert all(np.array_equal(a[3], b[3]) for a, b in zip(root_here, root_there))
+        assert all(
+            np.array_equal(here[3]["fitted"][k], there[3]["fitted"][k])
+            for k in "keep values slopes slopes_in".split()
+        )
+        body_here, body_there = here[2], there[2]
+        keep = body_here["fitted"]["keep"]
+        assert keep.any() and np.array_equal(keep, body_there["fitted"]["keep"])
+        for k in ("values", "slopes", "slopes_in"):
+            assert np.array_equal(body_here["fitted"][k][keep], body_there["fitted"][k][keep])
+        assert np.array_equal(body_here["values"], body_there["values"])
+        assert body_here["ranges"] == body_there["ranges"]
+
+
+def test_the_body_keys_stay_within_their_tolerance(walk_patch, planned):
+    """Every bone the body keys play (Hermite cubics between kept frames) within the
+    tolerance its rotation is judged by (the legs finer), on every frame."""
+    skel = walk_patch.gait.skeleton
+    plan, placed = planned[0]
+    tol = Tolerance()
+    _, locked, body, _ = rig_keys.prepare(
+        skel, placed, True, 24.0, plan, ({}, 1.0), (0.0, "XYZ", None), tol
+    )
+    fit, values = body["fitted"], body["values"]
+    frames = np.arange(values.shape[0], dtype=float)
+    played = np.empty_like(values)
+    for c in range(values.shape[1]):
+        if fit["constant"][c]:
+            played[:, c] = fit["value"][c]
+            continue
+        if fit["gave_up"][c]:
+            played[:, c] = values[:, c]
+            continue
+        k = np.flatnonzero(fit["keep"][:, c])
+        played[:, c] = keys.hermite(
+            k, fit["values"][k, c], fit["slopes"][k, c], frames, fit["slopes_in"][k, c]
+        )
+    for group in body["rotations"]:
+        for cols in group.columns:
+            q_plan = quat.normalize(values[:, cols])
+            q_play = quat.normalize(played[:, cols])
+            turn = 2.0 * np.arccos(np.clip(np.abs(np.sum(q_plan * q_play, axis=1)), 0.0, 1.0))
+            assert turn.max() <= group.angle * (1.0 + 1e-6), np.degrees(turn.max())
