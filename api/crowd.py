@@ -596,11 +596,12 @@ def _moving_conflicts(c, planned, schedules):
     return out
 
 
-AHEAD = 4  # characters whose writes are prepared while one is written (per worker: 2)
-# In process, one thread prepares them (cluster.InProcess.pool): the main thread, writing
+AHEAD = 4  # characters whose writes are prepared while one is written, in process
+# In process one thread prepares them (cluster.InProcess.pool): the main thread, writing
 # through Blender, needs the GIL most of the time; a second preparing thread slowed it more
 # than it gained (bench_blender, 200 characters on 2 cores: writing 6.0 s with one, 7.4 s
-# with two or three). On a cluster its workers prepare them.
+# with two or three). On a cluster its workers prepare them, this many each ahead (their
+# answers come back over the network; 4 each wrote the plaza of 1,000 about a second slower).
 AHEAD_PER_WORKER = 8
 
 
@@ -635,16 +636,14 @@ def _write_all(c, planned, schedules, progress=None):
             skel = rig.target if rig is not None else c.patch.gait.skeleton
             placed = _placed(c.scene, c.patch, rig, members.unpacked(raw))
             args = _prepared_args(c.pairs[n][0], skel, placed, c.settings, c.fps, plan)
-            ahead[k] = (placed, pool.submit(rig_keys.prepare_packed, *args))
+            ahead[k] = (skel, placed, pool.submit(rig_keys.prepare_packed, *args))
 
         try:
             for k in range(min(depth, len(planned))):
                 prepare(k)
             for k, ((n, plan, *_), s) in enumerate(zip(planned, schedules)):
                 check_cancelled(c.cancelled, CANCELLED)
-                rig = c.rigs[n]
-                skel = rig.target if rig is not None else c.patch.gait.skeleton
-                placed, packed = ahead.pop(k)
+                skel, placed, packed = ahead.pop(k)
                 prepared = rig_keys.unpack(packed.result(), skel, placed[2])
                 if k + depth < len(planned):
                     prepare(k + depth)

@@ -385,20 +385,26 @@ def blender_floor(bpy, addon, source, chars):
     return replay(True), replay(False)
 
 
+class _Timed(list):
+    cpu = 0.0
+
+
 @contextlib.contextmanager
 def crowd_writes_timed(api):
     """A list filled with the seconds of each crowd's writes (``api.crowd._write_all``,
     what ``plan_crowd`` calls: the writes, with what is prepared for them meanwhile) made
-    inside the ``with``."""
-    writes = []
+    inside the ``with``; its ``cpu``: this process's CPU seconds in them (all its threads,
+    not the Dask workers')."""
+    writes = _Timed()
     write = api.crowd._write_all
 
     def timed_write(*a, **kw):
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         try:
             return write(*a, **kw)
         finally:
             writes.append(time.perf_counter() - t)
+            writes.cpu += time.process_time() - c
 
     api.crowd._write_all = timed_write
     try:
