@@ -29,8 +29,6 @@ from ..motion_patches.kinematics.channels import (  # noqa: F401 (the adapter's 
 )
 from ..motion_patches.kinematics.clip import Clip
 from ..motion_patches.kinematics.pose_keys import (  # noqa: F401
-    LEG_FINER,
-    ROOT_FINER,
     Tolerance,
     fit_curves,
     pose_curves,

@@ -19,12 +19,9 @@ import numpy as np
 
 from ..motion_patches.kinematics import foot_lock
 from ..motion_patches.kinematics.rig_keys import (  # noqa: F401 (the adapter's names for them)
-    FINER,
-    STEADY,
     body_keys,
     facing_angle,
     finer,
-    fit_foot_lock,
     in_units,
     inplace_channels,
     own_pieces,
@@ -266,7 +263,8 @@ def write_plan(
     :func:`write_units`); ``root``: :func:`root_keys` of it, fitted already.
     ``lock_later``: the foot lock's curves are returned too, (strips, stashed, lock or None),
     not written: a crowd fits them while the next character is written and writes them
-    after (:func:`fit_foot_lock`, :func:`finish_foot_lock`)."""
+    after (:func:`~motion_patches.kinematics.rig_keys.fit_foot_lock`,
+    :func:`finish_foot_lock`)."""
     skel = rig.target if rig is not None else patch.gait.skeleton
     modes, unit = write_units(obj, skel)
     if bounds is None:
@@ -500,7 +498,8 @@ def foot_lock_curves(obj, skel, world, locked, frame_start, modes=None, played=(
 
 def write_foot_lock(obj, lock, fitted=None):
     """The foot lock :func:`foot_lock_curves` made, as its Add strip on a track above the
-    character's others (``fitted``: :func:`fit_foot_lock` of it, made already)."""
+    character's others (``fitted``: its keys fitted already,
+    :func:`~motion_patches.kinematics.rig_keys.fit_foot_lock`)."""
     frames, curves, values, frame_start = lock
     action, slot = compat.new_action(f"MP {obj.name} foot lock")
     action[CHARACTER_KEY] = obj.name

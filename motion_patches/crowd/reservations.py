@@ -58,9 +58,13 @@ class _Sorted:
             living = self._alive[both["stamp"]]
             if not living.all():  # the dead left out
                 self._dead -= int(living.size - np.count_nonzero(living))
-                both = {c: both[c][living] for c in self._COLUMNS}
-            order = np.argsort(both["key"], kind="stable")
-            self.runs.append({c: both[c][order] for c in self._COLUMNS})
+                both = self._rows(both, living)
+            self.runs.append(self._rows(both, np.argsort(both["key"], kind="stable")))
+
+    @classmethod
+    def _rows(cls, run, which):
+        """``run`` with every column taken at ``which`` (a mask or an order)."""
+        return {c: run[c][which] for c in cls._COLUMNS}
 
     def remove(self, owner):
         stamps = self._stamp.pop(owner, [])
@@ -74,7 +78,7 @@ class _Sorted:
             for i, run in enumerate(self.runs):
                 living = self._alive[run["stamp"]]
                 if not living.all():
-                    self.runs[i] = {c: run[c][living] for c in self._COLUMNS}
+                    self.runs[i] = self._rows(run, living)
             self.runs = [run for run in self.runs if run["key"].size]
             self._dead = 0
 

@@ -133,7 +133,7 @@ def convex_closest(points: np.ndarray, polygon: np.ndarray) -> tuple[np.ndarray,
     points = np.asarray(points, float)
     poly = np.asarray(polygon, float)
     px, py = points[:, 0], points[:, 1]
-    e = np.concatenate((poly[1:], poly[:1])) - poly
+    e = _next(poly) - poly
     keep = np.einsum("ij,ij->i", e, e) > 1e-18
     if not keep.all():
         poly, e = poly[keep], e[keep]
@@ -146,7 +146,7 @@ def convex_closest(points: np.ndarray, polygon: np.ndarray) -> tuple[np.ndarray,
         return np.linalg.norm(points - q, axis=1), q
     if np.sum(poly[:, 0] * e[:, 1] - poly[:, 1] * e[:, 0]) < 0:  # clockwise: turn it round
         poly = poly[::-1]
-        e = np.concatenate((poly[1:], poly[:1])) - poly
+        e = _next(poly) - poly
     length2 = np.einsum("ij,ij->i", e, e)
     normal = np.column_stack((e[:, 1], -e[:, 0])) / np.sqrt(length2)[:, None]  # outward
     beyond = points @ normal.T - np.einsum("ij,ij->i", normal, poly)[None]  # (N, V)
