@@ -249,7 +249,10 @@ def prepare_packed(*args: Any) -> tuple:
         if fit is not None:
             keep = fit["keep"]
             kept = {k: fit[k][keep] for k in ("values", "slopes", "slopes_in")}
-            body = {**body, "fitted": {**fit, **kept, "sparse": True}}
+            # with fitted keys the values are only read as Blender stores them (a curve kept
+            # as samples), so single precision loses nothing
+            values = np.asarray(body["values"], np.float32)
+            body = {**body, "values": values, "fitted": {**fit, **kept, "sparse": True}}
     return world.contacts, legs, body, root
 
 
@@ -270,5 +273,5 @@ def unpack(packed: tuple, skel: Skeleton, world: Motion) -> tuple:
             full = np.zeros(keep.shape)
             full[keep] = fit[k]
             fit[k] = full
-        body = {**body, "fitted": fit}
+        body = {**body, "values": np.asarray(body["values"], float), "fitted": fit}
     return world, locked, body, root
