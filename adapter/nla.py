@@ -240,7 +240,6 @@ def write_plan(
     segments=None,
     body=None,
     root=None,
-    lock_later=False,
 ):
     """Write a plan's strips and root trajectory on ``obj``; returns strip records.
 
@@ -260,11 +259,7 @@ def write_plan(
     play that patch's shared segment actions, on the one motion track. ``segments``:
     :func:`segment_index` of the file, kept up to date here (one for many writes).
     ``body``: :func:`body_keys` of this plan, fitted already (see :func:`own_pieces`,
-    :func:`write_units`); ``root``: :func:`root_keys` of it, fitted already.
-    ``lock_later``: the foot lock's curves are returned too, (strips, stashed, lock or None),
-    not written: a crowd fits them while the next character is written and writes them
-    after (:func:`~motion_patches.kinematics.rig_keys.fit_foot_lock`,
-    :func:`finish_foot_lock`)."""
+    :func:`write_units`); ``root``: :func:`root_keys` of it, fitted already."""
     skel = rig.target if rig is not None else patch.gait.skeleton
     modes, unit = write_units(obj, skel)
     if bounds is None:
@@ -352,26 +347,14 @@ def write_plan(
     rs.extrapolation = "HOLD"
     rs.blend_in = rs.blend_out = 0.0
     owned = [TRACK_MOTION, TRACK_ROOT]
-    lock = None
     if locked is not None:
-        lock = foot_lock_curves(obj, skel, world, locked, frame_start, modes, played, body)
-        if not lock_later:
-            write_foot_lock(obj, lock)
-            owned.append(TRACK_FOOT)
+        write_foot_lock(
+            obj, foot_lock_curves(obj, skel, world, locked, frame_start, modes, played, body)
+        )
+        owned.append(TRACK_FOOT)
     obj[TRACKS_KEY] = json.dumps(owned)
     _claim_actions(obj, ad, owned)
-    return (strips, stashed, lock) if lock_later else (strips, stashed)
-
-
-def finish_foot_lock(obj, lock, fitted=None):
-    """Write the foot lock a plan written with ``lock_later`` left (:func:`write_plan`) and
-    keep its track and action as the plan's own."""
-    write_foot_lock(obj, lock, fitted)
-    owned = json.loads(obj.get(TRACKS_KEY, "[]")) + [TRACK_FOOT]
-    obj[TRACKS_KEY] = json.dumps(owned)
-    made = json.loads(obj.get(ACTIONS_KEY, "{}"))
-    _claim_actions(obj, obj.animation_data, [TRACK_FOOT])
-    obj[ACTIONS_KEY] = json.dumps({**made, **json.loads(obj[ACTIONS_KEY])})
+    return strips, stashed
 
 
 def root_units(obj):
@@ -496,10 +479,9 @@ def foot_lock_curves(obj, skel, world, locked, frame_start, modes=None, played=(
     return frames, curves, values, int(frame_start)
 
 
-def write_foot_lock(obj, lock, fitted=None):
+def write_foot_lock(obj, lock):
     """The foot lock :func:`foot_lock_curves` made, as its Add strip on a track above the
-    character's others (``fitted``: its keys fitted already,
-    :func:`~motion_patches.kinematics.rig_keys.fit_foot_lock`)."""
+    character's others (its keys fitted finer than the body's: :func:`finer`)."""
     frames, curves, values, frame_start = lock
     action, slot = compat.new_action(f"MP {obj.name} foot lock")
     action[CHARACTER_KEY] = obj.name
@@ -511,7 +493,6 @@ def write_foot_lock(obj, lock, fitted=None):
         finer(act_io.COMPACT),
         values=values,
         between=False,
-        fitted=fitted,
     )
     track = obj.animation_data.nla_tracks.new()
     track.name = TRACK_FOOT

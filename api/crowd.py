@@ -13,7 +13,6 @@ from typing import Any
 import bpy
 import numpy as np
 
-from ..adapter import actions as act_io
 from ..adapter import moving as moving_io
 from ..adapter import nla, transaction
 from ..adapter import scene as scene_io
@@ -604,6 +603,15 @@ AHEAD = 4  # characters whose writes are prepared while one is written, in proce
 # with two or three). On a cluster its workers prepare them, this many each ahead (their
 # answers come back over the network; 4 each wrote the plaza of 1,000 about a second slower).
 AHEAD_PER_WORKER = 8
+# Characters a worker prepares in one task: each task costs Blender's process a few
+# milliseconds of Dask's own work (messages, the answer fetched), beside Blender's.
+BATCH = 4
+
+
+def _skeleton(c, n):
+    """The skeleton entry ``n``'s motion is placed on: its rig's, else the patch's."""
+    rig = c.rigs[n]
+    return rig.target if rig is not None else c.patch.gait.skeleton
 
 
 def _write_all(c, planned, schedules, progress=None):
@@ -612,10 +620,9 @@ def _write_all(c, planned, schedules, progress=None):
     between two characters, those written are put back.
 
     What a write computes before it touches Blender (the foot lock, the body and root
-    actions' keys: :func:`~motion_patches.kinematics.rig_keys.prepare`) is made for the next
-    characters while one is written, on ``c.executor``'s workers (in process: in a thread),
-    and so are the foot-lock strips' keys (they need the motion strips below them
-    written): those strips are written last. Blender's data is only touched here, in
+    actions' keys: :func:`~motion_patches.crowd.members.prepared_keys`) is made for the
+    next characters while one is written, on ``c.executor``'s workers, :data:`BATCH` at a
+    time (in process: in a thread, one at a time). Blender's data is only touched here, in
     order."""
     written = {}
     for (n, _, _, track, _), s in zip(planned, schedules):
@@ -628,29 +635,35 @@ def _write_all(c, planned, schedules, progress=None):
     ):
         segments = nla.segment_index(bpy)  # the shared segment actions, found once
         pool = c.executor.pool()
-        ahead, locks = {}, []  # locks: (character, foot lock, its fit) written last
+        batch = BATCH if c.executor.workers else 1
         depth = max(AHEAD, AHEAD_PER_WORKER * c.executor.workers)
+        shared = pool.share(patch=c.patch)
+        ahead, got = {}, {}  # batches asked for (by first character), answers taken
 
-        def prepare(k):
-            n, plan, raw, _, _ = planned[k]
-            rig = c.rigs[n]
-            skel = rig.target if rig is not None else c.patch.gait.skeleton
-            placed = _placed(c.scene, c.patch, rig, members.unpacked(raw))
-            args = _prepared_args(c.pairs[n][0], skel, placed, c.settings, c.fps, plan)
-            ahead[k] = (skel, placed, pool.submit(rig_keys.prepare_packed, *args))
+        def prepare(first):
+            jobs = []
+            for n, plan, raw, _, _ in planned[first : first + batch]:
+                args = _prepared_args(c.pairs[n][0], _skeleton(c, n), None, c.settings, c.fps, plan)
+                jobs.append((raw, c.rigs[n], args))
+            # each motion is placed where it is prepared (sent the piece motions, a quarter
+            # of the bytes) and again here when written
+            ahead[first] = pool.submit(members.prepared_keys, jobs, c.fps, shared=shared)
 
         try:
-            for k in range(min(depth, len(planned))):
-                prepare(k)
-            for k, ((n, plan, *_), s) in enumerate(zip(planned, schedules)):
+            asked = 0  # characters whose preparation was asked for
+            for k, ((n, plan, raw, *_), s) in enumerate(zip(planned, schedules)):
                 check_cancelled(c.cancelled, CANCELLED)
-                skel, placed, packed = ahead.pop(k)
-                prepared = rig_keys.unpack(packed.result(), skel, placed[2])
-                if k + depth < len(planned):
-                    prepare(k + depth)
+                while asked < min(k + depth, len(planned)) or asked <= k:
+                    prepare(asked)
+                    asked += batch
+                if k % batch == 0:
+                    got = dict(enumerate(ahead.pop(k).result(), k))
+                skel = _skeleton(c, n)
+                placed = _placed(c.scene, c.patch, c.rigs[n], members.unpacked(raw))
+                prepared = rig_keys.unpack(got.pop(k), skel, placed[2])
                 env = _world_of(c, c.sizes[n]).env
                 with _without(env, c.own[n]):  # the plan record lists what it walked around
-                    written[n], lock = _write(
+                    written[n] = _write(
                         c.scene,
                         c.pairs[n][0],
                         c.patch,
@@ -664,26 +677,12 @@ def _write_all(c, planned, schedules, progress=None):
                         fit=False,
                         segments=segments,
                         prepared=prepared,
-                        lock_later=True,
                     )
                 # written: its motions are let go, not held to the end beside the actions
                 # Blender makes of them
                 planned[k][2] = placed = prepared = None
-                if lock is not None:  # fitted while the next ones are written
-                    locks.append(
-                        (
-                            c.pairs[n][0],
-                            lock,
-                            pool.submit(rig_keys.fit_foot_lock, lock, act_io.COMPACT),
-                        )
-                    )
                 if progress is not None:
-                    progress(0.9 + 0.08 * (k + 1) / len(planned))
-            for k, (ob, lock, fitted) in enumerate(locks):
-                check_cancelled(c.cancelled, CANCELLED)
-                nla.finish_foot_lock(ob, lock, fitted.result())
-                if progress is not None:
-                    progress(0.98 + 0.02 * (k + 1) / len(locks))
+                    progress(0.9 + 0.1 * (k + 1) / len(planned))
         finally:
             pool.shutdown(wait=True, cancel_futures=True)
         if written:

@@ -103,7 +103,6 @@ def _write(
     from_here=False,
     segments=None,
     prepared=None,
-    lock_later=False,
 ):
     """NLA strips and the plan record of one planned character (``placed``: its motion,
     :func:`_placed`; ``env``: the planner's world, shrunk by the character's size; ``settings``: the
@@ -114,9 +113,7 @@ def _write(
     ``segments``: the file's shared segment actions (:func:`nla.segment_index`) when several
     characters are written in a row (a crowd): found once, not once per character.
     ``prepared``: :func:`~motion_patches.kinematics.rig_keys.prepare` of this character
-    and plan, made already.
-    ``lock_later``: the foot lock is not written but returned, (result, lock or None), for
-    :func:`nla.finish_foot_lock` (a crowd fits it while the next character is written)."""
+    and plan, made already."""
     stood = _start_matrix(character, from_here)  # read before the record is replaced
     scale = _size(rig)
     goal_state = _shrunk(plan.goal, 1.0 / scale)  # the facing reached when any would do
@@ -127,7 +124,7 @@ def _write(
             *_prepared_args(character, skel, placed, settings, scene_fps(scene), plan)
         )
     world, locked, body, root = prepared
-    strips, stashed, *lock = nla.write_plan(
+    strips, stashed = nla.write_plan(
         bpy,
         character,
         patch,
@@ -143,7 +140,6 @@ def _write(
         segments,
         body,
         root,
-        lock_later,
     )
     root = root_positions(world.ground, world.root_local)  # the hips
     foot = contacts.foot_joints(skel)
@@ -200,4 +196,4 @@ def _write(
         path_length(world.ground),
         tuple(goal_state),
     )
-    return (result, lock[0]) if lock_later else result
+    return result

@@ -66,6 +66,17 @@ def _unpacked(token: str, packed: dict) -> dict:
         return got
 
 
+class _ThreadPool(ThreadPoolExecutor):
+    """:class:`InProcess`'s pool: one thread; inputs shared by its tasks (:meth:`share`)
+    are passed to each as they are."""
+
+    def share(self, **shared: Any) -> dict:
+        return shared
+
+    def submit(self, fn: Callable, /, *args: Any, shared: dict | None = None) -> Any:  # type: ignore[override]
+        return super().submit(fn, *args, **(shared or {}))
+
+
 class InProcess:
     """Runs every task here, in order: the default, and what Blender's window uses."""
 
@@ -88,11 +99,11 @@ class InProcess:
                 progress(len(out) / len(items))
         return out
 
-    def pool(self) -> "ThreadPoolExecutor":
+    def pool(self) -> "_ThreadPool":
         """Tasks submitted one at a time (``submit(fn, *args)``, a future's ``result()``) and
         run beside the caller: here in one thread (numpy work holds the GIL often: more
         threads slowed a crowd's writing, which needs it too). ``shutdown()`` when done."""
-        return ThreadPoolExecutor(max_workers=1)
+        return _ThreadPool(max_workers=1)
 
     def close(self) -> None:
         pass
@@ -169,12 +180,7 @@ class DaskCluster:
         items = list(items)
         if not items:
             return []
-        # Scattered as pickled bytes, unpickled in each worker's own copy: a broadcast is
-        # copied on from worker to worker while tasks already run, and a task filling a
-        # cache in the world (a gait's loops, say) while it was pickled again for the next
-        # worker broke the copy ("dictionary changed size during iteration", 10,000 members).
-        packed = {k: pickle.dumps(v, protocol=pickle.HIGHEST_PROTOCOL) for k, v in shared.items()}
-        scattered = {k: self.client.scatter(v, broadcast=True) for k, v in packed.items()}
+        scattered = _scattered(self.client, shared)
         parts = (
             chunks(len(items), 4 * max(self.workers, 1))
             if chunk is None
@@ -237,6 +243,22 @@ class DaskCluster:
         self.close()
 
 
+def _scattered(client: Any, shared: dict) -> dict:
+    """``shared`` scattered to every worker as pickled bytes, each worker unpickling its
+    own copy (:func:`_unpacked`). A broadcast is copied on from worker to worker while tasks
+    already run, and a task filling a cache in the world (a gait's loops, say) while it was
+    pickled again for the next worker broke the copy ("dictionary changed size during
+    iteration", 10,000 members)."""
+    packed = {k: pickle.dumps(v, protocol=pickle.HIGHEST_PROTOCOL) for k, v in shared.items()}
+    return {k: client.scatter(v, broadcast=True) for k, v in packed.items()}
+
+
+def run_shared(fn: Callable, args: tuple, shared: dict, token: str) -> Any:
+    """``fn(*args, **shared)`` on a worker, the shared inputs unpickled once per worker
+    process (:meth:`_DaskPool.share`)."""
+    return fn(*args, **_unpacked(token, shared))
+
+
 class _DaskPool:
     """Tasks submitted one by one to a Dask client (:meth:`DaskCluster.pool`). Their futures
     are only looked after weakly (a result stays on its worker while a future holds it):
@@ -246,8 +268,17 @@ class _DaskPool:
         self.client = client
         self.futures: weakref.WeakSet = weakref.WeakSet()
 
-    def submit(self, fn: Callable, *args: Any) -> Any:
-        f = self.client.submit(fn, *args, pure=False)
+    def share(self, **shared: Any) -> tuple:
+        """Inputs many tasks read (a crowd's patch), sent to every worker once: pass what
+        this returns as :meth:`submit`'s ``shared``."""
+        return _scattered(self.client, shared), uuid.uuid4().hex[:8]
+
+    def submit(self, fn: Callable, *args: Any, shared: tuple | None = None) -> Any:
+        """``fn(*args)``, or ``fn(*args, **inputs)`` with ``shared`` from :meth:`share`."""
+        if shared is None:
+            f = self.client.submit(fn, *args, pure=False)
+        else:
+            f = self.client.submit(run_shared, fn, args, *shared, pure=False)
         self.futures.add(f)
         return f
 

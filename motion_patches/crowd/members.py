@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from ..kinematics import rig_keys
 from ..kinematics.inplace import root_positions
 from ..kinematics.motion import Motion
 from ..kinematics.retarget import RigMap
@@ -260,6 +261,19 @@ def unpacked(motions: list) -> list:
     return [
         Motion(m.ground, m.root_local, np.asarray(m.rotations, float), m.contacts) for m in motions
     ]
+
+
+def prepared_keys(jobs: Sequence[tuple], fps: float, patch: Any) -> list[tuple]:
+    """What writing members computes before it touches Blender
+    (:func:`~..kinematics.rig_keys.prepare_packed`), from each one's (:func:`packed` piece
+    motions, rig map or None, :func:`~..kinematics.rig_keys.prepare`'s arguments with the
+    placed motion, the second, left None) in ``jobs``: each motion placed on its rig at
+    the scene's rate ``fps`` here, so a worker is sent a quarter of the bytes."""
+    out = []
+    for raw, rig, args in jobs:
+        where = placed(patch, rig, unpacked(raw), fps)
+        out.append(rig_keys.prepare_packed(args[0], where, *args[2:]))
+    return out
 
 
 def spots_of(task: MemberTask, world: MemberWorld, every: bool = True) -> list[Obstacle]:

@@ -194,13 +194,6 @@ def finer(tol: Any) -> Any:
     return tol
 
 
-def fit_foot_lock(lock: tuple, tol: Any) -> dict | None:
-    """The keys of a foot lock (the adapter's ``nla.foot_lock_curves``) fitted, touching no
-    Blender data (a crowd fits one while the next character is written)."""
-    frames, curves, values, _ = lock
-    return fit_curves(frames, curves, finer(tol), values, between=False)
-
-
 def prepare(
     skel: Skeleton,
     placed: tuple,

@@ -182,11 +182,13 @@ def test_a_local_cluster_plans_the_same_members(crossing12, in_process, workers)
 
 def _fitted_in(ex):
     """Cubic keys of three curves fitted in ``ex``'s pool (what a crowd's writing sends
-    there, a character at a time), several asked for before the first answer is taken."""
+    there, a few characters at a time), several asked for before the first answer is taken,
+    the last with its tolerance shared (sent once, as a crowd's patch is)."""
     values = np.cumsum(np.random.default_rng(3).normal(size=(90, 3)), axis=0)
     pool = ex.pool()
     try:
-        futures = [pool.submit(keys.cubic_keys, values * s, 0.05) for s in (1.0, 2.0, 3.0)]
+        futures = [pool.submit(keys.cubic_keys, values * s, 0.05) for s in (1.0, 2.0)]
+        futures.append(pool.submit(keys.cubic_keys, values * 3.0, shared=pool.share(tol=0.05)))
         return [f.result() for f in futures]
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
