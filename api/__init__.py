@@ -41,7 +41,7 @@ from .crowd_conflicts import (
 )
 from .crowd_copies import CROWD_COLLECTION, duplicate_crowd, remove_crowd
 from .crowd_holds import CROWD_HOLD_RAMP_SECONDS, _holdable
-from .errors import Cancelled, MotionPatchesError, PathNotFound
+from .errors import Cancelled, ClusterLost, MotionPatchesError, PathNotFound
 from .overlay import PlanDrawing, clip_ends, footprint_info, plan_drawings, plan_fingerprints
 from .patch_files import bone_map, export_patch, fill_bone_map, import_patch, set_bone_map
 from .plan import plan_path
@@ -72,6 +72,7 @@ __all__ = [
     "CONFLICTS_KEY",
     "CROWD_SPOT",
     "Cancelled",
+    "ClusterLost",
     "cluster_executor",
     "CrowdResult",
     "CrowdSchedule",

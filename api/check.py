@@ -30,7 +30,7 @@ from .common import (
     scene_fps,
     state_dict,
 )
-from .errors import MotionPatchesError
+from .errors import MotionPatchesError, cluster_kept
 from .settings import plan_settings
 from .solve import _start_matrix
 
@@ -310,7 +310,8 @@ def check_layout(
             }
         )
     run = executor if executor is not None else InProcess()
-    planned = run.map(layout_check.plan_pair, tasks, patch=patch, worlds=worlds)
+    with cluster_kept():
+        planned = run.map(layout_check.plan_pair, tasks, patch=patch, worlds=worlds)
     results = []
     for k, ((p, start, sob, goal, gob, exclude, size), got) in enumerate(zip(jobs, planned)):
         if "planner_error" in got:

@@ -35,7 +35,7 @@ from .common import (
 )
 from .crowd_conflicts import remember_conflicts
 from .crowd_holds import _root_track, _with_hold
-from .errors import MotionPatchesError, check_cancelled
+from .errors import MotionPatchesError, check_cancelled, cluster_kept
 from .results import CrowdResult, CrowdSchedule
 from .settings import plan_settings
 from .solve import (
@@ -189,7 +189,8 @@ def plan_crowd(
     c.cancelled = cancelled
     _place_ends(c)
     check_cancelled(cancelled, CANCELLED)
-    planned, failed = _plan_each(c, progress)
+    with cluster_kept():
+        planned, failed = _plan_each(c, progress)
     planned, schedules = _resolve(c, planned)
     holds = _lay_holds(c, planned, schedules)
     # what is reported is checked on the motion written, whatever resolved it
@@ -203,7 +204,8 @@ def plan_crowd(
     if progress is not None:
         progress(0.9)
     check_cancelled(cancelled, CANCELLED)
-    written = _write_all(c, planned, schedules, progress)
+    with cluster_kept():  # what was written is put back first
+        written = _write_all(c, planned, schedules, progress)
     if progress is not None:
         progress(1.0)
     names = [c.pairs[p[0]][0].name for p in planned]

@@ -3,7 +3,10 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import contextlib
+from collections.abc import Callable, Iterator
+
+from ..motion_patches import cluster
 
 
 class MotionPatchesError(ValueError):
@@ -34,3 +37,20 @@ def check_cancelled(cancelled: Callable[[], bool] | None, what: str = "the work"
     never) says the user asked to stop."""
     if cancelled is not None and cancelled():
         raise Cancelled(what)
+
+
+class ClusterLost(MotionPatchesError):
+    """The Dask cluster planning or fitting for the request dropped its tasks (its
+    scheduler stopped or cannot be reached); nothing was written."""
+
+
+@contextlib.contextmanager
+def cluster_kept() -> Iterator[None]:
+    """Work on a cluster whose loss is reported as :class:`ClusterLost`, with what to do."""
+    try:
+        yield
+    except cluster.ClusterLost as exc:
+        raise ClusterLost(
+            f"{exc}: nothing was written and the scene is as it was; run again once the "
+            "scheduler is back, or on this machine (without --scheduler / --workers)"
+        ) from None

@@ -13,7 +13,8 @@ handed back (:mod:`.output`).
 
 Exit codes: 0 ok; 1 a check failed or no path was found; 2 bad input (usage error, missing
 file, unknown object or action, no patch baked: nothing is written and the scene is left
-as it was); 70 an internal error (a bug: the traceback is printed).
+as it was); 69 the Dask cluster was lost mid-run (nothing is written); 70 an internal
+error (a bug: the traceback is printed).
 """
 
 import sys
@@ -32,6 +33,7 @@ from .output import (
     INTERNAL,
     INTERRUPTED,
     OK,
+    UNAVAILABLE,
     BadInput,
     CLIError,
     Failed,
@@ -49,6 +51,7 @@ __all__ = (  # what scripts and tests reach as cli.X
     "FAILED",
     "INTERNAL",
     "OK",
+    "UNAVAILABLE",
     "BadInput",
     "CLIError",
     "Failed",
@@ -83,6 +86,8 @@ def main(argv):
         return _fail(exc.code, str(exc), args.json, args.command)
     except api.PathNotFound as exc:
         return _fail(FAILED, str(exc), args.json, args.command)
+    except api.ClusterLost as exc:
+        return _fail(UNAVAILABLE, str(exc), args.json, args.command)
     except api.MotionPatchesError as exc:
         return _fail(BAD_INPUT, str(exc), args.json, args.command)
     except KeyboardInterrupt:  # Ctrl-C: the API puts back what it had begun to write

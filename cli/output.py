@@ -20,6 +20,7 @@ PROG = "blender -c " + COMMAND_ID
 
 OK, FAILED, BAD_INPUT = 0, 1, 2
 INTERNAL = getattr(os, "EX_SOFTWARE", 70)
+UNAVAILABLE = getattr(os, "EX_UNAVAILABLE", 69)  # the Dask cluster was lost mid-run
 INTERRUPTED = 130  # Ctrl-C, as shells report it
 
 

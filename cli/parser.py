@@ -25,7 +25,8 @@ how to run it:
   --factory-startup it is not).
 
 exit codes: 0 ok, 1 a check failed / no path found, 2 bad input (nothing written),
-  70 internal error. --json prints one JSON document on stdout and nothing else.
+  69 the Dask cluster was lost mid-run (nothing written), 70 internal error. --json
+  prints one JSON document on stdout and nothing else.
 """
 
 

@@ -27,12 +27,25 @@ import uuid
 import weakref
 import zipfile
 from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import CancelledError, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
 CORE = Path(__file__).resolve().parent
 CORE_NAME = __name__.rpartition(".")[0]  # the core's module name in this process
+
+
+class ClusterLost(RuntimeError):
+    """The cluster dropped the tasks it was given before answering (its scheduler stopped
+    or cannot be reached: Dask cancels every task it held then). A lost worker is not
+    this: Dask gives its tasks to the others."""
+
+
+def _lost(address: str) -> ClusterLost:
+    return ClusterLost(
+        f"the Dask scheduler at {address} dropped the tasks before answering "
+        "(it stopped or cannot be reached)"
+    )
 
 
 def chunks(n: int, parts: int) -> list[range]:
@@ -212,12 +225,17 @@ class DaskCluster:
         at = {f.key: k for k, f in enumerate(futures)}
         got: list = [None] * len(futures)
         done = 0
-        for future, part in as_completed(futures, with_results=True):
-            got[at[future.key]] = part
-            future.release()
-            done += 1
-            if progress is not None:
-                progress(done / len(futures))
+        try:
+            for future, part in as_completed(futures, with_results=True):
+                if future.cancelled():  # handed on as its answer, not raised
+                    raise CancelledError
+                got[at[future.key]] = part
+                future.release()
+                done += 1
+                if progress is not None:
+                    progress(done / len(futures))
+        except CancelledError:
+            raise _lost(self.address) from None
         del futures
         out: list = []
         for part in got:
@@ -228,7 +246,7 @@ class DaskCluster:
         """Tasks submitted one at a time (``submit(fn, *args)``, a future's ``result()``),
         run on the workers while the caller goes on: a crowd's keys are fitted there while
         Blender writes the characters before. ``shutdown()`` when done."""
-        return _DaskPool(self.client)
+        return _DaskPool(self.client, self.address)
 
     def close(self) -> None:
         self.client.close()
@@ -264,8 +282,8 @@ class _DaskPool:
     are only looked after weakly (a result stays on its worker while a future holds it):
     those the caller still holds unfinished are cancelled at :meth:`shutdown`."""
 
-    def __init__(self, client: Any) -> None:
-        self.client = client
+    def __init__(self, client: Any, address: str = "") -> None:
+        self.client, self.address = client, address
         self.futures: weakref.WeakSet = weakref.WeakSet()
 
     def share(self, **shared: Any) -> tuple:
@@ -280,7 +298,7 @@ class _DaskPool:
         else:
             f = self.client.submit(run_shared, fn, args, *shared, pure=False)
         self.futures.add(f)
-        return f
+        return _Answer(f, self.address)
 
     def shutdown(self, wait: bool = True, cancel_futures: bool = False) -> None:
         if cancel_futures:
@@ -288,6 +306,23 @@ class _DaskPool:
             if pending:
                 self.client.cancel(pending)
         self.futures = weakref.WeakSet()
+
+
+class _Answer:
+    """A task's Dask future whose :meth:`result` raises :class:`ClusterLost` when the
+    cluster dropped it."""
+
+    def __init__(self, future: Any, address: str) -> None:
+        self.future, self.address = future, address
+
+    def result(self) -> Any:
+        try:
+            return self.future.result()
+        except CancelledError:
+            raise _lost(self.address) from None
+
+    def done(self) -> bool:
+        return bool(self.future.done())
 
 
 def executor(workers: int | None = None, scheduler: str | None = None) -> "InProcess | DaskCluster":

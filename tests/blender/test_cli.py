@@ -750,6 +750,30 @@ def test_crowd_interrupted_exits_130_and_saves_nothing(
     assert not out.exists() and crossing.read_bytes() == before
 
 
+def test_crowd_whose_cluster_is_lost_exits_69_and_saves_nothing(
+    cli, capsys, crossing, tmp_path, monkeypatch
+):
+    """The Dask cluster dropping its tasks mid-run (the core's ClusterLost, which a lost
+    scheduler raises: tests/core/test_cluster.py) is said as such, not as a bug: exit 69,
+    the scheduler named, nothing saved, the open file unchanged."""
+    before = crossing.read_bytes()
+    where = "tcp://10.0.0.9:8786"
+
+    def lost(c, progress):
+        raise cli.api.crowd.cluster.ClusterLost(
+            f"the Dask scheduler at {where} dropped the tasks before answering"
+        )
+
+    monkeypatch.setattr(cli.api.crowd, "_plan_each", lost)
+    out = tmp_path / "crowd.blend"
+    code, doc, err = call_json(
+        cli, capsys, "crowd", "--blend", crossing, "--pair", "East", "EastGoal", "--save", out
+    )
+    assert code == 69 and where in doc["error"] and "nothing was written" in doc["error"], err
+    assert "Traceback" not in err
+    assert not out.exists() and crossing.read_bytes() == before
+
+
 def test_crowd_with_no_worker_exits_2(cli, capsys, crossing):
     code, doc, err = call_json(
         cli, capsys, "crowd", "--blend", crossing, "--pair", "East", "EastGoal", "--workers", "0"

@@ -3,6 +3,8 @@
 LocalCluster of one and of two workers, and on a real `dask scheduler` with two
 `dask worker` processes over TCP of which one is killed mid-run."""
 
+import contextlib
+import json
 import pickle
 import subprocess
 import sys
@@ -210,13 +212,10 @@ def _wait_for(path, timeout=60.0):
     raise TimeoutError(f"{path} never appeared")
 
 
-def test_a_scheduler_over_tcp_with_a_worker_killed_mid_run_plans_the_same(
-    crossing12, in_process, tmp_path
-):
-    """A `dask scheduler` and two `dask worker` processes (no nanny: a killed worker stays
-    dead) on localhost; one worker is killed when the first task is done. Dask gives its
-    tasks to the other; the plans are the same."""
-    world, tasks = crossing12
+@contextlib.contextmanager
+def _dask_processes(tmp_path, workers=2):
+    """A `dask scheduler` and ``workers`` `dask worker` processes (no nanny: a killed worker
+    stays dead) on localhost: (the processes, scheduler first; its address)."""
     sched_file = tmp_path / "scheduler.json"
     py = sys.executable
     procs = [
@@ -239,7 +238,7 @@ def test_a_scheduler_over_tcp_with_a_worker_killed_mid_run_plans_the_same(
     ]
     try:
         _wait_for(sched_file)
-        for _ in range(2):
+        for _ in range(workers):
             procs.append(
                 subprocess.Popen(
                     [
@@ -257,10 +256,23 @@ def test_a_scheduler_over_tcp_with_a_worker_killed_mid_run_plans_the_same(
                     stderr=subprocess.DEVNULL,
                 )
             )
-        import json
-
         address = json.loads(sched_file.read_text())["address"]
         assert address.startswith("tcp://127.0.0.1:")
+        yield procs, address
+    finally:
+        for p in procs:
+            p.kill()
+            p.wait(timeout=30)
+
+
+def test_a_scheduler_over_tcp_with_a_worker_killed_mid_run_plans_the_same(
+    crossing12, in_process, tmp_path
+):
+    """A `dask scheduler` and two `dask worker` processes on localhost; one worker is killed
+    when the first task is done. Dask gives its tasks to the other; the plans are the
+    same."""
+    world, tasks = crossing12
+    with _dask_processes(tmp_path) as (procs, address):
         with cluster.DaskCluster(scheduler=address) as ex:
             ex.client.wait_for_workers(2, timeout=60)
             killed = []
@@ -274,8 +286,24 @@ def test_a_scheduler_over_tcp_with_a_worker_killed_mid_run_plans_the_same(
             assert killed and killed[0] < 1.0  # killed with tasks still to do
             assert procs[1].wait(timeout=30) != 0
             assert ex.workers == 1
-        assert fingerprint(got) == in_process
-    finally:
-        for p in procs:
-            p.kill()
-            p.wait(timeout=30)
+    assert fingerprint(got) == in_process
+
+
+def test_a_scheduler_lost_mid_run_is_reported_as_such(crossing12, tmp_path):
+    """The scheduler killed when the first task is done: the rest of the map, and a task
+    of the pool waiting for its answer, raise ClusterLost naming the scheduler (Dask
+    cancels every task it held), not an error of Dask's own."""
+    world, tasks = crossing12
+    with _dask_processes(tmp_path) as (procs, address):
+        with cluster.DaskCluster(scheduler=address) as ex:
+            ex.client.wait_for_workers(2, timeout=60)
+            pool = ex.pool()
+            slow = pool.submit(time.sleep, 60)
+
+            def kill_scheduler(fraction):
+                procs[0].kill()
+
+            with pytest.raises(cluster.ClusterLost, match=address):
+                ex.map(members.plan_member, tasks, world=world, chunk=1, progress=kill_scheduler)
+            with pytest.raises(cluster.ClusterLost, match="dropped the tasks"):
+                slow.result()
