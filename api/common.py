@@ -119,6 +119,12 @@ def _size(rig):
     return 1.0 if rig is None else float(rig.scale)
 
 
+def _skeleton(rig, patch):
+    """The skeleton a character plays the patch on: its rig map's target, else (no map)
+    the patch's own."""
+    return rig.target if rig is not None else patch.gait.skeleton
+
+
 def _shrunk(state, scale):
     """A world (x, y, heading) in the planner's world of a character ``scale`` times the
     patch skeleton's size (and back with ``1 / scale``)."""

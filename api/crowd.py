@@ -30,6 +30,7 @@ from .common import (
     _patch_for_planning,
     _shrunk,
     _size,
+    _skeleton,
     object_patches,
     scene_fps,
 )
@@ -610,12 +611,6 @@ AHEAD_PER_WORKER = 8
 BATCH = 4
 
 
-def _skeleton(c, n):
-    """The skeleton entry ``n``'s motion is placed on: its rig's, else the patch's."""
-    rig = c.rigs[n]
-    return rig.target if rig is not None else c.patch.gait.skeleton
-
-
 def _write_all(c, planned, schedules, progress=None):
     """{entry: PlanResult} of every planned character written (all refused before the
     first is written when one cannot be), the frame range fitted once after; cancelled
@@ -645,7 +640,9 @@ def _write_all(c, planned, schedules, progress=None):
         def prepare(first):
             jobs = []
             for n, plan, raw, _, _ in planned[first : first + batch]:
-                args = _prepared_args(c.pairs[n][0], _skeleton(c, n), None, c.settings, c.fps, plan)
+                args = _prepared_args(
+                    c.pairs[n][0], _skeleton(c.rigs[n], c.patch), None, c.settings, c.fps, plan
+                )
                 jobs.append((raw, c.rigs[n], args))
             # each motion is placed where it is prepared (sent the piece motions, a quarter
             # of the bytes) and again here when written
@@ -660,7 +657,7 @@ def _write_all(c, planned, schedules, progress=None):
                     asked += batch
                 if k % batch == 0:
                     got = dict(enumerate(ahead.pop(k).result(), k))
-                skel = _skeleton(c, n)
+                skel = _skeleton(c.rigs[n], c.patch)
                 placed = _placed(c.scene, c.patch, c.rigs[n], members.unpacked(raw))
                 prepared = rig_keys.unpack(got.pop(k), skel, placed[2])
                 env = _world_of(c, c.sizes[n]).env

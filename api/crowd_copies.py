@@ -11,7 +11,7 @@ import numpy as np
 from ..adapter import copies, nla
 from ..adapter import scene as scene_io
 from .bodies import add_bodies, has_body, remove_bodies
-from .common import _check_character, _not_obstacles, _patch_for_planning
+from .common import _check_character, _not_obstacles, _patch_for_planning, _skeleton
 from .errors import MotionPatchesError
 
 CROWD_COLLECTION = "MP Crowd"
@@ -100,7 +100,7 @@ def duplicate_crowd(
 
     starts, goals = scatter(corners, "region"), scatter(goal_corners, "goal region")
     rng.shuffle(goals)
-    skel = rig.target if rig is not None else patch.gait.skeleton
+    skel = _skeleton(rig, patch)
     facing = nla.facing_angle(skel)
     pairs = copies.make_copies(scene, source, starts, goals, facing, CROWD_COLLECTION)
     if has_body(source):

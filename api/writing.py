@@ -15,7 +15,7 @@ from ..motion_patches.kinematics import contacts, rig_keys, scene_rate
 from ..motion_patches.kinematics.inplace import root_positions
 from ..motion_patches.planning import transitions
 from ..motion_patches.planning.settings import PlanSettings
-from .common import _shrunk, _size, path_length, scene_fps
+from .common import _shrunk, _size, _skeleton, path_length, scene_fps
 from .results import PlanResult
 from .solve import _start_matrix
 
@@ -117,7 +117,7 @@ def _write(
     stood = _start_matrix(character, from_here)  # read before the record is replaced
     scale = _size(rig)
     goal_state = _shrunk(plan.goal, 1.0 / scale)  # the facing reached when any would do
-    skel = rig.target if rig is not None else patch.gait.skeleton
+    skel = _skeleton(rig, patch)
     motions, bounds, _ = placed
     if prepared is None:
         prepared = rig_keys.prepare(
