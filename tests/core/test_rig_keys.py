@@ -81,6 +81,47 @@ def test_a_workers_packed_answer_unpacks_to_what_the_writer_reads(walk_patch, pl
         assert body_here["ranges"] == body_there["ranges"]
 
 
+def test_a_member_prepared_from_its_packed_motions_is_prepared_as_in_process(walk_patch):
+    """What a crowd's worker is sent (each member's packed piece motions, the patch shared)
+    and prepares, several members a task (members.prepared_keys, through pickle): the same
+    arrays as prepare_packed of the motion placed here, as the writer places it."""
+    world, tasks = crossing(walk_patch)
+    skel = walk_patch.gait.skeleton
+    jobs, direct = [], []
+    for task in tasks[:3]:
+        m = members.plan_member(task, world)
+        assert isinstance(m, members.Member), m
+        args = (skel, None, True, 24.0, m.plan, ({}, 1.0), (0.0, "XYZ", None), Tolerance())
+        jobs.append((m.raw, None, args))
+        placed = scene_rate.placed(walk_patch, None, members.unpacked(m.raw), 24.0)
+        direct.append(rig_keys.prepare_packed(skel, placed, *args[2:]))
+    sent = pickle.loads(pickle.dumps((jobs, 24.0), protocol=pickle.HIGHEST_PROTOCOL))
+    got = members.prepared_keys(*sent, patch=walk_patch)
+    assert len(got) == len(direct) == 3
+    for a, b in zip(got, direct):
+        _same(a, b)
+
+
+def _same(a, b):
+    """Equal nested answers: numpy arrays to the bit, objects field by field (a Tolerance
+    comes back a copy), everything else by ==."""
+    if isinstance(a, np.ndarray):
+        assert isinstance(b, np.ndarray) and a.dtype == b.dtype and np.array_equal(a, b)
+    elif isinstance(a, dict):
+        assert a.keys() == b.keys()
+        for k in a:
+            _same(a[k], b[k])
+    elif isinstance(a, (list, tuple)):
+        assert len(a) == len(b)
+        for x, y in zip(a, b):
+            _same(x, y)
+    elif hasattr(a, "__dict__"):
+        assert type(a) is type(b)
+        _same(vars(a), vars(b))
+    else:
+        assert a == b
+
+
 def test_the_body_keys_stay_within_their_tolerance(walk_patch, planned):
     """Every bone the body keys play (Hermite cubics between kept frames) within the
     tolerance its rotation is judged by (the legs finer), on every frame."""
