@@ -321,9 +321,6 @@ class _Answer:
         except CancelledError:
             raise _lost(self.address) from None
 
-    def done(self) -> bool:
-        return bool(self.future.done())
-
 
 def executor(workers: int | None = None, scheduler: str | None = None) -> "InProcess | DaskCluster":
     """In process unless ``workers`` or ``scheduler`` is given."""

@@ -231,11 +231,15 @@ def prepare(
 
 
 def prepare_packed(*args: Any) -> tuple:
-    """:func:`prepare` as a worker sends it back (:func:`unpack`): what the writer has
-    already (the motion's rotations, the bones the lock leaves alone, what the keys leave
-    between them) left out: about a third of the bytes."""
-    world, locked, body, root = prepare(*args)
-    skel = args[0]
+    """:func:`prepare` as a worker sends it back: :func:`pack` of it."""
+    return pack(prepare(*args), args[0])
+
+
+def pack(prepared: tuple, skel: Skeleton) -> tuple:
+    """:func:`prepare`'s answer ``prepared`` as a worker sends it back (:func:`unpack`):
+    what the writer has already (the motion's rotations, the bones the lock leaves alone,
+    what the keys leave between them) left out: about a third of the bytes."""
+    world, locked, body, root = prepared
     legs = None if locked is None else locked[:, foot_lock.locked_bones(skel)]
     if body is not None:
         fit = body["fitted"]
@@ -250,7 +254,7 @@ def prepare_packed(*args: Any) -> tuple:
 
 
 def unpack(packed: tuple, skel: Skeleton, world: Motion) -> tuple:
-    """:func:`prepare`'s answer from :func:`prepare_packed`'s, given the motion ``world``
+    """:func:`prepare`'s answer from :func:`pack`'s, given the motion ``world``
     it was prepared from: the same arrays wherever the writer reads them (the lock's legs,
     the keys' kept frames)."""
     contacts, legs, body, root = packed
