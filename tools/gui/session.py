@@ -222,7 +222,13 @@ class Session:
         self.xdo("mousemove", int(x), int(y))
 
     def click(self, x, y, button=1, modifiers=()):
+        """Pointer to (x, y), then the press and release once Blender has seen the pointer
+        there, as a hand does. Pressed at once, the checkbox was toggled once without an
+        undo step (Ctrl+Z then undid the step before it): Blender records a toggle's undo
+        step on release for the button under where its drag began, and a press taken
+        before the move can begin it elsewhere."""
         self.move(x, y)
+        self.wait_idle()
         for m in modifiers:
             self.xdo("keydown", m)
         self.xdo("click", button)
