@@ -124,24 +124,25 @@ def earliest(
                 better = ok & (st[ks] < stand_v[e + 1, ks])
                 stand_v[e + 1, ks[better]] = st[ks[better]]
                 stand_how[e + 1, ks[better]] = _STAND
+            # A ramp is looked at only where it would improve a state: most layers improve
+            # none, and the look-up is the costly part.
             if e + half < layers:  # speed up out of a hold
-                t = ks[:, None] + e + 1 + np.arange(ramp)[None]
-                ok = ~at(ups, ks, t).any(1)
-                k2, v = ks[ok] + half, st[ks[ok]]
-                better = v < seed_v[e + half, k2]
-                seed_v[e + half, k2[better]] = v[better]
-                seed_how[e + half, k2[better]] = _UP
+                ks = ks[st[ks] < seed_v[e + half, ks + half]]
+                if ks.size:
+                    t = ks[:, None] + e + 1 + np.arange(ramp)[None]
+                    ks = ks[~at(ups, ks, t).any(1)]
+                    seed_v[e + half, ks + half] = st[ks]
+                    seed_how[e + half, ks + half] = _UP
         if can_hold.any() and e + half + 1 < layers:  # slow down into a hold
             ks = np.nonzero(reach[: n - ramp] & can_hold[half : n - half])[0] + half
+            v = val[ks - half] + _HOLD
+            better = (v // _HOLD <= max_holds) & (v < stand_v[e + half + 1, ks])
+            ks, v = ks[better], v[better]
             if ks.size:
                 t = (ks - half)[:, None] + e + 1 + np.arange(ramp + 1)[None]
                 ok = ~at(downs, ks - half, t).any(1)
-                ks = ks[ok]
-                v = val[ks - half] + _HOLD
-                ks, v = ks[v // _HOLD <= max_holds], v[v // _HOLD <= max_holds]
-                better = v < stand_v[e + half + 1, ks]
-                stand_v[e + half + 1, ks[better]] = v[better]
-                stand_how[e + half + 1, ks[better]] = _DOWN
+                stand_v[e + half + 1, ks[ok]] = v[ok]
+                stand_how[e + half + 1, ks[ok]] = _DOWN
     return None
 
 
