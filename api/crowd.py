@@ -192,7 +192,7 @@ def plan_crowd(
     check_cancelled(cancelled, CANCELLED)
     with cluster_kept():
         planned, failed = _plan_each(c, progress)
-    planned, schedules = _resolve(c, planned)
+        planned, schedules = _resolve(c, planned)
     holds = _lay_holds(c, planned, schedules)
     # what is reported is checked on the motion written, whatever resolved it
     ranked = sorted(range(len(planned)), key=lambda k: schedules[k].rank)  # order kept
@@ -531,30 +531,66 @@ def _replan(c, versions, k, ghosts):
     check_cancelled(c.cancelled, CANCELLED)
     n = versions[k][0][0]
     a = members.plan_member(_task(c, n, ghosts), _world_of(c, c.sizes[n]).members)
+    return _replanned(c, versions, k, a)
+
+
+def _replanned(c, versions, k, a):
+    """:func:`_replan`'s answer from member ``a``, its new version kept."""
     if isinstance(a, members.NoPlan):
         return None
     versions[k].append(_entry(c, a))
     return versions[k][-1][3], versions[k][-1][4]
 
 
+class _Replanning:
+    """A re-plan worked out on a worker (:func:`_replan_later`); ``result()`` is
+    :func:`_replan`'s answer, taken when the crowd's resolution comes to it."""
+
+    def __init__(self, c, versions, k, answer):
+        self.c, self.versions, self.k, self.answer = c, versions, k, answer
+
+    def result(self):
+        return _replanned(self.c, self.versions, self.k, self.answer.result())
+
+
+def _replan_later(c, pool, worlds, versions, k, ghosts):
+    """:func:`_replan` asked of ``pool``'s workers at once (``worlds``: every size's member
+    world, shared with them), its answer taken later."""
+    check_cancelled(c.cancelled, CANCELLED)
+    task = _task(c, versions[k][0][0], ghosts)
+    return _Replanning(c, versions, k, pool.submit(members.plan_sized, task, shared=worlds))
+
+
 def _resolve(c, planned):
     """(the version of each planned character the crowd settled on, its schedules):
-    :func:`motion_patches.crowd.crowd.resolve` with every re-plan kept."""
+    :func:`motion_patches.crowd.crowd.resolve` with every re-plan kept. On a cluster the
+    re-plans are worked out on its workers while the resolution places the next characters
+    (in process, when their turn comes: the crowd comes out the same)."""
     versions = [[p] for p in planned]  # every re-plan kept: the crowd may settle on any
-    # Resolved a little wider than reported: a hold is laid into the written motion by a time
-    # warp, which may bring a pair nearer than the track the table saw (on the plaza of
-    # 1,000: by 0.2 mm at most; the slack is a hundred times that).
-    schedules, _ = crowd.resolve(
-        [p[3] for p in planned],
-        partial(_replan, c, versions),
-        c.spacing + CROWD_RESOLVE_SLACK,
-        c.settings.radius,
-        c.fps,
-        round(c.max_wait_seconds * c.fps),
-        max(1, round(0.2 * c.fps)),
-        ramp=c.ramp,
-        holdable=[p[4] for p in planned],
-    )
+    pool = later = None
+    if c.executor.workers:
+        pool = c.executor.pool()
+        worlds = pool.share(worlds={size: w.members for size, w in c.worlds.items()})
+        later = partial(_replan_later, c, pool, worlds, versions)
+    try:
+        # Resolved a little wider than reported: a hold is laid into the written motion by a
+        # time warp, which may bring a pair nearer than the track the table saw (on the plaza
+        # of 1,000: by 0.2 mm at most; the slack is a hundred times that).
+        schedules, _ = crowd.resolve(
+            [p[3] for p in planned],
+            partial(_replan, c, versions),
+            c.spacing + CROWD_RESOLVE_SLACK,
+            c.settings.radius,
+            c.fps,
+            round(c.max_wait_seconds * c.fps),
+            max(1, round(0.2 * c.fps)),
+            ramp=c.ramp,
+            holdable=[p[4] for p in planned],
+            replan_later=later,
+        )
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
     return [v[s.version] for v, s in zip(versions, schedules)], schedules
 
 

@@ -298,6 +298,19 @@ def _timed(table, s, max_delay, max_hold, ramp, found):
     return (timed, left) if _too_close(left) < _too_close(found) else (s, found)
 
 
+REPLAN_AHEAD = 8  # characters placed while one's re-plan is worked out (see _resolve_once)
+
+
+class _Now:
+    """A re-plan worked out when its answer is asked for (no cluster to hand it to)."""
+
+    def __init__(self, replan, i, discs):
+        self.replan, self.i, self.discs = replan, i, discs
+
+    def result(self):
+        return self.replan(self.i, self.discs)
+
+
 def _resolve_once(
     order,
     tracks,
@@ -314,21 +327,32 @@ def _resolve_once(
     stages,
     versions,
     fixed=None,
+    replan_later=None,
 ):
     """One pass of :func:`resolve` placing the characters in ``order``; ``versions``
     counts each character's re-plans over all passes (its next one's number). ``fixed``
-    {character: schedule}: characters kept as they are, reserved before the others."""
+    {character: schedule}: characters kept as they are, reserved before the others.
+
+    A character to be re-planned is placed :data:`REPLAN_AHEAD` characters later than its
+    turn (those are placed meanwhile, and it walks round them too): its re-plan, asked for
+    with ``replan_later(i, discs)`` (an answer whose ``result()`` is ``replan``'s), is
+    worked out on a cluster's worker while they are placed. Placed that much later whether
+    or not there is a cluster, so the crowd comes out the same in process and on one.
+    Returns (schedules, conflicts, table, the characters in the order they were placed)."""
     table = Reservations(spacing)
     schedules, conflicts = [None] * len(tracks), []
     paths, waiting = ways.Ways(tracks, spacing), np.ones(len(tracks), bool)
     for i, s in (fixed or {}).items():
         table.reserve(i, s.track, s.delay)
         schedules[i], waiting[i] = s, False
+    later = replan_later or (replan and (lambda i, discs: _Now(replan, i, discs)))
 
     def clear(track, mask):  # holds only out of the way of those still to be placed
         return None if mask is None else np.asarray(mask, bool) & ~paths.crossed(track, waiting)
 
-    for i in order:
+    def place(i):
+        """Character i's attempts: yields the discs to re-plan it round, is sent the
+        re-plan's answer, and returns its best schedule and what it still meets."""
         waiting[i] = False
         track = np.asarray(tracks[i], float)[:, :2]
         s = Schedule(0, (), 0, track, clear(track, holdable[i]))
@@ -353,28 +377,52 @@ def _resolve_once(
             for j, (_, frame, _) in found.items():
                 d, walked = table.placed[j]
                 reserved += ghosts(timeline(walked, d, horizon), frame, spacing, radius, fps)
-            new = replan(i, list(reserved))
+            new = yield list(reserved)
+            # those placed while it was re-planned are in the table now
+            best = (best[0], table.check(best[0].track, best[0].delay))
             if new is None:
                 break
             versions[i] += 1
             track = np.asarray(new[0], float)[:, :2]
             s = Schedule(0, (), versions[i], track, clear(track, new[1]))
             s.base = (s.track, new[1])
-        s, found = best
-        table.reserve(i, s.track, s.delay)
-        schedules[i] = s
-        for j, (frames, frame, dist) in sorted(found.items()):
-            conflicts.append(
-                {
-                    "a": j,
-                    "b": i,
-                    "frame": frame,
-                    "first_frame": int(frames[0]),
-                    "frames": int(len(frames)),
-                    "distance_m": dist,
-                }
-            )
-    return schedules, conflicts, table
+        return best
+
+    def step_on(i, attempts, answer):
+        """Character i's attempts run on with ``answer``: placed, or its re-plan asked for."""
+        try:
+            discs = attempts.send(answer)
+        except StopIteration as done:
+            s, found = done.value
+            table.reserve(i, s.track, s.delay)
+            schedules[i] = s
+            placed.append(i)
+            for j, (frames, frame, dist) in sorted(found.items()):
+                conflicts.append(
+                    {
+                        "a": j,
+                        "b": i,
+                        "frame": frame,
+                        "first_frame": int(frames[0]),
+                        "frames": int(len(frames)),
+                        "distance_m": dist,
+                    }
+                )
+            return
+        pending.append((turn + REPLAN_AHEAD, i, attempts, later(i, discs)))
+
+    placed, pending = [], []  # pending: (turn due, character, its attempts, re-plan asked)
+    for turn, i in enumerate(order):
+        step_on(i, place(i), None)
+        while pending and pending[0][0] <= turn:
+            _, k, attempts, answer = pending.pop(0)
+            step_on(k, attempts, answer.result())
+    turn = len(order)
+    while pending:
+        _, k, attempts, answer = pending.pop(0)
+        step_on(k, attempts, answer.result())
+        turn += 1
+    return schedules, conflicts, table, placed
 
 
 def _repair(table, schedules, conflicts, max_delay, max_hold, ramp):
@@ -456,6 +504,7 @@ def resolve(
     rounds: int = 2,
     stages: int = 6,
     restarts: int = 4,
+    replan_later: Callable[[int, list[np.ndarray]], Any] | None = None,
 ) -> tuple[list[Schedule], list[dict[str, Any]]]:
     """Schedules and the conflicts left for ``tracks`` [(frames, 2)] in priority order,
     all starting on frame 0: each character in turn is checked against the
@@ -478,7 +527,10 @@ def resolve(
     Still too close, it is re-planned (``replan(i, discs) -> (track, holdable) or None``,
     each call a new version of its plan, :attr:`Schedule.version`; None: never) round the
     discs where the others it meets walk around those frames (:func:`ghosts`), and the
-    above is done again, at most ``rounds`` times.
+    above is done again, at most ``rounds`` times, :data:`REPLAN_AHEAD` characters after
+    its turn (``replan_later(i, discs)``: the re-plan asked for at once, an answer whose
+    ``result()`` is ``replan``'s, worked out on a cluster meanwhile; None: ``replan``
+    when its turn comes).
 
     When conflicts are left, each character still too close is first mended locally
     (:func:`_repair`: freed with those it meets, placed before them and all re-timed), and
@@ -503,10 +555,11 @@ def resolve(
     strips = {}  # {character: the strips keeping it in its lane}, kept when it is re-routed
     places = []  # the lanes' places (midpoint, axis), the same over the passes
     on_lane = replan and (lambda i, discs: replan(i, strips.get(i, []) + discs))
+    later = replan_later and (lambda i, discs: replan_later(i, strips.get(i, []) + discs))
     fixed = None  # the characters a restart keeps as they were (None: none)
     wider = 0  # rings added to a restart's neighbourhood, one per restart that gained nothing
     for _ in range(restarts + 1):
-        schedules, conflicts, table = _resolve_once(
+        schedules, conflicts, table, placed = _resolve_once(
             [i for i in order if fixed is None or i not in fixed],
             tracks,
             on_lane,
@@ -522,7 +575,9 @@ def resolve(
             stages,
             versions,
             fixed,
+            later,
         )
+        order = [i for i in order if fixed is not None and i in fixed] + placed
         for rank, i in enumerate(order):
             schedules[i].rank = rank
             if i in laned and schedules[i].version == 0:  # on its lane plan

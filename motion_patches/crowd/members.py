@@ -400,6 +400,12 @@ def round_spots(task: MemberTask, world: MemberWorld, ghosts: bool) -> Plan:
     raise refused
 
 
+def plan_sized(task: MemberTask, worlds: dict) -> Member | NoPlan:
+    """:func:`plan_member` in the world of the task's size (``worlds``: {size: world}, sent
+    to a worker once for every re-plan of a crowd)."""
+    return plan_member(task, worlds[task.size])
+
+
 def plan_members(tasks: Sequence[MemberTask], world: MemberWorld) -> list:
     """:func:`plan_member` of each task, in order."""
     return [plan_member(t, world) for t in tasks]

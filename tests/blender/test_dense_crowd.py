@@ -169,3 +169,29 @@ def test_a_counter_flow_of_forty_through_a_doorway_keeps_everyone_apart(
     for p in res.plans:  # the plans came back with the file
         assert api.load_plan_record(bpy.data.objects[p.character])
     check_apart(scene, pairs, res, api, ["Wall.S", "Wall.N"])
+
+
+def test_the_four_way_crossing_on_a_local_cluster_is_the_crowd_planned_in_process(
+    crossing, walk_blend, addon_module
+):
+    """Planned on a Dask LocalCluster of two workers (its members there, and its re-plans,
+    worked out while the resolution places the next characters): the same holds, waits,
+    re-routes, strips, frames and costs as in process."""
+    api = addon_module.api
+    _, _, here, _ = crossing
+    bpy.ops.wm.open_mainfile(filepath=str(walk_blend))
+    scene = bpy.context.scene
+    scene.render.fps = FPS
+    pairs = build_fourway(scene.motion_patches.source_armature)
+    with api.cluster_executor(workers=2) as ex:
+        there = api.plan_crowd(scene, pairs, frame_start=1, radius=RADIUS, executor=ex)
+    print(summary("four-way, 2 workers", there, 0.0))
+    assert here.rerouted  # re-planned on the workers
+    assert there.rerouted == here.rerouted
+    assert there.delays == here.delays and there.holds == here.holds
+    assert not there.conflicts
+
+    def plans(res):
+        return [(p.character, p.frame_start, p.frame_end, p.cost, p.strips) for p in res.plans]
+
+    assert plans(there) == plans(here)

@@ -9,12 +9,13 @@ import pickle
 import subprocess
 import sys
 import time
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from motion_patches import cluster
-from motion_patches.crowd import members
+from motion_patches.crowd import crowd, members
 from motion_patches.kinematics import keys
 from motion_patches.planning import body_clearance
 from motion_patches.planning.settings import PlanSettings
@@ -178,8 +179,30 @@ def test_a_local_cluster_plans_the_same_members(crossing12, in_process, workers)
         assert ex.workers == workers
         got = ex.map(members.plan_member, tasks, world=world)
         fitted = _fitted_in(ex)
+        rerouted = _replanned_in(ex, world, tasks)
     assert fingerprint(got) == in_process
     _same_fits(fitted, _fitted_in(cluster.InProcess()))
+    assert fingerprint(rerouted) == fingerprint(_replanned_in(cluster.InProcess(), world, tasks))
+
+
+def _replanned_in(ex, world, tasks):
+    """Three members re-planned in ``ex``'s pool round a disc where another walks, as a
+    crowd's resolution asks for them (all asked before the first answer is taken, every
+    size's world sent once)."""
+    plain = [members.plan_member(t, world) for t in tasks[:3]]
+    ghosted = [  # a disc on the middle of its path as planned alone
+        replace(t, ghosts=[crowd.disc(a.root_track[len(a.root_track) // 2, :2], 0.4)])
+        for t, a in zip(tasks, plain)
+    ]
+    pool = ex.pool()
+    try:
+        worlds = pool.share(worlds={1.0: world})
+        asked = [pool.submit(members.plan_sized, t, shared=worlds) for t in ghosted]
+        got = [a.result() for a in asked]
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+    assert all(a[-1] != b[-1] for a, b in zip(fingerprint(got), fingerprint(plain)))
+    return got
 
 
 def _fitted_in(ex):

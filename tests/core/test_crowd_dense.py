@@ -6,6 +6,7 @@ re-synthesised with the holds laid in, played at a 24 fps scene from the 30 fps 
 every root against every other on every frame and against the props."""
 
 import time
+from concurrent.futures import ThreadPoolExecutor
 from functools import partial
 
 import numpy as np
@@ -76,13 +77,14 @@ def doorway(patch, per_side=20, gap=2.0, seed=5):
     return env, ends
 
 
-def plan_crowd(patch, env, ends, fps, max_wait, times=None):
+def plan_crowd(patch, env, ends, fps, max_wait, times=None, later=None):
     """The crowd as ``api.plan_crowd`` plans it, on the core: ([(pieces, plan)], schedules,
     ramp). Priority by distance; each member planned by the core
     (:func:`motion_patches.crowd.members.plan_member`: round the props and the others'
     standing spots, its motion at the scene's rate); holds, waits and re-routes timed on the
     scene's frames. ``times`` (a dict) gets the seconds of the members (re-plans included)
-    and of resolution."""
+    and of resolution. ``later(replan)``: the ``replan_later`` of :func:`crowd.resolve`
+    made of the re-plan (None: re-planned when its turn comes)."""
     times = {} if times is None else times
     for k in ("members", "resolve"):
         times[k] = 0.0
@@ -129,6 +131,7 @@ def plan_crowd(patch, env, ends, fps, max_wait, times=None):
         max(1, round(0.2 * fps)),
         ramp=ramp,
         holdable=[v[0][2] for v in versions],
+        replan_later=None if later is None else later(replan),
     )
     re_plans = times["members"] - before
     times["resolve"] = time.perf_counter() - t0 - re_plans  # re-plans counted as members
@@ -190,6 +193,52 @@ def test_a_dense_crowd_ends_with_no_two_roots_too_close(walk_patch, scene, max_w
     assert inside == 0
     assert closest >= SPACING, closest
     assert max(s.delay for s in schedules) <= round(max_wait * SCENE_FPS)
+
+
+def test_re_plans_worked_out_beside_the_resolution_give_the_same_crowd(walk_patch, monkeypatch):
+    """The four-way crossing's re-plans asked for at once and worked out in another thread
+    (as a cluster's worker does) while the next characters are placed: the same schedules,
+    to the bit, as re-planned when each one's turn comes; every answer taken in the order
+    asked, after others were placed meanwhile."""
+    env, ends = fourway(walk_patch)
+    _, alone, _ = plan_crowd(walk_patch, env, ends, SCENE_FPS, 4.0)
+    events = []
+    reserve = crowd.Reservations.reserve
+
+    def placed(self, index, track, delay=0):
+        events.append(("placed", index))
+        return reserve(self, index, track, delay)
+
+    monkeypatch.setattr(crowd.Reservations, "reserve", placed)
+    pool = ThreadPoolExecutor(max_workers=1)
+
+    class Asked:
+        def __init__(self, replan, k, discs):
+            events.append(("asked", k))
+            self.k, self.future = k, pool.submit(replan, k, discs)
+
+        def result(self):
+            events.append(("taken", self.k))
+            return self.future.result()
+
+    try:
+        _, beside, _ = plan_crowd(
+            walk_patch, env, ends, SCENE_FPS, 4.0, later=lambda r: partial(Asked, r)
+        )
+    finally:
+        pool.shutdown()
+    assert [_schedule(s) for s in beside] == [_schedule(s) for s in alone]
+    asked = [k for e, k in events if e == "asked"]
+    assert asked and any(s.rerouted for s in beside)
+    assert [k for e, k in events if e == "taken"] == asked
+    for n, (e, k) in enumerate(events):
+        if e == "asked":
+            taken = events.index(("taken", k), n)
+            assert any(x == "placed" and j != k for x, j in events[n:taken]), k
+
+
+def _schedule(s):
+    return (s.delay, s.holds, s.version, s.rank, s.track.tobytes())
 
 
 def test_a_gap_one_walker_wide_is_taken_in_turn(walk_patch):
