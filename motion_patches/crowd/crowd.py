@@ -298,7 +298,11 @@ def _timed(table, s, max_delay, max_hold, ramp, found):
     return (timed, left) if _too_close(left) < _too_close(found) else (s, found)
 
 
-REPLAN_AHEAD = 8  # characters placed while one's re-plan is worked out (see _resolve_once)
+REPLAN_AHEAD = 16  # at most this many characters placed while one is re-planned
+# Only characters whose paths keep this far (metres) from the path and the discs of one being
+# re-planned are placed while it is: a re-route stays near its first path, so it would not
+# have met them (a doorway's crowd, all through one gap, is placed strictly in turn).
+REPLAN_CLEAR = 2.0
 
 
 class _Now:
@@ -333,12 +337,14 @@ def _resolve_once(
     counts each character's re-plans over all passes (its next one's number). ``fixed``
     {character: schedule}: characters kept as they are, reserved before the others.
 
-    A character to be re-planned is placed :data:`REPLAN_AHEAD` characters later than its
-    turn (those are placed meanwhile, and it walks round them too): its re-plan, asked for
-    with ``replan_later(i, discs)`` (an answer whose ``result()`` is ``replan``'s), is
-    worked out on a cluster's worker while they are placed. Placed that much later whether
-    or not there is a cluster, so the crowd comes out the same in process and on one.
-    Returns (schedules, conflicts, table, the characters in the order they were placed)."""
+    A character to be re-planned may be placed after some characters that come after it
+    in ``order``: those whose paths keep :data:`REPLAN_CLEAR` from its path and the discs
+    it is re-planned round (:class:`_Clear`), at most :data:`REPLAN_AHEAD` of them; its
+    re-plan, asked for with ``replan_later(i, discs)`` (an answer whose ``result()`` is
+    ``replan``'s), is worked out on a cluster's worker while they are placed. The order
+    does not depend on whether there is a cluster, so the crowd comes out the same in
+    process and on one. Returns (schedules, conflicts, table, the characters in the order
+    they were placed)."""
     table = Reservations(spacing)
     schedules, conflicts = [None] * len(tracks), []
     paths, waiting = ways.Ways(tracks, spacing), np.ones(len(tracks), bool)
@@ -377,7 +383,7 @@ def _resolve_once(
             for j, (_, frame, _) in found.items():
                 d, walked = table.placed[j]
                 reserved += ghosts(timeline(walked, d, horizon), frame, spacing, radius, fps)
-            new = yield list(reserved)
+            new = yield list(reserved), s.track
             # those placed while it was re-planned are in the table now
             best = (best[0], table.check(best[0].track, best[0].delay))
             if new is None:
@@ -391,7 +397,7 @@ def _resolve_once(
     def step_on(i, attempts, answer):
         """Character i's attempts run on with ``answer``: placed, or its re-plan asked for."""
         try:
-            discs = attempts.send(answer)
+            discs, track = attempts.send(answer)
         except StopIteration as done:
             s, found = done.value
             table.reserve(i, s.track, s.delay)
@@ -409,20 +415,42 @@ def _resolve_once(
                     }
                 )
             return
-        pending.append((turn + REPLAN_AHEAD, i, attempts, later(i, discs)))
+        clear_of = _Clear([track, *discs], REPLAN_CLEAR)
+        pending.append((turn + REPLAN_AHEAD, i, attempts, later(i, discs), clear_of))
 
-    placed, pending = [], []  # pending: (turn due, character, its attempts, re-plan asked)
+    # pending: (last turn it may wait to, character, its attempts, re-plan asked, _Clear)
+    placed, pending = [], []
     for turn, i in enumerate(order):
-        step_on(i, place(i), None)
-        while pending and pending[0][0] <= turn:
-            _, k, attempts, answer = pending.pop(0)
+        track = np.asarray(tracks[i], float)[:, :2]
+        while pending and (pending[0][0] < turn or any(not p[4].of(track) for p in pending)):
+            _, k, attempts, answer, _ = pending.pop(0)
             step_on(k, attempts, answer.result())
+        step_on(i, place(i), None)
     turn = len(order)
     while pending:
-        _, k, attempts, answer = pending.pop(0)
+        _, k, attempts, answer, _ = pending.pop(0)
         step_on(k, attempts, answer.result())
-        turn += 1
     return schedules, conflicts, table, placed
+
+
+class _Clear:
+    """Whether a path keeps ``margin`` from some ``shapes`` (paths and polygons, (N, 2)
+    points): cells ``margin`` wide hold their points, and a point in none of those cells or
+    their neighbours is further than ``margin`` from all of them (a coarse test: some a
+    little further count as near)."""
+
+    def __init__(self, shapes, margin):
+        self.margin = float(margin)
+        pts = np.concatenate([np.asarray(p, float)[:, :2] for p in shapes])
+        c = np.floor(pts / self.margin).astype(np.int64)
+        ring = np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)], np.int64)
+        c = (c[:, None, :] + ring[None]).reshape(-1, 2)
+        self.keys = np.unique(c[:, 0] << 32 ^ (c[:, 1] & 0xFFFFFFFF))
+
+    def of(self, track):
+        c = np.floor(np.asarray(track, float)[:, :2] / self.margin).astype(np.int64)
+        keys = c[:, 0] << 32 ^ (c[:, 1] & 0xFFFFFFFF)
+        return not np.isin(keys, self.keys).any()
 
 
 def _repair(table, schedules, conflicts, max_delay, max_hold, ramp):

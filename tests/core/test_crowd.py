@@ -416,3 +416,17 @@ def test_the_earliest_timing_is_clear_and_no_earlier_one_is():
         track, m = crowd.held_track(track, k, h, 10, m)
     assert not table.check(track, delay2)
     assert delay2 + len(track) <= delay + len(b)  # arrives no later
+
+
+def test_a_path_placed_while_another_is_re_planned_keeps_clear_of_its_path_and_discs():
+    """crowd._Clear: a path further than twice the margin from a re-planned walker's path
+    and discs is clear of them; one within the margin of either is not."""
+    path = np.column_stack((np.linspace(0.0, 10.0, 50), np.zeros(50)))
+    disc = crowd.disc((12.0, 0.0), 0.5)
+    clear = crowd._Clear([path, disc], 2.0)
+    along = np.column_stack((np.linspace(-5.0, 20.0, 80), np.zeros(80)))
+    assert clear.of(along + (0.0, 4.01))  # beyond twice the margin
+    assert clear.of(along - (0.0, 4.01))
+    assert not clear.of(along + (0.0, 1.9))  # within the margin of the path
+    assert not clear.of(np.array([[12.0, 2.3], [30.0, 2.3]]))  # of the disc (0.5 + 1.8)
+    assert clear.of(np.array([[16.1, 0.0], [40.0, 0.0]]))  # past the disc, beyond 2 margins
