@@ -413,6 +413,33 @@ def crowd_writes_timed(api):
         api.crowd._write_all = write
 
 
+@contextlib.contextmanager
+def crowd_stages_timed(api, names=("_plan_each", "_resolve")):
+    """{name: seconds} of the crowd stages ``names`` (functions of ``api.crowd`` that
+    ``plan_crowd`` calls: its members planned, its resolution with its re-plans) run inside
+    the ``with``, wall time."""
+    seconds = dict.fromkeys(names, 0.0)
+    kept = {n: getattr(api.crowd, n) for n in names}
+
+    def timed(name):
+        def run(*a, **kw):
+            t = time.perf_counter()
+            try:
+                return kept[name](*a, **kw)
+            finally:
+                seconds[name] += time.perf_counter() - t
+
+        return run
+
+    for n in names:
+        setattr(api.crowd, n, timed(n))
+    try:
+        yield seconds
+    finally:
+        for n, f in kept.items():
+            setattr(api.crowd, n, f)
+
+
 def section_crowd(bpy, addon, args):
     """plan_crowd of ``args.crowd`` characters (10 lanes per column), end to end."""
     api = addon.api

@@ -382,7 +382,7 @@ def run_written(n, args):
     bpy.ops.wm.save_as_mainfile(filepath=str(folder / "before.blend"))
     reset = peak_rss_reset()  # the scene built, before planning
     t0 = time.perf_counter()
-    with bb.crowd_writes_timed(api) as writes:
+    with bb.crowd_writes_timed(api) as writes, bb.crowd_stages_timed(api) as stages:
         with api.cluster_executor(args.written_workers or None) as executor:
             res = api.plan_crowd(scene, pairs, frame_start=1, executor=executor)
     total = time.perf_counter() - t0
@@ -404,6 +404,8 @@ def run_written(n, args):
         "workers": args.written_workers,
         "seconds": {
             "plan_resolve": total - sum(writes),
+            "members": stages["_plan_each"],  # of plan_resolve
+            "resolve": stages["_resolve"],  # of plan_resolve, its re-plans included
             "write": sum(writes),
             "write_cpu": writes.cpu,  # Blender's process (its keys fitted elsewhere or not)
             "planned_resolved_written": total,
@@ -423,17 +425,19 @@ def run_written(n, args):
 def written_markdown(rows):
     out = [
         "| characters | Blender | workers | planned | conflicts left | plan + resolve s "
+        "| of which members s | of which resolution s "
         "| write s | write CPU s, Blender's process | planned, resolved and written s "
         "| save s | with the save s "
         "| KB per character-second | peak RSS MB written / saved |",
-        "|" + "---|" * 13,
+        "|" + "---|" * 15,
     ]
     for r in rows:
         s = r["seconds"]
         out.append(
             f"| {r['characters']} | {r['blender']} | {r['workers']} "
             f"| {r['planned']}/{r['characters']} | {r['conflicts_left']} "
-            f"| {s['plan_resolve']:.1f} | {s['write']:.1f} | {s['write_cpu']:.1f} "
+            f"| {s['plan_resolve']:.1f} | {s['members']:.1f} | {s['resolve']:.1f} "
+            f"| {s['write']:.1f} | {s['write_cpu']:.1f} "
             f"| {s['planned_resolved_written']:.1f} "
             f"| {s['save']:.1f} | {s['with_save']:.1f} "
             f"| {r['file_kb_per_character_second']:.1f} "
