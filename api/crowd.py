@@ -553,25 +553,29 @@ class _Replanning:
         return _replanned(self.c, self.versions, self.k, self.answer.result())
 
 
-def _replan_later(c, pool, worlds, versions, k, ghosts):
-    """:func:`_replan` asked of ``pool``'s workers at once (``worlds``: every size's member
-    world, shared with them), its answer taken later."""
+def _replan_later(c, pool, sent, versions, k, ghosts):
+    """:func:`_replan` asked of ``pool``'s workers at once, its answer taken later. Every
+    size's member world is sent to them with the first re-plan (kept in ``sent``): a crowd
+    nobody is re-routed in sends none."""
     check_cancelled(c.cancelled, CANCELLED)
+    if not sent:
+        sent["worlds"] = pool.share(worlds={size: w.members for size, w in c.worlds.items()})
     task = _task(c, versions[k][0][0], ghosts)
-    return _Replanning(c, versions, k, pool.submit(members.plan_sized, task, shared=worlds))
+    answer = pool.submit(members.plan_sized, task, shared=sent["worlds"])
+    return _Replanning(c, versions, k, answer)
 
 
 def _resolve(c, planned):
     """(the version of each planned character the crowd settled on, its schedules):
     :func:`motion_patches.crowd.crowd.resolve` with every re-plan kept. On a cluster the
-    re-plans are worked out on its workers while the resolution places the next characters
-    (in process, when their turn comes: the crowd comes out the same)."""
+    re-plans are worked out on its workers while the resolution places the characters that
+    keep clear of them (in process each is worked out when its answer is taken, in the same
+    order: the crowd comes out the same)."""
     versions = [[p] for p in planned]  # every re-plan kept: the crowd may settle on any
     pool = later = None
     if c.executor.workers:
         pool = c.executor.pool()
-        worlds = pool.share(worlds={size: w.members for size, w in c.worlds.items()})
-        later = partial(_replan_later, c, pool, worlds, versions)
+        later = partial(_replan_later, c, pool, {}, versions)
     try:
         # Resolved a little wider than reported: a hold is laid into the written motion by a
         # time warp, which may bring a pair nearer than the track the table saw (on the plaza
