@@ -403,17 +403,7 @@ def _resolve_once(
             table.reserve(i, s.track, s.delay)
             schedules[i] = s
             placed.append(i)
-            for j, (frames, frame, dist) in sorted(found.items()):
-                conflicts.append(
-                    {
-                        "a": j,
-                        "b": i,
-                        "frame": frame,
-                        "first_frame": int(frames[0]),
-                        "frames": int(len(frames)),
-                        "distance_m": dist,
-                    }
-                )
+            conflicts.extend(_pairs(found, i))
             return
         clear_of = _Clear([track, *discs], REPLAN_CLEAR)
         pending.append((turn + REPLAN_AHEAD, i, attempts, later(i, discs), clear_of))
@@ -674,16 +664,22 @@ def conflicts_of(
     table, out = Reservations(spacing), []
     for i, (track, d) in enumerate(zip(tracks, delays)):
         track = np.asarray(track, float)[:, :2]
-        for j, (frames, frame, dist) in sorted(table.check(track, d).items()):
-            out.append(
-                {
-                    "a": j,
-                    "b": i,
-                    "frame": frame,
-                    "first_frame": int(frames[0]),
-                    "frames": int(len(frames)),
-                    "distance_m": dist,
-                }
-            )
+        out.extend(_pairs(table.check(track, d), i))
         table.reserve(i, track, d)
     return out
+
+
+def _pairs(found, b):
+    """The conflicts of ``b`` with those it meets (``found``: :meth:`Reservations.check`),
+    as :func:`resolve` reports them, by the other's index."""
+    return [
+        {
+            "a": j,
+            "b": b,
+            "frame": frame,
+            "first_frame": int(frames[0]),
+            "frames": int(len(frames)),
+            "distance_m": dist,
+        }
+        for j, (frames, frame, dist) in sorted(found.items())
+    ]
