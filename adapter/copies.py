@@ -55,18 +55,17 @@ def remove_copies(pairs, collection):
     """Remove the copies and goals of :func:`make_copies`, the actions planning made for
     them (:func:`nla.made_for`) and their collections (named from ``collection``) when
     left empty."""
-    colls = set()
+    colls, tagged, made, doomed = set(), nla.tagged_actions(bpy), [], []
     for ob, goal in pairs:
         for o in (ob, goal):
             colls.update(c for c in o.users_collection if c.name.startswith(collection))
-        made = [a for a in bpy.data.actions if nla.made_for(a, ob)]
+        made += nla.actions_made_for(bpy, ob, tagged)
         if ob.animation_data is not None:
             ob.animation_data_clear()
-        bpy.data.objects.remove(ob)
-        bpy.data.objects.remove(goal)
-        for a in made:
-            if a.users == 0:
-                bpy.data.actions.remove(a)
+        doomed += [ob, goal]
+    # in batches: each removal on its own has Blender look through the whole file
+    bpy.data.batch_remove(doomed)
+    bpy.data.batch_remove([a for a in made if a.users == 0])
     for c in colls:
         if not c.objects and not c.children:
             bpy.data.collections.remove(c)

@@ -144,6 +144,7 @@ class Snapshot:
         self.objects = []
         self.fake = {}
         self.made = set()  # pointers of the actions planning made for the objects
+        tagged = None  # {character name: actions with that name tag}, made once if needed
         for ob in objects:
             ad = ob.animation_data
             rec = {"object": ob, "props": {k: ob.get(k) for k in self.keys}, "ad": None}
@@ -158,10 +159,11 @@ class Snapshot:
                     for s in t["strips"]:
                         self._hold(s["action"])
                 self._hold(ad.action)
-            for a in bpy.data.actions:
-                if nla.made_for(a, ob):
-                    self._hold(a)
-                    self.made.add(a.as_pointer())
+            if tagged is None and nla.owned_actions(ob) is None:
+                tagged = nla.tagged_actions(bpy)
+            for a in nla.actions_made_for(bpy, ob, tagged):
+                self._hold(a)
+                self.made.add(a.as_pointer())
             self.objects.append(rec)
 
     def _hold(self, action):
@@ -182,9 +184,11 @@ class Snapshot:
         still there take the name back."""
         self._release()
         actions = self.bpy.data.actions
-        for action, _ in list(self.fake.values()):
-            if action.as_pointer() in self.made and action.users == 0:
-                actions.remove(action)
+        # in one batch: each removal on its own has Blender look through the whole file
+        # (3,000 actions of a crowd planned again: 8.6 s)
+        self.bpy.data.batch_remove(
+            [a for a, _ in self.fake.values() if a.as_pointer() in self.made and a.users == 0]
+        )
         renamed = {}
         for a in list(actions):
             if a.as_pointer() not in self.actions:
@@ -205,9 +209,9 @@ class Snapshot:
         for k, v in self.scene_props.items():
             _set_prop(self.scene, k, v)
         self._release()
-        for a in list(self.bpy.data.actions):
-            if a.as_pointer() not in self.actions:
-                self.bpy.data.actions.remove(a)
+        self.bpy.data.batch_remove(
+            [a for a in self.bpy.data.actions if a.as_pointer() not in self.actions]
+        )
 
     def _restore_object(self, rec):
         ob = rec["object"]

@@ -158,3 +158,22 @@ def test_a_long_plan_on_the_command_line_says_it_still_works(mp, planned, capsys
     code = mp.cli.main(["plan", "--character", "Walker", "--goal", "Goal", "--json"])
     out, err = capsys.readouterr()
     assert code == 0 and "still working" not in err  # --json: stdout and stderr stay quiet
+
+
+def test_a_character_planned_before_ids_were_kept_has_its_old_actions_replaced(mp, planned):
+    """A character whose record keeps no action ids (planned by an earlier version): its
+    old actions are found by their name tag and replaced by a re-plan; an action of the
+    user's with no user of its own stays."""
+    scene, walker, goal = planned
+    nla = mp.adapter.nla
+    old = [a for a in own_actions(walker) if a.get(nla.SEGMENT_KEY) is None]
+    assert old and all(a.get(nla.CHARACTER_KEY) == walker.name for a in old)
+    for a in old:
+        a["made before"] = True
+    del walker[nla.ACTIONS_KEY]
+    spare = bpy.data.actions.new("my spare action")
+    mp.api.plan_path(scene, walker, goal, frame_start=1)
+    left = [a.name for a in bpy.data.actions if a.get("made before")]
+    assert not left, left
+    assert bpy.data.actions.get("my spare action") is spare and spare.users == 0
+    assert nla.ACTIONS_KEY in walker  # ids kept again
