@@ -441,6 +441,17 @@ def crowd_stages_timed(api, names=("_plan_each", "_resolve")):
             setattr(api.crowd, n, f)
 
 
+def _crowd_planned(api, scene, pairs, args):
+    """(result, seconds, the writes' seconds) of ``api.plan_crowd`` of ``pairs``."""
+    t0 = time.perf_counter()
+    with crowd_writes_timed(api) as writes:
+        with api.cluster_executor(args.workers or None) as executor:
+            res = profiled(
+                args.profile, api.plan_crowd, scene, pairs, frame_start=1, executor=executor
+            )
+    return res, time.perf_counter() - t0, writes
+
+
 def section_crowd(bpy, addon, args):
     """plan_crowd of ``args.crowd`` characters (10 lanes per column), end to end."""
     api = addon.api
@@ -458,13 +469,7 @@ def section_crowd(bpy, addon, args):
         pillar(bpy, f"P{i}", 14.0 * i + 11.0, -1.5)
     bpy.ops.wm.save_as_mainfile(filepath=str(Path(tempfile.gettempdir()) / "bench_crowd0.blend"))
     before = (Path(tempfile.gettempdir()) / "bench_crowd0.blend").stat().st_size
-    t0 = time.perf_counter()
-    with crowd_writes_timed(api) as writes:
-        with api.cluster_executor(args.workers or None) as executor:
-            res = profiled(
-                args.profile, api.plan_crowd, scene, pairs, frame_start=1, executor=executor
-            )
-    total = time.perf_counter() - t0
+    res, total, writes = _crowd_planned(api, scene, pairs, args)
     saved = Path(tempfile.gettempdir()) / "bench_crowd1.blend"
     t1 = time.perf_counter()
     bpy.ops.wm.save_as_mainfile(filepath=str(saved))
@@ -477,13 +482,7 @@ def section_crowd(bpy, addon, args):
         print(f"  not planned: {failed}", flush=True)
     # planned again, as a user does after changing something: the file now holds the first
     # crowd's actions, which the writes replace
-    t2 = time.perf_counter()
-    with crowd_writes_timed(api) as again_writes:
-        with api.cluster_executor(args.workers or None) as executor:
-            again = profiled(
-                args.profile, api.plan_crowd, scene, pairs, frame_start=1, executor=executor
-            )
-    again_s = time.perf_counter() - t2
+    again, again_s, again_writes = _crowd_planned(api, scene, pairs, args)
     out = {
         "characters": len(pairs),
         "planned": len(res.plans),
