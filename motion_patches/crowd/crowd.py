@@ -357,8 +357,9 @@ def _resolve_once(
         return None if mask is None else np.asarray(mask, bool) & ~paths.crossed(track, waiting)
 
     def place(i):
-        """Character i's attempts: yields the discs to re-plan it round, is sent the
-        re-plan's answer, and returns its best schedule and what it still meets."""
+        """Character i's attempts: yields the discs to re-plan it round (and the track it
+        tried last), is sent the re-plan's answer, and returns its best schedule and what
+        it still meets."""
         waiting[i] = False
         track = np.asarray(tracks[i], float)[:, :2]
         s = Schedule(0, (), 0, track, clear(track, holdable[i]))
@@ -545,10 +546,10 @@ def resolve(
     Still too close, it is re-planned (``replan(i, discs) -> (track, holdable) or None``,
     each call a new version of its plan, :attr:`Schedule.version`; None: never) round the
     discs where the others it meets walk around those frames (:func:`ghosts`), and the
-    above is done again, at most ``rounds`` times, :data:`REPLAN_AHEAD` characters after
-    its turn (``replan_later(i, discs)``: the re-plan asked for at once, an answer whose
-    ``result()`` is ``replan``'s, worked out on a cluster meanwhile; None: ``replan``
-    when its turn comes).
+    above is done again, at most ``rounds`` times. Meanwhile the characters after it whose
+    paths keep clear of it may be placed (:func:`_resolve_once`): ``replan_later(i,
+    discs)`` asks for the re-plan at once (an answer whose ``result()`` is ``replan``'s,
+    worked out on a cluster meanwhile); None: ``replan`` when its answer is taken.
 
     When conflicts are left, each character still too close is first mended locally
     (:func:`_repair`: freed with those it meets, placed before them and all re-timed), and
