@@ -136,7 +136,7 @@ def actions_made_for(bpy, obj, tagged=None):
     (:func:`tagged_actions`, made once for many characters), else every action read."""
     owned = owned_actions(obj)
     if owned is not None:
-        found = [bpy.data.actions.get(name) for name in owned.values()]
+        found = [bpy.data.actions.get(name) for name in dict.fromkeys(owned.values())]
     else:
         found = (tagged_actions(bpy) if tagged is None else tagged).get(obj.name, [])
     return [a for a in found if made_for(a, obj)]
