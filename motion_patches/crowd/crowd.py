@@ -412,8 +412,7 @@ def _resolve_once(
     # pending: (last turn it may wait to, character, its attempts, re-plan asked, _Clear)
     placed, pending = [], []
     for turn, i in enumerate(order):
-        track = np.asarray(tracks[i], float)[:, :2]
-        while pending and (pending[0][0] < turn or any(not p[4].of(track) for p in pending)):
+        while pending and (pending[0][0] < turn or any(not p[4].of(tracks[i]) for p in pending)):
             _, k, attempts, answer, _ = pending.pop(0)
             step_on(k, attempts, answer.result())
         step_on(i, place(i), None)
