@@ -387,58 +387,57 @@ def blender_floor(bpy, addon, source, chars):
 
 
 class _Timed(list):
+    """The wall seconds of each call of a function, and its ``cpu``: this process's CPU
+    seconds in them (all its threads, not the Dask workers')."""
+
     cpu = 0.0
 
 
 @contextlib.contextmanager
-def crowd_writes_timed(api):
-    """A list filled with the seconds of each crowd's writes (``api.crowd._write_all``,
-    what ``plan_crowd`` calls: the writes, with what is prepared for them meanwhile) made
-    inside the ``with``; its ``cpu``: this process's CPU seconds in them (all its threads,
-    not the Dask workers')."""
-    writes = _Timed()
-    write = api.crowd._write_all
-
-    def timed_write(*a, **kw):
-        t, c = time.perf_counter(), time.process_time()
-        try:
-            return write(*a, **kw)
-        finally:
-            writes.append(time.perf_counter() - t)
-            writes.cpu += time.process_time() - c
-
-    api.crowd._write_all = timed_write
-    try:
-        yield writes
-    finally:
-        api.crowd._write_all = write
-
-
-@contextlib.contextmanager
-def crowd_stages_timed(api, names=("_plan_each", "_resolve")):
-    """{name: seconds} of the crowd stages ``names`` (functions of ``api.crowd`` that
-    ``plan_crowd`` calls: its members planned, its resolution with its re-plans) run inside
-    the ``with``, wall time."""
-    seconds = dict.fromkeys(names, 0.0)
+def _calls_timed(api, names):
+    """{name: :class:`_Timed`} of the calls of ``api.crowd``'s functions ``names`` made
+    inside the ``with`` (each wrapped, then put back)."""
     kept = {n: getattr(api.crowd, n) for n in names}
+    timed = {n: _Timed() for n in names}
 
-    def timed(name):
+    def wrapped(name):
         def run(*a, **kw):
-            t = time.perf_counter()
+            t, c = time.perf_counter(), time.process_time()
             try:
                 return kept[name](*a, **kw)
             finally:
-                seconds[name] += time.perf_counter() - t
+                timed[name].append(time.perf_counter() - t)
+                timed[name].cpu += time.process_time() - c
 
         return run
 
     for n in names:
-        setattr(api.crowd, n, timed(n))
+        setattr(api.crowd, n, wrapped(n))
     try:
-        yield seconds
+        yield timed
     finally:
         for n, f in kept.items():
             setattr(api.crowd, n, f)
+
+
+@contextlib.contextmanager
+def crowd_writes_timed(api):
+    """A :class:`_Timed` of each crowd's writes (``api.crowd._write_all``, what
+    ``plan_crowd`` calls: the writes, with what is prepared for them meanwhile) made inside
+    the ``with``."""
+    with _calls_timed(api, ["_write_all"]) as timed:
+        yield timed["_write_all"]
+
+
+@contextlib.contextmanager
+def crowd_stages_timed(api, names=("_plan_each", "_resolve")):
+    """{name: wall seconds} of the crowd stages ``names`` (functions of ``api.crowd`` that
+    ``plan_crowd`` calls: its members planned, its resolution with its re-plans) run inside
+    the ``with``, filled in when it ends."""
+    seconds = dict.fromkeys(names, 0.0)
+    with _calls_timed(api, names) as timed:
+        yield seconds
+    seconds.update({n: sum(t) for n, t in timed.items()})
 
 
 def _crowd_planned(api, scene, pairs, args):
