@@ -22,6 +22,7 @@ from ..motion_patches.kinematics import rig_keys, scene_rate
 from ..motion_patches.planning import moving_props
 from ..motion_patches.planning.settings import PlanSettings
 from ..motion_patches.props.environment import Obstacle
+from . import crowd_keys
 from .common import (
     ANALYSIS_KEY,
     PLAN_KEY,
@@ -50,7 +51,7 @@ from .solve import (
     _without,
     _writable,
 )
-from .writing import FRAME_RANGE_KEY, _fit_frame_range, _placed, _prepared_args, _write
+from .writing import FRAME_RANGE_KEY, _fit_frame_range, _placed, _write
 
 CROWD_RESOLVE_SLACK = 0.02  # metres the crowd is resolved wider than its spacing (see _resolve)
 CROWD_SPOT = "\x00crowd spot "  # obstacle names of other characters' standing spots
@@ -192,24 +193,19 @@ def plan_crowd(
     check_cancelled(cancelled, CANCELLED)
     with cluster_kept():
         planned, failed = _plan_each(c, progress)
-        planned, schedules = _resolve(c, planned)
-    holds = _lay_holds(c, planned, schedules)
-    # what is reported is checked on the motion written, whatever resolved it
-    ranked = sorted(range(len(planned)), key=lambda k: schedules[k].rank)  # order kept
-    conflicts = crowd.conflicts_of(
-        [planned[k][3] for k in ranked],
-        [schedules[k].delay for k in ranked],
-        c.spacing,
-    )
-    moving_left = _moving_conflicts(c, planned, schedules)
-    if progress is not None:
-        progress(0.9)
-    check_cancelled(cancelled, CANCELLED)
-    with cluster_kept():  # what was written is put back first
-        written = _write_all(c, planned, schedules, progress)
+    pool = c.executor.pool()  # the re-plans' and the writing's, from the resolution on
+    try:
+        with cluster_kept():
+            keys = crowd_keys.Keys(c, pool, planned)
+            planned, schedules = _resolve(c, planned, pool, keys)
+        written, conflicts, ranked, holds, moving_left = _settled(
+            c, planned, schedules, keys, progress
+        )
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+    names = [c.pairs[p[0]][0].name for p in planned]
     if progress is not None:
         progress(1.0)
-    names = [c.pairs[p[0]][0].name for p in planned]
     for x in conflicts:
         x["a"], x["b"] = names[ranked[x["a"]]], names[ranked[x["b"]]]
         x["frame"] += c.first
@@ -233,6 +229,26 @@ def plan_crowd(
         [names[k] for k in ranked],
         moving_left,
     )
+
+
+def _settled(c, planned, schedules, keys, progress):
+    """The resolved crowd's holds laid in, what is left checked, and every character
+    written: (written, conflicts, ranks, holds, props' conflicts)."""
+    holds = _lay_holds(c, planned, schedules)
+    # what is reported is checked on the motion written, whatever resolved it
+    ranked = sorted(range(len(planned)), key=lambda k: schedules[k].rank)  # order kept
+    conflicts = crowd.conflicts_of(
+        [planned[k][3] for k in ranked],
+        [schedules[k].delay for k in ranked],
+        c.spacing,
+    )
+    moving_left = _moving_conflicts(c, planned, schedules)
+    if progress is not None:
+        progress(0.9)
+    check_cancelled(c.cancelled, CANCELLED)
+    with cluster_kept():  # what was written is put back first
+        written = _write_all(c, planned, schedules, keys, progress)
+    return written, conflicts, ranked, holds, moving_left
 
 
 @dataclass
@@ -561,58 +577,68 @@ def _replan_later(c, pool, sent, versions, k, ghosts):
     if not sent:
         sent["worlds"] = pool.share(worlds={size: w.members for size, w in c.worlds.items()})
     task = _task(c, versions[k][0][0], ghosts)
-    answer = pool.submit(members.plan_sized, task, shared=sent["worlds"])
+    # before any keys asked early (:func:`_resolve`): the resolution may be waiting for it
+    answer = pool.submit(members.plan_sized, task, shared=sent["worlds"], priority=1)
     return _Replanning(c, versions, k, answer)
 
 
-def _resolve(c, planned):
+def _resolve(c, planned, pool, keys):
     """(the version of each planned character the crowd settled on, its schedules):
-    :func:`motion_patches.crowd.crowd.resolve` with every re-plan kept. On a cluster the
-    re-plans are worked out on its workers while the resolution places the characters that
-    keep clear of them (in process each is worked out when its answer is taken, in the same
-    order: the crowd comes out the same)."""
+    :func:`motion_patches.crowd.crowd.resolve` with every re-plan kept. On a cluster
+    (``pool``, ``c.executor``'s) the re-plans are worked out on its workers while the
+    resolution places the characters that keep clear of them (in process each is worked
+    out when its answer is taken, in the same order: the crowd comes out the same), and the
+    keys of each character placed as it was planned are asked of them then (``keys``,
+    :meth:`~.crowd_keys.Keys.early`), behind the re-plans."""
     versions = [[p] for p in planned]  # every re-plan kept: the crowd may settle on any
-    pool = later = None
+    later = settled = None
     if c.executor.workers:
-        pool = c.executor.pool()
         later = partial(_replan_later, c, pool, {}, versions)
-    try:
-        # Resolved a little wider than reported: a hold is laid into the written motion by a
-        # time warp, which may bring a pair nearer than the track the table saw (on the plaza
-        # of 1,000: by 0.2 mm at most; the slack is a hundred times that).
-        schedules, _ = crowd.resolve(
-            [p[3] for p in planned],
-            partial(_replan, c, versions),
-            c.spacing + CROWD_RESOLVE_SLACK,
-            c.settings.radius,
-            c.fps,
-            round(c.max_wait_seconds * c.fps),
-            max(1, round(0.2 * c.fps)),
-            ramp=c.ramp,
-            holdable=[p[4] for p in planned],
-            replan_later=later,
-        )
-    finally:
-        if pool is not None:
-            pool.shutdown(wait=True, cancel_futures=True)
+
+        def settled(i, s):  # placed as it was planned: its keys asked for now
+            if s.version == 0 and not s.holds:
+                keys.early(i, planned[i][1], planned[i][2])
+
+    # Resolved a little wider than reported: a hold is laid into the written motion by a
+    # time warp, which may bring a pair nearer than the track the table saw (on the plaza
+    # of 1,000: by 0.2 mm at most; the slack is a hundred times that).
+    schedules, _ = crowd.resolve(
+        [p[3] for p in planned],
+        partial(_replan, c, versions),
+        c.spacing + CROWD_RESOLVE_SLACK,
+        c.settings.radius,
+        c.fps,
+        round(c.max_wait_seconds * c.fps),
+        max(1, round(0.2 * c.fps)),
+        ramp=c.ramp,
+        holdable=[p[4] for p in planned],
+        replan_later=later,
+        settled=settled,
+    )
     return [v[s.version] for v, s in zip(versions, schedules)], schedules
 
 
+def _held(c, p, holds):
+    """(plan, piece motions, root track, [(frame from its start, frames held)]) of the
+    planned character ``p`` ([n, plan, piece motions, root track, holdable]) with its
+    schedule's ``holds`` put in the pieces they fall in, each as its own strip; ``p`` is
+    left as it is."""
+    plan, raw, at = p[1], members.unpacked(p[2]), []
+    rate = c.fps / c.patch.gait.fps  # scene frames per patch frame
+    for k, h in holds:
+        bounds = scene_rate.piece_bounds([m.frames for m in raw], rate)[1]
+        plan, raw = _with_hold(plan, raw, bounds, k, h, c.ramp, rate)
+        at = [(f + h + c.ramp if f > k else f, n) for f, n in at] + [(k, h)]
+    return plan, raw, _root_track(_placed(c.scene, c.patch, c.rigs[p[0]], raw)), sorted(at)
+
+
 def _lay_holds(c, planned, schedules):
-    """Each schedule's holds put in the piece they fall in, as its own strip (``planned``
-    updated); {name: [(frame from its start, frames held)]}."""
+    """Each schedule's holds laid in (:func:`_held`, ``planned`` updated); {name: [(frame
+    from its start, frames held)]}."""
     holds = {}
     for p, s in zip(planned, schedules):
         if s.holds:
-            p[2] = members.unpacked(p[2])
-            at = []
-            for k, h in s.holds:
-                rate = c.fps / c.patch.gait.fps  # scene frames per patch frame
-                bounds = scene_rate.piece_bounds([m.frames for m in p[2]], rate)[1]
-                p[1], p[2] = _with_hold(p[1], p[2], bounds, k, h, c.ramp, rate)
-                at = [(f + h + c.ramp if f > k else f, n) for f, n in at] + [(k, h)]
-            p[3] = _root_track(_placed(c.scene, c.patch, c.rigs[p[0]], p[2]))
-            holds[c.pairs[p[0]][0].name] = sorted(at)
+            p[1], p[2], p[3], holds[c.pairs[p[0]][0].name] = _held(c, p, s.holds)
     return holds
 
 
@@ -639,28 +665,15 @@ def _moving_conflicts(c, planned, schedules):
     return out
 
 
-AHEAD = 4  # characters whose writes are prepared while one is written, in process
-# In process one thread prepares them (cluster.InProcess.pool): the main thread, writing
-# through Blender, needs the GIL most of the time; a second preparing thread slowed it more
-# than it gained (bench_blender, 200 characters on 2 cores: writing 6.0 s with one, 7.4 s
-# with two or three). On a cluster its workers prepare them, this many each ahead (their
-# answers come back over the network; 4 each wrote the plaza of 1,000 about a second slower).
-AHEAD_PER_WORKER = 8
-# Characters a worker prepares in one task: each task costs Blender's process a few
-# milliseconds of Dask's own work (messages, the answer fetched), beside Blender's.
-BATCH = 4
-
-
-def _write_all(c, planned, schedules, progress=None):
+def _write_all(c, planned, schedules, keys, progress=None):
     """{entry: PlanResult} of every planned character written (all refused before the
     first is written when one cannot be), the frame range fitted once after; cancelled
     between two characters, those written are put back.
 
     What a write computes before it touches Blender (the foot lock, the body and root
-    actions' keys: :func:`~motion_patches.crowd.members.prepared_keys`) is made for the
-    next characters while one is written, on ``c.executor``'s workers, :data:`BATCH` at a
-    time (in process: in a thread, one at a time). Blender's data is only touched here, in
-    order."""
+    actions' keys) comes from ``keys`` (:class:`~.crowd_keys.Keys`: asked of
+    ``c.executor``'s workers early, or ahead of the character written; in process, in a
+    thread, one at a time). Blender's data is only touched here, in order."""
     written = {}
     for (n, _, _, track, _), s in zip(planned, schedules):
         _writable(c.pairs[n][0], c.first + s.delay, len(track))
@@ -671,59 +684,35 @@ def _write_all(c, planned, schedules, progress=None):
         (PLAN_KEY, ANALYSIS_KEY, FRAME_RANGE_KEY),
     ):
         segments = nla.segment_index(bpy)  # the shared segment actions, found once
-        pool = c.executor.pool()
-        batch = BATCH if c.executor.workers else 1
-        depth = max(AHEAD, AHEAD_PER_WORKER * c.executor.workers)
-        shared = pool.share(patch=c.patch)
-        ahead, got = {}, {}  # batches asked for (by first character), answers taken
-
-        def prepare(first):
-            jobs = []
-            for n, plan, raw, _, _ in planned[first : first + batch]:
-                args = _prepared_args(
-                    c.pairs[n][0], _skeleton(c.rigs[n], c.patch), None, c.settings, c.fps, plan
+        keys.writing(planned)
+        for k, ((n, plan, raw, *_), s) in enumerate(zip(planned, schedules)):
+            check_cancelled(c.cancelled, CANCELLED)
+            packed = keys.take(k)
+            skel = _skeleton(c.rigs[n], c.patch)
+            placed = _placed(c.scene, c.patch, c.rigs[n], members.unpacked(raw))
+            prepared = rig_keys.unpack(packed, skel, placed[2])
+            env = _world_of(c, c.sizes[n]).env
+            with _without(env, c.own[n]):  # the plan record lists what it walked around
+                written[n] = _write(
+                    c.scene,
+                    c.pairs[n][0],
+                    c.patch,
+                    c.patch_name,
+                    plan,
+                    placed,
+                    c.first + s.delay,
+                    env,
+                    c.settings,
+                    c.rigs[n],
+                    fit=False,
+                    segments=segments,
+                    prepared=prepared,
                 )
-                jobs.append((raw, c.rigs[n], args))
-            # each motion is placed where it is prepared (sent the piece motions, a quarter
-            # of the bytes) and again here when written
-            ahead[first] = pool.submit(members.prepared_keys, jobs, c.fps, shared=shared)
-
-        try:
-            asked = 0  # characters whose preparation was asked for
-            for k, ((n, plan, raw, *_), s) in enumerate(zip(planned, schedules)):
-                check_cancelled(c.cancelled, CANCELLED)
-                while asked < min(k + depth, len(planned)) or asked <= k:
-                    prepare(asked)
-                    asked += batch
-                if k % batch == 0:
-                    got = dict(enumerate(ahead.pop(k).result(), k))
-                skel = _skeleton(c.rigs[n], c.patch)
-                placed = _placed(c.scene, c.patch, c.rigs[n], members.unpacked(raw))
-                prepared = rig_keys.unpack(got.pop(k), skel, placed[2])
-                env = _world_of(c, c.sizes[n]).env
-                with _without(env, c.own[n]):  # the plan record lists what it walked around
-                    written[n] = _write(
-                        c.scene,
-                        c.pairs[n][0],
-                        c.patch,
-                        c.patch_name,
-                        plan,
-                        placed,
-                        c.first + s.delay,
-                        env,
-                        c.settings,
-                        c.rigs[n],
-                        fit=False,
-                        segments=segments,
-                        prepared=prepared,
-                    )
-                # written: its motions are let go, not held to the end beside the actions
-                # Blender makes of them
-                planned[k][2] = placed = prepared = None
-                if progress is not None:
-                    progress(0.9 + 0.1 * (k + 1) / len(planned))
-        finally:
-            pool.shutdown(wait=True, cancel_futures=True)
+            # written: its motions are let go, not held to the end beside the actions
+            # Blender makes of them
+            planned[k][2] = placed = prepared = packed = None
+            if progress is not None:
+                progress(0.9 + 0.1 * (k + 1) / len(planned))
         if written:
             _fit_frame_range(c.scene)  # once: it reads every character's plan record
     return written

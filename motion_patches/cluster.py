@@ -80,13 +80,22 @@ def _unpacked(token: str, packed: dict) -> dict:
 
 
 class _ThreadPool(ThreadPoolExecutor):
-    """:class:`InProcess`'s pool: one thread; inputs shared by its tasks (:meth:`share`)
-    are passed to each as they are."""
+    """:class:`InProcess`'s pool: one thread, running tasks in the order they come (a
+    ``priority`` is not needed there); inputs shared by its tasks (:meth:`share`) are
+    passed to each as they are."""
 
     def share(self, **shared: Any) -> dict:
         return shared
 
-    def submit(self, fn: Callable, /, *args: Any, shared: dict | None = None) -> Any:  # type: ignore[override]
+    def submit(  # type: ignore[override]
+        self,
+        fn: Callable,
+        /,
+        *args: Any,
+        shared: dict | None = None,
+        priority: int = 0,
+        aside: bool = False,
+    ) -> Any:
         return super().submit(fn, *args, **(shared or {}))
 
 
@@ -246,7 +255,7 @@ class DaskCluster:
         """Tasks submitted one at a time (``submit(fn, *args)``, a future's ``result()``),
         run on the workers while the caller goes on: a crowd's keys are fitted there while
         Blender writes the characters before. ``shutdown()`` when done."""
-        return _DaskPool(self.client, self.address)
+        return _DaskPool(self.client, self.address, own=self.cluster is not None)
 
     def close(self) -> None:
         self.client.close()
@@ -282,8 +291,8 @@ class _DaskPool:
     are only looked after weakly (a result stays on its worker while a future holds it):
     those the caller still holds unfinished are cancelled at :meth:`shutdown`."""
 
-    def __init__(self, client: Any, address: str = "") -> None:
-        self.client, self.address = client, address
+    def __init__(self, client: Any, address: str = "", own: bool = False) -> None:
+        self.client, self.address, self.own = client, address, own
         self.futures: weakref.WeakSet = weakref.WeakSet()
 
     def share(self, **shared: Any) -> tuple:
@@ -291,12 +300,32 @@ class _DaskPool:
         this returns as :meth:`submit`'s ``shared``."""
         return _scattered(self.client, shared), uuid.uuid4().hex[:8]
 
-    def submit(self, fn: Callable, *args: Any, shared: tuple | None = None) -> Any:
-        """``fn(*args)``, or ``fn(*args, **inputs)`` with ``shared`` from :meth:`share`."""
+    def submit(
+        self,
+        fn: Callable,
+        *args: Any,
+        shared: tuple | None = None,
+        priority: int = 0,
+        aside: bool = False,
+    ) -> Any:
+        """``fn(*args)``, or ``fn(*args, **inputs)`` with ``shared`` from :meth:`share`.
+        A task of higher ``priority`` is run before those of lower still waiting. ``aside``:
+        work nobody waits for yet, put on one worker (the last) of a cluster of this
+        machine's, so the others take at once what is waited for (a task running is not
+        stopped for a higher priority); another worker may still take it over (Dask's
+        work stealing, or the worker lost). On a cluster at a scheduler's address the
+        workers may be many and are not ours to order: the task goes anywhere."""
+        where: dict = {}
+        if aside and self.own:
+            workers = sorted(self.client.scheduler_info().get("workers", {}))
+            if len(workers) > 1:
+                where = {"workers": workers[-1:], "allow_other_workers": True}
         if shared is None:
-            f = self.client.submit(fn, *args, pure=False)
+            f = self.client.submit(fn, *args, pure=False, priority=priority, **where)
         else:
-            f = self.client.submit(run_shared, fn, args, *shared, pure=False)
+            f = self.client.submit(
+                run_shared, fn, args, *shared, pure=False, priority=priority, **where
+            )
         self.futures.add(f)
         return _Answer(f, self.address)
 

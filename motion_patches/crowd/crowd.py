@@ -332,6 +332,7 @@ def _resolve_once(
     versions,
     fixed=None,
     replan_later=None,
+    settled=None,
 ):
     """One pass of :func:`resolve` placing the characters in ``order``; ``versions``
     counts each character's re-plans over all passes (its next one's number). ``fixed``
@@ -343,8 +344,8 @@ def _resolve_once(
     re-plan, asked for with ``replan_later(i, discs)`` (an answer whose ``result()`` is
     ``replan``'s), is worked out on a cluster's worker while they are placed. The order
     does not depend on whether there is a cluster, so the crowd comes out the same in
-    process and on one. Returns (schedules, conflicts, table, the characters in the order
-    they were placed)."""
+    process and on one. ``settled(i, schedule)`` is told of each character as it is placed.
+    Returns (schedules, conflicts, table, the characters in the order they were placed)."""
     table = Reservations(spacing)
     schedules, conflicts = [None] * len(tracks), []
     paths, waiting = ways.Ways(tracks, spacing), np.ones(len(tracks), bool)
@@ -405,6 +406,8 @@ def _resolve_once(
             schedules[i] = s
             placed.append(i)
             conflicts.extend(_pairs(found, i))
+            if settled is not None:
+                settled(i, s)
             return
         clear_of = _Clear([track, *discs], REPLAN_CLEAR)
         pending.append((turn + REPLAN_AHEAD, i, attempts, later(i, discs), clear_of))
@@ -523,6 +526,7 @@ def resolve(
     stages: int = 6,
     restarts: int = 4,
     replan_later: Callable[[int, list[np.ndarray]], Any] | None = None,
+    settled: Callable[[int, Schedule], Any] | None = None,
 ) -> tuple[list[Schedule], list[dict[str, Any]]]:
     """Schedules and the conflicts left for ``tracks`` [(frames, 2)] in priority order,
     all starting on frame 0: each character in turn is checked against the
@@ -549,6 +553,9 @@ def resolve(
     paths keep clear of it may be placed (:func:`_resolve_once`): ``replan_later(i,
     discs)`` asks for the re-plan at once (an answer whose ``result()`` is ``replan``'s,
     worked out on a cluster meanwhile); None: ``replan`` when its answer is taken.
+    ``settled(i, schedule)`` is told of each character placed, in every pass, as it is
+    placed (what a character comes out with may still change in a later pass or repair):
+    work that follows from a schedule may start before the crowd is resolved.
 
     When conflicts are left, each character still too close is first mended locally
     (:func:`_repair`: freed with those it meets, placed before them and all re-timed), and
@@ -594,6 +601,7 @@ def resolve(
             versions,
             fixed,
             later,
+            settled,
         )
         order = [i for i in order if fixed is not None and i in fixed] + placed
         for rank, i in enumerate(order):

@@ -150,6 +150,63 @@ def test_a_restart_in_a_large_crowd_places_again_only_the_neighbours_of_those_le
     assert [(s.delay, s.holds) for s in whole] == [(s.delay, s.holds) for s in sched]
 
 
+def test_each_character_placed_is_told_as_it_is_placed_in_every_pass():
+    """``settled`` hears of each character as it is placed, with the schedule it was
+    placed with, in the first pass and again in each restart that places it: a crowd with
+    a re-route and held characters, and the restart crowd above. What a character comes
+    out with is what it was last placed with, except where a repair moved it."""
+    t = np.linspace(0.0, 1.0, 121)[:, None]
+    a = np.array([0.0, 0.0]) + t * np.array([10.0, 0.0])
+    b = np.array([10.0, 0.3]) + t * np.array([-10.0, 0.0])
+    told = []
+
+    def settled(i, s):
+        told.append((i, s, (s.delay, s.holds, s.version, s.track.tobytes())))
+
+    sched, conflicts = crowd.resolve(
+        [a, b],
+        lambda i, discs: (b + np.array([0.0, 2.0]), None),
+        1.0,
+        0.25,
+        30.0,
+        12,
+        6,
+        holdable=[None, np.ones(121, bool)],
+        settled=settled,
+    )
+    assert not conflicts and sched[1].rerouted
+    assert [i for i, _, _ in told] == [0, 1]
+    for i, s, seen in told:  # each as it was placed, and as it came out
+        assert s is sched[i] and seen == (s.delay, s.holds, s.version, s.track.tobytes())
+    told.clear()
+    crossing = [line((0.0, 0.0), (8.0, 0.0), 81), line((4.0, -4.0), (4.0, 4.0), 81)]
+    held, _ = crowd.resolve(
+        crossing,
+        None,
+        0.5,
+        0.25,
+        30.0,
+        60,
+        3,
+        ramp=10,
+        holdable=[np.ones(81, bool)] * 2,
+        settled=settled,
+    )
+    assert held[1].holds or held[1].delay
+    assert [(i, s) for i, s, _ in told] == [(0, held[0]), (1, held[1])]
+    told.clear()
+    a = line((-5.0, 0.0), (5.0, 0.0), 101)  # the restart crowd of the test above
+    b = line((0.0, -2.0), (0.0, 0.0), 21)
+    far = [line((20.0 + 3 * k, 10.0), (20.0 + 3 * k, 18.0), 80) for k in range(10)]
+    sched, _ = crowd.resolve(
+        [*far[:5], a, *far[5:], b], lambda i, d: None, 0.5, 0.25, 30.0, 30, 3, settled=settled
+    )
+    counts = np.bincount([i for i, _, _ in told], minlength=12)
+    assert counts[5] == counts[11] == 5 and set(counts) == {1, 5}  # the first pass, 4 restarts
+    last = {i: s for i, s, _ in told}
+    assert all(last[k] is sched[k] for k in range(12) if k not in (5, 11))
+
+
 def test_the_neighbourhood_of_a_restart_reaches_those_whose_paths_come_near():
     """Paths 0.4 m apart in a chain: one step out per ring, nobody further; a character
     re-routed meets those near the way it walks now as well as near its plan; a
