@@ -29,6 +29,12 @@ AHEAD_PER_WORKER = 8
 # Characters a worker prepares in one task: each task costs Blender's process a few
 # milliseconds of Dask's own work (messages, the answer fetched), beside Blender's.
 BATCH = 4
+# Tasks of keys asked early that may be on the workers at once: the rest wait their turn in
+# this process (those still waiting when the crowd is resolved are prepared as the writing
+# comes to them). All at once, a crowd resolved in a second or two (the 1,000 lanes of
+# bench_blender) had its resolution slowed by the stream of tasks and their fitting
+# (planned and written 36.6 s against 35.6); two at a time it was not (31.2 s).
+FLYING = 2
 
 
 class Keys:
@@ -47,8 +53,9 @@ class Keys:
         self.waiting: list[tuple] = []  # (k, plan, motions) asked early, until a batch is full
         self.fresh: list[int] = []  # the characters to prepare while writing, in order
         self.next = 0  # of ``fresh``, the first not asked for yet
+        self.flying: list = []  # answers asked early, not made yet
 
-    def _ask(self, items: list[tuple], aside: bool = False) -> None:
+    def _ask(self, items: list[tuple], aside: bool = False) -> Any:
         """Ask for the keys of ``items`` [(k, plan, piece motions)] in one task."""
         if self._shared is None:  # the patch, sent to every worker once
             self._shared = self.pool.share(patch=self.c.patch)
@@ -66,6 +73,7 @@ class Keys:
         for place, (k, plan, raw) in enumerate(items):
             self.asked[k] = (plan, raw, answer, place)
         self.uses[answer] = len(items)
+        return answer
 
     def early(self, k: int, plan: Any, raw: list) -> None:
         """Character ``k`` placed by the resolution, to be written with ``plan`` and piece
@@ -79,9 +87,10 @@ class Keys:
             del self.asked[k]
             self._taken(old[2])
         self.waiting = [w for w in self.waiting if w[0] != k] + [(k, plan, raw)]
-        if len(self.waiting) >= self.batch:
-            self._ask(self.waiting, aside=True)
-            self.waiting = []
+        self.flying = [a for a in self.flying if a in self.uses and not self.pool.done(a)]
+        while len(self.waiting) >= self.batch and len(self.flying) < FLYING:
+            self.flying.append(self._ask(self.waiting[: self.batch], aside=True))
+            self.waiting = self.waiting[self.batch :]
 
     def writing(self, planned: list) -> None:
         """The crowd is resolved: ``planned`` is what is written. Keys asked for early of

@@ -98,6 +98,10 @@ class _ThreadPool(ThreadPoolExecutor):
     ) -> Any:
         return super().submit(fn, *args, **(shared or {}))
 
+    @staticmethod
+    def done(answer: Any) -> bool:
+        return bool(answer.done())
+
 
 class InProcess:
     """Runs every task here, in order: the default, and what Blender's window uses."""
@@ -328,6 +332,11 @@ class _DaskPool:
             )
         self.futures.add(f)
         return _Answer(f, self.address)
+
+    @staticmethod
+    def done(answer: "_Answer") -> bool:
+        """Whether ``answer``'s task has finished."""
+        return bool(answer.future.done())
 
     def shutdown(self, wait: bool = True, cancel_futures: bool = False) -> None:
         if cancel_futures:
