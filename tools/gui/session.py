@@ -222,16 +222,21 @@ class Session:
         self.xdo("mousemove", int(x), int(y))
 
     def click(self, x, y, button=1, modifiers=()):
-        """Pointer to (x, y), then the press and release once Blender has seen the pointer
-        there, as a hand does. Pressed at once, the checkbox was toggled once without an
-        undo step (Ctrl+Z then undid the step before it): Blender records a toggle's undo
-        step on release for the button under where its drag began, and a press taken
-        before the move can begin it elsewhere."""
+        """Pointer to (x, y), then the press, then the release, each once Blender's main
+        loop has taken what came before, as a hand does (a press lasts a tenth of a
+        second). Pressed at once, a checkbox was toggled without an undo step (Ctrl+Z then
+        undid the step before it): Blender records a toggle's undo step on release for the
+        button under where its drag began, and a press taken before the move can begin it
+        elsewhere; with press and release sent together it was still missed once in many
+        runs."""
         self.move(x, y)
         self.wait_idle()
         for m in modifiers:
             self.xdo("keydown", m)
-        self.xdo("click", button)
+        self.xdo("mousedown", button)
+        self.wait_idle()
+        self.xdo("mouseup", button)
+        self.wait_idle()
         for m in reversed(modifiers):
             self.xdo("keyup", m)
 
