@@ -118,15 +118,18 @@ def remove_owned(obj):
             ad.nla_tracks.remove(tr)
 
 
-def _orphan_connectors(bpy, obj, made=None):
-    """The actions planning made for ``obj`` that nothing uses any more, removed (none
-    for a character never planned: it has neither ids nor tracks of the add-on's).
-    ``made``: :func:`actions_made_for` of it, found before its tracks were removed."""
+def _made_before(bpy, obj):
+    """The actions planning made for ``obj`` (:func:`actions_made_for`), found while its
+    tracks still play them (taken from its strips, not looked up by name); none for a
+    character never planned (it has neither ids nor tracks of the add-on's)."""
     if owned_actions(obj) is None and TRACKS_KEY not in obj:
-        return
-    # users first: reading users is far cheaper than looking up custom properties
-    found = actions_made_for(bpy, obj) if made is None else made
-    for a in [a for a in found if a.users == 0]:
+        return []
+    return actions_made_for(bpy, obj)
+
+
+def _remove_unused(bpy, actions):
+    """Those of ``actions`` nothing uses any more (its tracks removed), removed."""
+    for a in [a for a in actions if a.users == 0]:
         bpy.data.actions.remove(a)
 
 
@@ -313,9 +316,9 @@ def write_plan(
     bounds = np.asarray(bounds, int)
     ad = obj.animation_data or obj.animation_data_create()
     stashed = stash_active_action(obj)
-    made = actions_made_for(bpy, obj) if owned_actions(obj) is not None else None
+    made = _made_before(bpy, obj)
     remove_owned(obj)
-    _orphan_connectors(bpy, obj, made)
+    _remove_unused(bpy, made)
 
     motion_track = ad.nla_tracks.new()
     motion_track.name = TRACK_MOTION
