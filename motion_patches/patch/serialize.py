@@ -287,6 +287,24 @@ def _lowest_joint(skel, d, prefix):
         return float(forward_kinematics(skel, root, d[prefix + "rotations"])[..., 2, 3].min())
 
 
+# How far a segment's curve may land from where its bake put it, relative to the patch's
+# side: the curve is summed in another order where numpy's BLAS runs on another CPU or
+# with another thread count (OPENBLAS_NUM_THREADS=1, as Dask's workers and many farm nodes
+# set it), and a curve that runs along a cell's side then lands a hair into the next cell.
+HAIR = 1e-9
+
+
+def _cells_crossed(points, side, cells):
+    """uint64 bitmask (S,) of the cells every curve (S, M, 2) crosses however its points are
+    nudged by a hair (:data:`HAIR`): a cell a point enters only by a hair is not counted,
+    so a patch baked on one machine loads on another."""
+    hair = HAIR * side
+    crossed = np.full(points.shape[0], ~np.uint64(0))
+    for nudge in ((-hair, -hair), (-hair, hair), (hair, -hair), (hair, hair)):
+        crossed &= cell_mask(points + np.array(nudge), side, cells)
+    return crossed
+
+
 def _segment_sense(d, header, fps, frames):
     """Each segment's stored length, turn, cells and effort are what its curve gives."""
     side, nodes = float(header["side"]), int(header["nodes"])
@@ -318,7 +336,7 @@ def _segment_sense(d, header, fps, frames):
                 f"array '{key}' says {stored[i]:.4g} for segment {i}, whose curve (header "
                 f"'side' {side:g}, 'seg_entry', 'seg_exit', 'seg_scale') gives {want[i]:.4g}"
             )
-    visited = cell_mask(pos[:, ::8], side, int(header["cells"]))
+    visited = _cells_crossed(pos[:, ::8], side, int(header["cells"]))
     if ((visited & d["seg_mask"]) != visited).any():
         _fail("array 'seg_mask' leaves out cells its segments' curves cross")
     rate = float(header["effort_rate"])

@@ -56,6 +56,38 @@ def test_the_good_file_reads_back(good, walk_patch):
     assert np.array_equal(p.seg_mask, walk_patch.seg_mask)
 
 
+def test_a_patch_loads_where_its_curves_land_a_hair_apart(good, monkeypatch):
+    """numpy's BLAS sums in another order on another CPU or thread count (Dask's workers
+    and many farm nodes set OPENBLAS_NUM_THREADS=1): a segment's curve that runs along a
+    cell's side then lands a hair into the next cell. The patch still loads either way; a
+    cell a curve crosses that the mask leaves out is still refused."""
+    from motion_patches.patch.locomotion_patch import cell_mask
+
+    hermite = serialize.curves.hermite
+    d = arrays_of(good)
+    header = json.loads(str(d["header"]))
+    side, cells = float(header["side"]), int(header["cells"])
+    left_out = []
+    for nudge in (-1e-13, 1e-13):
+        seen = []
+
+        def nudged(*args, nudge=nudge, seen=seen):
+            pos, vel, acc = hermite(*args)
+            seen.append(pos + nudge)
+            return seen[-1], vel, acc
+
+        monkeypatch.setattr(serialize.curves, "hermite", nudged)
+        serialize.patch_from_bytes(good)
+        plain = cell_mask(seen[0][:, ::8], side, cells)
+        left_out.append(bool(((plain & d["seg_mask"]) != plain).any()))
+    assert any(left_out)  # counted plainly, one nudge leaves the stored mask short
+    crossed = serialize._cells_crossed(seen[0][:, ::8], side, cells)
+    mask = d["seg_mask"].copy()
+    mask[0] &= ~(crossed[0] & (~crossed[0] + np.uint64(1)))  # a cell its curve crosses
+    with pytest.raises(ValueError, match="seg_mask"):
+        serialize.patch_from_bytes(crafted(good, seg_mask=mask))
+
+
 @pytest.mark.parametrize("fraction", [0.0, 0.1, 0.5, 0.9, 0.999])
 def test_truncated_files_are_refused(good, fraction):
     with pytest.raises(ValueError, match="not a stored locomotion patch"):
