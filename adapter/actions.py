@@ -23,6 +23,7 @@ from ..motion_patches.kinematics.channels import (  # noqa: F401 (the adapter's 
     channels_to_quat,
     closest_channels,
     euler_to_quat,
+    matching_channels,
     rest_channels,
     rotation_channels,
     rotation_path,
@@ -359,7 +360,7 @@ def key_pose(
     Quaternion channels are keyed as given (the caller makes them continuous); Euler and
     axis-angle ones are converted continuous over ``frames`` (:func:`rotation_channels`).
     ``tol``, ``between``: store the curves compactly (:func:`key_curves`)."""
-    curves, values, tol, groups = pose_curves(skel, root_location, rotations, modes, tol)
+    curves, values, tol, groups = pose_curves(skel, root_location, rotations, modes, tol, between)
     key_curves(action, slot, frames, curves, tol, values=values, rotations=groups, between=between)
 
 

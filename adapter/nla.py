@@ -516,7 +516,7 @@ def foot_lock_curves(obj, skel, world, locked, frame_start, modes=None, played=(
     for mode, ks in by_mode.items():  # the bones of one rotation mode at once
         names = [skel.names[changed[k]] for k in ks]
         lower = _lower_channels(frames_of, names, mode, world.frames, cache)  # (F, K, C)
-        delta = act_io.closest_channels(locked[:, changed[ks]], mode, lower) - lower
+        delta = act_io.matching_channels(locked[:, changed[ks]], mode, lower) - lower
         delta[~moved[:, ks]] = 0.0
         path = act_io.rotation_path(mode)
         columns.append(delta.reshape(world.frames, -1))  # bone by bone, channels in order

@@ -115,6 +115,53 @@ def _euler_pair(q, order):
     return (-e1, -e2) if odd else (e1, e2)
 
 
+# A quaternion channel is keyed with one component held at 1 (each frame's quaternion divided
+# by it): Blender normalises a pose bone's quaternion before it plays it, so the rotation is
+# the same, and that component's curve is one key instead of a sample a frame (a quarter of a
+# quaternion bone's bytes). A bone holds the component that stays largest against the
+# quaternion's length over the action, if it stays at least this large (w for a bone turning
+# less than 120 degrees from rest); under it the others, divided by it, grow fast, and the
+# bone keeps its unit quaternion.
+HELD = 0.5
+
+
+def held_channels(q: ArrayLike) -> np.ndarray:
+    """Quaternion channels (F, ..., 4) of ``q`` keyed with one component held at exactly 1
+    (:data:`HELD`): the rotations Blender plays are the same. A bone (a position of the
+    axes between the first and last) none of whose components stays at least
+    :data:`HELD` of the length on every frame is left as given."""
+    q = np.asarray(q, float)
+    if not q.shape[0]:
+        return q
+    ratio = np.abs(q) / np.linalg.norm(q, axis=-1, keepdims=True)
+    least = ratio.min(axis=0)  # (..., 4) each component's smallest share
+    k = np.argmax(least, axis=-1)[..., None]  # (..., 1) the one held
+    held = np.take_along_axis(least, k, axis=-1) >= HELD
+    by = np.take_along_axis(q, np.broadcast_to(k, q.shape[:-1] + (1,)), axis=-1)
+    return np.where(held, q / np.where(held, by, 1.0), q)
+
+
+def matching_channels(q: np.ndarray, mode: str, reference: ArrayLike) -> np.ndarray:
+    """:func:`closest_channels` of ``q`` for a correction added to ``reference`` (the sum
+    plays ``q``: Blender normalises it): a quaternion is scaled to take the reference's
+    value in one component, so that component's correction is zero (its curve one key):
+    the component the reference holds at 1 (:func:`held_channels`: it reads exactly +-1),
+    else w. Where either's share of it is under :data:`HELD`, the sign nearest."""
+    near = closest_channels(q, mode, reference)
+    if mode != "QUATERNION":
+        return near
+    ref = np.broadcast_to(np.asarray(reference, float), near.shape)
+    k = np.argmax(np.abs(ref) == 1.0, axis=-1)[..., None]  # none exact: 0, w
+    ref_k = np.take_along_axis(ref, k, axis=-1)
+    near_k = np.take_along_axis(near, k, axis=-1)
+    ok = (np.abs(near_k) >= HELD) & (
+        np.abs(ref_k) >= HELD * np.linalg.norm(ref, axis=-1, keepdims=True)
+    )
+    scaled = near * (ref_k / np.where(ok, near_k, 1.0))
+    np.put_along_axis(scaled, k, ref_k, axis=-1)  # exactly: that correction is zero
+    return np.where(ok, scaled, near)
+
+
 def closest_channels(q: np.ndarray, mode: str, reference: ArrayLike) -> np.ndarray:
     """Channel values of ``mode`` for quaternions ``q`` (..., 4), each the representation of
     its rotation nearest ``reference`` (same leading shape): quaternion sign, Euler triple

@@ -12,7 +12,7 @@ from numpy.typing import ArrayLike
 
 from . import foot_lock
 from . import keys as key_plan
-from .channels import channels_to_quat, rotation_channels, rotation_path
+from .channels import channels_to_quat, held_channels, rotation_channels, rotation_path
 from .skeleton import Skeleton
 
 
@@ -85,10 +85,18 @@ def pose_curves(
     rotations: np.ndarray,
     modes: Mapping[str, str] | None = None,
     tol: Any = None,
+    between: bool = True,
 ) -> tuple[list, np.ndarray, Any, list]:
     """What the adapter's ``actions.key_pose`` keys: (curves, their values (F, C), the
     tolerance, the :class:`~motion_patches.kinematics.keys.Rotations` among them), for
-    ``key_curves`` or :func:`fit_curves`. Touches no Blender data."""
+    ``key_curves`` or :func:`fit_curves`. Touches no Blender data.
+
+    Stored compactly (``tol`` a Tolerance) and played only on its frames (not
+    ``between``: a strip unscaled on the scene's frames), a quaternion bone's keys hold a
+    component at 1 (:func:`~motion_patches.kinematics.channels.held_channels`). Between
+    frames the line through held quaternions turns at another pace than the line through
+    unit ones (0.27 degrees off for a toe turning 20 degrees a frame), so a strip scaled
+    to another rate keeps unit quaternions."""
     modes = modes or {}
     root = skel.names[skel.root]
     curves = [(f'pose.bones["{root}"].location', i, root, None) for i in range(3)]
@@ -99,11 +107,12 @@ def pose_curves(
     groups, start = [], 3
     for mode, joints in by_mode.items():
         path = rotation_path(mode)
-        values = (
-            rotations[:, joints]
-            if mode == "QUATERNION"
-            else rotation_channels(rotations[:, joints], mode)
-        )
+        if mode != "QUATERNION":
+            values = rotation_channels(rotations[:, joints], mode)
+        elif isinstance(tol, Tolerance) and not between:  # a component held at 1: one key
+            values = held_channels(rotations[:, joints])
+        else:
+            values = rotations[:, joints]
         columns.append(values.reshape(len(values), -1))  # bone by bone, channels in order
         k = values.shape[-1]
         if isinstance(tol, Tolerance):

@@ -157,9 +157,9 @@ def body_keys(
         at += len(r)
     frames = np.arange(len(loc), dtype=float)
     rot = quat.make_continuous(rot, axis=0)
-    curves, values, tol, groups = pose_curves(skel, loc, rot, modes, in_units(tol, unit))
     # keyed on the scene's frames, its strips unscaled play nothing between them
     between = not scene_keys
+    curves, values, tol, groups = pose_curves(skel, loc, rot, modes, in_units(tol, unit), between)
     return {
         "frames": frames,
         "curves": curves,

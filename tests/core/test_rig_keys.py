@@ -32,6 +32,63 @@ def test_channels_of_every_mode_play_the_rotations_back_continuously(mode):
     assert np.abs(np.diff(ch, axis=0)).max() < 1.5  # radians (or quaternion units) a frame
 
 
+def _turning(frames, bones, seed):
+    """(F, B, 4) unit quaternions of bones each turning smoothly about its own axis."""
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0.0, 1.0, frames)[:, None]
+    axis = rng.normal(size=(bones, 3))
+    axis /= np.linalg.norm(axis, axis=1, keepdims=True)
+    angle = rng.uniform(-1.5, 1.5, bones) * np.sin(2 * np.pi * t + rng.uniform(0, 3, bones))
+    return np.concatenate((np.cos(angle / 2)[..., None], np.sin(angle / 2)[..., None] * axis), -1)
+
+
+def test_held_channels_play_the_same_rotations_with_one_component_at_one():
+    """Blender normalises a bone's quaternion before it plays it: a bone whose quaternion
+    keeps one component at least HELD of its length is keyed with that component exactly
+    1 (one key), the others divided by it; one turning past 120 degrees from rest about an
+    axis, whose components all come near 0 on some frame, is keyed as given."""
+    q = _turning(90, 5, 3)
+    half = np.linspace(0.0, np.pi, 90) / 2  # the last bone turns half a turn about x
+    q[:, 4] = np.stack((np.cos(half), np.sin(half), 0 * half, 0 * half), 1)
+    q[:, 2] *= -1.0  # either sign
+    held = channels.held_channels(q)
+    back = quat.normalize(held)
+    assert np.abs(np.abs(np.sum(back * q, axis=-1)) - 1.0).max() < 1e-12
+    for b in range(4):
+        ones = np.all(held[:, b] == 1.0, axis=0)
+        assert ones.sum() == 1, b
+    assert np.array_equal(held[:, 4], q[:, 4])
+    assert np.array_equal(channels.held_channels(q[:0]), q[:0])
+
+
+def test_a_correction_added_to_held_channels_leaves_the_held_one_unchanged():
+    """The foot lock adds ``matching_channels(locked) - lower`` to the motion's channels:
+    the sum plays the locked rotation; where the motion holds a component at 1 that
+    correction is exactly 0 (its curve one key), over unit quaternions w's; where w is too
+    small for that, the representation nearest (the sign)."""
+    lower = _turning(60, 3, 4)
+    locked = quat.normalize(lower + 0.05 * _turning(60, 3, 5))
+    held = channels.held_channels(lower)
+    for ref in (held, lower):
+        got = channels.matching_channels(locked, "QUATERNION", ref)
+        back = quat.normalize(ref + (got - ref))
+        assert np.abs(np.abs(np.sum(back * locked, axis=-1)) - 1.0).max() < 1e-12
+    delta = channels.matching_channels(locked, "QUATERNION", held) - held
+    at_one = held == 1.0
+    assert at_one.any() and np.all(delta[at_one] == 0.0)
+    # over unit quaternions, w takes the correction of none
+    delta = channels.matching_channels(locked, "QUATERNION", lower) - lower
+    assert np.all(delta[..., 0] == 0.0)
+    far = np.array([[[0.1, 0.995, 0.0, 0.0]]]) / np.linalg.norm([0.1, 0.995])
+    near = channels.closest_channels(far, "QUATERNION", lower[:1, :1])  # w too small: the sign
+    assert np.array_equal(channels.matching_channels(far, "QUATERNION", lower[:1, :1]), near)
+    e = np.zeros((4, 3))
+    assert np.array_equal(
+        channels.matching_channels(locked[:4, 0], "XYZ", e),
+        channels.closest_channels(locked[:4, 0], "XYZ", e),
+    )
+
+
 @pytest.fixture(scope="module")
 def planned(walk_patch):
     """Three members of the small crossing, planned and placed at 24 fps, as a crowd holds
@@ -147,3 +204,8 @@ def test_the_body_keys_stay_within_their_tolerance(walk_patch, planned):
             q_play = quat.normalize(played[:, cols])
             turn = 2.0 * np.arccos(np.clip(np.abs(np.sum(q_plan * q_play, axis=1)), 0.0, 1.0))
             assert turn.max() <= group.angle * (1.0 + 1e-6), np.degrees(turn.max())
+    # keyed on the scene's frames, every quaternion bone of the walk holds a component at 1
+    assert not body["between"]
+    bones = np.concatenate([g.columns for g in body["rotations"]])
+    assert all(np.all(values[:, cols] == 1.0, axis=0).sum() == 1 for cols in bones)
+    assert all(fit["constant"][cols].any() for cols in bones)
