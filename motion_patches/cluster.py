@@ -156,6 +156,18 @@ def core_zip(folder: str | Path) -> Path:
     return path
 
 
+def _restore_environ(kept: dict) -> None:
+    """Put back the variables a LocalCluster's nannies set in this process to spawn their
+    workers (OMP_NUM_THREADS=1, OPENBLAS_NUM_THREADS=1, PYTHONHASHSEED, ...): every process
+    Blender or the command line starts later inherited them, numpy's BLAS there running on
+    one thread. The nannies set them again when they start a worker anew."""
+    for k in set(os.environ) - set(kept):
+        del os.environ[k]
+    for k, v in kept.items():
+        if os.environ.get(k) != v:
+            os.environ[k] = v
+
+
 class DaskCluster:
     """Runs tasks on Dask distributed: a new ``LocalCluster`` of ``workers`` processes
     (default: one per core), or the running scheduler at ``scheduler``."""
@@ -176,13 +188,17 @@ class DaskCluster:
             # temporary over 64 KB is mapped and unmapped again: planning ran ~30 % slower.
             environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}))
             environ.pop("MALLOC_TRIM_THRESHOLD_", None)
-            with dask.config.set({"distributed.nanny.pre-spawn-environ": environ}):
-                self.cluster = LocalCluster(
-                    n_workers=workers or os.cpu_count() or 1,
-                    threads_per_worker=1,  # numpy work holds the GIL often: a process per core
-                    processes=True,
-                    dashboard_address=None,
-                )
+            kept = dict(os.environ)
+            try:
+                with dask.config.set({"distributed.nanny.pre-spawn-environ": environ}):
+                    self.cluster = LocalCluster(
+                        n_workers=workers or os.cpu_count() or 1,
+                        threads_per_worker=1,  # numpy holds the GIL often: a process per core
+                        processes=True,
+                        dashboard_address=None,
+                    )
+            finally:
+                _restore_environ(kept)
             self.client = Client(self.cluster)
         self.address = self.client.scheduler.address
         self._tmp = tempfile.TemporaryDirectory(prefix="motion-patches-core-")

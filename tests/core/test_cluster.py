@@ -5,6 +5,7 @@ LocalCluster of one and of two workers, and on a real `dask scheduler` with two
 
 import contextlib
 import json
+import os
 import pickle
 import subprocess
 import sys
@@ -175,8 +176,12 @@ def test_standing_spots_are_made_once_per_world_and_again_when_the_ranks_change(
 @pytest.mark.parametrize("workers", [1, 2])
 def test_a_local_cluster_plans_the_same_members(crossing12, in_process, workers):
     world, tasks = crossing12
+    before = dict(os.environ)
     with cluster.DaskCluster(workers=workers) as ex:
         assert ex.workers == workers
+        # this process's environment as it was (the nannies set OMP_NUM_THREADS=1, ... in
+        # it to spawn their workers; every process started after would inherit them)
+        assert dict(os.environ) == before
         got = ex.map(members.plan_member, tasks, world=world)
         fitted = _fitted_in(ex)
         rerouted = _replanned_in(ex, world, tasks)
