@@ -265,6 +265,30 @@ def test_giving_up_on_cubic_keys_changes_no_choice_of_the_others(between):
     assert np.array_equal(part["constant"][kept], full["constant"][kept])
 
 
+def test_a_jittering_rotation_gives_up_before_any_key_is_added():
+    """A rotation whose capture jitters by degrees from frame to frame would end as
+    samples: it gives up at once (its fit adds no key), the smooth bones keep the keys they
+    keep without it, and without ``give_up_at`` nothing gives up."""
+    rng = np.random.default_rng(5)
+    n = 120
+    q = walk_rotations(n, 30, rng)
+    jitter = np.radians(2.0) * rng.normal(size=(n, 3))  # bone 0: two degrees of jitter
+    q[:, 0] = quat.mul(q[:, 0], np.concatenate((np.ones((n, 1)), 0.5 * jitter), 1))
+    q[:, 0] = quat.normalize(q[:, 0])
+    values = q.reshape(n, -1)
+    rot = keys.Rotations(np.arange(q.shape[1] * 4).reshape(-1, 4), quat.normalize)
+    tol = np.full(values.shape[1], np.inf)
+    limit = -(-n * keys.SAMPLE_BYTES // keys.KEY_BYTES)
+    part = keys.cubic_keys(values, tol, (rot,), True, give_up_at=limit)
+    full = keys.cubic_keys(values, tol, (rot,), True)
+    assert part["gave_up"][:4].all() and (part["inserted"][:4] == 2).all()
+    assert (full["inserted"][:4] >= limit).all()  # it would have cost more than samples
+    smooth = np.arange(4, values.shape[1])
+    assert not part["gave_up"][smooth].any()
+    assert np.array_equal(part["keep"][:, smooth], full["keep"][:, smooth])
+    assert not full["gave_up"].any()
+
+
 def test_keys_judged_on_frames_only_hold_there():
     """``between=False`` (a strip that plays its keys on whole frames only): every frame
     within the tolerance, and no more keys than when half frames are judged too."""
