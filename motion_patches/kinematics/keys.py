@@ -302,13 +302,26 @@ def _gram(n):
     return table[:, n]
 
 
+# A rotation that bends sharply on many frames (captured jitter: fingers, toes, the legs held
+# finer) needs about a key every other frame and ends as samples; its fit used to add keys
+# round after round until it reached ``give_up_at``, half of a crowd body's fitting time. A
+# unit whose rotation turns away from the midpoint of its two neighbours by more than KINK
+# times its angle on at least KINK_SHARE of ``give_up_at`` frames gives up at once. On a
+# crowd's captured bodies (60 characters of bench_crowd.py's plaza) it caught 891 of the
+# 1,088 units that gave up and none that did not.
+KINK = 4.0
+KINK_SHARE = 0.5
+
+
 class _Kind:
     """Units of one kind (a :class:`Rotations`, or the lone columns), each a row: their
-    columns (U, k), and per unit the values, plan slopes, plan on the judged points, what
-    the keys play there and the fitted slopes, as (U, frames or points, k) arrays."""
+    unit indices (U,), columns (U, k), the angle a rotation is judged within, and per unit
+    the values, plan slopes, plan on the judged points, what the keys play there and the
+    fitted slopes, as (U, frames or points, k) arrays."""
 
-    def __init__(self, cols, v, m, ref, judge, to_quat):
-        self.cols, self.judge, self.to_quat = cols, judge, to_quat
+    def __init__(self, units, cols, v, m, ref, judge, to_quat, angle=None):
+        self.units, self.cols, self.judge, self.to_quat = units, cols, judge, to_quat
+        self.angle = angle
         self.v, self.m = (np.ascontiguousarray(x[:, cols].transpose(1, 0, 2)) for x in (v, m))
         self.ref = np.ascontiguousarray(ref[:, cols].transpose(1, 0, 2))
         # a rotation's plan as quaternions; its error is judged from their dot product
@@ -335,12 +348,14 @@ class _Intervals:
                 kind_of[u], row_of[u] = len(self.kinds), np.arange(u.size)
                 # within the angle A: |dot| of the unit quaternions at least cos(A / 2)
                 judge = 1.0 - np.cos(0.5 * r.angle)
-                self.kinds.append(_Kind(r.columns, v, self.m, self.ref, judge, r.to_quat))
+                self.kinds.append(
+                    _Kind(u, r.columns, v, self.m, self.ref, judge, r.to_quat, r.angle)
+                )
         lone = np.flatnonzero(units < 0)
         if lone.size:
             u = -units[lone] - 1
             kind_of[u], row_of[u] = len(self.kinds), np.arange(u.size)
-            self.kinds.append(_Kind(lone[:, None], v, self.m, self.ref, tol[lone], None))
+            self.kinds.append(_Kind(u, lone[:, None], v, self.m, self.ref, tol[lone], None))
         self.kind_of, self.row_of = kind_of, row_of
 
     def fit(self, a, b, u, limit=False):
@@ -412,6 +427,18 @@ class _Intervals:
         kind.played[rs[mine], p[mine]] = played[mine]
         return ok, p[at], worst
 
+    def jittery(self, give_up_at, n_units):
+        """(U,) bool: the rotation units whose plan bends sharply on many frames (KINK)."""
+        out = np.zeros(n_units, bool)
+        for kind in self.kinds:
+            if kind.ref_q is None:
+                continue
+            q = kind.ref_q[:, :: self.step]  # (U, F, 4) the plan on its frames
+            bend = 2.0 * np.linalg.norm(q[:, :-2] - 2.0 * q[:, 1:-1] + q[:, 2:], axis=-1)
+            many = (bend > KINK * kind.angle).sum(axis=1) >= KINK_SHARE * give_up_at
+            out[kind.units] = many  # bend: radians, about
+        return out
+
     def gather(self, name, n_cols):
         """(points or frames, C) one of the kinds' per-unit arrays, by column."""
         arrays = [getattr(k, name) for k in self.kinds]
@@ -419,29 +446,6 @@ class _Intervals:
         for k, x in zip(self.kinds, arrays):
             out[:, k.cols] = x.transpose(1, 0, 2)
         return out
-
-
-# A rotation that bends sharply on many frames (captured jitter: fingers, toes, the legs held
-# finer) needs about a key every other frame and ends as samples; its fit used to add keys
-# round after round until it reached ``give_up_at``, half of a crowd body's fitting time. A
-# unit whose rotation turns away from the midpoint of its two neighbours by more than KINK
-# times its angle on at least KINK_SHARE of ``give_up_at`` frames gives up at once. On a
-# crowd's captured bodies (60 characters of bench_crowd.py's plaza) it caught 891 of the
-# 1,088 units that gave up and none that did not.
-KINK = 4.0
-KINK_SHARE = 0.5
-
-
-def _jittery(v, rotations, units, n_units, give_up_at):
-    """(U,) bool: the rotation units of ``v`` that bend sharply on many frames (KINK)."""
-    out = np.zeros(n_units, bool)
-    for r in rotations:
-        if not r.columns.size:
-            continue
-        q = r.to_quat(v[:, r.columns])  # (F, B, 4)
-        bend = 2.0 * np.linalg.norm(q[:-2] - 2.0 * q[1:-1] + q[2:], axis=-1)  # radians, about
-        out[units[r.columns[:, 0]]] = (bend > KINK * r.angle).sum(axis=0) >= KINK_SHARE * give_up_at
-    return out
 
 
 def cubic_keys(
@@ -496,7 +500,7 @@ def cubic_keys(
     # keys added where intervals miss (not on units that jitter: they give up at once)
     a, b, u = np.zeros(n_units, int), np.full(n_units, max(n - 1, 0)), np.arange(n_units)
     if give_up_at is not None and n > 2:
-        gave_up = _jittery(v, rotations, units, n_units, give_up_at)
+        gave_up = fit.jittery(give_up_at, n_units)
         a, b, u = a[~gave_up], b[~gave_up], u[~gave_up]
     while a.size and n > 1:
         which, point, worst = fit.fit(a, b, u)
