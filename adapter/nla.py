@@ -17,7 +17,7 @@ import uuid
 
 import numpy as np
 
-from ..motion_patches.kinematics import foot_lock
+from ..motion_patches.kinematics import foot_lock, loop_strips
 from ..motion_patches.kinematics.rig_keys import (  # noqa: F401 (the adapter's names for them)
     body_keys,
     facing_angle,
@@ -41,6 +41,10 @@ CHARACTER_KEY = "motion_patches_character"
 ACTIONS_KEY = "motion_patches_actions"  # object: {action id: name} of what planning made for it
 ACTION_ID = "motion_patches_id"  # action: its id, kept by its character under ACTIONS_KEY
 STASH_PREFIX = TRACK_PREFIX + "stash: "
+# A piece played by more than one strip (a stretch of it by the shared loop action): its
+# first strip has the piece's name, the others that name, this and "loop" or "body" and a
+# number.
+PART = " \u00b7 "
 
 
 def check_rig(obj, skel, floor=0.0):
@@ -253,6 +257,33 @@ def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None, index
     return action, slot
 
 
+def loop_action(bpy, patch, patch_key, skel, modes=None, rig=None, index=None, unit=1.0):
+    """The shared in-place action of the gait's straight loop (two cycles and a frame,
+    :func:`~motion_patches.kinematics.loop_strips.straight_loop`) for a rig, created on
+    first use and kept as :func:`segment_action` keeps a segment's (by patch, the rig's
+    skeleton, rotation modes and scale): the stretches of characters' own pieces that play
+    the loop frame by frame play it through repeating strips."""
+    sig = rotation_signature(skel, modes or {})
+    rig_sig = rig.signature() if rig is not None else ""
+    key = f"{patch_key}:loop" + (f":rig-{rig_sig}" if rig_sig else "") + (f":{sig}" if sig else "")
+    if unit != 1.0:
+        key += f":unit-{unit:.6g}"
+    found = (segment_index(bpy) if index is None else index).get(key)
+    if found is not None:
+        return found, compat.action_slot(found)
+    name = (
+        f"MP {patch.layer} loop"
+        + (f" rig-{rig_sig[:6]}" if rig_sig else "")
+        + (f" {sig}" if sig else "")
+        + (f" x{unit:.4g}" if unit != 1.0 else "")
+    )
+    motion = loop_strips.straight_loop(patch.gait, rig)
+    action, slot = _inplace_action(name, skel, motion, {SEGMENT_KEY: key}, modes, unit)
+    if index is not None:
+        index[key] = action
+    return action, slot
+
+
 def segment_index(bpy):
     """{segment key: action} of the file's shared segment actions."""
     out = {}
@@ -263,13 +294,16 @@ def segment_index(bpy):
     return out
 
 
-def _inplace_action(name, skel, motion, tags, modes=None, unit=1.0):
+def _inplace_action(name, skel, motion, tags, modes=None, unit=1.0, tol=None):
+    """A shared action of ``motion`` in place, keyed within ``tol`` (default the stored
+    actions' :data:`~.actions.COMPACT`)."""
     loc, rot = inplace_channels(skel, motion, unit)
     action, slot = compat.new_action(name)
     for k, v in tags.items():
         action[k] = v
     frames = np.arange(motion.frames, dtype=float)
-    act_io.key_pose(action, slot, skel, frames, loc, rot, modes, tol=in_units(act_io.COMPACT, unit))
+    tol = act_io.COMPACT if tol is None else tol
+    act_io.key_pose(action, slot, skel, frames, loc, rot, modes, tol=in_units(tol, unit))
     return action, slot
 
 
@@ -327,8 +361,13 @@ def write_plan(
     index = segment_index(bpy) if segments is None else segments
     own = own_pieces(plan)
     if own and body is None:
-        body = body_keys(skel, world, locked, bounds, own, motions, modes, unit, act_io.COMPACT)
+        loops = loop_strips.straight_loop(patch.gait, rig)
+        body = body_keys(
+            skel, world, locked, bounds, own, motions, modes, unit, act_io.COMPACT, loops
+        )
     body = _body_action(obj, body) if own else None
+    loop = None  # the shared loop action, looked up when a piece first plays it
+    parts = []  # (piece, name, action, slot, first scene frame, last, action start, scale, cycle)
     for n, (piece, m) in enumerate(zip(plan.pieces, motions)):
         start, end = first + int(bounds[n]), first + int(bounds[n + 1])
         if piece.kind == "segment":
@@ -345,36 +384,44 @@ def write_plan(
                 unit,
             )
             scale = (end - start) / float(max(m.frames - 1, 1))
-            at = None
+            parts.append((n, f"{n:02d} {piece.label}", action, slot, start, end, None, scale, 0))
         else:
-            action, slot, ranges, _ = body
-            at, scale, _ = ranges[n]
-        played.append((action, slot, int(bounds[n]), end - start + 1, scale, at))
-        strip = motion_track.strips.new(f"{n:02d} {piece.label}", start, action)
-        compat.set_strip_slot(strip, slot)
-        if at is not None:  # its own frames of the character's body action
-            strip.action_frame_end = at + ranges[n][2] - 1
-            strip.action_frame_start = at
-        if abs(scale - 1.0) > 1e-9:
-            # Blender keeps the scale in single precision: rounded up, the strip would end a
-            # hair after the next one starts, and that one could not be added.
-            single = np.float32(scale)
-            while float(single) * (m.frames - 1) > end - start:
-                single = np.nextafter(single, np.float32(0.0))
-            strip.scale = float(single)
-        strip.extrapolation = (
-            "HOLD" if n == 0 else ("HOLD_FORWARD" if n == len(plan.pieces) - 1 else "NOTHING")
-        )
-        strip.blend_in = strip.blend_out = 0.0
+            for i, (kind, a, b, at, scale) in enumerate(body[2][n]):
+                name = f"{n:02d} {piece.label}" + (f"{PART}{kind} {i}" if i else "")
+                if kind == "loop":
+                    if loop is None:
+                        loop = loop_action(bpy, patch, patch_key, skel, modes, rig, index, unit)
+                    cycle = patch.gait.straight.frames
+                    action, slot = loop
+                    parts.append((n, name, action, slot, first + a, first + b, at, scale, cycle))
+                else:
+                    action, slot = body[0], body[1]
+                    parts.append((n, name, action, slot, first + a, first + b, at, scale, 0))
         strips.append(
             {
-                "name": strip.name,
+                "name": f"{n:02d} {piece.label}",
                 "start": start,
                 "end": end,
-                "action": action.name,
+                "action": action.name if piece.kind == "segment" else body[0].name,
                 "kind": piece.kind,
             }
         )
+    for i, (n, name, action, slot, start, end, at, scale, cycle) in enumerate(parts):
+        played.append((action, slot, start - first, end - start + 1, scale, at, cycle))
+        strip = motion_track.strips.new(name, start, action)
+        compat.set_strip_slot(strip, slot)
+        if at is not None:  # its own frames of the action (a loop's: one cycle, repeated)
+            span = cycle if cycle else round((end - start) / scale)
+            strip.action_frame_end = at + span
+            strip.action_frame_start = at
+        if abs(scale - 1.0) > 1e-9:
+            _set_scale(strip, scale, end)
+        if cycle:
+            _set_repeat(strip, (end - start) / (cycle * float(strip.scale)), end)
+        strip.extrapolation = (
+            "HOLD" if i == 0 else ("HOLD_FORWARD" if i == len(parts) - 1 else "NOTHING")
+        )
+        strip.blend_in = strip.blend_out = 0.0
 
     root_action, root_slot = compat.new_action(f"MP {obj.name} root")
     root_action[CHARACTER_KEY] = obj.name
@@ -405,6 +452,27 @@ def write_plan(
     obj[TRACKS_KEY] = json.dumps(owned)
     _claim_actions(obj, ad, owned)
     return strips, stashed
+
+
+def _set_scale(strip, scale, end):
+    """Scale ``strip`` by ``scale``, kept from ending after scene frame ``end``: Blender keeps
+    the scale in single precision, and rounded up the strip would end a hair after the next
+    one starts, which then could not be added."""
+    single = np.float32(scale)
+    strip.scale = float(single)
+    while strip.frame_end > end:
+        single = np.nextafter(single, np.float32(0.0))
+        strip.scale = float(single)
+
+
+def _set_repeat(strip, repeat, end):
+    """Repeat ``strip``'s action range ``repeat`` times (a fraction too: a loop strip ends
+    mid-cycle), kept from ending after scene frame ``end`` (see :func:`_set_scale`)."""
+    single = np.float32(repeat)
+    strip.repeat = float(single)
+    while strip.frame_end > end:
+        single = np.nextafter(single, np.float32(0.0))
+        strip.repeat = float(single)
 
 
 def root_units(obj):
@@ -445,19 +513,23 @@ def _body_action(obj, keys):
 def _played_frames(played, n_frames):
     """Which strip plays each plan frame and the action frame it plays there: ``played`` =
     [(action, slot, first plan frame, scene frames it spans, strip scale, first action
-    frame or None: the action's own start)] in track order;
-    where two strips meet on a frame the earlier one plays (Blender takes the first strip
-    whose range holds the frame). A scaled strip plays action frame
-    ``(frame - start) / scale``. Returns {(action, slot): (plan frames, action frames)},
+    frame or None: the action's own start, frames of the cycle it repeats or 0)] in track
+    order; where two strips meet on a frame the earlier one plays (Blender takes the first
+    strip whose range holds the frame). A scaled strip plays action frame
+    ``first + (frame - start) / scale``, a repeating one that within its cycle (Blender's
+    ``fmod``). Returns {(action, slot): (plan frames, action frames)},
     the frames of every strip of one action together, so each channel is read once per
     action (a plan plays one segment action on many strips)."""
     owner = np.full(n_frames, -1)
     at = np.zeros(n_frames)
-    for s, (_, _, start, frames, scale, first) in enumerate(played):
+    for s, (_, _, start, frames, scale, first, *cycle) in enumerate(played):
         idx = np.arange(start, min(start + frames, n_frames))
         idx = idx[owner[idx] < 0]
         owner[idx] = s
-        at[idx] = (idx - start) / scale + (first or 0)
+        if cycle and cycle[0]:
+            at[idx] = np.fmod(idx - start, cycle[0] * scale) / scale + first
+        else:
+            at[idx] = (idx - start) / scale + (first or 0)
     keys = {}  # (action, slot) -> its number, in the order strips first play them
     which = np.array([keys.setdefault((a, sl), len(keys)) for a, sl, *_ in played] + [-1])
     playing = which[owner]  # the action on each frame (-1: none; owner -1 picks the last)
@@ -529,25 +601,67 @@ def foot_lock_curves(obj, skel, world, locked, frame_start, modes=None, played=(
     return frames, curves, values, int(frame_start)
 
 
+LOCK_GAP = 2  # frames the lock leaves alone that still go in one strip with those round them
+
+
+def lock_spans(values, frames):
+    """[(first, last)] of the plan frames the foot lock's strips play: the runs of frames
+    where it changes something (``values`` (F, C), the deltas; exactly 0 elsewhere: frames
+    its character's body action plays locked already), runs closer than :data:`LOCK_GAP`
+    joined, each at least two frames long. A curve kept as samples holds every frame it
+    spans: one strip over a whole plan kept the legs' deltas on every frame of it."""
+    if values is None or not np.any(values):
+        return [(0, frames - 1)]
+    idx = np.flatnonzero(np.any(values != 0.0, axis=1))
+    cut = np.flatnonzero(np.diff(idx) > LOCK_GAP + 1)
+    firsts, lasts = idx[np.r_[0, cut + 1]], idx[np.r_[cut, idx.size - 1]]
+    out = []
+    for a, b in zip(firsts.tolist(), lasts.tolist()):
+        if b == a:  # a strip needs two frames
+            a, b = (a, a + 1) if a + 1 < frames else (a - 1, a)
+        if out and a <= out[-1][1]:
+            out[-1] = (out[-1][0], b)
+        else:
+            out.append((a, b))
+    return out
+
+
 def write_foot_lock(obj, lock):
-    """The foot lock :func:`foot_lock_curves` made, as its Add strip on a track above the
-    character's others (its keys fitted finer than the body's: :func:`finer`)."""
+    """The foot lock :func:`foot_lock_curves` made, as Add strips on a track above the
+    character's others (its keys fitted finer than the body's: :func:`finer`), one over
+    each stretch of frames it changes (:func:`lock_spans`)."""
     frames, curves, values, frame_start = lock
+    spans = lock_spans(values, len(frames))
+    rows = np.concatenate([np.arange(a, b + 1) for a, b in spans])
     action, slot = compat.new_action(f"MP {obj.name} foot lock")
     action[CHARACTER_KEY] = obj.name
     act_io.key_curves(
         action,
         slot,
-        frames,
+        np.arange(rows.size, dtype=float),
         curves,
         finer(act_io.COMPACT),
-        values=values,
+        values=None if values is None else values[rows],
         between=False,
     )
     track = obj.animation_data.nla_tracks.new()
     track.name = TRACK_FOOT
-    strip = track.strips.new(f"{obj.name} foot lock", int(frame_start), action)
-    compat.set_strip_slot(strip, slot)
-    strip.blend_type = "ADD"
-    strip.extrapolation = "HOLD"
-    strip.blend_in = strip.blend_out = 0.0
+    at = 0
+    for i, (a, b) in enumerate(spans):
+        name = f"{obj.name} foot lock" + (f" {i}" if i else "")
+        strip = track.strips.new(name, int(frame_start) + a, action)
+        compat.set_strip_slot(strip, slot)
+        if len(spans) > 1:  # its own rows of the action
+            strip.action_frame_end = at + b - a
+            strip.action_frame_start = at
+        at += b - a + 1
+        strip.blend_type = "ADD"
+        # Between its strips the lock must change nothing: a strip holding its last frame
+        # would go on adding it until the next one.
+        if spans == [(0, len(frames) - 1)]:
+            strip.extrapolation = "HOLD"
+        elif i == len(spans) - 1 and b == len(frames) - 1:
+            strip.extrapolation = "HOLD_FORWARD"
+        else:
+            strip.extrapolation = "NOTHING"
+        strip.blend_in = strip.blend_out = 0.0

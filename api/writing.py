@@ -11,7 +11,7 @@ import numpy as np
 
 from ..adapter import actions as act_io
 from ..adapter import nla, storage
-from ..motion_patches.kinematics import contacts, rig_keys, scene_rate
+from ..motion_patches.kinematics import contacts, loop_strips, rig_keys, scene_rate
 from ..motion_patches.kinematics.inplace import root_positions
 from ..motion_patches.planning import transitions
 from ..motion_patches.planning.settings import PlanSettings
@@ -60,7 +60,7 @@ def _fit_frame_range(scene):
         scene[FRAME_RANGE_KEY] = [start, end]
 
 
-def _prepared_args(character, skel, placed, settings: PlanSettings, fps, plan):
+def _prepared_args(character, skel, placed, settings: PlanSettings, fps, plan) -> tuple:
     """The arguments of :func:`~motion_patches.kinematics.rig_keys.prepare` for one
     character (what writing its plan computes before it touches Blender): Blender's data
     it needs (rotation modes, scale, height, tilt) and the storage tolerance, read here,
@@ -121,7 +121,8 @@ def _write(
     motions, bounds, _ = placed
     if prepared is None:
         prepared = rig_keys.prepare(
-            *_prepared_args(character, skel, placed, settings, scene_fps(scene), plan)
+            *_prepared_args(character, skel, placed, settings, scene_fps(scene), plan),
+            loop=loop_strips.straight_loop(patch.gait, rig),
         )
     world, locked, body, root = prepared
     strips, stashed = nla.write_plan(

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from ..kinematics import rig_keys
+from ..kinematics import loop_strips, rig_keys
 from ..kinematics.inplace import root_positions
 from ..kinematics.motion import Motion
 from ..kinematics.retarget import RigMap
@@ -269,10 +269,13 @@ def prepared_keys(jobs: Sequence[tuple], fps: float, patch: Any) -> list[tuple]:
     motions, rig map or None, :func:`~..kinematics.rig_keys.prepare`'s arguments with the
     placed motion, the second, left None) in ``jobs``: each motion placed on its rig at
     the scene's rate ``fps`` here, so a worker is sent a quarter of the bytes."""
-    out = []
+    out, loops = [], {}
     for raw, rig, args in jobs:
         where = placed(patch, rig, unpacked(raw), fps)
-        out.append(rig_keys.prepare_packed(args[0], where, *args[2:]))
+        sig = None if rig is None else rig.signature()
+        if sig not in loops:  # the same for every character of one rig
+            loops[sig] = loop_strips.straight_loop(patch.gait, rig)
+        out.append(rig_keys.prepare_packed(args[0], where, *args[2:], loop=loops[sig]))
     return out
 
 

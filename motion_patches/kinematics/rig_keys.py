@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from . import foot_lock, quat
+from . import foot_lock, loop_strips, quat
 from .channels import closest_channels, rest_channels, rotation_path
 from .inplace import rest_facing, root_channel_to_ground
 from .motion import Motion
@@ -124,6 +124,7 @@ def body_keys(
     modes: Mapping[str, str],
     unit: float,
     tol: Any,
+    loop: Motion | None = None,
 ) -> dict:
     """The keys of a character's body action (the adapter's ``nla._body_action``) fitted,
     touching no Blender data (a crowd fits the next characters' while one is written): {"frames",
@@ -134,27 +135,57 @@ def body_keys(
     with the feet already locked (``locked``; these frames then need no foot-lock
     correction, and no scaled strip plays keys between frames); above the patch's rate from
     the pieces' own ``motions`` at the patch's, their strips scaled as segments' are.
-    ``ranges``: {piece: (first action frame, strip scale, frames)}."""
+    Keyed at the scene's rate, the patch's, the stretches of a piece that play ``loop``
+    (the gait's :func:`~.loop_strips.straight_loop` on this rig) are left to a shared loop
+    action.
+    ``ranges``: {piece: [(kind "body" or "loop", first scene frame, last scene frame, first
+    action frame, strip scale)]}: the strips the piece is played by, in order."""
     scene_keys = sum(int(bounds[n + 1] - bounds[n]) for n in own) <= sum(
         motions[n].frames - 1 for n in own
     )
+    parts = {}
+    for n in own:
+        lo, hi = int(bounds[n]), int(bounds[n + 1])
+        found = []
+        # Only a piece played on its own frames: at another rate the scene's frames of the
+        # plan are slerped between two planned frames, each a slerp of two loop frames,
+        # and a loop strip playing the loop itself at those phases turned a finger 2.7
+        # degrees and a toe 1.5 away from them (30 fps walk, 24 fps scene).
+        if loop is not None and scene_keys and hi - lo == motions[n].frames - 1:
+            found = loop_strips.runs(motions[n], loop)
+        if found and loop is not None:
+            p = loop_strips.period(loop)
+            parts[n] = loop_strips.scene_parts(found, lo, hi, motions[n].frames, p)
+        else:
+            parts[n] = [("body", lo, hi, 0.0, 1.0)]
+    if not any(k == "body" for n in own for k, *_ in parts[n]):  # nothing left to key
+        parts = {n: [("body", int(bounds[n]), int(bounds[n + 1]), 0.0, 1.0)] for n in own}
+    ranges: dict[int, list] = {}
+    at = 0
     if scene_keys:
         rot = world.rotations if locked is None else locked
         pose = Motion(world.ground, world.root_local, rot, world.contacts)
         loc, rot = inplace_channels(skel, pose, unit)
-        rows = [np.arange(int(bounds[n]), int(bounds[n + 1]) + 1) for n in own]
+        rows = []
+        for n in own:
+            ranges[n] = []
+            for kind, a, b, first, scale in parts[n]:
+                if kind == "body":
+                    rows.append(np.arange(a, b + 1))
+                    ranges[n].append((kind, a, b, float(at), 1.0))
+                    at += b - a + 1
+                else:
+                    ranges[n].append((kind, a, b, first, scale))
         loc = np.concatenate([loc[r] for r in rows])
         rot = np.concatenate([rot[r] for r in rows])
     else:
-        parts = [inplace_channels(skel, motions[n], unit) for n in own]
-        rows = [p[0] for p in parts]
-        loc = np.concatenate(rows)
-        rot = np.concatenate([p[1] for p in parts])
-    ranges, at = {}, 0
-    for n, r in zip(own, rows):
-        span = int(bounds[n + 1] - bounds[n])
-        ranges[n] = (at, 1.0 if scene_keys else span / float(max(len(r) - 1, 1)), len(r))
-        at += len(r)
+        chans = [inplace_channels(skel, motions[n], unit) for n in own]
+        loc = np.concatenate([c[0] for c in chans])
+        rot = np.concatenate([c[1] for c in chans])
+        for n, c in zip(own, chans):
+            lo, hi = int(bounds[n]), int(bounds[n + 1])
+            ranges[n] = [("body", lo, hi, float(at), (hi - lo) / float(max(len(c[0]) - 1, 1)))]
+            at += len(c[0])
     frames = np.arange(len(loc), dtype=float)
     rot = quat.make_continuous(rot, axis=0)
     # keyed on the scene's frames, its strips unscaled play nothing between them
@@ -203,6 +234,8 @@ def prepare(
     units: tuple,
     root_units: tuple,
     tol: Any,
+    *,
+    loop: Motion | None = None,
 ) -> tuple:
     """What writing a plan computes before it touches Blender (a crowd makes the next
     characters' while one is written, on the cluster's workers when it has some): (the
@@ -211,7 +244,9 @@ def prepare(
     action's, :func:`root_keys`). ``placed``: (piece motions, bounds, the whole motion on
     the scene's frames); ``locks``: pin the planted feet; ``fps``: the scene's rate;
     ``units`` (rotation modes, world scale), ``root_units`` (height, rotation mode, tilt):
-    read from the character; ``tol``: what the actions are stored within."""
+    read from the character; ``tol``: what the actions are stored within; ``loop``: the
+    gait's straight loop on this rig (:func:`~.loop_strips.straight_loop`), whose stretches
+    a shared loop action plays (None: every own frame in the body action)."""
     motions, bounds, world = placed
     # Feet moving fast while labelled planted (through a blend) are not planted: neither
     # pinned nor measured as skating (foot_lock.still_contacts). Both read the motion as
@@ -226,13 +261,17 @@ def prepare(
     locked = foot_lock.lock_feet(skel, world, posed=posed, fps=fps) if locks else None
     own = own_pieces(plan)
     modes, unit = units
-    body = body_keys(skel, world, locked, bounds, own, motions, modes, unit, tol) if own else None
+    body = (
+        body_keys(skel, world, locked, bounds, own, motions, modes, unit, tol, loop)
+        if own
+        else None
+    )
     return world, locked, body, root_keys(skel, world, root_units, tol)
 
 
-def prepare_packed(*args: Any) -> tuple:
+def prepare_packed(*args: Any, loop: Motion | None = None) -> tuple:
     """:func:`prepare` as a worker sends it back: :func:`pack` of it."""
-    return pack(prepare(*args), args[0])
+    return pack(prepare(*args, loop=loop), args[0])
 
 
 def pack(prepared: tuple, skel: Skeleton) -> tuple:

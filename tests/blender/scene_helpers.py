@@ -92,3 +92,19 @@ def fbx_like_mixamo(
     ob.scale = scale
     bpy.context.view_layer.update()  # as an import leaves it: its world matrix current
     return ob
+
+
+def world_bone_matrices(rigs, frames, names):
+    """{rig name: (F, B, 4, 4)} world matrices of the evaluated bones (pose_bone.matrix of
+    the evaluated object, times its matrix_world), one depsgraph evaluation per frame."""
+    scene = bpy.context.scene
+    out = {r.name: np.empty((len(frames), len(names), 4, 4)) for r in rigs}
+    for i, f in enumerate(frames):
+        scene.frame_set(int(f))
+        dg = bpy.context.evaluated_depsgraph_get()
+        for r in rigs:
+            ev = r.evaluated_get(dg)
+            mw = np.array(ev.matrix_world)
+            for b, n in enumerate(names):
+                out[r.name][i, b] = mw @ np.array(ev.pose.bones[n].matrix)
+    return out

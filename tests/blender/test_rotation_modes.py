@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from mathutils import Euler, Quaternion
 
-from scene_helpers import empty, pillar, walker_from
+from scene_helpers import empty, pillar, walker_from, world_bone_matrices
 
 EULER_ORDERS = ("XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX")
 MODES = ("QUATERNION",) + EULER_ORDERS + ("AXIS_ANGLE",)
@@ -44,22 +44,6 @@ def set_modes(obj, bone_modes, object_mode=None):
         pb.rotation_mode = bone_modes(pb.name)
     if object_mode:
         obj.rotation_mode = object_mode
-
-
-def world_bone_matrices(rigs, frames, names):
-    """{rig name: (F, B, 4, 4)} world matrices of the evaluated bones (pose_bone.matrix of
-    the evaluated object, times its matrix_world), one depsgraph evaluation per frame."""
-    scene = bpy.context.scene
-    out = {r.name: np.empty((len(frames), len(names), 4, 4)) for r in rigs}
-    for i, f in enumerate(frames):
-        scene.frame_set(int(f))
-        dg = bpy.context.evaluated_depsgraph_get()
-        for r in rigs:
-            ev = r.evaluated_get(dg)
-            mw = np.array(ev.matrix_world)
-            for b, n in enumerate(names):
-                out[r.name][i, b] = mw @ np.array(ev.pose.bones[n].matrix)
-    return out
 
 
 def curves_of(addon_module, action):
@@ -272,7 +256,9 @@ def planned(request, baked, addon_module, mocap_dir):
     world matrices of the plan itself (the motion, and the locked rotations with the foot
     lock), computed in float64 from what api.plan_path hands to nla.write_plan. Stored with
     linear keys within 1e-5, so every mode plays the plan to float32 (cubic keys, the
-    default, play it within their tolerance in each mode: test_compact_keys.py)."""
+    default, play it within their tolerance in each mode: test_compact_keys.py), every
+    piece by strips playing keys on whole frames (loop strips do not:
+    test_loop_strips.py)."""
     api, nla = addon_module.api, addon_module.adapter.nla
     bpy.ops.wm.open_mainfile(filepath=str(baked))
     scene = bpy.context.scene
@@ -303,6 +289,9 @@ def planned(request, baked, addon_module, mocap_dir):
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(nla, "write_plan", spy)
         mp.setattr(addon_module.adapter.actions, "COMPACT", addon_module.adapter.actions.LINEAR_TOL)
+        # no stretch played by the shared loop action: it plays between its keys, where
+        # Blender interpolates channels and the plan slerps (test_loop_strips.py)
+        mp.setattr(addon_module.motion_patches.kinematics.loop_strips, "MIN_CYCLES", 1e6)
         results = {
             r.name: api.plan_path(scene, r, goal, frame_start=1, foot_lock=request.param)
             for r in rigs

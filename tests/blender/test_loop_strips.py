@@ -1,0 +1,124 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""A straight walk is played by the gait's shared loop action: one action for every
+character of a rig, repeating strips starting mid-cycle at the walk's own pace, and the
+evaluated rig still plays the plan (stored exactly: to float32; compactly: within the
+compact keys' tolerance), with the foot lock over it."""
+
+import bpy
+import numpy as np
+import pytest
+
+from scene_helpers import empty, native_rig, pillar, walker_from, world_bone_matrices
+
+# Degrees any bone may turn from the plan with keys stored within 1e-5. Not to float32, as
+# test_rotation_modes.py's segments do: a loop strip plays its action between keys (the walk
+# is a fraction of a frame off the loop's frames, at a pace a little off its own), where
+# Blender interpolates each channel and the plan slerps; where a finger turns 20 degrees in
+# one frame (the recorded loop's seam) they differ by 0.09 degrees on a quaternion rig and
+# 0.24 on an Euler one. Cubic keys (the default) are fitted against the slerp between frames:
+# every bone within their 0.5 degrees.
+BETWEEN_DEG = 0.3
+
+
+@pytest.fixture(scope="module", params=["linear", "compact"])
+def walked(request, walk_blend, addon_module, mocap_dir):
+    """Two walkers planned 12 m ahead round a pillar each, in the session's 30 fps scene
+    (the patch's rate), evaluated on every frame; ``expected``: the world matrices of the
+    plan itself (locked), from what api.plan_path hands to nla.write_plan."""
+    api, nla, act_io = addon_module.api, addon_module.adapter.nla, addon_module.adapter.actions
+    bpy.ops.wm.open_mainfile(filepath=str(walk_blend))
+    scene = bpy.context.scene
+    assert scene.render.fps == 30
+    source = bpy.data.objects["Source"]
+    rigs = [walker_from(source, "A", (0.4, 0.3, 0.0)), walker_from(source, "B", (0.4, 3.3, 0.0))]
+    # and Blender's own BVH import of the subject, its bones in Euler angles (ZYX)
+    rigs.append(native_rig(mocap_dir, "cmu/16_15.bvh", "Euler"))
+    rigs[-1].location = (0.4, 6.3, 0.0)
+    goals = [empty(f"Goal{r.name}", 12.4, 2.3 + 3.0 * n, 0.0) for n, r in enumerate(rigs)]
+    for n, r in enumerate(rigs):  # a pillar on each way: walked round, not through tiles
+        pillar(f"Pillar{n}", 6.4, 1.3 + 3.0 * n)
+    written = {}
+    write_plan = nla.write_plan
+
+    def spy(bpy_, obj, patch, key, plan, motions, world, frame_start, locked=None, *more):
+        written[obj.name] = (patch.gait.skeleton, world, locked)
+        return write_plan(bpy_, obj, patch, key, plan, motions, world, frame_start, locked, *more)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(nla, "write_plan", spy)
+        if request.param == "linear":
+            mp.setattr(act_io, "COMPACT", act_io.LINEAR_TOL)
+        results = [api.plan_path(scene, r, g, frame_start=1) for r, g in zip(rigs, goals)]
+    motion = addon_module.motion_patches.kinematics.motion.Motion
+    out = {"rigs": rigs, "results": results, "storage": request.param, "expected": {}}
+    for r, res in zip(rigs, results):
+        skel, world, locked = written[r.name]
+        assert locked is not None  # the foot lock is on by default
+        m = motion(world.ground, world.root_local, locked, world.contacts)
+        out["expected"][r.name] = m.world_matrices(skel)
+        frames = np.arange(res.frame_start, res.frame_end + 1)
+        out.setdefault("frames", {})[r.name] = frames
+        out["mats"] = {**out.get("mats", {}), **world_bone_matrices([r], frames, skel.names)}
+    out["skel"] = skel
+    return out
+
+
+def _loop_strips(rig, nla):
+    track = rig.animation_data.nla_tracks[nla.TRACK_MOTION]
+    return [s for s in track.strips if ":loop" in str(s.action.get(nla.SEGMENT_KEY, ""))]
+
+
+def test_a_straight_walk_plays_one_shared_loop_action(walked, addon_module):
+    nla = addon_module.adapter.nla
+    loops = {r.name: _loop_strips(r, nla) for r in walked["rigs"]}
+    actions = {s.action for strips in loops.values() for s in strips}
+    # one action for both characters of a rig, another for the Euler rig (its own channels)
+    assert {s.action for s in loops["A"]} == {s.action for s in loops["B"]}
+    assert len(actions) == 2, actions
+    assert {a.name for a in bpy.data.actions if a.name.startswith("MP walk loop")} == {
+        "MP walk loop",
+        "MP walk loop ZYX",
+    }
+    for r, res in zip(walked["rigs"], walked["results"]):
+        strips = loops[r.name]
+        assert strips, r.name
+        covered = sum(s.frame_end - s.frame_start for s in strips)
+        # most of a straight walk: all but the start, the stop and the frames round them
+        assert covered >= 0.5 * (res.frame_end - res.frame_start), (covered, res.frame_end)
+        assert max(s.repeat for s in strips) > 1.0
+        # its own body action keys only the frames the loop does not play
+        body = rig_body(r, nla)
+        length = body.frame_range[1] - body.frame_range[0]
+        assert length <= (res.frame_end - res.frame_start) - covered + len(strips) + 2
+
+
+def rig_body(rig, nla):
+    track = rig.animation_data.nla_tracks[nla.TRACK_MOTION]
+    (body,) = {s.action for s in track.strips if s.action.get(nla.SEGMENT_KEY) is None}
+    return body
+
+
+def _local_angles(mats, skel):
+    """(F, B) each bone's rotation relative to its parent's, as an angle (degrees) from
+    the other matrix set's: what a bone plays, whatever the bones above it do."""
+    rot = mats[..., :3, :3] / np.linalg.norm(mats[..., :3, 0], axis=-1)[..., None, None]
+    par = np.where(skel.parents < 0, np.arange(len(skel.parents)), skel.parents)
+    local = np.swapaxes(rot[:, par], -1, -2) @ rot
+    local[:, skel.parents < 0] = rot[:, skel.parents < 0]
+    return local
+
+
+def test_the_evaluated_rig_plays_the_plan_over_its_loop_strips(walked):
+    skel = walked["skel"]
+    for r in walked["rigs"]:
+        got, want = walked["mats"][r.name], walked["expected"][r.name]
+        a, b = _local_angles(got, skel), _local_angles(want, skel)
+        cos = (np.trace(np.swapaxes(a, -1, -2) @ b, axis1=-2, axis2=-1) - 1.0) / 2.0
+        deg = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+        print(f"{r.name}, {walked['storage']} keys: worst bone {deg.max():.3f} deg from the plan")
+        if walked["storage"] == "linear":
+            assert deg.max() < BETWEEN_DEG, (r.name, deg.max())
+            continue
+        assert deg.max() < 0.5 + 0.01, (r.name, deg.max())
+        hips = np.linalg.norm(got[:, skel.root, :3, 3] - want[:, skel.root, :3, 3], axis=-1)
+        assert hips.max() < 1.5e-3, (r.name, hips.max())

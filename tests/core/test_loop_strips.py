@@ -1,0 +1,106 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Stretches of a character's own motion that a shared loop action plays
+(:mod:`motion_patches.kinematics.loop_strips`), found on the real subject-16 walk."""
+
+import numpy as np
+
+from motion_patches.kinematics import loop_strips, quat, retime
+from motion_patches.kinematics.motion import Motion
+from motion_patches.patch import curves, synthesis
+
+
+def _walk(gait, kappa=0.0, cycles=5, eased=True):
+    """The gait followed along a line (or an arc of curvature ``kappa``) for ``cycles``
+    loops, started from and stopped at standing as a plan's single piece is."""
+    s = np.linspace(0.0, cycles * gait.cycle_distance * 1.013, 600)  # a little longer
+    pos, heading = curves.arc_frame(np.zeros(2), 0.0, kappa, s)
+    m = synthesis.follow(gait, curves.Curve(s, pos, heading, np.full(s.size, kappa)), cycles=cycles)
+    return retime.eased(m, True, True, gait.frames) if eased else m
+
+
+def _played(loop, first, last, k0, pace):
+    """What a loop strip plays on frames ``first`` .. ``last``: the loop's frames slerped
+    at the phases the stretch names."""
+    p = loop_strips.period(loop)
+    u = (k0 + pace * np.arange(last - first + 1)) % p
+    return retime.resample(loop, u)
+
+
+def _largest_angle(a, b):
+    dots = np.abs(np.einsum("fjc,fjc->fj", a, b))
+    return np.degrees(2 * np.arccos(np.clip(dots, -1.0, 1.0))).max()
+
+
+def test_a_straight_walk_plays_the_loop_between_its_ramps(walk_gait):
+    m = _walk(walk_gait)
+    loop = loop_strips.straight_loop(walk_gait)
+    p = loop_strips.period(loop)
+    assert loop.frames == 2 * p + 1 and p == walk_gait.frames
+    found = loop_strips.runs(m, loop)
+    assert len(found) == 1
+    first, last, k0, pace = found[0]
+    # the ramps (a cycle each) are not the loop; most of what lies between is
+    assert first >= walk_gait.frames // 2 and last <= m.frames - 1 - walk_gait.frames // 2
+    assert last - first + 1 >= 2 * p
+    # the ramps' time warp plays the middle a little off the loop's own pace and frames
+    assert 1e-4 < abs(pace - 1.0) < 0.05 and 1e-3 < k0 % 1.0 < 1.0 - 1e-3
+    got = _played(loop, first, last, k0, pace)
+    assert _largest_angle(got.rotations, m.rotations[first : last + 1]) < 1e-3
+    assert np.abs(got.root_local - m.root_local[first : last + 1]).max() < 1e-6
+
+
+def test_a_frame_changed_by_a_tenth_of_a_degree_is_left_to_the_body(walk_gait):
+    m = _walk(walk_gait)
+    loop = loop_strips.straight_loop(walk_gait)
+    first, last, _, _ = loop_strips.runs(m, loop)[0]
+    mid = (first + last) // 2
+    rot = m.rotations.copy()
+    bone = walk_gait.skeleton.names.index("LeftArm")
+    rot[mid, bone] = quat.mul(rot[mid, bone], quat.about_z(np.radians([0.1]))[0])
+    cut = Motion(m.ground, m.root_local, rot, m.contacts)
+    found = loop_strips.runs(cut, loop)
+    assert [(a, b) for a, b, *_ in found] == [(first, mid - 1), (mid + 1, last)]
+
+
+def test_a_curved_walk_blends_other_loops_and_plays_none(walk_gait):
+    m = _walk(walk_gait, kappa=0.3)
+    assert loop_strips.runs(m, loop_strips.straight_loop(walk_gait)) == []
+
+
+def test_loop_strips_play_the_stretch_on_the_scene_frames(walk_gait):
+    m = _walk(walk_gait)
+    loop = loop_strips.straight_loop(walk_gait)
+    p = loop_strips.period(loop)
+    found = loop_strips.runs(m, loop)
+    lo, hi = 7, 7 + m.frames - 1
+    parts = loop_strips.scene_parts(found, lo, hi, m.frames, p)
+    # the parts cover the piece, each starting where the one before ends
+    assert [x[0] for x in parts] == ["body", "loop", "body"]
+    assert parts[0][1] == lo and parts[-1][2] == hi
+    assert all(a[2] == b[1] for a, b in zip(parts[:-1], parts[1:]))
+    _, a, b, first, scale = parts[1]
+    assert b - a >= p * scale  # at least a cycle
+    # on each scene frame of the strip, the loop frame it plays (Blender's fmod of a
+    # repeating strip) shows the piece's pose there
+    s = np.arange(a, b + 1)
+    played = retime.resample(loop, first + np.fmod(s - a, p * scale) / scale)
+    assert _largest_angle(played.rotations, m.rotations[s - lo]) < 1e-3
+    assert np.abs(played.root_local - m.root_local[s - lo]).max() < 1e-6
+
+
+def test_a_piece_played_at_another_rate_is_keyed_whole(walk_gait):
+    """At another rate the scene's frames are slerped between planned ones, which a loop
+    strip does not play (see body_keys): the piece stays one body strip."""
+    from motion_patches.kinematics import rig_keys, scene_rate
+    from motion_patches.kinematics.pose_keys import Tolerance
+
+    m = _walk(walk_gait)
+    loop = loop_strips.straight_loop(walk_gait)
+    skel = walk_gait.skeleton
+    for ratio, kinds in ((1.0, ["body", "loop", "body"]), (0.8, ["body"])):
+        patch_bounds, bounds = scene_rate.piece_bounds([m.frames], ratio)
+        world = scene_rate.at_scene_rate(m, patch_bounds, bounds)
+        keys = rig_keys.body_keys(skel, world, None, bounds, [0], [m], {}, 1.0, Tolerance(), loop)
+        assert [x[0] for x in keys["ranges"][0]] == kinds
+        body_rows = sum(b - a + 1 for k, a, b, *_ in keys["ranges"][0] if k == "body")
+        assert keys["frames"].size == body_rows
