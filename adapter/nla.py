@@ -323,6 +323,7 @@ def write_plan(
     segments=None,
     body=None,
     root=None,
+    reads=None,
 ):
     """Write a plan's strips and root trajectory on ``obj``; returns strip records.
 
@@ -342,7 +343,9 @@ def write_plan(
     play that patch's shared segment actions, on the one motion track. ``segments``:
     :func:`segment_index` of the file, kept up to date here (one for many writes).
     ``body``: :func:`body_keys` of this plan, fitted already (see :func:`own_pieces`,
-    :func:`write_units`); ``root``: :func:`root_keys` of it, fitted already."""
+    :func:`write_units`); ``root``: :func:`root_keys` of it, fitted already. ``reads``: a
+    dict kept by the caller over many writes, in which the foot lock keeps the curves it
+    reads of the shared (segment and loop) actions: a crowd reads them once."""
     skel = rig.target if rig is not None else patch.gait.skeleton
     modes, unit = write_units(obj, skel)
     if bounds is None:
@@ -446,7 +449,8 @@ def write_plan(
     owned = [TRACK_MOTION, TRACK_ROOT]
     if locked is not None:
         write_foot_lock(
-            obj, foot_lock_curves(obj, skel, world, locked, frame_start, modes, played, body)
+            obj,
+            foot_lock_curves(obj, skel, world, locked, frame_start, modes, played, body, reads),
         )
         owned.append(TRACK_FOOT)
     obj[TRACKS_KEY] = json.dumps(owned)
@@ -540,19 +544,23 @@ def _played_frames(played, n_frames):
     return out
 
 
-def _lower_channels(frames_of, bones, mode, n_frames, cache=None):
+def _lower_channels(frames_of, bones, mode, n_frames, cache=None, reads=None):
     """What the motion track gives the ``mode`` channels of ``bones`` on each plan frame
     (F, K, C), read from the keys of its strips' actions (``frames_of``:
     :func:`_played_frames`), between keys linearly; the rest value on frames no strip
-    plays."""
+    plays. ``cache``: the curves read of this character's actions; ``reads``: those of the
+    shared actions (:func:`write_plan`), else in ``cache`` too."""
     out = np.empty((n_frames, len(bones), act_io.rest_channels(mode).size))
     out[:] = act_io.rest_channels(mode)
     for (action, slot), (idx, at) in frames_of.items():
-        out[idx] = act_io.read_bones(action, slot, bones, mode, at, cache)
+        shared = reads is not None and action.get(SEGMENT_KEY) is not None
+        out[idx] = act_io.read_bones(action, slot, bones, mode, at, reads if shared else cache)
     return out
 
 
-def foot_lock_curves(obj, skel, world, locked, frame_start, modes=None, played=(), body=None):
+def foot_lock_curves(
+    obj, skel, world, locked, frame_start, modes=None, played=(), body=None, reads=None
+):
     """The foot lock's curves (frames, curves, values, first frame), to be written as an Add
     strip above the motion (:func:`write_foot_lock`), so segment actions stay shared.
 
@@ -569,7 +577,8 @@ def foot_lock_curves(obj, skel, world, locked, frame_start, modes=None, played=(
     tests/blender/test_rotation_modes.py.) On the frames where the lock leaves a bone alone
     its delta is exactly zero (the motion plays unchanged; the curve stays compact), and so
     on the frames the character's ``body`` action plays (:func:`_body_action`: it holds the
-    locked rotations itself)."""
+    locked rotations itself). ``reads``: the curves of shared actions read so far (see
+    :func:`write_plan`; a shared action is never changed once made)."""
     modes = modes or {}
     # of the bones the lock may turn (the legs), those it turned, and on which frames
     legs = foot_lock.locked_bones(skel)
@@ -587,7 +596,7 @@ def foot_lock_curves(obj, skel, world, locked, frame_start, modes=None, played=(
         by_mode.setdefault(modes.get(skel.names[j], "QUATERNION"), []).append(k)
     for mode, ks in by_mode.items():  # the bones of one rotation mode at once
         names = [skel.names[changed[k]] for k in ks]
-        lower = _lower_channels(frames_of, names, mode, world.frames, cache)  # (F, K, C)
+        lower = _lower_channels(frames_of, names, mode, world.frames, cache, reads)
         delta = act_io.matching_channels(locked[:, changed[ks]], mode, lower) - lower
         delta[~moved[:, ks]] = 0.0
         path = act_io.rotation_path(mode)

@@ -506,7 +506,8 @@ def _entry(c, member):
     (:func:`_write_all`), so a crowd of 1,000 does not hold every member's placed motion
     (~0.8 MB each) until then."""
     m = member
-    track = _root_track(_placed(c.scene, c.patch, c.rigs[m.entry], members.unpacked(m.raw)))
+    raw = members.unpacked(m.raw)
+    track = _root_track(_placed(c.scene, c.patch, c.rigs[m.entry], raw, m.plan))
     return [m.entry, m.plan, m.raw, track, m.holdable]
 
 
@@ -629,7 +630,8 @@ def _held(c, p, holds):
         bounds = scene_rate.piece_bounds([m.frames for m in raw], rate)[1]
         plan, raw = _with_hold(plan, raw, bounds, k, h, c.ramp, rate)
         at = [(f + h + c.ramp if f > k else f, n) for f, n in at] + [(k, h)]
-    return plan, raw, _root_track(_placed(c.scene, c.patch, c.rigs[p[0]], raw)), sorted(at)
+    track = _root_track(_placed(c.scene, c.patch, c.rigs[p[0]], raw, plan))
+    return plan, raw, track, sorted(at)
 
 
 def _lay_holds(c, planned, schedules):
@@ -684,12 +686,13 @@ def _write_all(c, planned, schedules, keys, progress=None):
         (PLAN_KEY, ANALYSIS_KEY, FRAME_RANGE_KEY),
     ):
         segments = nla.segment_index(bpy)  # the shared segment actions, found once
+        reads: dict = {}  # their curves, read once for every character's foot lock
         keys.writing(planned)
         for k, ((n, plan, raw, *_), s) in enumerate(zip(planned, schedules)):
             check_cancelled(c.cancelled, CANCELLED)
             packed = keys.take(k)
             skel = _skeleton(c.rigs[n], c.patch)
-            placed = _placed(c.scene, c.patch, c.rigs[n], members.unpacked(raw))
+            placed = _placed(c.scene, c.patch, c.rigs[n], members.unpacked(raw), plan)
             prepared = rig_keys.unpack(packed, skel, placed[2])
             env = _world_of(c, c.sizes[n]).env
             with _without(env, c.own[n]):  # the plan record lists what it walked around
@@ -707,6 +710,7 @@ def _write_all(c, planned, schedules, keys, progress=None):
                     fit=False,
                     segments=segments,
                     prepared=prepared,
+                    reads=reads,
                 )
             # written: its motions are let go, not held to the end beside the actions
             # Blender makes of them

@@ -160,7 +160,7 @@ def plan_path(
             plan.stats["layers"][change[0].stats["layer"]] = round(change[0].cost, 4)
         elif why:
             plan.stats["gait_change"] = why
-    placed = _placed(scene, patch, rig, motions)
+    placed = _placed(scene, patch, rig, motions, plan)
     _writable(character, start_frame, placed[2].frames)
     with transaction.kept(bpy, scene, [character], (PLAN_KEY, ANALYSIS_KEY, FRAME_RANGE_KEY)):
         return _write(

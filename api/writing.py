@@ -20,12 +20,14 @@ from .results import PlanResult
 from .solve import _start_matrix
 
 
-def _placed(scene, patch, rig, motions):
+def _placed(scene, patch, rig, motions, plan):
     """A plan's piece motions (:func:`plan_motions`) put on the character: (its pieces'
     motions on its skeleton, at the patch's rate; the scene frames where the pieces start
-    and the last ends, from 0; the whole motion on the scene's frames). ``rig``: the
-    character's :class:`~motion_patches.kinematics.retarget.RigMap` (None: the patch skeleton)."""
-    return scene_rate.placed(patch, rig, motions, scene_fps(scene))
+    and the last ends, from 0; the whole motion on the scene's frames, as its strips play
+    it: :func:`~motion_patches.kinematics.scene_rate.placed`). ``rig``: the character's
+    :class:`~motion_patches.kinematics.retarget.RigMap` (None: the patch skeleton)."""
+    own = rig_keys.own_pieces(plan)
+    return scene_rate.placed(patch, rig, motions, scene_fps(scene), own)
 
 
 FRAME_RANGE_KEY = "motion_patches_frame_range"  # the scene frame range last set by a plan
@@ -103,6 +105,7 @@ def _write(
     from_here=False,
     segments=None,
     prepared=None,
+    reads=None,
 ):
     """NLA strips and the plan record of one planned character (``placed``: its motion,
     :func:`_placed`; ``env``: the planner's world, shrunk by the character's size; ``settings``: the
@@ -113,7 +116,8 @@ def _write(
     ``segments``: the file's shared segment actions (:func:`nla.segment_index`) when several
     characters are written in a row (a crowd): found once, not once per character.
     ``prepared``: :func:`~motion_patches.kinematics.rig_keys.prepare` of this character
-    and plan, made already."""
+    and plan, made already. ``reads``: what the foot lock has read of the shared actions
+    so far, kept for the next characters of a crowd (:func:`nla.write_plan`)."""
     stood = _start_matrix(character, from_here)  # read before the record is replaced
     scale = _size(rig)
     goal_state = _shrunk(plan.goal, 1.0 / scale)  # the facing reached when any would do
@@ -141,6 +145,7 @@ def _write(
         segments,
         body,
         root,
+        reads,
     )
     root = root_positions(world.ground, world.root_local)  # the hips
     foot = contacts.foot_joints(skel)

@@ -240,7 +240,9 @@ def without(env: Environment, names: Sequence[str]) -> Iterator[Environment]:
 def synthesised(task: MemberTask, world: MemberWorld, plan: Plan) -> Member:
     """The member's motion for ``plan``: synthesised, on its rig, at the scene's rate."""
     raw = plan_motions(world.patch, plan)
-    _, bounds, whole = placed(world.patch, task.rig, raw, world.scene_fps)
+    _, bounds, whole = placed(
+        world.patch, task.rig, raw, world.scene_fps, rig_keys.own_pieces(plan)
+    )
     hold = holdable(plan, bounds, whole, world.ramp)  # holds are timed on the scene's frames
     return Member(task.entry, plan, packed(raw), bounds, root_track(whole), hold)
 
@@ -271,7 +273,7 @@ def prepared_keys(jobs: Sequence[tuple], fps: float, patch: Any) -> list[tuple]:
     the scene's rate ``fps`` here, so a worker is sent a quarter of the bytes."""
     out, loops = [], {}
     for raw, rig, args in jobs:
-        where = placed(patch, rig, unpacked(raw), fps)
+        where = placed(patch, rig, unpacked(raw), fps, rig_keys.own_pieces(args[4]))
         sig = None if rig is None else rig.signature()
         if sig not in loops:  # the same for every character of one rig
             loops[sig] = loop_strips.straight_loop(patch.gait, rig)

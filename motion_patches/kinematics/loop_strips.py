@@ -20,6 +20,7 @@ import numpy as np
 
 from . import quat
 from .motion import Motion
+from .retime import resample
 
 # every bone's quaternion this close to the loop's (single precision, as a crowd's motions
 # travel, is 1e-7 away; 1e-5 is a thousandth of a degree)
@@ -139,3 +140,51 @@ def scene_parts(
     if at < hi or not parts:
         parts.append(("body", at, hi, 0.0, 1.0))
     return parts
+
+
+def played_parts(
+    motions: list[Motion], bounds: Any, own: list[int], loop: Motion | None
+) -> dict[int, list[tuple[str, int, int, float, float]]]:
+    """{piece: :func:`scene_parts`} of the pieces ``own`` (those only their character plays;
+    ``bounds``: the scene frames where the pieces start and the last ends): the strips
+    each is played by. Loops only where the character's own pieces are keyed on the scene's
+    frames (the scene's rate at most the patch's; above it they are keyed on the patch's
+    frames and played by scaled strips), and only when ``loop`` (:func:`straight_loop`)."""
+    scene_keys = sum(int(bounds[n + 1] - bounds[n]) for n in own) <= sum(
+        motions[n].frames - 1 for n in own
+    )
+    parts = {}
+    for n in own:
+        lo, hi = int(bounds[n]), int(bounds[n + 1])
+        found = runs(motions[n], loop) if loop is not None and scene_keys else []
+        if found and loop is not None:
+            parts[n] = scene_parts(found, lo, hi, motions[n].frames, period(loop))
+        else:
+            parts[n] = [("body", lo, hi, 0.0, 1.0)]
+    if not any(k == "body" for n in own for k, *_ in parts[n]):  # nothing left to key
+        parts = {n: [("body", int(bounds[n]), int(bounds[n + 1]), 0.0, 1.0)] for n in own}
+    return parts
+
+
+def on_loops(world: Motion, parts: dict, loop: Motion) -> Motion:
+    """``world`` (the plan on the scene's frames) with the frames its loop strips play
+    (``parts``: :func:`played_parts`) taken from the loop at the phase each plays there,
+    as the strip plays them: the scene's frames between the patch's are otherwise
+    slerped between two planned frames, each a slerp of two loop frames, a finger 2.7
+    degrees and a toe 1.5 away (a 30 fps walk in a 24 fps scene). At the patch's rate
+    they are the same frames."""
+    p = period(loop)
+    rows, phase = [], []
+    for pieces in parts.values():
+        for kind, a, b, first, scale in pieces:
+            if kind == "loop":
+                s = np.arange(a, b + 1)
+                rows.append(s)
+                phase.append(first + np.fmod(s - a, p * scale) / scale)
+    if not rows:
+        return world
+    at = np.concatenate(rows)
+    got = resample(loop, np.concatenate(phase))
+    root, rot = world.root_local.copy(), np.array(world.rotations, float)
+    root[at], rot[at] = got.root_local, got.rotations
+    return Motion(world.ground, root, quat.make_continuous(rot, axis=0), world.contacts)

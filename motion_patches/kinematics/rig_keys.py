@@ -135,31 +135,15 @@ def body_keys(
     with the feet already locked (``locked``; these frames then need no foot-lock
     correction, and no scaled strip plays keys between frames); above the patch's rate from
     the pieces' own ``motions`` at the patch's, their strips scaled as segments' are.
-    Keyed at the scene's rate, the patch's, the stretches of a piece that play ``loop``
-    (the gait's :func:`~.loop_strips.straight_loop` on this rig) are left to a shared loop
-    action.
+    Keyed at the scene's rate, the stretches of a piece that play ``loop`` (the gait's
+    :func:`~.loop_strips.straight_loop` on this rig; ``world`` plays it there,
+    :func:`~.scene_rate.placed`) are left to a shared loop action.
     ``ranges``: {piece: [(kind "body" or "loop", first scene frame, last scene frame, first
     action frame, strip scale)]}: the strips the piece is played by, in order."""
     scene_keys = sum(int(bounds[n + 1] - bounds[n]) for n in own) <= sum(
         motions[n].frames - 1 for n in own
     )
-    parts = {}
-    for n in own:
-        lo, hi = int(bounds[n]), int(bounds[n + 1])
-        found = []
-        # Only a piece played on its own frames: at another rate the scene's frames of the
-        # plan are slerped between two planned frames, each a slerp of two loop frames,
-        # and a loop strip playing the loop itself at those phases turned a finger 2.7
-        # degrees and a toe 1.5 away from them (30 fps walk, 24 fps scene).
-        if loop is not None and scene_keys and hi - lo == motions[n].frames - 1:
-            found = loop_strips.runs(motions[n], loop)
-        if found and loop is not None:
-            p = loop_strips.period(loop)
-            parts[n] = loop_strips.scene_parts(found, lo, hi, motions[n].frames, p)
-        else:
-            parts[n] = [("body", lo, hi, 0.0, 1.0)]
-    if not any(k == "body" for n in own for k, *_ in parts[n]):  # nothing left to key
-        parts = {n: [("body", int(bounds[n]), int(bounds[n + 1]), 0.0, 1.0)] for n in own}
+    parts = loop_strips.played_parts(list(motions), bounds, list(own), loop)
     ranges: dict[int, list] = {}
     at = 0
     if scene_keys:

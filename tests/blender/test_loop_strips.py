@@ -122,3 +122,30 @@ def test_the_evaluated_rig_plays_the_plan_over_its_loop_strips(walked):
         assert deg.max() < 0.5 + 0.01, (r.name, deg.max())
         hips = np.linalg.norm(got[:, skel.root, :3, 3] - want[:, skel.root, :3, 3], axis=-1)
         assert hips.max() < 1.5e-3, (r.name, hips.max())
+
+
+def test_the_foot_lock_plays_only_where_it_changes_something(addon_module):
+    nla = addon_module.adapter.nla
+    v = np.zeros((40, 3))
+    v[[3, 4, 5, 7, 20, 39], 1] = 0.1  # 6 -> 7: a gap of one frame; 20 alone; the last frame
+    assert nla.lock_spans(v, 40) == [(3, 7), (20, 21), (38, 39)]
+    v[10, 0] = 0.1  # 7 -> 10: a gap of LOCK_GAP frames, one strip
+    assert nla.LOCK_GAP == 2 and nla.lock_spans(v, 40)[0] == (3, 10)
+    assert nla.lock_spans(np.zeros((40, 3)), 40) == [(0, 39)]  # nothing: one strip, as before
+    assert nla.lock_spans(None, 40) == [(0, 39)]
+
+
+def test_the_walkers_feet_lock_over_the_loop(walked, addon_module):
+    """The foot lock track of a walker has several strips (the loop's stretches, not the
+    frames its body action plays locked already), none holding its last frame over a gap."""
+    nla = addon_module.adapter.nla
+    for r in walked["rigs"]:
+        strips = list(r.animation_data.nla_tracks[nla.TRACK_FOOT].strips)
+        assert len(strips) >= 2, r.name
+        assert all(s.blend_type == "ADD" for s in strips)
+        assert all(s.extrapolation == "NOTHING" for s in strips[:-1])
+        loops = _loop_strips(r, nla)
+        for lp in loops:  # the lock corrects the legs the loop plays
+            assert any(
+                s.frame_start < lp.frame_end and s.frame_end > lp.frame_start for s in strips
+            ), (r.name, lp.name)

@@ -3,6 +3,7 @@
 (:mod:`motion_patches.kinematics.loop_strips`), found on the real subject-16 walk."""
 
 import numpy as np
+import pytest
 
 from motion_patches.kinematics import loop_strips, quat, retime
 from motion_patches.kinematics.motion import Motion
@@ -88,19 +89,34 @@ def test_loop_strips_play_the_stretch_on_the_scene_frames(walk_gait):
     assert np.abs(played.root_local - m.root_local[s - lo]).max() < 1e-6
 
 
-def test_a_piece_played_at_another_rate_is_keyed_whole(walk_gait):
-    """At another rate the scene's frames are slerped between planned ones, which a loop
-    strip does not play (see body_keys): the piece stays one body strip."""
+@pytest.mark.parametrize("scene_fps", [24.0, 7.5])
+def test_at_another_rate_the_plan_is_what_its_loop_strips_play(walk_patch, scene_fps):
+    """On the scene's frames between the patch's the plan is the loop at the phase its
+    strip plays there (not a slerp of two planned frames, each a slerp of two loop frames:
+    a finger several tenths of a degree away); its body strips' frames are as before."""
     from motion_patches.kinematics import rig_keys, scene_rate
     from motion_patches.kinematics.pose_keys import Tolerance
 
-    m = _walk(walk_gait)
-    loop = loop_strips.straight_loop(walk_gait)
-    skel = walk_gait.skeleton
-    for ratio, kinds in ((1.0, ["body", "loop", "body"]), (0.8, ["body"])):
-        patch_bounds, bounds = scene_rate.piece_bounds([m.frames], ratio)
-        world = scene_rate.at_scene_rate(m, patch_bounds, bounds)
-        keys = rig_keys.body_keys(skel, world, None, bounds, [0], [m], {}, 1.0, Tolerance(), loop)
-        assert [x[0] for x in keys["ranges"][0]] == kinds
-        body_rows = sum(b - a + 1 for k, a, b, *_ in keys["ranges"][0] if k == "body")
-        assert keys["frames"].size == body_rows
+    gait = walk_patch.gait
+    m = _walk(gait)
+    loop = loop_strips.straight_loop(gait)
+    p = loop_strips.period(loop)
+    motions, bounds, whole = scene_rate.placed(walk_patch, None, [m], scene_fps, [0])
+    patch_bounds = np.array([0, m.frames - 1])
+    slerped = scene_rate.at_scene_rate(m, patch_bounds, bounds)
+    parts = loop_strips.played_parts(motions, bounds, [0], loop)[0]
+    assert [x[0] for x in parts] == ["body", "loop", "body"]
+    _, a, b, first, scale = parts[1]
+    s = np.arange(a, b + 1)
+    played = retime.resample(loop, first + np.fmod(s - a, p * scale) / scale)
+    assert _largest_angle(played.rotations, whole.rotations[s]) < 1e-4
+    assert np.abs(played.root_local - whole.root_local[s]).max() < 1e-9
+    assert _largest_angle(played.rotations, slerped.rotations[s]) > 0.1
+    body = np.r_[0:a, b + 1 : whole.frames]
+    assert np.array_equal(whole.rotations[body], slerped.rotations[body])
+    assert np.array_equal(whole.ground, slerped.ground)
+    keys = rig_keys.body_keys(
+        gait.skeleton, whole, None, bounds, [0], motions, {}, 1.0, Tolerance(), loop
+    )
+    assert [x[0] for x in keys["ranges"][0]] == ["body", "loop", "body"]
+    assert keys["frames"].size == whole.frames - (b - a - 1)

@@ -98,7 +98,8 @@ def planned(walk_patch):
     for task in tasks[:3]:
         m = members.plan_member(task, world)
         assert isinstance(m, members.Member), m
-        placed = scene_rate.placed(walk_patch, None, members.unpacked(m.raw), 24.0)
+        own = rig_keys.own_pieces(m.plan)
+        placed = scene_rate.placed(walk_patch, None, members.unpacked(m.raw), 24.0, own)
         out.append((m.plan, placed))
     return out
 
@@ -156,9 +157,12 @@ def test_a_member_prepared_from_its_packed_motions_is_prepared_as_in_process(
         assert isinstance(m, members.Member), m
         args = (skel, None, True, 24.0, m.plan, ({}, 1.0), (0.0, "XYZ", None), Tolerance())
         jobs.append((m.raw, None, args))
-        placed_here.append(scene_rate.placed(walk_patch, None, members.unpacked(m.raw), 24.0))
+        own = rig_keys.own_pieces(m.plan)
+        placed_here.append(scene_rate.placed(walk_patch, None, members.unpacked(m.raw), 24.0, own))
     seen = []
-    monkeypatch.setattr(rig_keys, "prepare_packed", lambda *a: seen.append(a) or len(seen))
+    monkeypatch.setattr(
+        rig_keys, "prepare_packed", lambda *a, loop=None: seen.append(a) or len(seen)
+    )
     sent = pickle.loads(pickle.dumps((jobs, 24.0), protocol=pickle.HIGHEST_PROTOCOL))
     assert members.prepared_keys(*sent, patch=walk_patch) == [1, 2, 3]
     for got, (_, _, args), (motions, bounds, whole) in zip(seen, jobs, placed_here):
