@@ -345,7 +345,9 @@ def write_plan(
     ``body``: :func:`body_keys` of this plan, fitted already (see :func:`own_pieces`,
     :func:`write_units`); ``root``: :func:`root_keys` of it, fitted already. ``reads``: a
     dict kept by the caller over many writes, in which the foot lock keeps the curves it
-    reads of the shared (segment and loop) actions: a crowd reads them once."""
+    reads of the shared (segment and loop) actions: a crowd reads them once. Each strip
+    record (one per piece) lists the scene frames its piece's strips start on (``parts``:
+    several where the loop action plays stretches of it)."""
     skel = rig.target if rig is not None else patch.gait.skeleton
     modes, unit = write_units(obj, skel)
     if bounds is None:
@@ -407,6 +409,8 @@ def write_plan(
                 "end": end,
                 "action": action.name if piece.kind == "segment" else body[0].name,
                 "kind": piece.kind,
+                # where each of its strips starts (a stretch played by the loop: several)
+                "parts": [p[4] for p in parts if p[0] == n],
             }
         )
     for i, (n, name, action, slot, start, end, at, scale, cycle) in enumerate(parts):

@@ -68,7 +68,9 @@ def _analyse(context, character):
     for a, b in meta.get("traversals", []) + meta.get("interactions", []):
         during[(frames >= a) & (frames <= b)] = True  # clips that touch their prop
     inside = int((inside_mask & ~during).sum())
-    boundaries = [b - meta["frame_start"] for b in meta["boundaries"]]
+    # every strip's start (plans written before strips were cut within a piece: each piece's)
+    joins = meta.get("joins", meta["boundaries"])
+    boundaries = [b - meta["frame_start"] for b in joins]
     pops = metrics.boundary_pops(rot, boundaries, fps)
     end_heading = ground[-1, 2] + meta["facing"]
     return {

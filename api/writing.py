@@ -170,6 +170,9 @@ def _write(
             "goal": goal_state.tolist(),
             "stood": stood.tolist(),
             "boundaries": [s["start"] for s in strips[1:]],
+            # every strip's start but the first (a piece's loop stretches start strips too):
+            # where the analysis looks for a pop
+            "joins": sorted(p for s in strips for p in s["parts"])[1:],
             "radius": settings.radius,
             "facing": nla.facing_angle(skel),
             "foot_lock": bool(settings.foot_lock),

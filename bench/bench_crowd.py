@@ -114,6 +114,13 @@ def parse_args(argv=None):
         help="Dask LocalCluster workers of the written crowds (0: in Blender's process)",
     )
     p.add_argument(
+        "--no-loop-strips",
+        action="store_true",
+        help="written crowds: every own frame in the characters' body actions, no stretch "
+        "played by the shared loop action (the file and frame_set as before it); with "
+        "--written-workers 0",
+    )
+    p.add_argument(
         "--members-cache",
         type=Path,
         help="a folder: each size's members are kept there once planned and read back after "
@@ -122,6 +129,8 @@ def parse_args(argv=None):
     )
     p.add_argument("--json", type=Path, help="also write the full results here")
     args = p.parse_args(argv)
+    if args.no_loop_strips and args.written_workers:
+        p.error("--no-loop-strips keys the crowd in Blender's process: add --written-workers 0")
     args.workers = [int(w) for w in args.workers.split(",")]
     return args
 
@@ -374,7 +383,10 @@ def run_written(n, args):
     if "bpy" not in sys.modules:
         blender_session.start()
     bpy = sys.modules["bpy"]
-    api = sys.modules[f"bl_ext.{blender_session.REPO_MODULE}.motion_patches"].api
+    addon = sys.modules[f"bl_ext.{blender_session.REPO_MODULE}.motion_patches"]
+    api = addon.api
+    if args.no_loop_strips:  # no stretch is long enough (set in this process only)
+        addon.motion_patches.kinematics.loop_strips.MIN_CYCLES = 1e9
     scene, source = bb.baked_scene(bpy, api, args.mocap)
     env, ends, _ = plaza(api.storage.load_patch(scene), n, args)  # the same plaza
     pairs = blender_plaza(bpy, bb, api, env, ends, source)
@@ -387,6 +399,7 @@ def run_written(n, args):
             res = api.plan_crowd(scene, pairs, frame_start=1, executor=executor)
     total = time.perf_counter() - t0
     peak_written = peak_rss_mb(reset)
+    frame_set_ms = frame_set_per_armature(bpy, scene, res, len(pairs))
     t1 = time.perf_counter()
     bpy.ops.wm.save_as_mainfile(filepath=str(folder / "after.blend"))
     save = time.perf_counter() - t1
@@ -419,7 +432,24 @@ def run_written(n, args):
         # has a peak of its own); the core runs before it in this process left out
         "peak_rss_written_mb": peak_written,
         "process_max_rss_mb": peak_rss_mb(reset),
+        "frame_set_ms_per_armature": frame_set_ms,
+        "loop_strips": not args.no_loop_strips,
     }
+
+
+def frame_set_per_armature(bpy, scene, res, armatures, frames=24, passes=3):
+    """Milliseconds of Blender's CPU a ``scene.frame_set`` takes per armature of the crowd
+    written, on ``frames`` frames spread over it (the fastest of ``passes``): what playing
+    the crowd costs, whatever its actions' layout."""
+    last = max(p.frame_end for p in res.plans)
+    at = np.linspace(1, last, frames).round().astype(int)
+    best = np.inf
+    for _ in range(passes):
+        t0 = time.process_time()
+        for f in at:
+            scene.frame_set(int(f))
+        best = min(best, time.process_time() - t0)
+    return 1000.0 * best / frames / max(armatures, 1)
 
 
 def written_markdown(rows):
@@ -428,8 +458,9 @@ def written_markdown(rows):
         "| of which members s | of which resolution s "
         "| write s | write CPU s, Blender's process | planned, resolved and written s "
         "| save s | with the save s "
-        "| KB per character-second | peak RSS MB written / saved |",
-        "|" + "---|" * 15,
+        "| KB per character-second | peak RSS MB written / saved "
+        "| frame_set ms per armature | loop strips |",
+        "|" + "---|" * 17,
     ]
     for r in rows:
         s = r["seconds"]
@@ -441,7 +472,8 @@ def written_markdown(rows):
             f"| {s['planned_resolved_written']:.1f} "
             f"| {s['save']:.1f} | {s['with_save']:.1f} "
             f"| {r['file_kb_per_character_second']:.1f} "
-            f"| {r['peak_rss_written_mb']:.0f} / {r['process_max_rss_mb']:.0f} |"
+            f"| {r['peak_rss_written_mb']:.0f} / {r['process_max_rss_mb']:.0f} "
+            f"| {r['frame_set_ms_per_armature']:.3f} | {'on' if r['loop_strips'] else 'off'} |"
         )
     return "\n".join(out)
 

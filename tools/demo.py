@@ -360,10 +360,15 @@ def main(argv):
         "    frames with the root inside a pillar (+%.2f m radius): %d"
         % (s.radius, f["frames_root_inside_obstacle"])
     )
-    if len(plan.pieces) > 1:
+    tracks = walker.animation_data.nla_tracks
+    if len(plan.pieces) > 1 or len(tracks["MP motion"].strips) > 1:
         print(
-            "    largest joint jump at a strip boundary: %.1f deg (p99 elsewhere %.1f deg)"
-            % (f["boundary_pop"]["max_boundary_jump_deg"], f["boundary_pop"]["p99_step_deg"])
+            "    largest joint jump where %d strips meet: %.1f deg (p99 elsewhere %.1f deg)"
+            % (
+                len(tracks["MP motion"].strips),
+                f["boundary_pop"]["max_boundary_jump_deg"],
+                f["boundary_pop"]["p99_step_deg"],
+            )
         )
     else:
         print("    one strip (the path was shortened to one curve): no strip boundary to jump at")

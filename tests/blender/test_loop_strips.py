@@ -149,3 +149,17 @@ def test_the_walkers_feet_lock_over_the_loop(walked, addon_module):
             assert any(
                 s.frame_start < lp.frame_end and s.frame_end > lp.frame_start for s in strips
             ), (r.name, lp.name)
+
+
+def test_no_pop_where_a_loop_strip_meets_the_body(walked, addon_module):
+    """The plan record lists every strip's start (its pieces' and their loop stretches'),
+    and the analysis finds no joint jumping there more than anywhere else."""
+    api, nla = addon_module.api, addon_module.adapter.nla
+    for r in walked["rigs"]:
+        meta, _ = api.load_plan_record(r)
+        track = r.animation_data.nla_tracks[nla.TRACK_MOTION]
+        starts = sorted(int(round(s.frame_start)) for s in track.strips)
+        assert meta["joins"] == starts[1:] and len(meta["joins"]) > len(meta["boundaries"])
+        pop = api.analyse(bpy.context, r)["boundary_pop"]
+        print(f"{r.name}: largest jump where strips meet {pop['max_boundary_jump_deg']:.2f} deg")
+        assert pop["max_boundary_jump_deg"] < pop["p99_step_deg"], (r.name, pop)
