@@ -234,27 +234,18 @@ def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None, index
     many strips does not search every action of the file for each. ``unit``: the rig's
     world scale (:func:`~.rig.world_scale`), in which its root locations are keyed: rigs of
     another scale get their own actions."""
-    sig = rotation_signature(skel, modes or {})
-    rig_sig = rig.signature() if rig is not None else ""
-    key = f"{patch_key}:{seg}" + (f":rig-{rig_sig}" if rig_sig else "") + (f":{sig}" if sig else "")
-    if unit != 1.0:
-        key += f":unit-{unit:.6g}"
-    found = (segment_index(bpy) if index is None else index).get(key)
-    if found is not None:
-        return found, compat.action_slot(found)
-    motion = patch.motion(seg)
-    if rig is not None:
-        motion = rig.motion(motion)
-    name = (
-        f"MP {patch.layer} seg{seg:04d}"
-        + (f" rig-{rig_sig[:6]}" if rig_sig else "")
-        + (f" {sig}" if sig else "")
-        + (f" x{unit:.4g}" if unit != 1.0 else "")
+    return _shared_action(
+        bpy,
+        patch,
+        f"{patch_key}:{seg}",
+        f"seg{seg:04d}",
+        skel,
+        modes,
+        rig,
+        index,
+        unit,
+        lambda: patch.motion(seg) if rig is None else rig.motion(patch.motion(seg)),
     )
-    action, slot = _inplace_action(name, skel, motion, {SEGMENT_KEY: key}, modes, unit)
-    if index is not None:
-        index[key] = action
-    return action, slot
 
 
 def loop_action(bpy, patch, patch_key, skel, modes=None, rig=None, index=None, unit=1.0):
@@ -263,22 +254,39 @@ def loop_action(bpy, patch, patch_key, skel, modes=None, rig=None, index=None, u
     first use and kept as :func:`segment_action` keeps a segment's (by patch, the rig's
     skeleton, rotation modes and scale): the stretches of characters' own pieces that play
     the loop frame by frame play it through repeating strips."""
+    return _shared_action(
+        bpy,
+        patch,
+        f"{patch_key}:loop",
+        "loop",
+        skel,
+        modes,
+        rig,
+        index,
+        unit,
+        lambda: loop_strips.straight_loop(patch.gait, rig),
+    )
+
+
+def _shared_action(bpy, patch, base, label, skel, modes, rig, index, unit, motion_of):
+    """The shared action keyed ``base`` (extended by the rig's skeleton, rotation modes and
+    scale: :func:`segment_action`), named "MP <layer> ``label``" with the same marks,
+    looked up in ``index`` (or the file) and made of ``motion_of()`` when missing."""
     sig = rotation_signature(skel, modes or {})
     rig_sig = rig.signature() if rig is not None else ""
-    key = f"{patch_key}:loop" + (f":rig-{rig_sig}" if rig_sig else "") + (f":{sig}" if sig else "")
+    key = base + (f":rig-{rig_sig}" if rig_sig else "") + (f":{sig}" if sig else "")
     if unit != 1.0:
         key += f":unit-{unit:.6g}"
     found = (segment_index(bpy) if index is None else index).get(key)
     if found is not None:
         return found, compat.action_slot(found)
     name = (
-        f"MP {patch.layer} loop"
+        f"MP {patch.layer} {label}"
         + (f" rig-{rig_sig[:6]}" if rig_sig else "")
         + (f" {sig}" if sig else "")
         + (f" x{unit:.4g}" if unit != 1.0 else "")
     )
-    motion = loop_strips.straight_loop(patch.gait, rig)
-    action, slot = _inplace_action(name, skel, motion, {SEGMENT_KEY: key}, modes, unit)
+    action, slot = _inplace_action(name, skel, motion_of(), {SEGMENT_KEY: key}, modes, unit)
     if index is not None:
         index[key] = action
     return action, slot
@@ -422,9 +430,9 @@ def write_plan(
             strip.action_frame_end = at + span
             strip.action_frame_start = at
         if abs(scale - 1.0) > 1e-9:
-            _set_scale(strip, scale, end)
+            _set_within(strip, "scale", scale, end)
         if cycle:
-            _set_repeat(strip, (end - start) / (cycle * float(strip.scale)), end)
+            _set_within(strip, "repeat", (end - start) / (cycle * float(strip.scale)), end)
         strip.extrapolation = (
             "HOLD" if i == 0 else ("HOLD_FORWARD" if i == len(parts) - 1 else "NOTHING")
         )
@@ -462,25 +470,16 @@ def write_plan(
     return strips, stashed
 
 
-def _set_scale(strip, scale, end):
-    """Scale ``strip`` by ``scale``, kept from ending after scene frame ``end``: Blender keeps
-    the scale in single precision, and rounded up the strip would end a hair after the next
-    one starts, which then could not be added."""
-    single = np.float32(scale)
-    strip.scale = float(single)
+def _set_within(strip, prop, value, end):
+    """Set ``strip``'s ``prop`` ("scale", or "repeat": a fraction too, a loop strip ends
+    mid-cycle) to ``value``, kept from ending after scene frame ``end``: Blender keeps it in
+    single precision, and rounded up the strip would end a hair after the next one starts,
+    which then could not be added."""
+    single = np.float32(value)
+    setattr(strip, prop, float(single))
     while strip.frame_end > end:
         single = np.nextafter(single, np.float32(0.0))
-        strip.scale = float(single)
-
-
-def _set_repeat(strip, repeat, end):
-    """Repeat ``strip``'s action range ``repeat`` times (a fraction too: a loop strip ends
-    mid-cycle), kept from ending after scene frame ``end`` (see :func:`_set_scale`)."""
-    single = np.float32(repeat)
-    strip.repeat = float(single)
-    while strip.frame_end > end:
-        single = np.nextafter(single, np.float32(0.0))
-        strip.repeat = float(single)
+        setattr(strip, prop, float(single))
 
 
 def root_units(obj):

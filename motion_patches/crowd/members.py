@@ -273,10 +273,11 @@ def prepared_keys(jobs: Sequence[tuple], fps: float, patch: Any) -> list[tuple]:
     the scene's rate ``fps`` here, so a worker is sent a quarter of the bytes."""
     out, loops = [], {}
     for raw, rig, args in jobs:
-        where = placed(patch, rig, unpacked(raw), fps, rig_keys.own_pieces(args[4]))
         sig = None if rig is None else rig.signature()
         if sig not in loops:  # the same for every character of one rig
             loops[sig] = loop_strips.straight_loop(patch.gait, rig)
+        own = rig_keys.own_pieces(args[4])
+        where = placed(patch, rig, unpacked(raw), fps, own, loops[sig])
         out.append(rig_keys.prepare_packed(args[0], where, *args[2:], loop=loops[sig]))
     return out
 

@@ -14,6 +14,7 @@ A stretch is found by comparing the motion itself with the loop (every bone, the
 offset), never by what produced it, so a blend, a retarget or a hold that changes a frame
 leaves that frame to the body action."""
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -142,17 +143,23 @@ def scene_parts(
     return parts
 
 
+def keyed_on_scene_frames(motions: Sequence[Motion], bounds: Any, own: Sequence[int]) -> bool:
+    """Whether a character's own pieces ``own`` are keyed on the scene's frames (no more of
+    them than of the patch's: a scene at most the patch's rate), not on the patch's."""
+    return sum(int(bounds[n + 1] - bounds[n]) for n in own) <= sum(
+        motions[n].frames - 1 for n in own
+    )
+
+
 def played_parts(
-    motions: list[Motion], bounds: Any, own: list[int], loop: Motion | None
+    motions: Sequence[Motion], bounds: Any, own: Sequence[int], loop: Motion | None
 ) -> dict[int, list[tuple[str, int, int, float, float]]]:
     """{piece: :func:`scene_parts`} of the pieces ``own`` (those only their character plays;
     ``bounds``: the scene frames where the pieces start and the last ends): the strips
     each is played by. Loops only where the character's own pieces are keyed on the scene's
     frames (the scene's rate at most the patch's; above it they are keyed on the patch's
     frames and played by scaled strips), and only when ``loop`` (:func:`straight_loop`)."""
-    scene_keys = sum(int(bounds[n + 1] - bounds[n]) for n in own) <= sum(
-        motions[n].frames - 1 for n in own
-    )
+    scene_keys = keyed_on_scene_frames(motions, bounds, own)
     parts = {}
     for n in own:
         lo, hi = int(bounds[n]), int(bounds[n + 1])

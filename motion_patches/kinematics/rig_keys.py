@@ -140,10 +140,8 @@ def body_keys(
     :func:`~.scene_rate.placed`) are left to a shared loop action.
     ``ranges``: {piece: [(kind "body" or "loop", first scene frame, last scene frame, first
     action frame, strip scale)]}: the strips the piece is played by, in order."""
-    scene_keys = sum(int(bounds[n + 1] - bounds[n]) for n in own) <= sum(
-        motions[n].frames - 1 for n in own
-    )
-    parts = loop_strips.played_parts(list(motions), bounds, list(own), loop)
+    scene_keys = loop_strips.keyed_on_scene_frames(motions, bounds, own)
+    parts = loop_strips.played_parts(motions, bounds, own, loop)
     ranges: dict[int, list] = {}
     at = 0
     if scene_keys:

@@ -53,18 +53,21 @@ def placed(
     raw: list,
     scene_fps: float,
     own: Sequence[int] = (),
+    loop: Motion | None = None,
 ) -> tuple:
     """(piece motions on the character's rig, scene bounds of the pieces, the whole motion on
     the scene's frames) of a plan's piece motions ``raw`` at the patch's rate. ``rig``: the
     character's rig map (None: the patch's skeleton). ``own``: the pieces only the
     character plays (:func:`~.rig_keys.own_pieces`): at another rate than the patch's, the
     stretches of them a shared loop action plays are that loop at the phase it plays there
-    (:func:`~.loop_strips.on_loops`)."""
+    (:func:`~.loop_strips.on_loops`; ``loop``: its :func:`~.loop_strips.straight_loop`
+    when made already)."""
     motions = [rig.motion(m) for m in raw] if rig is not None else list(raw)
     patch_bounds, bounds = piece_bounds([m.frames for m in motions], scene_fps / patch.gait.fps)
     whole = at_scene_rate(concatenate(motions), patch_bounds, bounds)
     if own and not np.array_equal(patch_bounds, bounds):
-        loop = loop_strips.straight_loop(patch.gait, rig)
-        parts = loop_strips.played_parts(motions, bounds, list(own), loop)
+        if loop is None:
+            loop = loop_strips.straight_loop(patch.gait, rig)
+        parts = loop_strips.played_parts(motions, bounds, own, loop)
         whole = loop_strips.on_loops(whole, parts, loop)
     return motions, bounds, whole

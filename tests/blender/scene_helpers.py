@@ -108,3 +108,23 @@ def world_bone_matrices(rigs, frames, names):
             for b, n in enumerate(names):
                 out[r.name][i, b] = mw @ np.array(ev.pose.bones[n].matrix)
     return out
+
+
+def spy_writes(mp, addon_module):
+    """{character name: (patch skeleton, its plan's world bone matrices (F, B, 4, 4))},
+    filled as plans are written while ``mp`` (a pytest MonkeyPatch) holds: the motion
+    ``nla.write_plan`` is handed (the locked rotations with the foot lock), in float64: what
+    the rig should play."""
+    nla = addon_module.adapter.nla
+    motion = addon_module.motion_patches.kinematics.motion.Motion
+    write_plan, written = nla.write_plan, {}
+
+    def spy(bpy_, obj, patch, key, plan, motions, world, frame_start, locked=None, *more):
+        rot = world.rotations if locked is None else locked
+        m = motion(world.ground, world.root_local, rot, world.contacts)
+        skel = patch.gait.skeleton
+        written[obj.name] = (skel, m.world_matrices(skel))
+        return write_plan(bpy_, obj, patch, key, plan, motions, world, frame_start, locked, *more)
+
+    mp.setattr(nla, "write_plan", spy)
+    return written

@@ -8,7 +8,7 @@ import bpy
 import numpy as np
 import pytest
 
-from scene_helpers import empty, native_rig, pillar, walker_from, world_bone_matrices
+from scene_helpers import empty, native_rig, pillar, spy_writes, walker_from, world_bone_matrices
 
 # Degrees any bone may turn from the plan with keys stored within 1e-5. Not to float32, as
 # test_rotation_modes.py's segments do: a loop strip plays its action between keys (the walk
@@ -37,25 +37,16 @@ def walked(request, walk_blend, addon_module, mocap_dir):
     goals = [empty(f"Goal{r.name}", 12.4, 2.3 + 3.0 * n, 0.0) for n, r in enumerate(rigs)]
     for n, r in enumerate(rigs):  # a pillar on each way: walked round, not through tiles
         pillar(f"Pillar{n}", 6.4, 1.3 + 3.0 * n)
-    written = {}
-    write_plan = nla.write_plan
-
-    def spy(bpy_, obj, patch, key, plan, motions, world, frame_start, locked=None, *more):
-        written[obj.name] = (patch.gait.skeleton, world, locked)
-        return write_plan(bpy_, obj, patch, key, plan, motions, world, frame_start, locked, *more)
-
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(nla, "write_plan", spy)
+        written = spy_writes(mp, addon_module)
         if request.param == "linear":
             mp.setattr(act_io, "COMPACT", act_io.LINEAR_TOL)
         results = [api.plan_path(scene, r, g, frame_start=1) for r, g in zip(rigs, goals)]
-    motion = addon_module.motion_patches.kinematics.motion.Motion
     out = {"rigs": rigs, "results": results, "storage": request.param, "expected": {}}
     for r, res in zip(rigs, results):
-        skel, world, locked = written[r.name]
-        assert locked is not None  # the foot lock is on by default
-        m = motion(world.ground, world.root_local, locked, world.contacts)
-        out["expected"][r.name] = m.world_matrices(skel)
+        # the foot lock is on by default (the plan written is the locked motion)
+        assert nla.TRACK_FOOT in [t.name for t in r.animation_data.nla_tracks]
+        skel, out["expected"][r.name] = written[r.name]
         frames = np.arange(res.frame_start, res.frame_end + 1)
         out.setdefault("frames", {})[r.name] = frames
         out["mats"] = {**out.get("mats", {}), **world_bone_matrices([r], frames, skel.names)}

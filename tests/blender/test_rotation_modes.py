@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from mathutils import Euler, Quaternion
 
-from scene_helpers import empty, pillar, walker_from, world_bone_matrices
+from scene_helpers import empty, pillar, spy_writes, walker_from, world_bone_matrices
 
 EULER_ORDERS = ("XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX")
 MODES = ("QUATERNION",) + EULER_ORDERS + ("AXIS_ANGLE",)
@@ -259,7 +259,7 @@ def planned(request, baked, addon_module, mocap_dir):
     default, play it within their tolerance in each mode: test_compact_keys.py), every
     piece by strips playing keys on whole frames (loop strips do not:
     test_loop_strips.py)."""
-    api, nla = addon_module.api, addon_module.adapter.nla
+    api = addon_module.api
     bpy.ops.wm.open_mainfile(filepath=str(baked))
     scene = bpy.context.scene
     source = bpy.data.objects["Source"]
@@ -279,15 +279,8 @@ def planned(request, baked, addon_module, mocap_dir):
     for n, (x, y) in enumerate([(3.0, 1.0), (4.5, 3.0), (2.5, 4.0), (6.0, 1.5)]):
         pillar(f"Pillar{n}", x, y)
     goal = empty("Goal", 9.0, 7.0, 2.0)
-    written = {}
-    write_plan = nla.write_plan
-
-    def spy(bpy_, obj, patch, key, plan, motions, world, frame_start, locked=None, *more):
-        written[obj.name] = (patch.gait.skeleton, world, locked)
-        return write_plan(bpy_, obj, patch, key, plan, motions, world, frame_start, locked, *more)
-
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(nla, "write_plan", spy)
+        written = spy_writes(mp, addon_module)
         mp.setattr(addon_module.adapter.actions, "COMPACT", addon_module.adapter.actions.LINEAR_TOL)
         # no stretch played by the shared loop action: it plays between its keys, where
         # Blender interpolates channels and the plan slerps (test_loop_strips.py)
@@ -296,14 +289,7 @@ def planned(request, baked, addon_module, mocap_dir):
             r.name: api.plan_path(scene, r, goal, frame_start=1, foot_lock=request.param)
             for r in rigs
         }
-    skel, world, locked = written["Quat"]
-    motion = addon_module.motion_patches.kinematics.motion.Motion
-    expected = motion(
-        world.ground,
-        world.root_local,
-        world.rotations if locked is None else locked,
-        world.contacts,
-    ).world_matrices(skel)
+    skel, expected = written["Quat"]
     ref = results["Quat"]
     frames = np.arange(ref.frame_start, ref.frame_end + 1)
     mats = world_bone_matrices(rigs, frames, skel.names)
