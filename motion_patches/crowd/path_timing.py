@@ -57,27 +57,13 @@ def earliest(
     earliest arrivals, one with the fewest holds, then the shortest wait at the start."""
     track = np.asarray(track, float)
     busy = np.asarray(busy, bool)
-    n, last = len(track), busy.shape[1] - 1
+    n = len(track)
     ramp = int(ramp) // 2 * 2
     half = ramp // 2
-    k_all = np.arange(n)
     can_hold = np.zeros(n, bool)
     if holdable is not None and ramp and n > ramp + 1 and max_holds > 0:
         can_hold[half : n - half] = np.asarray(holdable, bool)[half : n - half]
     down, up = _ramps(ramp) if can_hold.any() else (np.zeros(0, int), np.zeros(0, int))
-
-    def ramp_points(offsets):
-        """(lo, hi, between) of the fractional track frames ``k + offsets`` for every
-        track frame k (rows): the frames either side and whether it lies between them."""
-        u = k_all[:, None] + offsets[None]
-        lo = np.clip(np.floor(u).astype(int), 0, n - 1)
-        return lo, np.minimum(lo + 1, n - 1), u > lo + 1e-9
-
-    def at(points, k, t):
-        """Busy at the ramp ``points`` from track frames ``k`` on frames ``t``."""
-        lo, hi, between = points
-        t = np.minimum(t, last)
-        return busy[lo[k], t] | (between[k] & busy[hi[k], t])
 
     # the goal: free on every frame from the arrival on (the first frame it stays free)
     goal = busy[n - 1, n - 1 :]
@@ -93,8 +79,8 @@ def earliest(
     walk_how = np.zeros((layers, n), np.int8)
     stand_how = np.zeros((layers + half + 2, n), np.int8)
     seed_v[0, 0], seed_how[0, 0] = 0, _START
-    downs, ups = ramp_points(down), ramp_points(up)
-    step, first = 32, -64  # layers whose free frames are looked up at once, the first
+    looks = _Looks(busy, n, down, up, can_hold)
+    first = -_BLOCK  # the first layer of the block looked up
     for e in range(layers):
         sv, st = seed_v[e], stand_v[e]
         live_w, live_s = sv < _NONE, st < _NONE
@@ -102,63 +88,158 @@ def earliest(
             if not (seed_v[e + 1 :] < _NONE).any() and not (stand_v[e + 1 :] < _NONE).any():
                 return None  # nothing left walking or standing
             continue
-        if not first <= e < first + step:
-            rows = np.minimum(k_all[None, :] + np.arange(e, min(e + step, layers))[:, None], last)
-            frees, first = ~busy[k_all[None, :], rows], e
-        free = frees[e - first]
-        val = _run_min(np.where(free, sv, _NONE), free)
-        how = np.where(val < _NONE, _WALK, 0).astype(np.int8)
+        if not first <= e < first + _BLOCK:
+            first = e
+            free_b, off_b, down_b, up_b = looks.block(e, min(e + _BLOCK, layers) - e)
+        i = e - first
+        free, off = free_b[i], off_b[i]
+        # least value so far along runs of free frames (a walk carries its value forward
+        # while the way is free; a busy frame ends the run)
+        val = np.minimum.accumulate(np.where(free, sv, _NONE) + off) - off
+        reach = val < _NONE
+        how = reach.astype(np.int8) * np.int8(_WALK)
         seeded = free & (sv == val) & live_w
         how[seeded] = seed_how[e][seeded]
         walk_how[e] = how
-        reach = val < _NONE
         if reach[-1] and n - 1 + e >= goal_from:
             return _way_back(e, n - 1, walk_how, stand_how, ramp)
         # standing on: the start (before leaving) and held frames
-        if reach[0] and e < max_delay and not busy[0, min(e + 1, last)] and e + 1 < layers:
+        if reach[0] and e < max_delay and free_b[i + 1, 0] and e + 1 < layers:
             seed_v[e + 1, 0], seed_how[e + 1, 0] = min(seed_v[e + 1, 0], e + 1), _WAIT
         if live_s.any():
             ks = np.nonzero(live_s)[0]
             if e + 1 < layers:
-                ok = ~busy[ks, np.minimum(ks + e + 1, last)]
-                better = ok & (st[ks] < stand_v[e + 1, ks])
+                better = free_b[i + 1, ks] & (st[ks] < stand_v[e + 1, ks])
                 stand_v[e + 1, ks[better]] = st[ks[better]]
                 stand_how[e + 1, ks[better]] = _STAND
             # A ramp is looked at only where it would improve a state: most layers improve
-            # none, and the look-up is the costly part.
+            # none.
             if e + half < layers:  # speed up out of a hold
                 ks = ks[st[ks] < seed_v[e + half, ks + half]]
                 if ks.size:
-                    t = ks[:, None] + e + 1 + np.arange(ramp)[None]
-                    ks = ks[~at(ups, ks, t).any(1)]
+                    ks = ks[~looks.up(up_b, i, e, ks)]
                     seed_v[e + half, ks + half] = st[ks]
                     seed_how[e + half, ks + half] = _UP
-        if can_hold.any() and e + half + 1 < layers:  # slow down into a hold
+        if looks.holds and e + half + 1 < layers:  # slow down into a hold
             ks = np.nonzero(reach[: n - ramp] & can_hold[half : n - half])[0] + half
             v = val[ks - half] + _HOLD
             better = (v // _HOLD <= max_holds) & (v < stand_v[e + half + 1, ks])
             ks, v = ks[better], v[better]
             if ks.size:
-                t = (ks - half)[:, None] + e + 1 + np.arange(ramp + 1)[None]
-                ok = ~at(downs, ks - half, t).any(1)
+                ok = ~looks.down(down_b, i, e, ks - half)
                 stand_v[e + half + 1, ks[ok]] = v[ok]
                 stand_how[e + half + 1, ks[ok]] = _DOWN
     return None
 
 
-def _run_min(v, free):
-    """Least value so far along runs of ``free`` frames (a walk carries its value forward
-    while the way is free; a busy frame ends the run)."""
-    seg = np.cumsum(~free)
-    off = (seg[-1] + 1 - seg).astype(np.int64) * _SEG
-    return np.minimum.accumulate(v + off) - off
+_BLOCK = 32  # layers whose look-ups are made at once
+
+
+class _Looks:
+    """What :func:`earliest` looks up in ``busy``, a block of layers at a time: whether
+    each track frame is free on each layer (and the layer after), the offsets that carry a
+    walk's least value along a run of free frames in one accumulate, and whether the
+    slow-down into a hold (the speed-up out of one) from each track frame on each layer
+    meets someone.
+
+    Point ``j`` of a ramp from track frame k lies ``j + 1`` frames on, between track frames
+    ``k + a`` and ``k + a + 1`` (``a`` its whole frames along the track). ``busy`` sheared
+    by the track frame (:meth:`_sheared`: row d holds every track frame d frames after its
+    own, column by column) holds that point of every k in one slice, so a block's ramps
+    are ``ramp + 1`` slices each, not a look-up per layer. A ramp whose whole offsets are
+    not the same from every frame that holds (rounding at the end of the track) is looked
+    up point by point instead; both give the same answer."""
+
+    def __init__(self, busy, n, down, up, can_hold):
+        self.busy, self.n, self.last = busy, n, busy.shape[1] - 1
+        held = np.flatnonzero(can_hold)
+        self.holds = bool(held.size)
+        half = len(up) // 2
+        # (point-by-point ramp, its whole offsets and betweens or None), per ramp
+        self.ramps = [self._ramp(down, held - half), self._ramp(up, held)] if self.holds else []
+        shifts = [0, 1]  # each layer's own frame and the next (standing on)
+        for _, same in self.ramps:
+            if same is not None:
+                a, between = same
+                j = np.arange(len(a))
+                shifts += (1 + j - a).tolist() + (j - a)[between].tolist()
+        self.lo, self.hi = min(shifts), max(shifts)
+        self.pad = 2 + max((int(same[0].max()) for _, same in self.ramps if same), default=0)
+
+    def _ramp(self, offsets, rows):
+        """(lo, hi, between) of the fractional track frames ``k + offsets`` for every track
+        frame k, and (whole offsets, between) of its points when every row in ``rows`` has
+        the same ones (else None)."""
+        n = self.n
+        u = np.arange(n)[:, None] + offsets[None]
+        lo = np.clip(np.floor(u).astype(int), 0, n - 1)
+        hi, between = np.minimum(lo + 1, n - 1), u > lo + 1e-9
+        a, b = lo[rows[0]] - rows[0], between[rows[0]]
+        same = (
+            (lo[rows] - rows[:, None] == a[None]).all()
+            and (hi[rows] - lo[rows] == 1).all()
+            and (between[rows] == b[None]).all()
+        )
+        return (lo, hi, between), ((a, b) if same else None)
+
+    def _sheared(self, e0, count):
+        """(count, n + pad) bool: row i, column r: track frame r (the last one past the
+        end) busy on frame ``r + e0 + i`` (``busy``'s last column for every frame after)."""
+        r = np.arange(self.n + self.pad)
+        t = np.clip(r[None] + e0 + np.arange(count)[:, None], 0, self.last)
+        return self.busy[np.minimum(r, self.n - 1)[None], t]
+
+    def block(self, e0, count):
+        """Layers ``e0 .. e0 + count - 1``: (free (count + 1, n), run offsets (count, n),
+        slow-down busy (count, n + pad) by the walking frame it leaves, speed-up busy
+        (count, n + pad) by the held frame; a ramp looked up point by point: None)."""
+        n = self.n
+        sheared = self._sheared(e0 + self.lo, count + self.hi - self.lo)
+        free = ~sheared[-self.lo : -self.lo + count + 1, :n]
+        seg = np.cumsum(~free[:count], axis=1)
+        off = (seg[:, -1:] + 1 - seg).astype(np.int64) * _SEG
+        ramps = []
+        for _, same in self.ramps:
+            if same is None:
+                ramps.append(None)
+                continue
+            a, between = same
+            width = n + self.pad - int(a.max()) - 1
+            hit = np.zeros((count, width), bool)
+            for j, (aj, bj) in enumerate(zip(a.tolist(), between.tolist())):
+                d = 1 + j - aj - self.lo  # the row of layer e0's point j
+                hit |= sheared[d : d + count, aj : aj + width]
+                if bj:  # and the track frame after it
+                    hit |= sheared[d - 1 : d - 1 + count, aj + 1 : aj + 1 + width]
+            ramps.append(hit)
+        return free, off, *(ramps or (None, None))
+
+    def _points(self, which, k, e, count):
+        """Busy anywhere on ramp ``which`` from track frames ``k`` on layer ``e``, point
+        by point (its ``count`` points on frames ``k + e + 1 ..``)."""
+        lo, hi, between = self.ramps[which][0]
+        t = np.minimum(k[:, None] + e + 1 + np.arange(count)[None], self.last)
+        return (self.busy[lo[k], t] | (between[k] & self.busy[hi[k], t])).any(1)
+
+    def down(self, block, i, e, k):
+        """Busy on the slow-down from walking track frames ``k`` on layer ``e`` (row ``i``
+        of its block, ``block`` its slow-downs)."""
+        if block is None:
+            return self._points(0, k, e, self.ramps[0][0][0].shape[1])
+        return block[i, k]
+
+    def up(self, block, i, e, k):
+        """Busy on the speed-up out of a hold on track frames ``k`` on layer ``e``."""
+        if block is None:
+            return self._points(1, k, e, self.ramps[1][0][0].shape[1])
+        return block[i, k]
 
 
 _HOLD = 1 << 24  # a state's value: holds * _HOLD + frames waited at the start
 
 
 _NONE = 1 << 28  # no state: more than any value
-_SEG = 1 << 29
+_SEG = 1 << 29  # per run of free frames: later runs offset less, so none carries into the next
 _START, _WALK, _WAIT, _UP = 1, 2, 3, 4  # how a walking state was reached
 _STAND, _DOWN = 1, 2  # how a standing state was reached
 

@@ -82,16 +82,17 @@ class _Sorted:
             self.runs = [run for run in self.runs if run["key"].size]
             self._dead = 0
 
-    def near(self, q):
-        """(query index, frame, xy, owner) of every living entry whose key is one of ``q``."""
+    def within(self, lo, hi):
+        """(query index, frame, xy, owner) of every living entry whose key lies in
+        ``[lo[q], hi[q]]`` for some query q, each query's in key order."""
         out = []
         for run in self.runs:
-            lo = np.searchsorted(run["key"], q, "left")
-            n = np.searchsorted(run["key"], q, "right") - lo
-            hit = np.nonzero(n)[0]
+            first = np.searchsorted(run["key"], lo, "left")
+            n = np.searchsorted(run["key"], hi, "right") - first
+            hit = np.nonzero(n > 0)[0]
             if hit.size:
                 n = n[hit]
-                ent = np.repeat(lo[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
+                ent = np.repeat(first[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
                 rows = np.repeat(hit, n)
                 if self._dead:
                     living = self._alive[run["stamp"][ent]]
@@ -133,18 +134,26 @@ class Reservations:
         return (np.asarray(t, np.int64) << 42) | (c[..., 0] << 21) | c[..., 1]
 
     SLACK = 0.05  # metres cells are wider than the spacing: the most :meth:`busy` adds
-    _RING = np.array([(i, j) for i in range(-1, 2) for j in range(-1, 2)], np.int64)
-    _RING_KEYS = (_RING[:, 0] << 21) + _RING[:, 1]  # added to a cell key: the cells round it
+    # added to a cell key: the cells round it
+    _RING_KEYS = np.array([(i << 21) + j for i in range(-1, 2) for j in range(-1, 2)], np.int64)
+    # A cell's column of three (y - 1 .. y + 1) is one range of keys: the nine cells round a
+    # point are three look-ups, each giving its cells' entries in the order of the nine.
+    _COLUMNS = np.arange(-1, 2, dtype=np.int64) << 21
+
+    @classmethod
+    def _columns(cls, keys):
+        """(lo, hi) key ranges (len(keys) * 3) of the three columns of cells round each
+        cell key (the key's low 21 bits its y cell)."""
+        k = (np.asarray(keys, np.int64)[:, None] + cls._COLUMNS[None]).ravel()
+        return k - 1, k + 1
 
     def _moving_near(self, t, xy):
         """(query row, xy, owner) of moving entries on frame ``t[row]`` in the cell of
         ``xy[row]`` or next to it."""
         if not self.moving.size or not len(t):
             return np.empty(0, int), np.empty((0, 2)), np.empty(0, int)
-        c = self._cells(xy)[:, None, :] + self._RING[None]
-        q = self._key(np.repeat(np.asarray(t)[:, None], len(self._RING), 1), c).ravel()
-        rows, _, where, owner = self.moving.near(q)
-        return rows // len(self._RING), where, owner
+        rows, _, where, owner = self.moving.within(*self._columns(self._key(t, self._cells(xy))))
+        return rows // len(self._COLUMNS), where, owner
 
     def _spots_near(self, xy):
         """Indices of standing spots in the cells of the points ``xy`` or next to them."""
@@ -173,10 +182,10 @@ class Reservations:
         n, s2 = len(track), (self.spacing + margin) ** 2
         out = np.zeros((n, frames + 2), np.int32)
         if self.by_cell.size:
-            c = self._cells(track)[:, None, :] + self._RING[None]
-            rows, when, where, _ = self.by_cell.near((c[..., 0] << 21 | c[..., 1]).ravel())
+            c = self._cells(track)
+            rows, when, where, _ = self.by_cell.within(*self._columns(c[:, 0] << 21 | c[:, 1]))
             if rows.size:
-                rows = rows // len(self._RING)
+                rows = rows // len(self._COLUMNS)
                 d = where - track[rows]
                 close = np.einsum("ij,ij->i", d, d) < s2
                 t = np.minimum(when[close], frames)

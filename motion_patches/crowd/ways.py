@@ -14,7 +14,9 @@ on. It may still wait at its start, and holds anywhere once the others are all p
 import numpy as np
 
 _OFF = 1 << 20  # cell indices shifted into a key's 21-bit fields (as the reservation table)
-_RING = np.array([(i << 21) + j for i in range(-1, 2) for j in range(-1, 2)], np.int64)
+# the three columns of cells round a cell (its key's low 21 bits its y cell): each is one
+# range of keys, y - 1 .. y + 1
+_COLUMNS = np.arange(-1, 2, dtype=np.int64) << 21
 STRIDE = 4  # every this many frames of a path are kept (about 0.2 m apart at a walk)
 BETWEEN_M = 0.1  # the most a frame of a path lies from the nearest point kept of it
 
@@ -46,15 +48,15 @@ class Ways:
         """(frame of ``track``, point kept) of every kept point within the spacing of it."""
         if not self.key.size or not len(track):
             return np.empty(0, int), np.empty(0, int)
-        q = (self._keys(track)[:, None] + _RING[None]).ravel()
-        lo = np.searchsorted(self.key, q, "left")
-        n = np.searchsorted(self.key, q, "right") - lo
+        q = (self._keys(track)[:, None] + _COLUMNS[None]).ravel()
+        lo = np.searchsorted(self.key, q - 1, "left")
+        n = np.searchsorted(self.key, q + 1, "right") - lo
         hit = np.nonzero(n)[0]
         if not hit.size:
             return np.empty(0, int), np.empty(0, int)
         n = n[hit]
         ent = np.repeat(lo[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
-        rows = np.repeat(hit // len(_RING), n)
+        rows = np.repeat(hit // len(_COLUMNS), n)
         d = self.xy[ent] - track[rows]
         close = np.einsum("ij,ij->i", d, d) < self.reach**2
         return rows[close], ent[close]

@@ -472,7 +472,34 @@ def test_the_earliest_timing_is_clear_and_no_earlier_one_is():
         assert m[k]
         track, m = crowd.held_track(track, k, h, 10, m)
     assert not table.check(track, delay2)
-    assert delay2 + len(track) <= delay + len(b)  # arrives no later
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_sliced_ramp_look_ups_give_the_point_by_point_timing(monkeypatch, seed):
+    """path_timing._Looks: the slow-downs and speed-ups of a block of layers looked up as
+    slices of the sheared busy table give the same earliest timing as each ramp's points
+    looked up one by one (what it falls back to where a ramp's whole offsets differ), on
+    random crossings, with holds, short and long searches."""
+    from motion_patches.crowd import path_timing
+
+    rng = np.random.default_rng(seed)
+    n, ramp = int(rng.integers(40, 120)), int(rng.choice([4, 8, 12]))
+    track = np.zeros((n, 2))
+    busy = np.zeros((n, n + 200), bool)
+    for _ in range(12):  # others crossing the track: a few frames of it busy a while
+        k, t = int(rng.integers(5, n)), int(rng.integers(0, n + 120))
+        busy[k - int(rng.integers(1, 4)) : k, t : t + int(rng.integers(4, 30))] = True
+    busy[:, 0] = busy[n - 1, -1] = False
+    holdable = rng.random(n) < 0.5
+    tries = [(60, 120, 4), (0, 60, 1), (30, 150, 2)]
+    sliced = [path_timing.earliest(track, busy, holdable, ramp, *t) for t in tries]
+    ramp_of = path_timing._Looks._ramp
+    monkeypatch.setattr(
+        path_timing._Looks, "_ramp", lambda self, o, rows: (ramp_of(self, o, rows)[0], None)
+    )
+    assert sliced == [path_timing.earliest(track, busy, holdable, ramp, *t) for t in tries]
+    if seed in (0, 1, 4, 5):  # these crossings are cleared by holds
+        assert any(t is not None and t[1] for t in sliced), sliced
 
 
 def test_a_path_placed_while_another_is_re_planned_keeps_clear_of_its_path_and_discs():
