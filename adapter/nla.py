@@ -233,7 +233,11 @@ def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None, index
     ``index``: {key: action} of the segment actions (:func:`segment_index`), so a plan of
     many strips does not search every action of the file for each. ``unit``: the rig's
     world scale (:func:`~.rig.world_scale`), in which its root locations are keyed: rigs of
-    another scale get their own actions."""
+    another scale get their own actions. A segment whose motion is the straight loop's
+    (:func:`~motion_patches.kinematics.loop_strips.loop_segments`) plays the shared loop
+    action (:func:`loop_action`)."""
+    if seg in loop_strips.loop_segments(patch):
+        return loop_action(bpy, patch, patch_key, skel, modes, rig, index, unit)
     return _shared_action(
         bpy,
         patch,

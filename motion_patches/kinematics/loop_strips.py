@@ -44,6 +44,31 @@ def straight_loop(gait: Any, rig: Any = None) -> Motion:
     return rig.motion(m) if rig is not None else m
 
 
+def loop_segments(patch: Any) -> frozenset[int]:
+    """The patch's segments whose motion is :func:`straight_loop`'s (a straight segment
+    of two cycles across the tile, whatever its heading: in place they are one motion), so
+    a plan's segment strip plays the shared loop action instead of an action of its own
+    with the same keys. Compared as motions (every bone, the root's offset, the contacts);
+    cached on the patch."""
+    found = patch.__dict__.get("_loop_segments")
+    if found is None:
+        loop = straight_loop(patch.gait)
+        maybe = np.flatnonzero((np.abs(patch.seg_turn) < 1e-6) & (patch.seg_cycles == 2))
+        found = frozenset(int(s) for s in maybe if _same_motion(patch.motion(int(s)), loop))
+        patch.__dict__["_loop_segments"] = found
+    return found
+
+
+def _same_motion(a: Motion, b: Motion, tol: float = 1e-9) -> bool:
+    """Whether two in-place motions pose every frame alike (to ``tol``)."""
+    return (
+        a.frames == b.frames
+        and bool(np.array_equal(a.contacts, b.contacts))
+        and float(np.abs(np.asarray(a.root_local) - b.root_local).max()) < tol
+        and float(np.abs(np.asarray(a.rotations) - b.rotations).max()) < tol
+    )
+
+
 def period(loop: Motion) -> int:
     """Frames of one cycle of a :func:`straight_loop`."""
     return (loop.frames - 1) // 2

@@ -64,13 +64,21 @@ def test_compact_keys_shrink_the_file_and_play_the_plan(measured, patch_fps, sce
     assert cubic["kb_per_char_s"] < linear["kb_per_char_s"] < every["kb_per_char_s"]
 
 
-@pytest.mark.xfail(
+# Blender 4.5 saves .blend files uncompressed by default (5.0 and 5.2 compress them, and
+# meet the bound at every rate): there a few walkers' file meets it where the scene is slower
+# than the patch, not yet at the patch's rate or a faster scene, nor with a 120 fps patch.
+NOT_ON_45 = pytest.mark.xfail(
     bpy.app.version < (5, 0, 0),
     strict=True,
-    reason="not reached on Blender 4.5, which saves .blend files uncompressed by default (5.0 "
-    "and 5.2 compress them, and meet it): a character's own pieces (start, stop, connectors) "
-    "are keyed per character, and captured motion bends on most frames (docs/benchmarks.md)",
+    reason="not reached on Blender 4.5 uncompressed: a character's own pieces (start, stop, "
+    "connectors) are keyed per character, and captured motion bends on most frames "
+    "(docs/benchmarks.md)",
 )
-@pytest.mark.parametrize("patch_fps,scene_fps", CASES)
+
+
+@pytest.mark.parametrize(
+    "patch_fps,scene_fps",
+    [c if c == (30, 24) else pytest.param(*c, marks=NOT_ON_45) for c in CASES],
+)
 def test_a_crowd_file_grows_at_most_the_bound(measured, patch_fps, scene_fps):
     assert measured(patch_fps, scene_fps)["cubic"]["kb_per_char_s"] <= BOUND_KB

@@ -83,6 +83,27 @@ def test_a_straight_walk_plays_one_shared_loop_action(walked, addon_module):
         assert length <= (res.frame_end - res.frame_start) - covered + len(strips) + 2
 
 
+def test_a_straight_segment_plays_the_loop_action(walked, addon_module):
+    """A segment whose motion is the straight loop's (loop_strips.loop_segments) plays the
+    shared loop action: no action of its own holds the same keys again; another segment
+    keeps its own."""
+    nla, storage = addon_module.adapter.nla, addon_module.adapter.storage
+    loop_strips = addon_module.motion_patches.kinematics.loop_strips
+    scene = bpy.context.scene
+    patch, key = storage.load_patch(scene, "walk"), storage.patch_key(scene, "walk")
+    skel = patch.gait.skeleton
+    straight = loop_strips.loop_segments(patch)
+    loop, _ = nla.loop_action(bpy, patch, key, skel)
+    for seg in straight:
+        assert nla.segment_action(bpy, patch, key, seg, skel)[0] == loop
+    assert loop.name == "MP walk loop"
+    keys = {a.get(nla.SEGMENT_KEY) for a in bpy.data.actions}
+    assert not keys & {f"{key}:{seg}" for seg in straight}
+    other = next(s for s in range(patch.segment_count) if s not in straight)
+    own = nla.segment_action(bpy, patch, key, other, skel)[0]
+    assert own != loop and own[nla.SEGMENT_KEY] == f"{key}:{other}"
+
+
 def rig_body(rig, nla):
     track = rig.animation_data.nla_tracks[nla.TRACK_MOTION]
     (body,) = {s.action for s in track.strips if s.action.get(nla.SEGMENT_KEY) is None}

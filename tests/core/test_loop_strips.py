@@ -120,3 +120,23 @@ def test_at_another_rate_the_plan_is_what_its_loop_strips_play(walk_patch, scene
     )
     assert [x[0] for x in keys["ranges"][0]] == ["body", "loop", "body"]
     assert keys["frames"].size == whole.frames - (b - a - 1)
+
+
+def test_the_straight_segments_are_the_loop_and_no_other_is(walk_patch):
+    """loop_strips.loop_segments: the segments of the real 16_15 patch whose motion is the
+    straight loop's two cycles and a frame (so they play the shared loop action): at least
+    one, each equal to the loop to 1e-9; every other segment of that length differs by more
+    than a degree somewhere."""
+    patch = walk_patch
+    loop = loop_strips.straight_loop(patch.gait)
+    found = loop_strips.loop_segments(patch)
+    assert found
+    assert loop_strips.loop_segments(patch) is found  # cached on the patch
+    same_length = [s for s in range(patch.segment_count) if patch.seg_cycles[s] == 2]
+    for s in same_length:
+        m = patch.motion(s)
+        if s in found:
+            assert np.abs(m.rotations - loop.rotations).max() < 1e-9
+            assert np.abs(m.root_local - loop.root_local).max() < 1e-9
+        elif m.frames == loop.frames:
+            assert _largest_angle(m.rotations, loop.rotations) > 1.0, s
