@@ -347,7 +347,8 @@ class _Intervals:
                 u = units[r.columns[:, 0]]
                 kind_of[u], row_of[u] = len(self.kinds), np.arange(u.size)
                 # within the angle A: |dot| of the unit quaternions at least cos(A / 2)
-                judge = 1.0 - np.cos(0.5 * r.angle)
+                # below about 1.5e-8 rad 1 - cos rounds to 0 (a perfect fit's error 0 / 0)
+                judge = max(1.0 - np.cos(0.5 * r.angle), np.finfo(float).eps)
                 self.kinds.append(
                     _Kind(u, r.columns, v, self.m, self.ref, judge, r.to_quat, r.angle)
                 )

@@ -365,3 +365,20 @@ def test_a_steady_fit_changes_its_error_little_from_frame_to_frame(steady):
         assert jump > 0.5 * tol
     else:
         assert jump <= steady * tol * (1 + 1e-9)
+
+
+def test_rotations_judged_within_a_hair_still_fit():
+    """An angle too small for ``1 - cos`` in double precision (1e-9 rad) is judged at the
+    precision there is: the fit ends, every frame on a key plays the plan, and no point is
+    further off than that precision allows."""
+    rng = np.random.default_rng(3)
+    n = 40
+    q = walk_rotations(n, 30, rng)
+    values = q.reshape(n, -1)
+    rot = keys.Rotations(np.arange(q.shape[1] * 4).reshape(-1, 4), quat.normalize, angle=1e-9)
+    fit = keys.cubic_keys(values, np.full(values.shape[1], np.inf), (rot,), True)
+    played = keys.play(values, fit, np.arange(n))
+    for b in range(q.shape[1]):
+        pq = quat.normalize(played[:, 4 * b : 4 * b + 4])
+        dot = np.abs(np.einsum("fc,fc->f", pq, q[:, b]))
+        assert (1.0 - dot).max() <= 4 * np.finfo(float).eps
