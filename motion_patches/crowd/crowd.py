@@ -253,6 +253,12 @@ def _improve(table, s, found, max_delay, max_hold, step, ramp):
     return best[2], best[3]
 
 
+def _extra(timing, ramp):
+    """Frames a timing (delay, holds) adds to its walk: the wait, each hold and its ramps."""
+    delay, holds = timing
+    return delay + sum(h + ramp for _, h in holds)
+
+
 def _found_by(timing, max_delay, max_extra, max_holds, ramp):
     """Whether :func:`path_timing.earliest` within ``max_delay``, ``max_extra`` and
     ``max_holds`` finds ``timing`` (delay, holds), the answer of a search allowing more.
@@ -261,8 +267,7 @@ def _found_by(timing, max_delay, max_extra, max_holds, ramp):
     wait, which it prefers alike (states are kept by that value, ties broken in the same
     order of moves); so the narrower search need not be run."""
     delay, holds = timing
-    extra = delay + sum(h + ramp for _, h in holds)
-    return delay <= max_delay and len(holds) <= max_holds and extra <= max_extra
+    return delay <= max_delay and len(holds) <= max_holds and _extra(timing, ramp) <= max_extra
 
 
 def _timed(table, s, max_delay, max_hold, ramp, found):
@@ -283,6 +288,8 @@ def _timed(table, s, max_delay, max_hold, ramp, found):
     for wait, holds in tries[:-1] if timing is not None else ():
         if _found_by(timing, wait, wait + max_hold, holds, ramp):
             break  # the earliest of all is one this search allows: it finds that one too
+        if _extra(timing, ramp) > wait + max_hold:
+            continue  # it arrives no earlier than the earliest of all: later than it may
         first = path_timing.earliest(s.track, busy, s.holdable, ramp, wait, wait + max_hold, holds)
         if first is not None:
             timing = first

@@ -474,6 +474,34 @@ def test_the_earliest_timing_is_clear_and_no_earlier_one_is():
     assert not table.check(track, delay2)
 
 
+def test_a_narrow_timing_later_than_it_may_arrive_is_not_searched(monkeypatch):
+    """crowd._timed: when the earliest arrival of all (the widest search's) needs more
+    extra time than a narrower search may take, that search finds nothing and is skipped:
+    the same timing, one search fewer."""
+    from motion_patches.crowd import path_timing
+
+    table = crowd.Reservations(0.5)
+    for i in range(14):  # walkers streaming across b's way, one every 8 frames
+        table.reserve(i, line((-5.0, 0.0), (5.0, 0.0), 101), delay=8 * i)
+    b = line((0.0, -5.0), (0.0, 5.0), 101)
+    mask = (np.arange(101) % 5) == 0
+    s = crowd.Schedule(0, (), 0, b, mask)
+    found = table.check(b)
+    calls = []
+    earliest = path_timing.earliest
+    monkeypatch.setattr(
+        path_timing, "earliest", lambda *a, **k: calls.append(a[4:]) or earliest(*a, **k)
+    )
+    got, left = crowd._timed(table, s, 120, 30, 10, found)
+    skipped = list(calls)
+    calls.clear()
+    monkeypatch.setattr(crowd, "_extra", lambda timing, ramp: 0)  # every search made
+    want, _ = crowd._timed(table, s, 120, 30, 10, found)
+    assert not left and (got.delay, got.holds) == (want.delay, want.holds)
+    assert got.delay + sum(h + 10 for _, h in got.holds) > 30  # later than (0, 1) may
+    assert len(calls) == len(skipped) + 1 and (0, 30, 1) in calls and (0, 30, 1) not in skipped
+
+
 @pytest.mark.parametrize("seed", range(6))
 def test_the_sliced_ramp_look_ups_give_the_point_by_point_timing(monkeypatch, seed):
     """path_timing._Looks: the slow-downs and speed-ups of a block of layers looked up as
