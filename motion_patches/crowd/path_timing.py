@@ -117,7 +117,7 @@ def earliest(
             if e + half < layers:  # speed up out of a hold
                 ks = ks[st[ks] < seed_v[e + half, ks + half]]
                 if ks.size:
-                    ks = ks[~looks.up(up_b, i, e, ks)]
+                    ks = ks[~looks.ramp_busy(1, up_b, i, e, ks)]
                     seed_v[e + half, ks + half] = st[ks]
                     seed_how[e + half, ks + half] = _UP
         if looks.holds and e + half + 1 < layers:  # slow down into a hold
@@ -126,7 +126,7 @@ def earliest(
             better = (v // _HOLD <= max_holds) & (v < stand_v[e + half + 1, ks])
             ks, v = ks[better], v[better]
             if ks.size:
-                ok = ~looks.down(down_b, i, e, ks - half)
+                ok = ~looks.ramp_busy(0, down_b, i, e, ks - half)
                 stand_v[e + half + 1, ks[ok]] = v[ok]
                 stand_how[e + half + 1, ks[ok]] = _DOWN
     return None
@@ -214,25 +214,15 @@ class _Looks:
             ramps.append(hit)
         return free, off, *(ramps or (None, None))
 
-    def _points(self, which, k, e, count):
-        """Busy anywhere on ramp ``which`` from track frames ``k`` on layer ``e``, point
-        by point (its ``count`` points on frames ``k + e + 1 ..``)."""
+    def ramp_busy(self, which, block, i, e, k):
+        """Busy on ramp ``which`` (0: the slow-down from walking track frames ``k``, 1: the
+        speed-up out of a hold on them) on layer ``e``: row ``i`` of its block's look-up
+        (``block``), or point by point (on frames ``k + e + 1 ..``) where there is none."""
+        if block is not None:
+            return block[i, k]
         lo, hi, between = self.ramps[which][0]
-        t = np.minimum(k[:, None] + e + 1 + np.arange(count)[None], self.last)
+        t = np.minimum(k[:, None] + e + 1 + np.arange(lo.shape[1])[None], self.last)
         return (self.busy[lo[k], t] | (between[k] & self.busy[hi[k], t])).any(1)
-
-    def down(self, block, i, e, k):
-        """Busy on the slow-down from walking track frames ``k`` on layer ``e`` (row ``i``
-        of its block, ``block`` its slow-downs)."""
-        if block is None:
-            return self._points(0, k, e, self.ramps[0][0][0].shape[1])
-        return block[i, k]
-
-    def up(self, block, i, e, k):
-        """Busy on the speed-up out of a hold on track frames ``k`` on layer ``e``."""
-        if block is None:
-            return self._points(1, k, e, self.ramps[1][0][0].shape[1])
-        return block[i, k]
 
 
 _HOLD = 1 << 24  # a state's value: holds * _HOLD + frames waited at the start

@@ -6,6 +6,27 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 _OFF = 1 << 20  # cell indices are shifted by this into a key's 21-bit fields
+# A cell's column of three (y - 1 .. y + 1) is one range of keys (a key's low 21 bits are its
+# y cell): the nine cells round a point are three look-ups, giving their entries in the order
+# of the nine.
+_COLUMN_SHIFTS = np.arange(-1, 2, dtype=np.int64) << 21
+
+
+def column_ranges(keys: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) key ranges (len(keys) * 3) of the three columns of cells round each cell
+    key, key by key."""
+    k = (np.asarray(keys, np.int64)[:, None] + _COLUMN_SHIFTS[None]).ravel()
+    return k - 1, k + 1
+
+
+def in_ranges(keys: np.ndarray, lo: ArrayLike, hi: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """(query index, entry index) of every entry of the sorted ``keys`` in ``[lo[q],
+    hi[q]]``, query by query, each query's entries in key order."""
+    first = np.searchsorted(keys, lo, "left")
+    n = np.searchsorted(keys, hi, "right") - first
+    hit = np.nonzero(n > 0)[0]
+    n = n[hit]
+    return np.repeat(hit, n), np.repeat(first[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
 
 
 class _Sorted:
@@ -87,13 +108,8 @@ class _Sorted:
         ``[lo[q], hi[q]]`` for some query q, each query's in key order."""
         out = []
         for run in self.runs:
-            first = np.searchsorted(run["key"], lo, "left")
-            n = np.searchsorted(run["key"], hi, "right") - first
-            hit = np.nonzero(n > 0)[0]
-            if hit.size:
-                n = n[hit]
-                ent = np.repeat(first[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
-                rows = np.repeat(hit, n)
+            rows, ent = in_ranges(run["key"], lo, hi)
+            if ent.size:
                 if self._dead:
                     living = self._alive[run["stamp"][ent]]
                     ent, rows = ent[living], rows[living]
@@ -136,24 +152,14 @@ class Reservations:
     SLACK = 0.05  # metres cells are wider than the spacing: the most :meth:`busy` adds
     # added to a cell key: the cells round it
     _RING_KEYS = np.array([(i << 21) + j for i in range(-1, 2) for j in range(-1, 2)], np.int64)
-    # A cell's column of three (y - 1 .. y + 1) is one range of keys: the nine cells round a
-    # point are three look-ups, each giving its cells' entries in the order of the nine.
-    _COLUMNS = np.arange(-1, 2, dtype=np.int64) << 21
-
-    @classmethod
-    def _columns(cls, keys):
-        """(lo, hi) key ranges (len(keys) * 3) of the three columns of cells round each
-        cell key (the key's low 21 bits its y cell)."""
-        k = (np.asarray(keys, np.int64)[:, None] + cls._COLUMNS[None]).ravel()
-        return k - 1, k + 1
 
     def _moving_near(self, t, xy):
         """(query row, xy, owner) of moving entries on frame ``t[row]`` in the cell of
         ``xy[row]`` or next to it."""
         if not self.moving.size or not len(t):
             return np.empty(0, int), np.empty((0, 2)), np.empty(0, int)
-        rows, _, where, owner = self.moving.within(*self._columns(self._key(t, self._cells(xy))))
-        return rows // len(self._COLUMNS), where, owner
+        rows, _, where, owner = self.moving.within(*column_ranges(self._key(t, self._cells(xy))))
+        return rows // len(_COLUMN_SHIFTS), where, owner
 
     def _spots_near(self, xy):
         """Indices of standing spots in the cells of the points ``xy`` or next to them."""
@@ -162,13 +168,8 @@ class Reservations:
         c = self._cells(xy)
         c = np.unique(c[:, 0] << 21 | c[:, 1])  # the cells of the points, once each
         q = np.unique((c[:, None] + self._RING_KEYS[None]).ravel())
-        lo = np.searchsorted(self.spot_keys, q, "left")
-        n = np.searchsorted(self.spot_keys, q, "right") - lo
-        hit = np.nonzero(n)[0]
-        if not hit.size:
-            return np.empty(0, int)
-        n = n[hit]  # disjoint ranges of the sorted keys, in order: already sorted and unique
-        return np.repeat(lo[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
+        # disjoint ranges of the sorted keys, in order: already sorted and unique
+        return in_ranges(self.spot_keys, q, q)[1]
 
     def busy(self, track: np.ndarray, frames: int, margin: float = 0.01) -> np.ndarray:
         """(len(track), frames) bool: ``track[k]`` closer than the spacing (and ``margin``)
@@ -183,9 +184,9 @@ class Reservations:
         out = np.zeros((n, frames + 2), np.int32)
         if self.by_cell.size:
             c = self._cells(track)
-            rows, when, where, _ = self.by_cell.within(*self._columns(c[:, 0] << 21 | c[:, 1]))
+            rows, when, where, _ = self.by_cell.within(*column_ranges(c[:, 0] << 21 | c[:, 1]))
             if rows.size:
-                rows = rows // len(self._COLUMNS)
+                rows = rows // len(_COLUMN_SHIFTS)
                 d = where - track[rows]
                 close = np.einsum("ij,ij->i", d, d) < s2
                 t = np.minimum(when[close], frames)

@@ -13,10 +13,8 @@ on. It may still wait at its start, and holds anywhere once the others are all p
 
 import numpy as np
 
-_OFF = 1 << 20  # cell indices shifted into a key's 21-bit fields (as the reservation table)
-# the three columns of cells round a cell (its key's low 21 bits its y cell): each is one
-# range of keys, y - 1 .. y + 1
-_COLUMNS = np.arange(-1, 2, dtype=np.int64) << 21
+from .reservations import _OFF, column_ranges, in_ranges
+
 STRIDE = 4  # every this many frames of a path are kept (about 0.2 m apart at a walk)
 BETWEEN_M = 0.1  # the most a frame of a path lies from the nearest point kept of it
 
@@ -48,15 +46,8 @@ class Ways:
         """(frame of ``track``, point kept) of every kept point within the spacing of it."""
         if not self.key.size or not len(track):
             return np.empty(0, int), np.empty(0, int)
-        q = (self._keys(track)[:, None] + _COLUMNS[None]).ravel()
-        lo = np.searchsorted(self.key, q - 1, "left")
-        n = np.searchsorted(self.key, q + 1, "right") - lo
-        hit = np.nonzero(n)[0]
-        if not hit.size:
-            return np.empty(0, int), np.empty(0, int)
-        n = n[hit]
-        ent = np.repeat(lo[hit] - np.cumsum(n) + n, n) + np.arange(n.sum())
-        rows = np.repeat(hit // len(_COLUMNS), n)
+        rows, ent = in_ranges(self.key, *column_ranges(self._keys(track)))
+        rows = rows // 3  # a point's three columns of cells
         d = self.xy[ent] - track[rows]
         close = np.einsum("ij,ij->i", d, d) < self.reach**2
         return rows[close], ent[close]
