@@ -33,6 +33,7 @@ from ..motion_patches.kinematics.pose_keys import (  # noqa: F401
     Tolerance,
     fit_curves,
     pose_curves,
+    rest_values,
     whole_frames,
 )
 from ..motion_patches.kinematics.skeleton import Skeleton, root_location_to_position
@@ -181,6 +182,8 @@ def key_curves(
     rotations=(),
     between=True,
     fitted=None,
+    left_out=None,
+    blend="REPLACE",
 ):
     """Create the F-curves ``curves`` = [(data_path, index, group, values (F,))], all keyed
     at ``frames``, each in one bulk write (``keyframe_points.add`` + ``foreach_set`` of
@@ -198,7 +201,11 @@ def key_curves(
     ``values``: the curves' values as one (F, C) array already (their ``curves`` entries
     are then not read). ``between``: the keys are also played between ``frames`` (a strip
     scaled to another rate) and held to the plan there too; False: only on them.
-    ``fitted``: :func:`fit_curves` of these arguments, made already."""
+    ``fitted``: :func:`fit_curves` of these arguments, made already. ``left_out``: (C,)
+    the value each curve is not made at when it holds it on every frame (NaN: always
+    made), stored compactly (``tol`` not None): the value the channel plays without it in
+    the strips' ``blend`` (:func:`_made`; an F-curve costs a few hundred bytes even with one
+    key)."""
     frames = np.asarray(frames, float)
     if values is None and curves:
         values = np.column_stack([np.asarray(c[3], float) for c in curves])
@@ -224,7 +231,13 @@ def key_curves(
     keys = _CubicKeys(frames, cubic, step) if cubic is not None else None
     bag = compat.channelbag(action, slot, create=True)
     groups, out = {}, []
+    made = np.ones(len(curves), bool)
+    if left_out is not None and tol is not None and curves:  # (every curve on every frame)
+        at = np.asarray(left_out, np.float32)
+        made = _made(curves, ~np.all(rows[:, 1::2] == at[:, None], axis=1), blend)
     for c, ((data_path, index, group, _), (how, kept)) in enumerate(zip(curves, stored)):
+        if not made[c]:
+            continue
         fc = bag.fcurves.new(data_path, index=index)
         if group:
             grp = groups.get(group)
@@ -263,6 +276,30 @@ def key_curves(
             fc.update()
         out.append(fc)
     return out
+
+
+def _made(curves, changing, blend):
+    """(C,) which ``curves`` to make, of those ``changing`` (the others hold the value
+    :func:`key_curves` may leave them out at), as Blender's NLA plays a strip of ``blend``.
+    It blends a quaternion whole (any other channel component by component): a strip
+    keying some of a quaternion's components plays the others at their defaults, one
+    keying none leaves the bone to the strips below. So an Add strip (adding zero where it
+    keys nothing) leaves out a bone's quaternion only whole; a Replace strip leaves out the
+    components at their defaults (the caller's values) while it keys one of them, and no
+    other channel (the strips below would play there)."""
+    made = changing.copy()
+    quats = {}
+    for c, (path, *_) in enumerate(curves):
+        if path.endswith("rotation_quaternion"):
+            quats.setdefault(path, []).append(c)
+        elif blend != "ADD":
+            made[c] = True
+    for cs in quats.values():
+        if blend == "ADD":
+            made[cs] = made[cs].any()
+        elif not made[cs].any():
+            made[cs[0]] = True  # a Replace strip keeps the bone (its w, held at 1)
+    return made
 
 
 class _CubicKeys:

@@ -502,7 +502,9 @@ def _body_action(obj, keys):
     """One action of the character's own pieces (connectors, turns, clips: the pieces no
     other character plays), keyed as :func:`body_keys` fitted them: one set of curves
     serves them all (an F-curve costs a few hundred bytes before any key), piece after
-    piece, each strip playing its own frames.
+    piece, each strip playing its own frames. A quaternion's component holding its rest
+    value throughout (held at 1, or 0) is left out: the strip plays it there
+    (``key_curves``' ``left_out``).
     Returns (action, slot, {piece: (first action frame, strip scale, frames)}, whether keyed
     at the scene's rate)."""
     action, slot = compat.new_action(f"MP {obj.name} body")
@@ -517,6 +519,7 @@ def _body_action(obj, keys):
         rotations=keys["rotations"],
         between=keys["between"],
         fitted=keys["fitted"],
+        left_out=act_io.rest_values(keys["curves"]),
     )
     return action, slot, keys["ranges"], keys["scene_keys"]
 
@@ -659,6 +662,8 @@ def write_foot_lock(obj, lock):
         finer(act_io.COMPACT),
         values=None if values is None else values[rows],
         between=False,
+        left_out=np.zeros(len(curves)),  # a bone's zero delta adds nothing
+        blend="ADD",
     )
     track = obj.animation_data.nla_tracks.new()
     track.name = TRACK_FOOT

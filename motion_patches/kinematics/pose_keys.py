@@ -12,7 +12,13 @@ from numpy.typing import ArrayLike
 
 from . import foot_lock
 from . import keys as key_plan
-from .channels import channels_to_quat, held_channels, rotation_channels, rotation_path
+from .channels import (
+    channels_to_quat,
+    held_channels,
+    rest_channels,
+    rotation_channels,
+    rotation_path,
+)
 from .skeleton import Skeleton
 
 
@@ -133,6 +139,18 @@ def pose_curves(
     if isinstance(tol, Tolerance):  # the root's location: finer too (rotations judged apart)
         tol = Tolerance(tol.angle, tol.length / ROOT_FINER, tol.steady)
     return curves, values, tol, groups
+
+
+def rest_values(curves: Sequence[tuple]) -> np.ndarray:
+    """(C,) the value each of :func:`pose_curves`' ``curves`` has in the rest pose (Blender's
+    default of the channel): what a channel the NLA animates plays where no strip keys it."""
+    out = np.zeros(len(curves))
+    for c, (path, index, *_) in enumerate(curves):
+        if path.endswith("rotation_quaternion"):
+            out[c] = rest_channels("QUATERNION")[index]
+        elif path.endswith("rotation_axis_angle"):
+            out[c] = rest_channels("AXIS_ANGLE")[index]
+    return out
 
 
 def _rotations(mode, columns, angle):

@@ -183,6 +183,50 @@ def test_blender_add_rule(clean_scene):
         assert np.allclose(got[m], np.add(lower[m], upper[m]), atol=1e-6), (m, got[m])
 
 
+def test_blender_plays_a_quaternion_a_strip_keys_in_part_at_its_defaults(clean_scene):
+    """What compact keys rely on to leave out a quaternion component at its rest value
+    (adapter.actions.key_curves' ``left_out``), on this Blender version: a Replace strip
+    keying some of a bone's quaternion components plays the others at their defaults (w 1,
+    x y z 0), not the strip's below; a strip keying none of a bone's components (of
+    either blend) leaves it as the strips below play it: a body action keeps a component of
+    every bone, a foot lock leaves a bone's zero delta out only whole (an Add strip keying
+    some components adds the others' defaults)."""
+    arm = bpy.data.armatures.new("Probe")
+    ob = bpy.data.objects.new("Probe", arm)
+    clean_scene.collection.objects.link(ob)
+    bpy.context.view_layer.objects.active = ob
+    bpy.ops.object.mode_set(mode="EDIT")
+    for name in ("Part", "Kept", "Other"):
+        b = arm.edit_bones.new(name)
+        b.head, b.tail = (0, 0, 0), (0, 0, 1)
+    bpy.ops.object.mode_set(mode="OBJECT")
+    below = (0.5, 0.5, -0.5, 0.5)
+    keyed = {
+        "below": ("REPLACE", {b: dict(enumerate(below)) for b in ("Part", "Kept", "Other")}),
+        "part": ("REPLACE", {"Part": {1: 0.1, 2: -0.2, 3: 0.3}, "Kept": dict(enumerate(below))}),
+        "add": ("ADD", {"Kept": {0: 0.0, 1: 0.0, 2: 0.0, 3: 0.0}}),
+    }
+    ad = ob.animation_data_create()
+    for name, (blend, bones) in keyed.items():
+        act = bpy.data.actions.new(name)
+        slot = act.slots.new(id_type="OBJECT", name=name)
+        bag = act.layers.new("L").strips.new(type="KEYFRAME").channelbag(slot, ensure=True)
+        for bone, comps in bones.items():
+            for i, x in comps.items():
+                fc = bag.fcurves.new(f'pose.bones["{bone}"].rotation_quaternion', index=i)
+                fc.keyframe_points.insert(1, x)
+                fc.keyframe_points.insert(9, x)
+        strip = ad.nla_tracks.new().strips.new(name, 1, act)
+        strip.action_slot = slot
+        strip.blend_type = blend
+    clean_scene.frame_set(5)
+    ev = ob.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    got = {b: np.array(ev.pose.bones[b].rotation_quaternion) for b in ("Part", "Kept", "Other")}
+    assert np.allclose(got["Part"], (1.0, 0.1, -0.2, 0.3), atol=1e-7), got["Part"]
+    assert np.allclose(got["Kept"], below, atol=1e-7), got["Kept"]
+    assert np.allclose(got["Other"], below, atol=1e-7), got["Other"]
+
+
 # --- reading clips --------------------------------------------------------------------------
 
 

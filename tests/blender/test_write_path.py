@@ -202,3 +202,54 @@ def test_the_plan_range_is_read_from_the_records_head(addon_module, clean_scene)
     )
     assert storage.plan_range(ob) == (3, 90)
     assert np.array_equal(storage.load_plan(ob)[1]["ground"], ground)
+
+
+def test_compact_keys_leave_out_what_the_strip_plays_anyway(addon_module, clean_scene):
+    """A curve holding its ``left_out`` value on every frame is not made, stored compactly:
+    in a Replace strip a quaternion component at its default while another of the bone's
+    stays (no other channel); in an Add strip a bone's quaternion only whole (a zero delta),
+    an Euler angle alone. Every curve is made when keyed on every frame (the reference)."""
+    act_io = addon_module.adapter.actions
+    compat = addon_module.adapter.compat
+    t = np.arange(30.0)
+    moving = np.sin(t / 5.0)
+    q, e = "rotation_quaternion", "rotation_euler"
+    spec = [  # bone, path, index, values
+        ("Held", q, 0, np.ones_like(t)),  # w held at 1
+        ("Held", q, 1, moving),
+        ("Held", q, 2, np.zeros_like(t)),
+        ("Held", q, 3, 0.5 * moving),
+        ("Rest", q, 0, np.ones_like(t)),  # a bone at rest throughout
+        ("Rest", q, 1, np.zeros_like(t)),
+        ("Rest", q, 2, np.zeros_like(t)),
+        ("Rest", q, 3, np.zeros_like(t)),
+        ("Zero", q, 0, np.zeros_like(t)),  # a delta of zero
+        ("Zero", q, 1, np.zeros_like(t)),
+        ("Zero", q, 2, np.zeros_like(t)),
+        ("Zero", q, 3, np.zeros_like(t)),
+        ("Euler", e, 0, np.zeros_like(t)),
+        ("Euler", e, 1, moving),
+        ("Euler", e, 2, np.zeros_like(t)),
+    ]
+    curves = [(f'pose.bones["{b}"].{p}', i, b, v) for b, p, i, v in spec]
+    made_of = {}
+    for blend, tol in (("REPLACE", act_io.CUBIC), ("ADD", act_io.CUBIC), ("ADD", None)):
+        action, slot = compat.new_action(f"left out {blend}")
+        left = act_io.rest_values(curves) if blend == "REPLACE" else np.zeros(len(curves))
+        act_io.key_curves(action, slot, t, curves, tol, left_out=left, blend=blend)
+        made_of[blend, tol is None] = {
+            (fc.data_path.split('"')[1], fc.array_index) for fc in compat.fcurves(action)
+        }
+    assert made_of["REPLACE", False] == {
+        ("Held", 1),
+        ("Held", 3),
+        ("Rest", 0),
+        ("Zero", 0),
+        ("Euler", 0),
+        ("Euler", 1),
+        ("Euler", 2),
+    }
+    # zeros left out: the zero bone's quaternion whole, none of the others' (a w of 1)
+    quats = {(b, i) for b in ("Held", "Rest") for i in range(4)}
+    assert made_of["ADD", False] == quats | {("Euler", 1)}
+    assert made_of["ADD", True] == {(b, i) for b, _, i, _ in spec}
