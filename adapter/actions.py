@@ -169,6 +169,10 @@ CUBIC = Tolerance()  # cubic keys within 0.5 degrees and 1 mm (bench/bench_files
 # put them (a character's own pieces keyed on the scene's frames with the feet locked, the
 # foot lock and the root keyed finer: adapter/nla.py), a sixth smaller than linear keys.
 COMPACT = CUBIC
+# How near its ``left_out`` value a curve of key_curves is left out at (a quaternion
+# component: the rotation turns by at most twice this, radians; 1e-4 degrees): a bone that
+# does not turn about an axis (a knee's hinge) holds it there to rounding, not exactly.
+LEFT_OUT = 1e-6
 
 
 def key_curves(
@@ -202,10 +206,10 @@ def key_curves(
     are then not read). ``between``: the keys are also played between ``frames`` (a strip
     scaled to another rate) and held to the plan there too; False: only on them.
     ``fitted``: :func:`fit_curves` of these arguments, made already. ``left_out``: (C,)
-    the value each curve is not made at when it holds it on every frame (NaN: always
-    made), stored compactly (``tol`` not None): the value the channel plays without it in
-    the strips' ``blend`` (:func:`_made`; an F-curve costs a few hundred bytes even with one
-    key)."""
+    the value each curve is not made at when it holds it on every frame (within
+    :data:`LEFT_OUT`; NaN: always made), stored compactly (``tol`` not None): the value
+    the channel plays without it in the strips' ``blend`` (:func:`_made`; an F-curve costs
+    a few hundred bytes even with one key)."""
     frames = np.asarray(frames, float)
     if values is None and curves:
         values = np.column_stack([np.asarray(c[3], float) for c in curves])
@@ -233,8 +237,8 @@ def key_curves(
     groups, out = {}, []
     made = np.ones(len(curves), bool)
     if left_out is not None and tol is not None and curves:  # (every curve on every frame)
-        at = np.asarray(left_out, np.float32)
-        made = _made(curves, ~np.all(rows[:, 1::2] == at[:, None], axis=1), blend)
+        off = np.abs(values - np.asarray(left_out, float)).max(axis=0)  # NaN: never
+        made = _made(curves, ~(off <= LEFT_OUT), blend)
     for c, ((data_path, index, group, _), (how, kept)) in enumerate(zip(curves, stored)):
         if not made[c]:
             continue
@@ -390,15 +394,36 @@ def curve_points(fc):
 
 
 def key_pose(
-    action, slot, skel, frames, root_location, rotations, modes=None, tol=None, between=True
+    action,
+    slot,
+    skel,
+    frames,
+    root_location,
+    rotations,
+    modes=None,
+    tol=None,
+    between=True,
+    strip=False,
 ):
     """Key the root bone's location and every bone's rotation in the channel its rotation
     mode plays: ``modes`` is {bone name: rotation_mode}, quaternion for bones not in it.
     Quaternion channels are keyed as given (the caller makes them continuous); Euler and
     axis-angle ones are converted continuous over ``frames`` (:func:`rotation_channels`).
-    ``tol``, ``between``: store the curves compactly (:func:`key_curves`)."""
+    ``tol``, ``between``: store the curves compactly (:func:`key_curves`); ``strip``: the
+    action is only played by Replace strips, which play a quaternion component at rest
+    without its curve (``key_curves``' ``left_out``)."""
     curves, values, tol, groups = pose_curves(skel, root_location, rotations, modes, tol, between)
-    key_curves(action, slot, frames, curves, tol, values=values, rotations=groups, between=between)
+    key_curves(
+        action,
+        slot,
+        frames,
+        curves,
+        tol,
+        values=values,
+        rotations=groups,
+        between=between,
+        left_out=rest_values(curves) if strip else None,
+    )
 
 
 def read_channels(action, slot, bone, mode, frames, cache=None):

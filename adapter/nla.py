@@ -315,7 +315,9 @@ def _inplace_action(name, skel, motion, tags, modes=None, unit=1.0, tol=None):
         action[k] = v
     frames = np.arange(motion.frames, dtype=float)
     tol = act_io.COMPACT if tol is None else tol
-    act_io.key_pose(action, slot, skel, frames, loc, rot, modes, tol=in_units(tol, unit))
+    act_io.key_pose(
+        action, slot, skel, frames, loc, rot, modes, tol=in_units(tol, unit), strip=True
+    )
     return action, slot
 
 
