@@ -12,6 +12,19 @@ _OFF = 1 << 20  # cell indices are shifted by this into a key's 21-bit fields
 _COLUMN_SHIFTS = np.arange(-1, 2, dtype=np.int64) << 21
 
 
+def cells(xy: ArrayLike, cell: float) -> np.ndarray:
+    """(..., 2) int64 cell indices of points ``xy`` (..., 2) on a grid of ``cell`` metres,
+    shifted into a key's 21-bit fields."""
+    return np.floor(np.asarray(xy, float) / cell).astype(np.int64) + _OFF
+
+
+def cell_keys(xy: ArrayLike, cell: float) -> np.ndarray:
+    """(N,) the int64 key of each point's cell (x cell in the high field, y in the low 21
+    bits: a column of cells is one range of keys, :func:`column_ranges`)."""
+    c = cells(xy, cell)
+    return c[:, 0] << 21 | c[:, 1]
+
+
 def column_ranges(keys: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """(lo, hi) key ranges (len(keys) * 3) of the three columns of cells round each cell
     key, key by key."""
@@ -143,7 +156,7 @@ class Reservations:
         self.horizon = 0
 
     def _cells(self, xy):
-        return np.floor(np.asarray(xy, float) / self.cell).astype(np.int64) + _OFF
+        return cells(xy, self.cell)
 
     @staticmethod
     def _key(t, c):
@@ -165,8 +178,7 @@ class Reservations:
         """Indices of standing spots in the cells of the points ``xy`` or next to them."""
         if not self.spot_keys.size:
             return np.empty(0, int)
-        c = self._cells(xy)
-        c = np.unique(c[:, 0] << 21 | c[:, 1])  # the cells of the points, once each
+        c = np.unique(cell_keys(xy, self.cell))  # the cells of the points, once each
         q = np.unique((c[:, None] + self._RING_KEYS[None]).ravel())
         # disjoint ranges of the sorted keys, in order: already sorted and unique
         return in_ranges(self.spot_keys, q, q)[1]
@@ -183,8 +195,7 @@ class Reservations:
         n, s2 = len(track), (self.spacing + margin) ** 2
         out = np.zeros((n, frames + 2), np.int32)
         if self.by_cell.size:
-            c = self._cells(track)
-            rows, when, where, _ = self.by_cell.within(*column_ranges(c[:, 0] << 21 | c[:, 1]))
+            rows, when, where, _ = self.by_cell.within(*column_ranges(cell_keys(track, self.cell)))
             if rows.size:
                 rows = rows // len(_COLUMN_SHIFTS)
                 d = where - track[rows]
@@ -265,11 +276,10 @@ class Reservations:
         t = np.arange(d, d + n)
         c = self._cells(track)
         self.moving.insert(self._key(t, c), t, track, index)
-        self.by_cell.insert(c[:, 0] << 21 | c[:, 1], t, track, index)
+        self.by_cell.insert(cell_keys(track, self.cell), t, track, index)
         spots = np.array([[*track[0], 0, d, index], [*track[-1], d + n, np.inf, index]], float)
         spots = spots[spots[:, 2] < spots[:, 3]]
-        c = self._cells(spots[:, :2])
-        skeys = c[:, 0] << 21 | c[:, 1]
+        skeys = cell_keys(spots[:, :2], self.cell)
         order = np.argsort(skeys)  # np.insert keeps the given order at one position
         skeys, spots = skeys[order], spots[order]
         at = np.searchsorted(self.spot_keys, skeys)

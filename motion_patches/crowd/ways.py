@@ -13,7 +13,7 @@ on. It may still wait at its start, and holds anywhere once the others are all p
 
 import numpy as np
 
-from .reservations import _OFF, column_ranges, in_ranges
+from .reservations import cell_keys, column_ranges, in_ranges
 
 STRIDE = 4  # every this many frames of a path are kept (about 0.2 m apart at a walk)
 BETWEEN_M = 0.1  # the most a frame of a path lies from the nearest point kept of it
@@ -39,8 +39,7 @@ class Ways:
         self.key, self.xy, self.owner = key[order], xy[order], own[order]
 
     def _keys(self, xy):
-        c = np.floor(np.asarray(xy, float) / self.cell).astype(np.int64) + _OFF
-        return c[:, 0] << 21 | c[:, 1]
+        return cell_keys(xy, self.cell)
 
     def _close(self, track: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(frame of ``track``, point kept) of every kept point within the spacing of it."""
