@@ -124,6 +124,33 @@ def test_channels_are_continuous_over_frames(addon_module):
         assert step < 1.0, (mode, step)
 
 
+def probe_rig(scene, bones):
+    """An armature object of one-unit bones named ``bones``, all at the origin."""
+    arm = bpy.data.armatures.new("Probe")
+    ob = bpy.data.objects.new("Probe", arm)
+    scene.collection.objects.link(ob)
+    bpy.context.view_layer.objects.active = ob
+    bpy.ops.object.mode_set(mode="EDIT")
+    for name in bones:
+        b = arm.edit_bones.new(name)
+        b.head, b.tail = (0, 0, 0), (0, 0, 1)
+    bpy.ops.object.mode_set(mode="OBJECT")
+    return ob
+
+
+def probe_strip(ob, name, blend, keys):
+    """A strip of ``blend`` on a track of its own over ``ob``'s others, playing an action
+    keyed on frame 1 with ``keys`` = {(data path, index): value}."""
+    act = bpy.data.actions.new(name)
+    slot = act.slots.new(id_type="OBJECT", name=name)
+    bag = act.layers.new("L").strips.new(type="KEYFRAME").channelbag(slot, ensure=True)
+    for (path, i), x in keys.items():
+        bag.fcurves.new(path, index=i).keyframe_points.insert(1, x)
+    strip = ob.animation_data_create().nla_tracks.new().strips.new(name, 1, act)
+    strip.action_slot = slot
+    strip.blend_type = blend
+
+
 def test_blender_add_rule(clean_scene):
     """What the foot-lock track relies on, on this Blender version: an Add strip over a
     Replace strip adds every channel value, the four quaternion components (of a lower
@@ -131,15 +158,7 @@ def test_blender_add_rule(clean_scene):
     every order and the four axis-angle values; and a quaternion strip that adds a tiny
     rotation (w within float32 rounding of 1) still gets it, exactly (a Combine strip,
     lower @ pow(strip, 1) with the angle taken as acos of float32 w, loses it)."""
-    arm = bpy.data.armatures.new("Probe")
-    ob = bpy.data.objects.new("Probe", arm)
-    clean_scene.collection.objects.link(ob)
-    bpy.context.view_layer.objects.active = ob
-    bpy.ops.object.mode_set(mode="EDIT")
-    for m in MODES:
-        b = arm.edit_bones.new(m)
-        b.head, b.tail = (0, 0, 0), (0, 0, 1)
-    bpy.ops.object.mode_set(mode="OBJECT")
+    ob = probe_rig(clean_scene, MODES)
     for m in MODES:
         ob.pose.bones[m].rotation_mode = m
     paths = {
@@ -158,18 +177,13 @@ def test_blender_add_rule(clean_scene):
     upper["QUATERNION"] = tuple(np.array(locked) - lower["QUATERNION"])
     lower["AXIS_ANGLE"] = (0.8, 0.0, 0.6, 0.8)
     upper["AXIS_ANGLE"] = (0.5, 1.0, 0.0, 0.0)
-    ad = ob.animation_data_create()
     for name, vals, blend in (("lower", lower, "REPLACE"), ("upper", upper, "ADD")):
-        act = bpy.data.actions.new(name)
-        slot = act.slots.new(id_type="OBJECT", name=name)
-        bag = act.layers.new("L").strips.new(type="KEYFRAME").channelbag(slot, ensure=True)
-        for m, v in vals.items():
-            for i, x in enumerate(v):
-                fc = bag.fcurves.new(f'pose.bones["{m}"].{paths[m]}', index=i)
-                fc.keyframe_points.insert(1, x)
-        strip = ad.nla_tracks.new().strips.new(name, 1, act)
-        strip.action_slot = slot
-        strip.blend_type = blend
+        keys = {
+            (f'pose.bones["{m}"].{paths[m]}', i): x
+            for m, v in vals.items()
+            for i, x in enumerate(v)
+        }
+        probe_strip(ob, name, blend, keys)
     clean_scene.frame_set(1)
     ev = ob.evaluated_get(bpy.context.evaluated_depsgraph_get())
     got = {m: np.array(getattr(ev.pose.bones[m], paths[m])) for m in MODES}
@@ -191,35 +205,18 @@ def test_blender_plays_a_quaternion_a_strip_keys_in_part_at_its_defaults(clean_s
     either blend) leaves it as the strips below play it: a body action keeps a component of
     every bone, a foot lock leaves a bone's zero delta out only whole (an Add strip keying
     some components adds the others' defaults)."""
-    arm = bpy.data.armatures.new("Probe")
-    ob = bpy.data.objects.new("Probe", arm)
-    clean_scene.collection.objects.link(ob)
-    bpy.context.view_layer.objects.active = ob
-    bpy.ops.object.mode_set(mode="EDIT")
-    for name in ("Part", "Kept", "Other"):
-        b = arm.edit_bones.new(name)
-        b.head, b.tail = (0, 0, 0), (0, 0, 1)
-    bpy.ops.object.mode_set(mode="OBJECT")
+    ob = probe_rig(clean_scene, ("Part", "Kept", "Other"))
     below = (0.5, 0.5, -0.5, 0.5)
     keyed = {
         "below": ("REPLACE", {b: dict(enumerate(below)) for b in ("Part", "Kept", "Other")}),
         "part": ("REPLACE", {"Part": {1: 0.1, 2: -0.2, 3: 0.3}, "Kept": dict(enumerate(below))}),
         "add": ("ADD", {"Kept": {0: 0.0, 1: 0.0, 2: 0.0, 3: 0.0}}),
     }
-    ad = ob.animation_data_create()
     for name, (blend, bones) in keyed.items():
-        act = bpy.data.actions.new(name)
-        slot = act.slots.new(id_type="OBJECT", name=name)
-        bag = act.layers.new("L").strips.new(type="KEYFRAME").channelbag(slot, ensure=True)
-        for bone, comps in bones.items():
-            for i, x in comps.items():
-                fc = bag.fcurves.new(f'pose.bones["{bone}"].rotation_quaternion', index=i)
-                fc.keyframe_points.insert(1, x)
-                fc.keyframe_points.insert(9, x)
-        strip = ad.nla_tracks.new().strips.new(name, 1, act)
-        strip.action_slot = slot
-        strip.blend_type = blend
-    clean_scene.frame_set(5)
+        path = 'pose.bones["{}"].rotation_quaternion'.format
+        keys = {(path(b), i): x for b, comps in bones.items() for i, x in comps.items()}
+        probe_strip(ob, name, blend, keys)
+    clean_scene.frame_set(1)
     ev = ob.evaluated_get(bpy.context.evaluated_depsgraph_get())
     got = {b: np.array(ev.pose.bones[b].rotation_quaternion) for b in ("Part", "Kept", "Other")}
     assert np.allclose(got["Part"], (1.0, 0.1, -0.2, 0.3), atol=1e-7), got["Part"]
