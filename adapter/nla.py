@@ -38,6 +38,9 @@ TRACK_FOOT = TRACK_PREFIX + "foot lock"
 TRACKS_KEY = "motion_patches_tracks"
 SEGMENT_KEY = "motion_patches_segment"
 CHARACTER_KEY = "motion_patches_character"
+# On a shared action keyed one cycle long whose curves repeat (Cycles modifiers): the
+# cycle's frames. A strip may play any cycle's worth of it from any frame of the cycle.
+CYCLE_KEY = "motion_patches_cycle"
 ACTIONS_KEY = "motion_patches_actions"  # object: {action id: name} of what planning made for it
 ACTION_ID = "motion_patches_id"  # action: its id, kept by its character under ACTIONS_KEY
 STASH_PREFIX = TRACK_PREFIX + "stash: "
@@ -253,12 +256,14 @@ def segment_action(bpy, patch, patch_key, seg, skel, modes=None, rig=None, index
 
 
 def loop_action(bpy, patch, patch_key, skel, modes=None, rig=None, index=None, unit=1.0):
-    """The shared in-place action of the gait's straight loop (two cycles and a frame,
-    :func:`~motion_patches.kinematics.loop_strips.straight_loop`) for a rig, created on
-    first use and kept as :func:`segment_action` keeps a segment's (by patch, the rig's
-    skeleton, rotation modes and scale): the stretches of characters' own pieces that play
-    the loop frame by frame play it through repeating strips."""
-    return _shared_action(
+    """The shared in-place action of the gait's straight loop for a rig, created on first
+    use and kept as :func:`segment_action` keeps a segment's (by patch, the rig's skeleton,
+    rotation modes and scale): the stretches of characters' own pieces that play the loop
+    frame by frame, and the straight segments, play it through repeating strips. It keys one
+    cycle and a frame (:func:`~motion_patches.kinematics.loop_strips.one_cycle`), every
+    curve repeating it (a Cycles modifier; :data:`CYCLE_KEY`), so a strip plays a cycle from
+    any frame of it; one made before keys two cycles and a frame, which serves as well."""
+    action, slot = _shared_action(
         bpy,
         patch,
         f"{patch_key}:loop",
@@ -268,8 +273,20 @@ def loop_action(bpy, patch, patch_key, skel, modes=None, rig=None, index=None, u
         rig,
         index,
         unit,
-        lambda: loop_strips.straight_loop(patch.gait, rig),
+        lambda: loop_strips.one_cycle(patch.gait, rig),
     )
+    if CYCLE_KEY not in action and not _made_two_cycles(action, patch.gait.straight.frames):
+        for fc in compat.fcurves(action, slot):
+            if len(fc.keyframe_points) + len(fc.sampled_points) > 1:
+                fc.modifiers.new("CYCLES")
+        action[CYCLE_KEY] = int(patch.gait.straight.frames)
+    return action, slot
+
+
+def _made_two_cycles(action, cycle):
+    """Whether a loop action found in the file keys two cycles (made before loop actions
+    were one cycle long): it is played as it is."""
+    return action.frame_range[1] - action.frame_range[0] > cycle + 0.5
 
 
 def _shared_action(bpy, patch, base, label, skel, modes, rig, index, unit, motion_of):
@@ -403,7 +420,10 @@ def write_plan(
                 unit,
             )
             scale = (end - start) / float(max(m.frames - 1, 1))
-            parts.append((n, f"{n:02d} {piece.label}", action, slot, start, end, None, scale, 0))
+            # a straight segment on the loop action keyed one cycle: its cycles repeated
+            cycle = int(action.get(CYCLE_KEY, 0))
+            at = 0.0 if cycle else None
+            parts.append((n, f"{n:02d} {piece.label}", action, slot, start, end, at, scale, cycle))
         else:
             for i, (kind, a, b, at, scale) in enumerate(body[2][n]):
                 name = f"{n:02d} {piece.label}" + (f"{PART}{kind} {i}" if i else "")
@@ -538,12 +558,14 @@ def _played_frames(played, n_frames):
     action (a plan plays one segment action on many strips)."""
     owner = np.full(n_frames, -1)
     at = np.zeros(n_frames)
-    for s, (_, _, start, frames, scale, first, *cycle) in enumerate(played):
+    for s, (action, _, start, frames, scale, first, *cycle) in enumerate(played):
         idx = np.arange(start, min(start + frames, n_frames))
         idx = idx[owner[idx] < 0]
         owner[idx] = s
         if cycle and cycle[0]:
             at[idx] = np.fmod(idx - start, cycle[0] * scale) / scale + first
+            if action.get(CYCLE_KEY):  # one cycle keyed, repeating: what it plays there
+                at[idx] = np.mod(at[idx], cycle[0])
         else:
             at[idx] = (idx - start) / scale + (first or 0)
     keys = {}  # (action, slot) -> its number, in the order strips first play them

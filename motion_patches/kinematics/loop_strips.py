@@ -44,6 +44,15 @@ def straight_loop(gait: Any, rig: Any = None) -> Motion:
     return rig.motion(m) if rig is not None else m
 
 
+def one_cycle(gait: Any, rig: Any = None) -> Motion:
+    """The first cycle and a frame of :func:`straight_loop` (its last frame the first
+    again): what the shared loop action keys, its curves repeating it."""
+    n = gait.straight.frames
+    m = straight_loop(gait)
+    m = Motion(m.ground[: n + 1], m.root_local[: n + 1], m.rotations[: n + 1], m.contacts[: n + 1])
+    return rig.motion(m) if rig is not None else m
+
+
 def loop_segments(patch: Any) -> frozenset[int]:
     """The patch's segments whose motion is :func:`straight_loop`'s (a straight segment
     of two cycles across the tile, whatever its heading: in place they are one motion), so

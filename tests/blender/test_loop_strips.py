@@ -104,6 +104,62 @@ def test_a_straight_segment_plays_the_loop_action(walked, addon_module):
     assert own != loop and own[nla.SEGMENT_KEY] == f"{key}:{other}"
 
 
+def test_the_loop_action_keys_one_cycle_its_curves_repeat(walked, addon_module):
+    """The shared loop action keys one cycle and a frame, every curve of more than one
+    point repeating it (a Cycles modifier), and strips play a cycle from mid-cycle on,
+    past the frames it keys (the evaluated rig is checked against the plan below)."""
+    nla = addon_module.adapter.nla
+    compat = addon_module.adapter.compat
+    strips = [s for r in walked["rigs"] for s in _loop_strips(r, nla)]
+    for action in {s.action for s in strips}:
+        cycle = action[nla.CYCLE_KEY]
+        assert action.frame_range[1] - action.frame_range[0] == pytest.approx(cycle)
+        for fc in compat.fcurves(action):
+            many = len(fc.keyframe_points) + len(fc.sampled_points) > 1
+            assert [m.type for m in fc.modifiers] == (["CYCLES"] if many else []), fc.data_path
+    assert any(s.action_frame_end > s.action[nla.CYCLE_KEY] + 1 for s in strips)
+
+
+def test_a_two_cycle_loop_action_made_before_is_played_as_it_is(walk_blend, addon_module, tmp_path):
+    """A file whose loop action keys two cycles (made before the loop action was one cycle)
+    goes on playing it: no Cycles modifier added, the strips within its frames, and the
+    evaluated rig plays the plan within the compact keys' 0.5 degrees."""
+    api, nla, storage = addon_module.api, addon_module.adapter.nla, addon_module.adapter.storage
+    loop_strips = addon_module.motion_patches.kinematics.loop_strips
+    bpy.ops.wm.open_mainfile(filepath=str(walk_blend))
+    scene = bpy.context.scene
+    patch, key = storage.load_patch(scene, "walk"), storage.patch_key(scene, "walk")
+    old, _ = nla._shared_action(
+        bpy,
+        patch,
+        f"{key}:loop",
+        "loop",
+        patch.gait.skeleton,
+        {},
+        None,
+        None,
+        1.0,
+        lambda: loop_strips.straight_loop(patch.gait),
+    )
+    source = bpy.data.objects["Source"]
+    rig = walker_from(source, "Old", (0.4, 0.3, 0.0))
+    goal = empty("GoalOld", 12.4, 2.3, 0.0)
+    with pytest.MonkeyPatch.context() as mp:
+        written = spy_writes(mp, addon_module)
+        res = api.plan_path(scene, rig, goal, frame_start=1)
+    strips = _loop_strips(rig, nla)
+    assert strips and {s.action for s in strips} == {old}
+    assert nla.CYCLE_KEY not in old
+    assert not any(fc.modifiers for fc in addon_module.adapter.compat.fcurves(old))
+    assert all(s.action_frame_end <= old.frame_range[1] + 1e-3 for s in strips)
+    skel, want = written[rig.name]
+    frames = np.arange(res.frame_start, res.frame_end + 1)
+    got = world_bone_matrices([rig], frames, skel.names)[rig.name]
+    a, b = _local_angles(got, skel), _local_angles(want, skel)
+    cos = (np.trace(np.swapaxes(a, -1, -2) @ b, axis1=-2, axis2=-1) - 1.0) / 2.0
+    assert np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))).max() < 0.5 + 0.01
+
+
 def rig_body(rig, nla):
     track = rig.animation_data.nla_tracks[nla.TRACK_MOTION]
     (body,) = {s.action for s in track.strips if s.action.get(nla.SEGMENT_KEY) is None}

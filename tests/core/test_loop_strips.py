@@ -140,3 +140,16 @@ def test_the_straight_segments_are_the_loop_and_no_other_is(walk_patch):
             assert np.abs(m.root_local - loop.root_local).max() < 1e-9
         elif m.frames == loop.frames:
             assert _largest_angle(m.rotations, loop.rotations) > 1.0, s
+
+
+def test_the_loop_action_keys_one_cycle_that_closes_on_itself(walk_gait):
+    """What the shared loop action keys: the straight loop's first cycle and a frame, the
+    last frame the first again (its curves repeat it), the second cycle the first."""
+    n = walk_gait.straight.frames
+    two, one = loop_strips.straight_loop(walk_gait), loop_strips.one_cycle(walk_gait)
+    assert one.frames == n + 1 and two.frames == 2 * n + 1
+    assert np.array_equal(one.rotations, two.rotations[: n + 1])
+    assert np.array_equal(one.root_local, two.root_local[: n + 1])
+    assert np.array_equal(one.rotations[-1], one.rotations[0])
+    assert np.array_equal(one.root_local[-1], one.root_local[0])
+    assert np.array_equal(two.rotations[n:], one.rotations)
