@@ -263,7 +263,7 @@ def loop_action(bpy, patch, patch_key, skel, modes=None, rig=None, index=None, u
     cycle and a frame (:func:`~motion_patches.kinematics.loop_strips.one_cycle`), every
     curve repeating it (a Cycles modifier; :data:`CYCLE_KEY`), so a strip plays a cycle from
     any frame of it; one made before keys two cycles and a frame, which serves as well."""
-    action, slot = _shared_action(
+    return _shared_action(
         bpy,
         patch,
         f"{patch_key}:loop",
@@ -274,25 +274,16 @@ def loop_action(bpy, patch, patch_key, skel, modes=None, rig=None, index=None, u
         index,
         unit,
         lambda: loop_strips.one_cycle(patch.gait, rig),
+        cycle=int(patch.gait.straight.frames),
     )
-    if CYCLE_KEY not in action and not _made_two_cycles(action, patch.gait.straight.frames):
-        for fc in compat.fcurves(action, slot):
-            if len(fc.keyframe_points) + len(fc.sampled_points) > 1:
-                fc.modifiers.new("CYCLES")
-        action[CYCLE_KEY] = int(patch.gait.straight.frames)
-    return action, slot
 
 
-def _made_two_cycles(action, cycle):
-    """Whether a loop action found in the file keys two cycles (made before loop actions
-    were one cycle long): it is played as it is."""
-    return action.frame_range[1] - action.frame_range[0] > cycle + 0.5
-
-
-def _shared_action(bpy, patch, base, label, skel, modes, rig, index, unit, motion_of):
+def _shared_action(bpy, patch, base, label, skel, modes, rig, index, unit, motion_of, cycle=0):
     """The shared action keyed ``base`` (extended by the rig's skeleton, rotation modes and
     scale: :func:`segment_action`), named "MP <layer> ``label``" with the same marks,
-    looked up in ``index`` (or the file) and made of ``motion_of()`` when missing."""
+    looked up in ``index`` (or the file) and made of ``motion_of()`` when missing; made with
+    ``cycle``, its curves repeat that many frames (:func:`_inplace_action`). One found is
+    played as it was made (a loop action made before keys two cycles, none repeating)."""
     sig = rotation_signature(skel, modes or {})
     rig_sig = rig.signature() if rig is not None else ""
     key = base + (f":rig-{rig_sig}" if rig_sig else "") + (f":{sig}" if sig else "")
@@ -307,7 +298,9 @@ def _shared_action(bpy, patch, base, label, skel, modes, rig, index, unit, motio
         + (f" {sig}" if sig else "")
         + (f" x{unit:.4g}" if unit != 1.0 else "")
     )
-    action, slot = _inplace_action(name, skel, motion_of(), {SEGMENT_KEY: key}, modes, unit)
+    action, slot = _inplace_action(
+        name, skel, motion_of(), {SEGMENT_KEY: key}, modes, unit, cycle=cycle
+    )
     if index is not None:
         index[key] = action
     return action, slot
@@ -323,9 +316,11 @@ def segment_index(bpy):
     return out
 
 
-def _inplace_action(name, skel, motion, tags, modes=None, unit=1.0, tol=None):
+def _inplace_action(name, skel, motion, tags, modes=None, unit=1.0, tol=None, cycle=0):
     """A shared action of ``motion`` in place, keyed within ``tol`` (default the stored
-    actions' :data:`~.actions.COMPACT`)."""
+    actions' :data:`~.actions.COMPACT`). ``cycle``: ``motion`` is one cycle and a frame,
+    every curve of more than one point repeats it (a Cycles modifier), and the action is
+    marked :data:`CYCLE_KEY`."""
     loc, rot = inplace_channels(skel, motion, unit)
     action, slot = compat.new_action(name)
     for k, v in tags.items():
@@ -335,6 +330,11 @@ def _inplace_action(name, skel, motion, tags, modes=None, unit=1.0, tol=None):
     act_io.key_pose(
         action, slot, skel, frames, loc, rot, modes, tol=in_units(tol, unit), strip=True
     )
+    if cycle:
+        for fc in compat.fcurves(action, slot):
+            if len(fc.keyframe_points) + len(fc.sampled_points) > 1:
+                fc.modifiers.new("CYCLES")
+        action[CYCLE_KEY] = int(cycle)
     return action, slot
 
 

@@ -10,6 +10,7 @@ _OFF = 1 << 20  # cell indices are shifted by this into a key's 21-bit fields
 # y cell): the nine cells round a point are three look-ups, giving their entries in the order
 # of the nine.
 _COLUMN_SHIFTS = np.arange(-1, 2, dtype=np.int64) << 21
+COLUMNS = len(_COLUMN_SHIFTS)  # key ranges :func:`column_ranges` gives per cell key
 
 
 def cells(xy: ArrayLike, cell: float) -> np.ndarray:
@@ -172,7 +173,7 @@ class Reservations:
         if not self.moving.size or not len(t):
             return np.empty(0, int), np.empty((0, 2)), np.empty(0, int)
         rows, _, where, owner = self.moving.within(*column_ranges(self._key(t, self._cells(xy))))
-        return rows // len(_COLUMN_SHIFTS), where, owner
+        return rows // COLUMNS, where, owner
 
     def _spots_near(self, xy):
         """Indices of standing spots in the cells of the points ``xy`` or next to them."""
@@ -197,7 +198,7 @@ class Reservations:
         if self.by_cell.size:
             rows, when, where, _ = self.by_cell.within(*column_ranges(cell_keys(track, self.cell)))
             if rows.size:
-                rows = rows // len(_COLUMN_SHIFTS)
+                rows = rows // COLUMNS
                 d = where - track[rows]
                 close = np.einsum("ij,ij->i", d, d) < s2
                 t = np.minimum(when[close], frames)

@@ -13,7 +13,7 @@ on. It may still wait at its start, and holds anywhere once the others are all p
 
 import numpy as np
 
-from .reservations import cell_keys, column_ranges, in_ranges
+from .reservations import COLUMNS, cell_keys, column_ranges, in_ranges
 
 STRIDE = 4  # every this many frames of a path are kept (about 0.2 m apart at a walk)
 BETWEEN_M = 0.1  # the most a frame of a path lies from the nearest point kept of it
@@ -46,7 +46,7 @@ class Ways:
         if not self.key.size or not len(track):
             return np.empty(0, int), np.empty(0, int)
         rows, ent = in_ranges(self.key, *column_ranges(self._keys(track)))
-        rows = rows // 3  # a point's three columns of cells
+        rows = rows // COLUMNS  # a point's columns of cells
         d = self.xy[ent] - track[rows]
         close = np.einsum("ij,ij->i", d, d) < self.reach**2
         return rows[close], ent[close]
