@@ -214,11 +214,19 @@ def main(argv=None):
     ap.add_argument("--characters", type=int, default=4)
     ap.add_argument("--json")
     ap.add_argument("--angles", default="", help="cubic keys within these degrees too")
+    ap.add_argument(
+        "--no-loop-strips",
+        action="store_true",
+        help="key every stretch of straight walking in each character's own action (no "
+        "shared loop action plays it): what sharing it saves",
+    )
     args = ap.parse_args(argv)
     sys.path.insert(0, str(REPO / "tools"))
     import blender_session
 
     bpy, addon = blender_session.start()
+    if args.no_loop_strips:  # no stretch is long enough (the crowd is keyed in process)
+        addon.motion_patches.kinematics.loop_strips.MIN_CYCLES = 1e9
     mocap = Path(os.environ.get("MOTION_PATCHES_MOCAP", REPO.parent / "shared" / "mocap"))
     if not mocap.is_dir():
         mocap = Path("/work/shared/mocap")
