@@ -133,13 +133,38 @@ def _shrunk(state, scale):
     return state
 
 
-def _not_obstacles(objects):
+def _children_map():
+    """{object: its children} of the file, in one pass: ``children_recursive`` looks at every
+    object of the file each time (1.6 ms an object among 20,000; a crowd of 10,000 asks it of
+    each character and each goal)."""
+    import bpy
+
+    out = {}
+    for ob in bpy.data.objects:
+        if ob.parent is not None:
+            out.setdefault(ob.parent, []).append(ob)
+    return out
+
+
+def _descendants(ob, children):
+    """``ob``'s children, theirs, ... from :func:`_children_map`'s ``children``."""
+    out, todo = [], list(children.get(ob, ()))
+    while todo:
+        child = todo.pop()
+        out.append(child)
+        todo.extend(children.get(child, ()))
+    return out
+
+
+def _not_obstacles(objects, children=None):
     """Objects that never block: the given ones with their children (a character's own
-    body mesh), except tagged props (a goal prop to sit on stays an obstacle)."""
+    body mesh), except tagged props (a goal prop to sit on stays an obstacle).
+    ``children``: :func:`_children_map` of the file, when asked for many objects."""
     out = []
     for ob in objects:
         if ob is not None and not (ob.type == "MESH" and ob.motion_patch.enabled):
-            out += [ob, *ob.children_recursive]
+            kids = ob.children_recursive if children is None else _descendants(ob, children)
+            out += [ob, *kids]
     return tuple(out)
 
 

@@ -27,6 +27,7 @@ from .common import (
     ANALYSIS_KEY,
     PLAN_KEY,
     _check_character,
+    _children_map,
     _not_obstacles,
     _patch_for_planning,
     _shrunk,
@@ -305,10 +306,17 @@ class _Crowd:
     rank: dict = field(default_factory=dict)  # entry -> its place in ``order``
     executor: object = field(default_factory=cluster.InProcess)  # where members are planned
     cancelled: object = None  # () -> bool: the user asked to stop (plan_crowd's argument)
+    children: dict | None = None  # _children_map of the file, read once
 
     @property
     def ramp(self) -> int:
         return members.hold_ramp(self.fps)
+
+    def not_obstacles(self, objects):
+        """:func:`_not_obstacles` of ``objects``, the file's children read once a crowd."""
+        if self.children is None:
+            self.children = _children_map()
+        return _not_obstacles(objects, self.children)
 
 
 def _request(scene, pairs, patch_name, settings, frame_start, context, max_wait_seconds, spacing):
@@ -399,7 +407,7 @@ def _world_of(c, size):
             c.depsgraph,
             c.patch,
             c.settings.radius,
-            _not_obstacles([ch for ch, _ in c.pairs]),
+            c.not_obstacles([ch for ch, _ in c.pairs]),
             size,
         )
         props = object_patches(c.scene, c.depsgraph, c.patch, size)
@@ -444,7 +452,7 @@ def _place_ends(c):
     c.own = [
         [
             o.name
-            for o in _not_obstacles([g, opt.get("start_prop")])
+            for o in c.not_obstacles([g, opt.get("start_prop")])
             if isinstance(o, bpy.types.Object)
         ]
         for (_, g), opt in zip(c.pairs, c.options)

@@ -110,7 +110,16 @@ def _obstacle_names(env, names):
     """Names of ``env``'s obstacles that are, or are parts of
     (:func:`adapter.scene.part_name`), the objects ``names``."""
     names = set(names)
-    return [n for n in env.obstacles if n in names or scene_io.owner(n) in names]
+    if not names:
+        return []
+    # a part's name starts with its object's: only those are looked at closer (a crowd asks
+    # this about three times a character; 360 props: 69 -> 27 microseconds a call)
+    stems = tuple(names)
+    return [
+        n
+        for n in env.obstacles
+        if n in names or (n.startswith(stems) and scene_io.owner(n) in names)
+    ]
 
 
 def _without(env, names):

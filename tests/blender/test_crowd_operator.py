@@ -155,6 +155,35 @@ def test_a_plan_record_lists_the_props_near_its_path_not_every_prop(walk_blend, 
     assert all(d.occluded for d in drawn)  # the lattice cells the near crate covers
 
 
+def test_a_crowds_own_meshes_are_no_obstacles_read_from_one_map(walk_blend, addon_module):
+    """A character's body mesh (a child, with a grandchild) standing over its start and a
+    marker mesh under each goal are no obstacle for the crowd, found from the file's
+    children read once (_children_map) as children_recursive finds them; another prop still
+    is one."""
+    common = addon_module.api.common
+    scene, src = open_walk(walk_blend)
+    a = walker_from(src, "A", (0.0, 0.0, 0.0))
+    b = walker_from(src, "B", (0.0, 4.0, 0.0))
+    body = prop_box("BodyA", 0.0, 0.0, (0.5, 0.5, 1.6))
+    body.parent = a
+    badge = prop_box("BadgeA", 0.0, 0.1, (0.1, 0.1, 0.1))
+    badge.parent = body
+    goals = [empty("GA", 6.5, 0.0, 0.0), empty("GB", 6.5, 4.0, 0.0)]
+    for g in goals:
+        mark = prop_box(f"Mark{g.name}", 6.5, g.location[1], (0.4, 0.4, 0.05))
+        mark.parent = g
+    prop_box("CrateB", 3.0, 4.0, (0.6, 0.6, 1.0))
+    objects = [a, b, *goals]
+    kids = common._children_map()
+    assert {o.name for o in common._not_obstacles(objects, kids)} == {
+        o.name for o in common._not_obstacles(objects)
+    } == {"A", "B", "GA", "GB", "BodyA", "BadgeA", "MarkGA", "MarkGB"}
+    res = addon_module.api.plan_crowd(scene, list(zip((a, b), goals)), frame_start=1)
+    assert len(res.plans) == 2 and not res.failed and not res.conflicts
+    listed = addon_module.api.load_plan_record(b)[0]["obstacles"]
+    assert "CrateB" in listed and "MarkGB" not in listed, sorted(listed)
+
+
 def test_a_crowd_writes_each_foot_lock_on_top_and_a_re_plan_replaces_it(walk_blend, addon_module):
     """A crowd writes its characters' foot-lock strips after all of them (their keys fitted
     meanwhile): each on the top track, its action kept as the character's own, so planning
