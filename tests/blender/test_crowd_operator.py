@@ -175,9 +175,11 @@ def test_a_crowds_own_meshes_are_no_obstacles_read_from_one_map(walk_blend, addo
     prop_box("CrateB", 3.0, 4.0, (0.6, 0.6, 1.0))
     objects = [a, b, *goals]
     kids = common._children_map()
-    assert {o.name for o in common._not_obstacles(objects, kids)} == {
-        o.name for o in common._not_obstacles(objects)
-    } == {"A", "B", "GA", "GB", "BodyA", "BadgeA", "MarkGA", "MarkGB"}
+    assert (
+        {o.name for o in common._not_obstacles(objects, kids)}
+        == {o.name for o in common._not_obstacles(objects)}
+        == {"A", "B", "GA", "GB", "BodyA", "BadgeA", "MarkGA", "MarkGB"}
+    )
     res = addon_module.api.plan_crowd(scene, list(zip((a, b), goals)), frame_start=1)
     assert len(res.plans) == 2 and not res.failed and not res.conflicts
     listed = addon_module.api.load_plan_record(b)[0]["obstacles"]
