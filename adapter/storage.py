@@ -121,7 +121,8 @@ def free_patch_name(scene, base):
 # A plan record's tracks (metres, radians) are kept in steps of a hundred-thousandth: at
 # 100 m from the origin single precision keeps about as much (7.6 micrometres).
 TRACK_STEPS = 100_000  # per metre or radian
-_STEPPED = "~d2"  # a track kept as the second differences of its whole steps
+# a track kept in steps is two arrays of the npz: its name and these
+_HEAD, _REST = "~d2head", "~d2rest"
 
 
 def _stepped(v):
@@ -159,8 +160,7 @@ def store_plan(obj, data):
             continue
         kept = _stepped(v) if v.dtype == np.float64 else None
         if kept is not None:
-            arrays[k + _STEPPED + "head"] = kept["head"]
-            arrays[k + _STEPPED + "rest"] = kept["rest"]
+            arrays[k + _HEAD], arrays[k + _REST] = kept["head"], kept["rest"]
         else:
             arrays[k] = v.astype(np.float32) if v.dtype == np.float64 else v
     buf = io.BytesIO()
@@ -222,10 +222,10 @@ def load_plan(obj):
     arrays = {}
     with np.load(io.BytesIO(base64.b64decode(d["arrays"]))) as z:
         for k in z.files:
-            if k.endswith(_STEPPED + "head"):
-                name = k[: -len(_STEPPED + "head")]
-                arrays[name] = _unstepped(z[k], z[name + _STEPPED + "rest"])
-            elif not k.endswith(_STEPPED + "rest"):
+            if k.endswith(_HEAD):
+                name = k[: -len(_HEAD)]
+                arrays[name] = _unstepped(z[k], z[name + _REST])
+            elif not k.endswith(_REST):
                 arrays[k] = z[k].astype(float) if z[k].dtype == np.float32 else z[k]
     return d["meta"], arrays
 
