@@ -265,7 +265,7 @@ class Environment:
         self._atlas[:, 0] = 0.0
         self._atlas[[0, 3], 0] = self.cap
         self._slots = {}  # tile -> slot
-        self._sub = {}  # (tile, radius) -> (slot, free, solid) sub-cell bitfields
+        self._sub = {}  # tile -> {radius: (free, solid)} sub-cell bitfields (its raster's)
         self._spare = list(range(7, 0, -1))
         self._grid = np.full((1, 1), -1, np.int64)
         self._grid_origin = (0, 0)
@@ -313,6 +313,8 @@ class Environment:
         i1, j1 = self.tile_of(hi + self.cap)
         for i in range(i0, i1 + 1):
             for j in range(j0, j1 + 1):
+                # Read off the raster dropped here (a refill may take the same slot back).
+                self._sub.pop((i, j), None)
                 slot = self._slots.pop((i, j), None)
                 if slot is None:
                     continue
@@ -399,16 +401,16 @@ class Environment:
         uint64: a free sub-cell has no point within ``radius`` of a footprint, a solid one
         no point farther, by the raster's bounds (the rest is neither). Cached per tile and
         radius while the raster stands."""
-        key = (tile, radius)
-        got = self._sub.get(key)
-        if got is None or got[0] != self._slots.get(tile):
+        of_tile = self._sub.setdefault(tile, {})
+        got = of_tile.get(radius)
+        if got is None:
             m, k = self.cells * SUB, FINE // SUB
             low = self._lowest(tile).reshape(m, k, m, k).min(axis=(1, 3)).ravel()
             high = self.clearance(tile)[0].reshape(m, k, m, k).max(axis=(1, 3)).ravel() + self.rho
             free = np.packbits(low >= radius + _EPS, bitorder="little").view(np.uint64)
             solid = np.packbits(high < radius - _EPS, bitorder="little").view(np.uint64)
-            got = self._sub[key] = (self._slots.get(tile), free, solid)
-        return got[1], got[2]
+            got = of_tile[radius] = (free, solid)
+        return got
 
     def sub_mask(self, points: np.ndarray) -> np.ndarray:
         """(n, W) uint64 sub-cell bitmasks of point sets (n, M, 2) given in tile

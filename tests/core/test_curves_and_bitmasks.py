@@ -112,3 +112,29 @@ def test_vectorised_cell_occlusion_matches_the_pairwise_polygon_test():
                 [[x0[k], y0[k]], [x0[k] + c, y0[k]], [x0[k] + c, y0[k] + c], [x0[k], y0[k] + c]]
             )
             assert fast[k] == polygons_within(cell, poly, r), (k, r)
+
+
+def test_sub_cells_of_a_tile_see_an_obstacle_placed_after_they_were_read():
+    """The sub-cell bitfields live as long as the tile's raster: an obstacle placed (or
+    moved) near the tile drops them with it, also when the refilled raster takes its old
+    slot back (the planner reads a tile's cells before its sub-cells)."""
+
+    def square(cx, cy, h):
+        return np.array([[cx - h, cy - h], [cx + h, cy - h], [cx + h, cy + h], [cx - h, cy + h]])
+
+    env = Environment(2.0, 8, 0.3)
+    env.place(Obstacle("pillar", square(0.3, 0.3, 0.1)))
+    before = env.sub_states((0, 0), 0.33)
+    env.place(Obstacle("spot", square(1.4, 1.4, 0.2)))
+    env.cell_states((0, 0))  # refills the raster first, as the search does
+    after = env.sub_states((0, 0), 0.33)
+    fresh = Environment(2.0, 8, 0.3)
+    fresh.place(Obstacle("pillar", square(0.3, 0.3, 0.1)))
+    fresh.place(Obstacle("spot", square(1.4, 1.4, 0.2)))
+    want = fresh.sub_states((0, 0), 0.33)
+    assert not np.array_equal(before[0], want[0])  # the spot takes sub-cells
+    assert np.array_equal(after[0], want[0]) and np.array_equal(after[1], want[1])
+    env.remove("spot")
+    env.cell_states((0, 0))
+    back = env.sub_states((0, 0), 0.33)
+    assert np.array_equal(back[0], before[0]) and np.array_equal(back[1], before[1])
