@@ -124,12 +124,15 @@ def owners(obstacle_names):
     return list(dict.fromkeys(owner(n) for n in obstacle_names))
 
 
-def obstacles(scene, depsgraph, exclude=(), known=None):
+def obstacles(scene, depsgraph, exclude=()):
     """Obstacles of every visible mesh object in the scene but ``exclude`` and the
-    characters' proxy bodies (:mod:`.bodies`: display only, they walk with their owner).
-    ``known``: a dict of footprints already read from this unchanged scene (object name ->
-    parts), filled as objects are read: the pairs of one layout check each read the same
-    meshes, less their own excludes."""
+    characters' proxy bodies (:mod:`.bodies`: display only, they walk with their owner)."""
+    return [ob for _, obs in obstacles_of_objects(scene, depsgraph, exclude) for ob in obs]
+
+
+def obstacles_of_objects(scene, depsgraph, exclude=()):
+    """:func:`obstacles` object by object: [(object name, its obstacles)] (a layout check
+    reads them once and leaves out each pair's own objects)."""
     out = []
     skip = {o.name for o in exclude}
     for obj in scene.objects:
@@ -137,13 +140,9 @@ def obstacles(scene, depsgraph, exclude=(), known=None):
             continue
         if bodies.is_part(obj):
             continue
-        if known is None:
-            polys = footprint_parts(obj, depsgraph)
-        else:
-            if obj.name not in known:
-                known[obj.name] = footprint_parts(obj, depsgraph)
-            polys = [p.copy() for p in known[obj.name]]
-        out += [Obstacle(part_name(obj.name, k, len(polys)), p) for k, p in enumerate(polys)]
+        polys = footprint_parts(obj, depsgraph)
+        parts = [Obstacle(part_name(obj.name, k, len(polys)), p) for k, p in enumerate(polys)]
+        out.append((obj.name, parts))
     return out
 
 

@@ -34,6 +34,11 @@ The machine may be shared: each call's time on the main thread's CPU clock
 (``time.thread_time``; the plan's added up around ``SegmentPlanner.plan``) is printed
 beside it, a ratio other processes move less than the wall clock's.
 
+``level``: one cold check of many pairs in a level of many props (``--level PROPS,PAIRS``,
+default 2,000 pillars, linked copies on a jittered 3 m grid, and 200 pairs, each from a
+point of an aisle to a goal empty up to 12 m away along the aisles): what reading the
+scene costs when it is large, against the plans of its pairs.
+
 ``batch``: ``blender -c motion_patches check`` over N distinct layouts (the four scenes in
 turn, their goals moved 10 cm more each round, so no pair is answered from another file's
 plan), each with its spec beside it, in one process (the CLI's handler given every file)
@@ -75,6 +80,11 @@ def parse_args(argv=None):
         "--repeat", type=int, default=3, help="second calls and warm plans timed (median)"
     )
     p.add_argument("--files", type=int, default=20, help="files of the batch section (0: skip)")
+    p.add_argument(
+        "--level",
+        default="2000,200",
+        help="props,pairs of the level section ('' skips it)",
+    )
     p.add_argument("--json", metavar="PATH", help="also write every figure as JSON")
     p.add_argument("--profile", action="store_true", help="cProfile the first calls")
     return p.parse_args(argv)
@@ -284,7 +294,54 @@ def section_batch(blends):
     }
 
 
-def table(rows, batch):
+def section_level(bpy, api, args, base, clock):
+    """One cold check of ``args.level``'s pairs among its props (see the module's doc)."""
+    import numpy as np
+    from bench_blender import goal_empty, pillar
+
+    props, pairs = (int(x) for x in args.level.split(","))
+    bpy.ops.wm.open_mainfile(filepath=str(base))
+    scene = bpy.context.scene
+    for ob in [o for o in scene.objects if o.name != "Source"]:
+        bpy.data.objects.remove(ob)
+    rng = np.random.default_rng(3)
+    side = int(np.ceil(np.sqrt(props)))
+    first = None
+    for n in range(props):
+        i, j = divmod(n, side)
+        x, y = 3.0 * i + rng.uniform(-0.4, 0.4), 3.0 * j + rng.uniform(-0.4, 0.4)
+        if first is None:
+            pillar(bpy, f"Pillar{n}", float(x), float(y))
+            first = bpy.context.object
+        else:  # linked copies, as a level designer duplicates a prop (Alt+D)
+            ob = first.copy()
+            ob.name = f"Pillar{n}"
+            ob.location = (float(x), float(y), first.location.z)
+            scene.collection.objects.link(ob)
+    spec = {"radius": 0.25, "pairs": []}
+    for k in range(pairs):
+        sx, sy = (3.0 * rng.integers(0, side - 1, size=2) + 1.5).tolist()
+        gx, gy = (
+            3.0 * np.floor((np.array([sx, sy]) + rng.uniform(-12, 12, 2)) / 3.0) + 1.5
+        ).tolist()
+        goal_empty(bpy, f"Goal{k}", gx, gy, 0.0)
+        spec["pairs"].append({"name": f"pair {k}", "start": [sx, sy, 0.0], "goal": f"Goal{k}"})
+    addon_name = api.__name__.rsplit(".", 1)[0]
+    sys.modules[addon_name + ".motion_patches.planning.layout_check"].forget()
+    api.scene_io.forget_footprints()
+    check, plan, cpu, plan_cpu, res = timed_check(api, bpy, spec, clock)
+    return {
+        "props": props,
+        "pairs": pairs,
+        "reached": sum(bool(r["reachable"]) for r in res),
+        "check_s": check,
+        "plan_s": plan,
+        "ratio": check / plan,
+        "cpu_ratio": cpu / plan_cpu,
+    }
+
+
+def table(rows, batch, level=None):
     head = (
         f"{'scene':<8} {'pairs':>5} {'check 1st':>10} {'plan 1st':>9} {'ratio':>6} "
         f"{'range':>10} {'cpu':>6} {'check 2nd':>10} {'plan 2nd':>9} {'ratio':>6} {'cpu':>6}"
@@ -305,6 +362,12 @@ def table(rows, batch):
         f"second {m['second_ratio']:.2f}x (cpu {m['second_cpu_ratio']:.2f}x) "
         f"(target: at most {TARGET_RATIO}x first, 1.0x second)"
     )
+    if level:
+        out.append(
+            f"level of {level['props']} props, {level['pairs']} pairs ({level['reached']} "
+            f"reached), first check: {level['check_s']:.1f} s against its plans' "
+            f"{level['plan_s']:.1f} s: {level['ratio']:.2f}x (cpu {level['cpu_ratio']:.2f}x)"
+        )
     if batch:
         out.append(
             f"check over {batch['files']} .blend files ({batch['pairs']} pairs): one process "
@@ -331,13 +394,16 @@ def main(argv=None):
         src = bpy.data.objects["Source"]
         path = tmp / f"{kind}.blend"
         files[kind] = (path, build(bpy, api, kind, src, path))
-    rows = section_scenes(bpy, api, args, files, PlanClock(addon))
+    clock = PlanClock(addon)
+    rows = section_scenes(bpy, api, args, files, clock)
+    level = section_level(bpy, api, args, base, clock) if args.level else None
     batch = section_batch(batch_files(bpy, api, args, base, tmp)) if args.files else None
-    text, medians = table(rows, batch)
+    text, medians = table(rows, batch, level)
     doc = {
         "scenes": rows,
         **{f"median_{k}": v for k, v in medians.items()},
         "target_ratio": TARGET_RATIO,
+        **({"level": level} if level else {}),
         **({"batch": batch} if batch else {}),
     }
     print(json.dumps(doc, indent=1))

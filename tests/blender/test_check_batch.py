@@ -232,6 +232,27 @@ def test_a_second_check_reuses_and_an_edit_is_seen(api, files):
     assert not edited["reachable"] and edited["blocked_by"] == ["Crate"]
 
 
+def test_each_pair_leaves_out_only_its_own_excludes(api, files):
+    """The scene's footprints are read once for a check, and each pair leaves out its own
+    excludes: in one check the pair excluding the cage's ring walks into it, the same pair
+    without them is refused by the ring, and with half of them excluded only the other
+    half can block it."""
+    bpy.ops.wm.open_mainfile(filepath=str(files["caged"]))
+    ring = sorted(o.name for o in bpy.data.objects if o.name.startswith("Ring"))
+    into = {"character": "Walker", "goal": "CageGoal"}
+    spec = {
+        "pairs": [
+            {**into, "name": "through the ring", "exclude": ring},
+            {**into, "name": "round the ring"},
+            {**into, "name": "through half of it", "exclude": ring[::2]},
+        ]
+    }
+    through, round_, half = api.check_layout(bpy.context.scene, spec)
+    assert through["reachable"] and not round_["reachable"]
+    assert set(round_["blocked_by"]) <= set(ring) and round_["blocked_by"]
+    assert set(half["blocked_by"]) <= set(ring[1::2])  # the half it still sees, if any
+
+
 WRAPPER = """
 import sys
 sys.path.insert(0, {tools!r})

@@ -105,15 +105,17 @@ def test_footprints_by_the_hull_fast_path_are_the_general_rules(
 
 
 def test_a_checks_footprints_are_those_of_the_scene(addon_module, clean_scene):
-    """What a layout check reads once for all its pairs is what each pair read before."""
+    """What a layout check reads once for all its pairs, less a pair's own objects, is what
+    that pair read on its own before."""
     scene_io = addon_module.api.scene_io
     primitives()
     dg = bpy.context.evaluated_depsgraph_get()
-    known: dict = {}
-    for exclude in ((), (bpy.data.objects["Ell"],), ()):
-        kept = scene_io.obstacles(bpy.context.scene, dg, exclude, known)
+    parts = scene_io.obstacles_of_objects(bpy.context.scene, dg)
+    assert [name for name, _ in parts] == [o.name for o in bpy.context.scene.objects]
+    for exclude in ((), (bpy.data.objects["Ell"],)):
+        gone = {o.name for o in exclude}
+        kept = [ob for name, obs in parts if name not in gone for ob in obs]
         read = scene_io.obstacles(bpy.context.scene, dg, exclude)
         assert [o.name for o in kept] == [o.name for o in read]
         for a, b in zip(kept, read):
             np.testing.assert_array_equal(a.polygon, b.polygon)
-    assert set(known) == {o.name for o in bpy.context.scene.objects}
