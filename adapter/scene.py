@@ -131,8 +131,8 @@ def obstacles(scene, depsgraph, exclude=()):
 
 
 def obstacles_of_objects(scene, depsgraph, exclude=()):
-    """:func:`obstacles` object by object: [(object name, its obstacles)] (a layout check
-    reads them once and leaves out each pair's own objects)."""
+    """:func:`obstacles` object by object: [(object, its obstacles)] (a layout check reads
+    them once and leaves out each pair's own objects)."""
     out = []
     skip = {o.name for o in exclude}
     for obj in scene.objects:
@@ -142,7 +142,7 @@ def obstacles_of_objects(scene, depsgraph, exclude=()):
             continue
         polys = footprint_parts(obj, depsgraph)
         parts = [Obstacle(part_name(obj.name, k, len(polys)), p) for k, p in enumerate(polys)]
-        out.append((obj.name, parts))
+        out.append((obj, parts))
     return out
 
 

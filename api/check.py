@@ -112,10 +112,11 @@ def _body_inside_props(context, character, heads):
     own = [character, *character.children_recursive]
     inside = np.zeros(points.shape[0], bool)
     flat = points.reshape(-1, 3)
-    for ob in scene_io.obstacles(context.scene, depsgraph, own):
-        top = props_io.height(bpy.data.objects[scene_io.owner(ob.name)], depsgraph)
-        hit = inside_convex(flat[:, :2], ob.polygon) & (flat[:, 2] < top - 0.01)
-        inside |= hit.reshape(points.shape[:2]).any(axis=1)
+    for prop, obs in scene_io.obstacles_of_objects(context.scene, depsgraph, own):
+        top = props_io.height(prop, depsgraph) if obs else 0.0
+        for ob in obs:
+            hit = inside_convex(flat[:, :2], ob.polygon) & (flat[:, 2] < top - 0.01)
+            inside |= hit.reshape(points.shape[:2]).any(axis=1)
     return int(inside.sum())
 
 
@@ -152,18 +153,19 @@ def _skate_by_layer(meta, frames, feet, fps, planted):
     return out
 
 
-def _resolve(scene, place, what, patch):
-    """(state, object or None, size) for the name of an object of ``scene`` or [x, y,
-    heading_deg]; a start that is an armature starts where its own skeleton stands (it may
-    be retargeted) and plans in the world shrunk by its size (:func:`_size`; 1 otherwise)."""
+def _resolve(scene, objects, place, what, patch):
+    """(state, object or None, size) for the name of an object of ``scene`` (``objects``:
+    its objects by name) or [x, y, heading_deg]; a start that is an armature starts where
+    its own skeleton stands (it may be retargeted) and plans in the world shrunk by its
+    size (:func:`_size`; 1 otherwise)."""
     if what == "exclude":
-        ob = scene.objects.get(place)
+        ob = objects.get(place)
         if ob is None:
             raise MotionPatchesError(f"layout spec: no object named '{place}' to exclude")
         return None, ob, 1.0
     if not isinstance(place, str):
         return np.array([place[0], place[1], math.radians(place[2])]), None, 1.0
-    ob = scene.objects.get(place)
+    ob = objects.get(place)
     if ob is None:
         raise MotionPatchesError(
             f"layout spec: no object named '{place}' for a {what} "
@@ -250,18 +252,21 @@ def check_layout(
     depsgraph = (context or bpy.context).evaluated_depsgraph_get()
     jobs: list = []
     refused: dict[int, str] = {}
-    children = _children_map()  # the file's, read once (children_recursive scans them all)
+    # The file's children and the scene's objects by name, read once: children_recursive
+    # and a lookup in scene.objects each walk them all (0.2 ms among 5,000 objects).
+    children = _children_map()
+    objects = {o.name: o for o in scene.objects}
     for p in spec["pairs"]:
         # A retargeted character plans in the world shrunk by its size (see _size).
         start, sob, size = _resolve(
-            scene, p["start"], "character" if p.get("character") else "start", patch
+            scene, objects, p["start"], "character" if p.get("character") else "start", patch
         )
-        goal, gob, _ = _resolve(scene, p["goal"], "goal", patch)
+        goal, gob, _ = _resolve(scene, objects, p["goal"], "goal", patch)
         # Not obstacles: the start and goal objects with their children (a character's own
         # body mesh) and whatever the spec excludes.
         exclude = {}
         for ob in [sob, gob] + [
-            _resolve(scene, n, "exclude", patch)[1] for n in spec["exclude"] + p["exclude"]
+            _resolve(scene, objects, n, "exclude", patch)[1] for n in spec["exclude"] + p["exclude"]
         ]:
             if ob is not None:
                 for o in (ob, *_descendants(ob, children)):
@@ -290,7 +295,7 @@ def check_layout(
     # read per pair, a spec of 200 pairs among 2,000 props spent 7 of its 20 s there.
     parts = scene_io.obstacles_of_objects(scene, depsgraph)
     every = [ob for _, obs in parts for ob in obs]
-    owners = [name for name, obs in parts for _ in obs]
+    owners = [prop.name for prop, obs in parts for _ in obs]
     meshes = set(owners)
     shrunk: dict[float, list] = {1.0: every}  # every footprint in the world of a size
     made: dict[tuple, layout_check.World] = {}

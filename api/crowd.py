@@ -111,8 +111,9 @@ def crowd_members(
         if not chosen:
             raise MotionPatchesError("no crowd: none of the chosen objects is an armature")
     pairs = []
+    here = set(scene.objects)  # a lookup in scene.objects walks the scene: read it once
     for ob in sorted({ob.name: ob for ob in chosen}.values(), key=lambda o: o.name):
-        if scene.objects.get(ob.name) != ob:
+        if ob not in here:
             raise MotionPatchesError(f"'{ob.name}' is not in the scene '{scene.name}'")
         goal = ob.motion_patches_character.goal or scene_goal
         if goal is None:

@@ -35,9 +35,11 @@ The machine may be shared: each call's time on the main thread's CPU clock
 beside it, a ratio other processes move less than the wall clock's.
 
 ``level``: one cold check of many pairs in a level of many props (``--level PROPS,PAIRS``,
-default 2,000 pillars, linked copies on a jittered 3 m grid, and 200 pairs, each from a
+default 5,000 pillars, linked copies on a jittered 3 m grid, and 200 pairs, each from a
 point of an aisle to a goal empty up to 12 m away along the aisles): what reading the
-scene costs when it is large, against the plans of its pairs.
+scene costs when it is large, against the plans of its pairs. Then a walker planned and
+written there (``api.plan_path``, 12 m along the aisles, three times, the median): the
+call against its planner's own CPU time.
 
 ``batch``: ``blender -c motion_patches check`` over N distinct layouts (the four scenes in
 turn, their goals moved 10 cm more each round, so no pair is answered from another file's
@@ -82,7 +84,7 @@ def parse_args(argv=None):
     p.add_argument("--files", type=int, default=20, help="files of the batch section (0: skip)")
     p.add_argument(
         "--level",
-        default="2000,200",
+        default="5000,200",
         help="props,pairs of the level section ('' skips it)",
     )
     p.add_argument("--json", metavar="PATH", help="also write every figure as JSON")
@@ -297,7 +299,7 @@ def section_batch(blends):
 def section_level(bpy, api, args, base, clock):
     """One cold check of ``args.level``'s pairs among its props (see the module's doc)."""
     import numpy as np
-    from bench_blender import goal_empty, pillar
+    from bench_blender import character, goal_empty, pillar
 
     props, pairs = (int(x) for x in args.level.split(","))
     bpy.ops.wm.open_mainfile(filepath=str(base))
@@ -330,6 +332,15 @@ def section_level(bpy, api, args, base, clock):
     sys.modules[addon_name + ".motion_patches.planning.layout_check"].forget()
     api.scene_io.forget_footprints()
     check, plan, cpu, plan_cpu, res = timed_check(api, bpy, spec, clock)
+    walker = character(bpy, bpy.data.objects["Source"], "Walker", 1.5, 1.5)
+    goal = goal_empty(bpy, "WalkerGoal", 13.5, 10.5, 0.0)
+    calls = []
+    for _ in range(3):
+        clock.seconds = 0.0
+        t0, c0 = time.perf_counter(), time.thread_time()
+        api.plan_path(scene, walker, goal)
+        calls.append((time.perf_counter() - t0, time.thread_time() - c0, clock.seconds))
+    one = sorted(calls)[1]
     return {
         "props": props,
         "pairs": pairs,
@@ -338,6 +349,9 @@ def section_level(bpy, api, args, base, clock):
         "plan_s": plan,
         "ratio": check / plan,
         "cpu_ratio": cpu / plan_cpu,
+        "plan_path_s": one[0],
+        "plan_path_cpu_s": one[1],
+        "planner_cpu_s": one[2],
     }
 
 
@@ -366,7 +380,9 @@ def table(rows, batch, level=None):
         out.append(
             f"level of {level['props']} props, {level['pairs']} pairs ({level['reached']} "
             f"reached), first check: {level['check_s']:.1f} s against its plans' "
-            f"{level['plan_s']:.1f} s: {level['ratio']:.2f}x (cpu {level['cpu_ratio']:.2f}x)"
+            f"{level['plan_s']:.1f} s: {level['ratio']:.2f}x (cpu {level['cpu_ratio']:.2f}x); "
+            f"a walker planned and written there: {level['plan_path_s']:.2f} s (cpu "
+            f"{level['plan_path_cpu_s']:.2f} s), its planner {level['planner_cpu_s']:.3f} s"
         )
     if batch:
         out.append(

@@ -111,10 +111,10 @@ def test_a_checks_footprints_are_those_of_the_scene(addon_module, clean_scene):
     primitives()
     dg = bpy.context.evaluated_depsgraph_get()
     parts = scene_io.obstacles_of_objects(bpy.context.scene, dg)
-    assert [name for name, _ in parts] == [o.name for o in bpy.context.scene.objects]
+    assert [prop for prop, _ in parts] == list(bpy.context.scene.objects)
     for exclude in ((), (bpy.data.objects["Ell"],)):
         gone = {o.name for o in exclude}
-        kept = [ob for name, obs in parts if name not in gone for ob in obs]
+        kept = [ob for prop, obs in parts if prop.name not in gone for ob in obs]
         read = scene_io.obstacles(bpy.context.scene, dg, exclude)
         assert [o.name for o in kept] == [o.name for o in read]
         for a, b in zip(kept, read):
