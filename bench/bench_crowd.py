@@ -400,6 +400,7 @@ def run_written(n, args):
     total = time.perf_counter() - t0
     peak_written = peak_rss_mb(reset)
     frame_set_ms = frame_set_per_armature(bpy, scene, res, len(pairs))
+    overlay_ms = overlay_redrawn(bpy, addon, scene, pairs)
     t1 = time.perf_counter()
     bpy.ops.wm.save_as_mainfile(filepath=str(folder / "after.blend"))
     save = time.perf_counter() - t1
@@ -433,8 +434,24 @@ def run_written(n, args):
         "peak_rss_written_mb": peak_written,
         "process_max_rss_mb": peak_rss_mb(reset),
         "frame_set_ms_per_armature": frame_set_ms,
+        "overlay_ms": overlay_ms,
         "loop_strips": not args.no_loop_strips,
     }
+
+
+def overlay_redrawn(bpy, addon, scene, pairs):
+    """Milliseconds the planner overlay takes to make what it draws of the crowd written:
+    first (nothing kept), then with another character active (its grid drawn instead)."""
+    overlay = addon.panels.overlay
+    layer = bpy.context.view_layer
+    getattr(addon.api.overlay, "_drawn", {}).clear()  # (the code before kept none)
+    out = {}
+    for name, active in (("first", pairs[0][0]), ("another_active", pairs[-1][0])):
+        layer.objects.active = active
+        t0 = time.perf_counter()
+        overlay.plan_buffers(scene)
+        out[name] = 1000.0 * (time.perf_counter() - t0)
+    return out
 
 
 def frame_set_per_armature(bpy, scene, res, armatures, frames=24, passes=3):

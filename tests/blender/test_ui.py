@@ -505,3 +505,38 @@ def test_the_overlay_draws_paths_of_visible_characters_and_the_active_one_s_grid
     assert overlay._plans_key(scene) != key  # the overlay is rebuilt
     assert drawn() == {frames["Walker"]: True}
     assert "overlay_all_lattices" in [p for k, p in draw_panels(addon_module)["Overlay"]]
+
+
+def test_the_overlay_reads_again_only_the_plans_that_changed(scene, addon_module):
+    """Another character made active redraws the overlay from the drawings it made before
+    (each plan record read once); a character planned again is read again; the buffers are
+    the ones made from scratch."""
+    overlay, api = addon_module.panels.overlay, addon_module.api
+    for name in ("Walker", "Walker.B"):
+        activate(name)
+        assert bpy.ops.motion_patches.plan_path() == {"FINISHED"}
+    activate("Walker")
+    first = {len(d.ground): d for d in api.plan_drawings(scene, overlay._lattice_of(scene))}
+    again = {len(d.ground): d for d in api.plan_drawings(scene, overlay._lattice_of(scene))}
+    assert all(again[n] is first[n] for n in first)  # nothing read again
+    activate("Walker.B")
+    swapped = {len(d.ground): d for d in api.plan_drawings(scene, overlay._lattice_of(scene))}
+    assert all(swapped[n] is not first[n] for n in first)  # each one's grid came or went
+    assert sorted(bool(d.grid) for d in swapped.values()) == [False, True]
+    kept = overlay.plan_buffers(scene)
+    api.overlay._drawn.clear()
+    fresh = overlay.plan_buffers(scene)
+    for k in fresh:
+        for a, b in zip(kept[k], fresh[k]):
+            np.testing.assert_array_equal(a, b)
+    before = api.plan_drawings(scene, overlay._lattice_of(scene))
+    walker_b = bpy.data.objects["Walker.B"]
+    fp = api.storage.plan_fingerprint(walker_b)
+    meta, _ = api.load_plan_record(walker_b)
+    x, y, h = meta["goal"]
+    api.plan_path(scene, walker_b, (x + 0.5, y, h))  # Walker.B planned again
+    assert api.storage.plan_fingerprint(walker_b) != fp
+    moved = api.plan_drawings(scene, overlay._lattice_of(scene))
+    assert [any(d is old for old in before) for d in moved] == [
+        ob.name == "Walker" for ob in scene.objects if ob.name in ("Walker", "Walker.B")
+    ]  # Walker's kept, Walker.B's read again
