@@ -130,11 +130,10 @@ def body_keys(
     touching no Blender data (a crowd fits the next characters' while one is written): {"frames",
     "curves", "values", "tol", "rotations", "between", "fitted", "ranges", "scene_keys"}.
 
-    Keyed at the lower of the scene's and the patch's rates, so no piece has more keys
-    than frames played or planned: at the scene's (not above the patch's) from ``world``
-    with the feet already locked (``locked``; these frames then need no foot-lock
-    correction, and no scaled strip plays keys between frames); above the patch's rate from
-    the pieces' own ``motions`` at the patch's, their strips scaled as segments' are.
+    Keyed at the scene's rate (up to :data:`~.loop_strips.SCENE_KEYS_UP_TO` times the
+    patch's) from ``world`` with the feet already locked (``locked``; these frames then
+    need no foot-lock correction, and no scaled strip plays keys between frames); above it
+    from the pieces' own ``motions`` at the patch's, their strips scaled as segments' are.
     Keyed at the scene's rate, the stretches of a piece that play ``loop`` (the gait's
     :func:`~.loop_strips.straight_loop` on this rig; ``world`` plays it there,
     :func:`~.scene_rate.placed`) are left to a shared loop action.
