@@ -231,3 +231,35 @@ def test_no_pop_where_a_loop_strip_meets_the_body(walked, addon_module):
         pop = api.analyse(bpy.context, r)["boundary_pop"]
         print(f"{r.name}: largest jump where strips meet {pop['max_boundary_jump_deg']:.2f} deg")
         assert pop["max_boundary_jump_deg"] < pop["p99_step_deg"], (r.name, pop)
+
+
+def test_a_scene_twice_the_patchs_rate_keys_its_own_frames_and_plays_the_plan(
+    walk_blend, addon_module
+):
+    """In a 60 fps scene from the 30 fps patch the walker's own pieces are keyed on the
+    scene's frames with its feet locked (unscaled body strips, the shared loop action over
+    its straight walking), and the evaluated rig plays the plan written: every bone within
+    the compact keys' 0.5 degrees of its parent, the hips within 1.5 mm."""
+    api, nla = addon_module.api, addon_module.adapter.nla
+    bpy.ops.wm.open_mainfile(filepath=str(walk_blend))
+    scene = bpy.context.scene
+    scene.render.fps, scene.render.fps_base = 60, 1.0
+    rig = walker_from(bpy.data.objects["Source"], "Fast", (0.4, 0.3, 0.0))
+    goal = empty("GoalFast", 12.4, 2.3, 0.0)
+    with pytest.MonkeyPatch.context() as mp:
+        written = spy_writes(mp, addon_module)
+        res = api.plan_path(scene, rig, goal, frame_start=1)
+    track = rig.animation_data.nla_tracks[nla.TRACK_MOTION]
+    body = rig_body(rig, nla)
+    own = [s for s in track.strips if s.action == body]
+    assert own and all(s.scale == pytest.approx(1.0) for s in own)
+    assert _loop_strips(rig, nla)
+    skel, want = written[rig.name]
+    frames = np.arange(res.frame_start, res.frame_end + 1)
+    got = world_bone_matrices([rig], frames, skel.names)[rig.name]
+    a, b = _local_angles(got, skel), _local_angles(want, skel)
+    cos = (np.trace(np.swapaxes(a, -1, -2) @ b, axis1=-2, axis2=-1) - 1.0) / 2.0
+    deg = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+    assert deg.max() < 0.5 + 0.01, deg.max()
+    hips = np.linalg.norm(got[:, skel.root, :3, 3] - want[:, skel.root, :3, 3], axis=-1)
+    assert hips.max() < 1.5e-3, hips.max()
