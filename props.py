@@ -170,9 +170,8 @@ class MOTION_PATCHES_PG_character(bpy.types.PropertyGroup):
     goal: PointerProperty(
         type=bpy.types.Object,
         name="Own Goal",
-        description="Where this character walks when it is planned in a "
-        "crowd (empty: the scene's goal; a character with "
-        "neither is refused, named)",
+        description="Where this character walks when it is planned, alone (Plan Path) or "
+        "in a crowd (empty: the scene's goal; a character with neither is refused, named)",
         poll=_goal_poll,
     )
     start_prop: PointerProperty(

@@ -227,3 +227,9 @@ def _limit_text(nodes):
 def _some_names(coll, limit=8):
     names = sorted(x.name for x in coll)
     return (", ".join(names[:limit]) + (", ..." if len(names) > limit else "")) or "none"
+
+
+def own_goal(scene: bpy.types.Scene, character: bpy.types.Object) -> bpy.types.Object | None:
+    """Where ``character`` walks when no goal is given: its Own Goal, else the scene's
+    goal (None: neither), the one rule for Plan Path, the ``plan`` command and crowds."""
+    return character.motion_patches_character.goal or scene.motion_patches.goal

@@ -34,6 +34,7 @@ from .common import (
     _size,
     _skeleton,
     object_patches,
+    own_goal,
     scene_fps,
 )
 from .crowd_conflicts import remember_conflicts
@@ -94,7 +95,6 @@ def crowd_members(
     every armature of the scene that has its own goal. Each walks to its own goal, else to
     the scene's; a character with neither, or whose goal is itself, is refused by name,
     and so is a choice with no armature in it."""
-    scene_goal = scene.motion_patches.goal
     if characters is None:
         chosen = [
             ob
@@ -115,7 +115,7 @@ def crowd_members(
     for ob in sorted({ob.name: ob for ob in chosen}.values(), key=lambda o: o.name):
         if ob not in here:
             raise MotionPatchesError(f"'{ob.name}' is not in the scene '{scene.name}'")
-        goal = ob.motion_patches_character.goal or scene_goal
+        goal = own_goal(scene, ob)
         if goal is None:
             raise MotionPatchesError(
                 f"'{ob.name}' has no goal: give it its own goal or set the scene's goal"

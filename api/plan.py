@@ -23,6 +23,7 @@ from .common import (
     _patch_for_planning,
     _size,
     object_patches,
+    own_goal,
     scene_fps,
 )
 from .errors import MotionPatchesError, PathNotFound
@@ -62,8 +63,9 @@ def plan_path(
     turn_in_place: bool | None = None,
     from_here: bool = False,
 ) -> PlanResult:
-    """Plan ``character`` to ``goal`` (an object or (x, y, heading); None: the scene's goal)
-    and write it as NLA. Settings left None are the scene's (:func:`planning_settings`).
+    """Plan ``character`` to ``goal`` (an object or (x, y, heading); None: the character's
+    Own Goal, else the scene's goal, as in a crowd: :func:`own_goal`) and write it as NLA.
+    Settings left None are the scene's (:func:`planning_settings`).
 
     Tagged props (object patches) offer their traversal clips; ``stitching`` is
     "dynamic" (lazy, the paper's method) or "static" (everything stitched first). A goal
@@ -103,10 +105,11 @@ def plan_path(
     # Objects moved by a script have stale matrix_world until the view layer updates.
     context.view_layer.update()
     if goal is None:
-        goal = scene.motion_patches.goal
+        goal = own_goal(scene, character)
     if goal is None:
         raise MotionPatchesError(
-            "no goal: choose a goal object (its location and facing) or set the scene's goal"
+            f"no goal for '{character.name}': choose a goal object (its location and "
+            "facing), give the character its own goal or set the scene's goal"
         )
     if goal == character:
         raise MotionPatchesError("the goal cannot be the character itself")

@@ -172,7 +172,8 @@ def _plan_parser(sub, common):
     g.add_argument(
         "--goal",
         metavar="OBJECT",
-        help="goal object: its location and -Y axis (default: the scene's goal)",
+        help="goal object: its location and -Y axis (default: the character's Own Goal, "
+        "else the scene's goal)",
     )
     g.add_argument(
         "--goal-xyh",

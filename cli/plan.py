@@ -11,16 +11,16 @@ from .lookup import object_named, save_blend, save_target, settings_given
 from .output import OK, BadInput, Failed, Heartbeat, Result, count
 
 
-def _goal_of(args, scene):
+def _goal_of(args, scene, character):
     """(goal for api.plan_path, goal object or None) from --goal / --goal-xyh; neither:
-    None, which api.plan_path reads as the scene's goal."""
+    None, which api.plan_path reads as the character's Own Goal, else the scene's goal."""
     if args.goal:
         ob = object_named(args.goal, "goal")
         return ob, ob
     if args.goal_xyh:
         x, y, h = args.goal_xyh
         return (x, y, math.radians(h)), None
-    return None, scene.motion_patches.goal
+    return None, api.own_goal(scene, character)
 
 
 def plan_doc(res, fps):
@@ -69,7 +69,7 @@ def bodies_text(res):
 def cmd_plan(args):
     scene = bpy.context.scene
     char = object_named(args.character, "character", {"ARMATURE"})
-    goal, goal_obj = _goal_of(args, scene)
+    goal, goal_obj = _goal_of(args, scene, char)
     # What is used: the flags over the scene's.
     w = api.planning_settings(scene, **settings_given(args))
     save = save_target(args)

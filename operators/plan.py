@@ -41,7 +41,7 @@ class MOTION_PATCHES_OT_plan_path(bpy.types.Operator):
             res = api.plan_path(
                 context.scene,
                 context.active_object,
-                context.scene.motion_patches.goal,
+                None,  # its Own Goal, else the scene's (api.own_goal)
                 patch_name=self.patch or None,
                 context=context,
                 start_prop=_start_prop(context.active_object),

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""Planning panel: the goal (the scene's, and the active character's own for crowds), the
+"""Planning panel: the goal (the scene's, and the active character's own, which it walks to), the
 active character's proxy body and bone map (when it is another skeleton than the
 patch's), the cost weights α β γ, radius and stitching, and the Plan Path / Plan Crowd
 buttons."""
@@ -25,7 +25,7 @@ class MOTION_PATCHES_PT_planning(SidebarPanel, bpy.types.Panel):
             # The character's name over the field: beside it, "Walker's Goal" is cut.
             col = layout.column(align=True)
             col.use_property_split = False
-            wrapped_label(col, context, f"{ob.name}'s Own Goal (crowds)")
+            wrapped_label(col, context, f"{ob.name}'s Own Goal")
             col.prop(ob.motion_patches_character, "goal", text="")
             layout.prop(ob.motion_patches_character, "start_prop")
             draw_body(layout, ob)

@@ -12,6 +12,7 @@ with the walkers."""
 import json
 
 import bpy
+import numpy as np
 import pytest
 
 from scene_helpers import empty, walker_from
@@ -190,7 +191,7 @@ def test_the_cli_plans_with_the_scene_settings_and_its_flags_override_them(
         "goal_facing": "any",
         "turn_in_place": False,
     }
-    assert doc["goal"]["object"] == "Goal"  # no --goal: the scene's
+    assert doc["goal"]["object"] == "Goal A"  # no --goal: its Own Goal (else the scene's)
     meta = record(bpy.data.objects["A"])[0]
     assert meta["foot_lock"] is False and meta["radius"] == pytest.approx(0.3)
     assert (
@@ -304,3 +305,43 @@ def test_list_buttons_stay_out_of_f3_search(mp):
     buttons = [c for c in mp.operators.classes if c.bl_idname.endswith(("_add", "_remove"))]
     assert len(buttons) == 4  # turn clips and a prop's clips, add and remove each
     assert all("INTERNAL" in c.bl_options for c in buttons)
+
+
+def evaluated_hips(name, frame):
+    """The world position of ``name``'s root bone on ``frame``, as Blender plays it."""
+    bpy.context.scene.frame_set(frame)
+    ev = bpy.data.objects[name].evaluated_get(bpy.context.evaluated_depsgraph_get())
+    head = ev.pose.bones[ev.pose.bones[0].name].head
+    return np.array(ev.matrix_world @ head)[:2]
+
+
+@pytest.mark.parametrize("door", ["button", "cli", "api"])
+def test_plan_path_walks_a_character_to_its_own_goal(scene, mp, cli, capsys, door):
+    """Plan Path with no goal given sends a character with an Own Goal there (A), one
+    without to the scene's goal (B): the rule a crowd follows, through every door, read
+    from where each walker's evaluated root ends."""
+    api = mp.api
+    for name in ("A", "B"):
+        if door == "button":
+            select(name)
+            assert bpy.ops.motion_patches.plan_path() == {"FINISHED"}
+        elif door == "cli":
+            capsys.readouterr()
+            assert cli.main(["plan", "--character", name, "--json"]) == 0
+            doc = json.loads(capsys.readouterr().out)
+            assert doc["goal"]["object"] == dict(EXPECTED)[name]
+        else:
+            api.plan_path(scene, bpy.data.objects[name], None)
+    for name, goal in EXPECTED:
+        meta, _ = api.load_plan_record(bpy.data.objects[name])
+        at = bpy.data.objects[goal].matrix_world.translation
+        end = evaluated_hips(name, meta["frame_end"])
+        assert np.hypot(*(end - np.array(at[:2]))) < 0.15, (name, goal, end)
+
+
+def test_plan_path_without_any_goal_names_the_character(scene, mp):
+    scene.motion_patches.goal = None
+    b = bpy.data.objects["B"]
+    with pytest.raises(mp.api.MotionPatchesError, match="no goal for 'B'"):
+        mp.api.plan_path(scene, b, None)
+    assert b.animation_data is None  # refused before anything was written
