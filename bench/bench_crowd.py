@@ -72,7 +72,11 @@ SPACING = 2 * RADIUS
 
 def parse_args(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--sizes", default="10,100,1000", help="crowd sizes, comma-separated")
+    p.add_argument(
+        "--sizes",
+        default="10,100,1000",
+        help="crowd sizes, comma-separated ('': none, only --written)",
+    )
     p.add_argument("--area", type=float, default=12.0, help="plaza m² per character")
     p.add_argument("--seed", type=int, default=17)
     p.add_argument("--max-wait", type=float, default=4.0, help="longest wait / hold, s")
@@ -372,6 +376,22 @@ def peak_rss_mb(since_reset):
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
+def cpu_seconds():
+    """(this process's CPU seconds, its child processes' (a LocalCluster's nannies and
+    workers, as long as they live)), user and system time together."""
+    import psutil  # a dependency of distributed, which the written run needs anyway
+
+    me = psutil.Process()
+    mine = sum(me.cpu_times()[:2])
+    theirs = 0.0
+    for child in me.children(recursive=True):
+        try:
+            theirs += sum(child.cpu_times()[:2])
+        except psutil.Error:  # ended meanwhile
+            pass
+    return mine, theirs
+
+
 def run_written(n, args):
     """The plaza of ``n`` planned, resolved and written into a .blend by
     ``api.plan_crowd`` in Blender (its members on a Dask LocalCluster of ``--written-workers``
@@ -396,7 +416,10 @@ def run_written(n, args):
     t0 = time.perf_counter()
     with bb.crowd_writes_timed(api) as writes, bb.crowd_stages_timed(api) as stages:
         with api.cluster_executor(args.written_workers or None) as executor:
+            # the workers' CPU read while they live (their start included)
+            cpu0 = cpu_seconds()
             res = api.plan_crowd(scene, pairs, frame_start=1, executor=executor)
+            cpu1 = cpu_seconds()
     total = time.perf_counter() - t0
     peak_written = peak_rss_mb(reset)
     frame_set_ms = frame_set_per_armature(bpy, scene, res, len(pairs))
@@ -426,6 +449,9 @@ def run_written(n, args):
             "save": save,
             "with_save": total + save,
         },
+        # CPU the run took, whichever process it ran in: with N cores the wall time cannot
+        # be less than their sum over N
+        "cpu_seconds": {"blender": cpu1[0] - cpu0[0], "workers": cpu1[1] - cpu0[1]},
         "character_seconds": char_s,
         "file_kb_per_character_second": grown / 1024 / max(char_s, 1e-9),
         "blender": bpy.app.version_string,
@@ -474,10 +500,11 @@ def written_markdown(rows):
         "| characters | Blender | workers | planned | conflicts left | plan + resolve s "
         "| of which members s | of which resolution s "
         "| write s | write CPU s, Blender's process | planned, resolved and written s "
+        "| CPU s, Blender's process / workers "
         "| save s | with the save s "
         "| KB per character-second | peak RSS MB written / saved "
         "| frame_set ms per armature | loop strips |",
-        "|" + "---|" * 17,
+        "|" + "---|" * 18,
     ]
     for r in rows:
         s = r["seconds"]
@@ -487,6 +514,7 @@ def written_markdown(rows):
             f"| {s['plan_resolve']:.1f} | {s['members']:.1f} | {s['resolve']:.1f} "
             f"| {s['write']:.1f} | {s['write_cpu']:.1f} "
             f"| {s['planned_resolved_written']:.1f} "
+            f"| {r['cpu_seconds']['blender']:.1f} / {r['cpu_seconds']['workers']:.1f} "
             f"| {s['save']:.1f} | {s['with_save']:.1f} "
             f"| {r['file_kb_per_character_second']:.1f} "
             f"| {r['peak_rss_written_mb']:.0f} / {r['process_max_rss_mb']:.0f} "
@@ -582,7 +610,7 @@ def main(argv=None):
         "args": {k: str(v) for k, v in vars(args).items() if k != "json"},
         "crowds": [],
     }
-    for n in sorted(int(s) for s in args.sizes.split(",")):
+    for n in sorted(int(s) for s in args.sizes.split(",") if s.strip()):
         print(f"{n} characters ...", flush=True)
         if n == args.profile:
             prof = cProfile.Profile()
