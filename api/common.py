@@ -232,4 +232,13 @@ def _some_names(coll, limit=8):
 def own_goal(scene: bpy.types.Scene, character: bpy.types.Object) -> bpy.types.Object | None:
     """Where ``character`` walks when no goal is given: its Own Goal, else the scene's
     goal (None: neither), the one rule for Plan Path, the ``plan`` command and crowds."""
-    return character.motion_patches_character.goal or scene.motion_patches.goal
+    return character_goal(character) or scene.motion_patches.goal
+
+
+def character_goal(character: bpy.types.Object) -> bpy.types.Object | None:
+    """``character``'s Own Goal, or None, read without changing it: on Blender 4.5 reading
+    the property of a character that never had it set adds it to its custom properties (a
+    plan that fails must leave the character as it was)."""
+    if not character.is_property_set("motion_patches_character"):
+        return None
+    return character.motion_patches_character.goal

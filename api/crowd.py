@@ -24,8 +24,6 @@ from ..motion_patches.planning.settings import PlanSettings
 from ..motion_patches.props.environment import Obstacle
 from . import crowd_keys
 from .common import (
-    ANALYSIS_KEY,
-    PLAN_KEY,
     _check_character,
     _children_map,
     _not_obstacles,
@@ -33,6 +31,7 @@ from .common import (
     _shrunk,
     _size,
     _skeleton,
+    character_goal,
     object_patches,
     own_goal,
     scene_fps,
@@ -53,7 +52,7 @@ from .solve import (
     _without,
     _writable,
 )
-from .writing import FRAME_RANGE_KEY, _fit_frame_range, _placed, _write
+from .writing import WRITTEN_KEYS, _fit_frame_range, _placed, _write
 
 CROWD_RESOLVE_SLACK = 0.02  # metres the crowd is resolved wider than its spacing (see _resolve)
 CROWD_SPOT = "\x00crowd spot "  # obstacle names of other characters' standing spots
@@ -97,9 +96,7 @@ def crowd_members(
     and so is a choice with no armature in it."""
     if characters is None:
         chosen = [
-            ob
-            for ob in scene.objects
-            if ob.type == "ARMATURE" and ob.motion_patches_character.goal is not None
+            ob for ob in scene.objects if ob.type == "ARMATURE" and character_goal(ob) is not None
         ]
         if not chosen:
             raise MotionPatchesError(
@@ -692,7 +689,7 @@ def _write_all(c, planned, schedules, keys, progress=None):
         bpy,
         c.scene,
         [c.pairs[n][0] for n, *_ in planned],
-        (PLAN_KEY, ANALYSIS_KEY, FRAME_RANGE_KEY),
+        WRITTEN_KEYS,
     ):
         segments = nla.segment_index(bpy)  # the shared segment actions, found once
         reads: dict = {}  # their curves, read once for every character's foot lock
