@@ -26,7 +26,7 @@ def make_copies(scene, source, starts, goals, facing, collection):
         ob = source.copy()  # object copy, armature data shared
         ob.name = f"{source.name}.crowd{k:03d}"
         ob.animation_data_clear()
-        for key in (storage.PLAN_KEY, nla.TRACKS_KEY, nla.ACTIONS_KEY):
+        for key in (storage.PLAN_KEY, storage.PLAN_ID_KEY, nla.TRACKS_KEY, nla.ACTIONS_KEY):
             if key in ob:
                 del ob[key]
         coll.objects.link(ob)

@@ -16,8 +16,6 @@ from ..motion_patches.planning.settings import PlanSettings
 from ..motion_patches.props.environment import Obstacle
 from ..motion_patches.quality import validate
 from .common import (
-    ANALYSIS_KEY,
-    PLAN_KEY,
     _check_character,
     _not_obstacles,
     _patch_for_planning,
@@ -41,7 +39,7 @@ from .solve import (
     _without,
     _writable,
 )
-from .writing import FRAME_RANGE_KEY, _placed, _write
+from .writing import WRITTEN_KEYS, _placed, _write
 
 
 def plan_path(
@@ -165,7 +163,7 @@ def plan_path(
             plan.stats["gait_change"] = why
     placed = _placed(scene, patch, rig, motions, plan)
     _writable(character, start_frame, placed[2].frames)
-    with transaction.kept(bpy, scene, [character], (PLAN_KEY, ANALYSIS_KEY, FRAME_RANGE_KEY)):
+    with transaction.kept(bpy, scene, [character], WRITTEN_KEYS):
         return _write(
             scene,
             character,

@@ -31,6 +31,9 @@ def _placed(scene, patch, rig, motions, plan):
 
 
 FRAME_RANGE_KEY = "motion_patches_frame_range"  # the scene frame range last set by a plan
+# the custom properties writing a plan may change (a character's, the scene's), put back
+# with its animation when a write fails or is cancelled (adapter.transaction.kept)
+WRITTEN_KEYS = (storage.PLAN_KEY, storage.PLAN_ID_KEY, storage.ANALYSIS_KEY, FRAME_RANGE_KEY)
 BLENDER_DEFAULT_RANGE = (1, 250)  # a new scene's: not a range anyone chose
 
 

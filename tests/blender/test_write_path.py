@@ -204,6 +204,37 @@ def test_the_plan_range_is_read_from_the_records_head(addon_module, clean_scene)
     assert np.array_equal(storage.load_plan(ob)[1]["ground"], ground)
 
 
+def test_a_records_fingerprint_is_kept_beside_it(addon_module, clean_scene):
+    """The overlay asks every redraw whether a plan changed: store_plan keeps the record's
+    fingerprint beside it (16 characters to read, not the record), equal to the one made
+    from the record itself, so records of older versions (none kept) compare alike; a
+    record gone is "" whatever is left beside it."""
+    import hashlib
+    import json
+
+    import bpy
+
+    storage = addon_module.adapter.storage
+    ob = bpy.data.objects.new("Walker", None)
+    clean_scene.collection.objects.link(ob)
+    assert storage.plan_fingerprint(ob) == ""
+    storage.store_plan(ob, {"frame_start": 1, "frame_end": 9, "ground": np.ones((3, 3))})
+    made = hashlib.sha1(ob[storage.PLAN_KEY].encode()).hexdigest()[:16]
+    assert ob[storage.PLAN_ID_KEY] == made == storage.plan_fingerprint(ob)
+    first = made
+    storage.store_plan(ob, {"frame_start": 1, "frame_end": 12, "ground": np.ones((3, 3))})
+    assert storage.plan_fingerprint(ob) not in ("", first)
+    ob[storage.PLAN_ID_KEY] = "kept"  # read, not made again from the record
+    assert storage.plan_fingerprint(ob) == "kept"
+    del ob[storage.PLAN_ID_KEY]  # a record an older version wrote
+    raw = json.dumps({"meta": {"frame_start": 2, "frame_end": 5}, "arrays": ""})
+    ob[storage.PLAN_KEY] = raw
+    assert storage.plan_fingerprint(ob) == hashlib.sha1(raw.encode()).hexdigest()[:16]
+    ob[storage.PLAN_ID_KEY] = "left"
+    del ob[storage.PLAN_KEY]
+    assert storage.plan_fingerprint(ob) == ""
+
+
 def test_a_records_tracks_are_kept_in_whole_steps(addon_module, clean_scene):
     """store_plan keeps a smooth track (a walk 100 m from the origin) within half a step
     (5 micrometres, about what single precision kept there) in under half the bytes of
