@@ -236,9 +236,21 @@ def own_goal(scene: bpy.types.Scene, character: bpy.types.Object) -> bpy.types.O
 
 
 def character_goal(character: bpy.types.Object) -> bpy.types.Object | None:
-    """``character``'s Own Goal, or None, read without changing it: on Blender 4.5 reading
-    the property of a character that never had it set adds it to its custom properties (a
-    plan that fails must leave the character as it was)."""
+    """``character``'s Own Goal (Planning panel), or None: :func:`_character_setting`."""
+    return _character_setting(character, "goal")
+
+
+def character_start_prop(character: bpy.types.Object) -> bpy.types.Object | None:
+    """``character``'s Start Prop (Planning panel), or None: :func:`_character_setting`."""
+    return _character_setting(character, "start_prop")
+
+
+def _character_setting(character, name):
+    """A setting of ``character`` (``MOTION_PATCHES_PG_character``), None where never set,
+    read without changing it: on Blender 4.5 reading the settings of a character that has
+    none stores an empty set of them among its custom properties (a plan that fails must
+    leave it as it was); from 5.0 they are not among its custom properties at all
+    (``keys()`` does not list them), so whether they were set is asked of Blender."""
     if not character.is_property_set("motion_patches_character"):
         return None
-    return character.motion_patches_character.goal
+    return getattr(character.motion_patches_character, name)

@@ -9,14 +9,6 @@ from .. import api, props
 from .common import LongWork, report_conflicts
 
 
-def _start_prop(ob):
-    """The character's Start Prop, read without creating its settings on an object that
-    has none (reading a property group stores an empty one on the object)."""
-    if "motion_patches_character" not in ob.keys():
-        return None
-    return ob.motion_patches_character.start_prop
-
-
 class MOTION_PATCHES_OT_plan_path(bpy.types.Operator):
     """Plan the active armature's walk to the goal and write it as NLA strips"""
 
@@ -44,7 +36,7 @@ class MOTION_PATCHES_OT_plan_path(bpy.types.Operator):
                 None,  # its Own Goal, else the scene's (api.own_goal)
                 patch_name=self.patch or None,
                 context=context,
-                start_prop=_start_prop(context.active_object),
+                start_prop=api.character_start_prop(context.active_object),
                 from_here=self.from_here,
             )
         except api.MotionPatchesError as exc:

@@ -274,6 +274,32 @@ def test_stand_up_walk_and_sit_down(chairs_blend, addon_module):
     assert hips.z < 0.75 and np.hypot(hips.x - 1.0, hips.y + 4.5) < 0.3  # seated on chair A
 
 
+def test_the_button_reads_the_characters_start_prop_and_own_goal(chairs_blend, addon_module):
+    """The Plan Path button with the walker's Start Prop and Own Goal set in the Planning
+    panel (no goal given to it, the scene's elsewhere): it stands up from chair A and sits
+    down on chair B, on every version (from Blender 5.0 a character's settings are no
+    longer among its custom properties, where they used to be looked for)."""
+    bpy.ops.wm.open_mainfile(filepath=str(chairs_blend))
+    api = addon_module.api
+    a, b = prop_box("Chair A", 1.0, -4.5), prop_box("Chair B", 9.0, -4.0)
+    b.rotation_euler = (0, 0, 2.0)
+    api.tag_object_patch(a, [(bpy.data.actions["13_05_standup"], "INTERACTION", 2.0, 0.0)])
+    api.tag_object_patch(b, [(bpy.data.actions["13_05"], "INTERACTION", 2.0, 0.0)])
+    walker = bpy.data.objects["Walker"]
+    walker.motion_patches_character.start_prop = a
+    walker.motion_patches_character.goal = b
+    for ob in bpy.context.scene.objects:
+        ob.select_set(ob == walker)
+    bpy.context.view_layer.objects.active = walker
+    assert bpy.ops.motion_patches.plan_path() == {"FINISHED"}
+    meta, _ = api.load_plan_record(walker)
+    scene = bpy.context.scene
+    for frame, (x, y) in ((meta["frame_start"], (1.0, -4.5)), (meta["frame_end"], (9.0, -4.0))):
+        scene.frame_set(frame)
+        hips = walker.matrix_world @ walker.pose.bones["Hips"].head
+        assert hips.z < 0.75 and np.hypot(hips.x - x, hips.y - y) < 0.3, (frame, hips)
+
+
 def test_a_goal_prop_without_a_sit_clip_is_refused(chairs_blend, addon_module):
     bpy.ops.wm.open_mainfile(filepath=str(chairs_blend))
     api = addon_module.api
