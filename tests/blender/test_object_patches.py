@@ -252,14 +252,20 @@ def test_import_retargets_another_subjects_clip(chairs_blend, addon_module):
     assert "13_05 (subject skeleton)" not in bpy.data.actions
 
 
-def test_stand_up_walk_and_sit_down(chairs_blend, addon_module):
+def two_chairs(chairs_blend, api):
+    """The chairs scene opened, with chair A (1, -4.5) tagged with the stand-up clip and
+    chair B (9, -4), turned, with the sit-down clip: (A, B, the walker)."""
     bpy.ops.wm.open_mainfile(filepath=str(chairs_blend))
-    api = addon_module.api
     a, b = prop_box("Chair A", 1.0, -4.5), prop_box("Chair B", 9.0, -4.0)
     b.rotation_euler = (0, 0, 2.0)
     api.tag_object_patch(a, [(bpy.data.actions["13_05_standup"], "INTERACTION", 2.0, 0.0)])
     api.tag_object_patch(b, [(bpy.data.actions["13_05"], "INTERACTION", 2.0, 0.0)])
-    walker = bpy.data.objects["Walker"]
+    return a, b, bpy.data.objects["Walker"]
+
+
+def test_stand_up_walk_and_sit_down(chairs_blend, addon_module):
+    api = addon_module.api
+    a, b, walker = two_chairs(chairs_blend, api)
     res = api.plan_path(bpy.context.scene, walker, b, start_prop=a, frame_start=1)
     names = [s.name for s in walker.animation_data.nla_tracks["MP motion"].strips]
     assert "13_05_standup" in names[0] and "13_05" in names[-1], names
@@ -279,13 +285,8 @@ def test_the_button_reads_the_characters_start_prop_and_own_goal(chairs_blend, a
     panel (no goal given to it, the scene's elsewhere): it stands up from chair A and sits
     down on chair B, on every version (from Blender 5.0 a character's settings are no
     longer among its custom properties, where they used to be looked for)."""
-    bpy.ops.wm.open_mainfile(filepath=str(chairs_blend))
     api = addon_module.api
-    a, b = prop_box("Chair A", 1.0, -4.5), prop_box("Chair B", 9.0, -4.0)
-    b.rotation_euler = (0, 0, 2.0)
-    api.tag_object_patch(a, [(bpy.data.actions["13_05_standup"], "INTERACTION", 2.0, 0.0)])
-    api.tag_object_patch(b, [(bpy.data.actions["13_05"], "INTERACTION", 2.0, 0.0)])
-    walker = bpy.data.objects["Walker"]
+    a, b, walker = two_chairs(chairs_blend, api)
     walker.motion_patches_character.start_prop = a
     walker.motion_patches_character.goal = b
     for ob in bpy.context.scene.objects:
