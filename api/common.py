@@ -251,6 +251,9 @@ def _character_setting(character, name):
     none stores an empty set of them among its custom properties (a plan that fails must
     leave it as it was); from 5.0 they are not among its custom properties at all
     (``keys()`` does not list them), so whether they were set is asked of Blender."""
-    if not character.is_property_set("motion_patches_character"):
+    try:
+        if not character.is_property_set("motion_patches_character"):
+            return None
+    except (AttributeError, TypeError):  # no object: refused by name where it is checked
         return None
     return getattr(character.motion_patches_character, name)

@@ -105,9 +105,10 @@ def plan_path(
     if goal is None:
         goal = own_goal(scene, character)
     if goal is None:
+        who = getattr(character, "name", character)
         raise MotionPatchesError(
-            f"no goal for '{character.name}': choose a goal object (its location and "
-            "facing), give the character its own goal or set the scene's goal"
+            f"no goal for '{who}': choose a goal object (its location and facing), give "
+            "the character its own goal or set the scene's goal"
         )
     if goal == character:
         raise MotionPatchesError("the goal cannot be the character itself")
