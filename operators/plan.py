@@ -10,7 +10,7 @@ from .common import LongWork, report_conflicts
 
 
 class MOTION_PATCHES_OT_plan_path(bpy.types.Operator):
-    """Plan the active armature's walk to the goal and write it as NLA strips"""
+    """Plan the active armature's walk to its own goal (or the scene's), written as NLA strips"""
 
     bl_idname = "motion_patches.plan_path"
     bl_label = "Plan Path"
