@@ -178,7 +178,7 @@ class MOTION_PATCHES_PG_character(bpy.types.PropertyGroup):
         type=bpy.types.Object,
         name="Start Prop",
         description="A prop tagged with a stand-up clip this character starts seated on "
-        "when Plan Path plans it (empty: where it stands)",
+        "when it is planned, alone (Plan Path) or in a crowd (empty: where it stands)",
         poll=_prop_poll,
     )
 

@@ -35,7 +35,7 @@ from .common import (
     scene_fps,
     state_dict,
 )
-from .crowd import CROWD_SPOT, cluster_executor, crowd_members, plan_crowd
+from .crowd import CROWD_SPOT, cluster_executor, crowd_member, crowd_members, plan_crowd
 from .crowd_conflicts import (
     CONFLICTS_KEY,
     crowd_conflicts,
@@ -106,6 +106,7 @@ __all__ = [
     "clip_ends",
     "compat",
     "crowd_conflicts",
+    "crowd_member",
     "crowd_members",
     "duplicate_crowd",
     "evaluate",

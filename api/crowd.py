@@ -32,6 +32,7 @@ from .common import (
     _size,
     _skeleton,
     character_goal,
+    character_start_prop,
     object_patches,
     own_goal,
     scene_fps,
@@ -86,8 +87,9 @@ def cluster_executor(
 def crowd_members(
     scene: bpy.types.Scene, characters: Iterable[bpy.types.Object] | None = None
 ) -> list[tuple]:
-    """Who is in a crowd and where each walks: [(armature, goal object)] by name, what
-    :func:`plan_crowd` takes. The one rule for the operator, the CLI and scripts.
+    """Who is in a crowd and where each walks: [(armature, goal object, options)] by name,
+    what :func:`plan_crowd` takes (:func:`crowd_member` of each). The one rule for the
+    operator, the CLI and scripts.
 
     ``characters``: the objects chosen (the selection, the CLI's --character); the
     armatures among them are the crowd (a selected body mesh is no character). None:
@@ -119,8 +121,16 @@ def crowd_members(
             )
         if goal == ob:
             raise MotionPatchesError(f"the goal of '{ob.name}' is the character itself")
-        pairs.append((ob, goal))
+        pairs.append(crowd_member(ob, goal))
     return pairs
+
+
+def crowd_member(character: bpy.types.Object, goal: Any) -> tuple:
+    """``character``'s entry of a crowd walking to ``goal``: (character, goal, options), the
+    options its own settings give (``{"start_prop": its Start Prop}`` where it has one: it
+    starts seated there, as Plan Path starts it)."""
+    seat = character_start_prop(character)
+    return character, goal, ({"start_prop": seat} if seat is not None else {})
 
 
 def plan_crowd(

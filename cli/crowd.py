@@ -10,13 +10,14 @@ from .plan import bodies_doc, bodies_text, plan_doc, plan_line
 
 
 def _crowd_pairs(args, scene):
-    """--pair CHARACTER GOAL as given; else the crowd the API makes of --character (or of
-    the scene, none given): api.crowd_members, the rule the Plan Crowd button follows."""
+    """--pair CHARACTER GOAL as given (each starting on its Start Prop where it has one:
+    api.crowd_member); else the crowd the API makes of --character (or of the scene, none
+    given): api.crowd_members, the rule the Plan Crowd button follows."""
     if args.pair and args.character:
         raise BadInput("give either --pair or --character, not both")
     if args.pair:
         return [
-            (object_named(c, "character", {"ARMATURE"}), object_named(g, "goal"))
+            api.crowd_member(object_named(c, "character", {"ARMATURE"}), object_named(g, "goal"))
             for c, g in args.pair
         ]
     if args.character:

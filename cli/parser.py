@@ -199,7 +199,8 @@ def _plan_parser(sub, common):
     p.add_argument(
         "--start-prop",
         metavar="OBJECT",
-        help="a prop tagged with a stand-up clip the character starts seated on",
+        help="a prop tagged with a stand-up clip the character starts seated on (default: "
+        "the character's own Start Prop, if it has one)",
     )
     p.add_argument(
         "--from-here",

@@ -73,7 +73,12 @@ def cmd_plan(args):
     # What is used: the flags over the scene's.
     w = api.planning_settings(scene, **settings_given(args))
     save = save_target(args)
-    seat = args.start_prop and object_named(args.start_prop, "start prop", {"MESH"})
+    # --start-prop, else the character's own Start Prop, as the Plan Path button reads it
+    seat = (
+        object_named(args.start_prop, "start prop", {"MESH"})
+        if args.start_prop
+        else api.character_start_prop(char)
+    )
     try:
         with Heartbeat(f"plan '{char.name}'", enabled=not args.json):
             res = api.plan_path(
@@ -84,7 +89,7 @@ def cmd_plan(args):
                 frame_start=args.frame_start,
                 gait=args.gait,
                 from_here=args.from_here,
-                start_prop=seat or None,
+                start_prop=seat,
                 **w,
             )
     except api.PathNotFound as exc:

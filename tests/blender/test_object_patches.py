@@ -301,6 +301,37 @@ def test_the_button_reads_the_characters_start_prop_and_own_goal(chairs_blend, a
         assert hips.z < 0.75 and np.hypot(hips.x - x, hips.y - y) < 0.3, (frame, hips)
 
 
+@pytest.mark.parametrize("door", ["plan cli", "crowd button", "crowd cli", "crowd api"])
+def test_every_door_starts_a_character_on_its_start_prop(chairs_blend, mp, capsys, door):
+    """The walker's Start Prop and Own Goal set in the Planning panel, nothing else given:
+    the ``plan`` command, the Plan Crowd button, the ``crowd`` command and
+    ``api.plan_crowd(scene, api.crowd_members(...))`` all stand it up from chair A and sit it
+    down on chair B, as Plan Path does (read from the evaluated hips)."""
+    api = mp.api
+    a, b, walker = two_chairs(chairs_blend, api)
+    walker.motion_patches_character.start_prop = a
+    walker.motion_patches_character.goal = b
+    scene = bpy.context.scene
+    if door == "plan cli":
+        assert mp.cli.main(["plan", "--character", "Walker", "--json"]) == 0
+    elif door == "crowd button":
+        for ob in scene.objects:
+            ob.select_set(ob == walker)
+        bpy.context.view_layer.objects.active = walker
+        assert bpy.ops.motion_patches.plan_crowd() == {"FINISHED"}
+    elif door == "crowd cli":
+        assert mp.cli.main(["crowd", "--character", "Walker", "--json"]) == 0
+    else:
+        assert api.crowd_members(scene, [walker]) == [(walker, b, {"start_prop": a})]
+        assert not api.plan_crowd(scene, api.crowd_members(scene, [walker])).failed
+    capsys.readouterr()
+    meta, _ = api.load_plan_record(walker)
+    for frame, (x, y) in ((meta["frame_start"], (1.0, -4.5)), (meta["frame_end"], (9.0, -4.0))):
+        scene.frame_set(frame)
+        hips = walker.matrix_world @ walker.pose.bones["Hips"].head
+        assert hips.z < 0.75 and np.hypot(hips.x - x, hips.y - y) < 0.3, (door, frame, hips)
+
+
 def test_a_goal_prop_without_a_sit_clip_is_refused(chairs_blend, addon_module):
     bpy.ops.wm.open_mainfile(filepath=str(chairs_blend))
     api = addon_module.api

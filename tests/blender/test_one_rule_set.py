@@ -70,7 +70,7 @@ def recorded(mp, monkeypatch):
     calls = []
 
     def record(scene, pairs, **kw):
-        calls.append([(c.name, g.name) for c, g in pairs])
+        calls.append([(c.name, g.name) for c, g, _ in pairs])
         raise api.MotionPatchesError("recorded")
 
     monkeypatch.setattr(api, "plan_crowd", record)
@@ -101,7 +101,7 @@ EXPECTED = [("A", "Goal A"), ("B", "Goal")]  # A's own goal; B has none: the sce
 def test_the_button_the_cli_and_the_api_make_the_same_crowd(scene, mp, cli, capsys, recorded):
     api = mp.api
     objects = [bpy.data.objects[n] for n in ("B", "Body", "A")]
-    by_api = [(c.name, g.name) for c, g in api.crowd_members(scene, objects)]
+    by_api = [(c.name, g.name) for c, g, _ in api.crowd_members(scene, objects)]
     assert by_api == EXPECTED  # the body mesh is no character; ordered by name
 
     assert through_operator(["B", "Body", "A"]) == "Error: recorded"
@@ -114,7 +114,7 @@ def test_the_button_the_cli_and_the_api_make_the_same_crowd(scene, mp, cli, caps
 
     # Nobody chosen (the CLI with neither --pair nor --character; a script passing None):
     # every armature with its own goal, i.e. A only; B would need the scene's goal.
-    assert [(c.name, g.name) for c, g in api.crowd_members(scene)] == [("A", "Goal A")]
+    assert [(c.name, g.name) for c, g, _ in api.crowd_members(scene)] == [("A", "Goal A")]
     capsys.readouterr()
     assert cli.main(["crowd", "--json"]) == 2
     assert recorded[-1] == [("A", "Goal A")]
