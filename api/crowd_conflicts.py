@@ -33,22 +33,29 @@ def _stored(scene):
         return []
 
 
-def _still_true(scene, c):
-    names = _objects(c)
-    return all(scene.objects.get(n) is not None for n in names) and all(
-        storage.plan_fingerprint(scene.objects[n]) == c["plans"].get(n) for n in _characters(c)
+def _by_name(scene):
+    """{name: object} of ``scene``, read once: a lookup in ``scene.objects`` walks the
+    scene (a crowd of 1,000 has as many characters and goals)."""
+    return {ob.name: ob for ob in scene.objects}
+
+
+def _still_true(objects, c):
+    """Whether conflict ``c`` holds among ``objects`` (:func:`_by_name`): its objects are
+    there and its characters' plans are the ones it was found in."""
+    return all(n in objects for n in _objects(c)) and all(
+        storage.plan_fingerprint(objects[n]) == c["plans"].get(n) for n in _characters(c)
     )
 
 
 def remember_conflicts(scene: bpy.types.Scene, conflicts: list, moving: list) -> None:
     """Keep a crowd's ``conflicts`` (pairs) and ``moving`` (walks meeting a moving prop),
     just written, on the scene, with the ones kept before that are still true."""
-    new = []
+    new, objects = [], _by_name(scene)
     for c in list(conflicts) + list(moving):
         c = dict(c)
-        c["plans"] = {n: storage.plan_fingerprint(scene.objects[n]) for n in _characters(c)}
+        c["plans"] = {n: storage.plan_fingerprint(objects[n]) for n in _characters(c)}
         new.append(c)
-    kept = [c for c in _stored(scene) if _still_true(scene, c)]
+    kept = [c for c in _stored(scene) if _still_true(objects, c)]
     if kept or new:
         scene[CONFLICTS_KEY] = json.dumps(kept + new)
     elif CONFLICTS_KEY in scene:
@@ -64,7 +71,8 @@ def crowd_conflicts(scene: bpy.types.Scene) -> list[dict]:
     """The conflicts of the crowds planned on ``scene`` that are still true, by frame:
     {"a", "b", "frame", "first_frame", "frames", "distance_m"} for a pair,
     {"character", "prop", "frame", "distance_m"} for a walk meeting a moving prop."""
-    out = [c for c in _stored(scene) if _still_true(scene, c)]
+    objects = _by_name(scene)
+    out = [c for c in _stored(scene) if _still_true(objects, c)]
     for c in out:
         del c["plans"]
     return sorted(out, key=lambda c: (c["frame"], _objects(c)))
