@@ -87,10 +87,16 @@ def object_patch(obj, depsgraph, skeleton, fps, gait_floor=None, scale=1.0):
     return patch
 
 
+def is_tagged(ob):
+    """Whether ``ob`` is a tagged object patch (a mesh with its Object Patch enabled), asked
+    without changing it: reading ``ob.motion_patch`` of an object that never had it stores
+    an empty set of those settings on it, so every mesh a plan or the overlay looked at
+    would carry one (on Blender 4.5 among its custom properties, which exporters write)."""
+    return ob.type == "MESH" and ob.is_property_set("motion_patch") and ob.motion_patch.enabled
+
+
 def tagged(scene):
-    return [
-        o for o in scene.objects if o.type == "MESH" and o.motion_patch.enabled and o.visible_get()
-    ]
+    return [o for o in scene.objects if is_tagged(o) and o.visible_get()]
 
 
 def interaction_clip(patch, sitting):

@@ -57,7 +57,7 @@ from .settings import (
     planning_checked,
     planning_settings,
 )
-from .tagging import tag_object_patch
+from .tagging import is_tagged, tag_object_patch
 from .writing import (
     BLENDER_DEFAULT_RANGE,
     FRAME_RANGE_KEY,
@@ -118,6 +118,7 @@ __all__ = [
     "has_body",
     "import_mocap",
     "import_patch",
+    "is_tagged",
     "last_analysis",
     "layers",
     "load_plan_record",

@@ -162,7 +162,7 @@ def _not_obstacles(objects, children=None):
     ``children``: :func:`_children_map` of the file, when asked for many objects."""
     out = []
     for ob in objects:
-        if ob is not None and not (ob.type == "MESH" and ob.motion_patch.enabled):
+        if ob is not None and not props_io.is_tagged(ob):
             kids = ob.children_recursive if children is None else _descendants(ob, children)
             out += [ob, *kids]
     return tuple(out)

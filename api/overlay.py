@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from ..adapter import storage
+from ..adapter import props_io, storage
 from ..motion_patches.planning.plan_frame import (
     lattice_frame,
     local_environment,
@@ -40,7 +40,7 @@ class PlanDrawing:
 
 
 def _tagged(scene):
-    return (ob for ob in scene.objects if ob.type == "MESH" and ob.motion_patch.enabled)
+    return (ob for ob in scene.objects if props_io.is_tagged(ob))
 
 
 def plan_fingerprints(scene: bpy.types.Scene) -> list:

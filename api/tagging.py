@@ -71,3 +71,10 @@ def tag_object_patch(
             )
     props_io.tag(obj, clips)
     return obj
+
+
+def is_tagged(ob: bpy.types.Object) -> bool:
+    """Whether ``ob`` is a tagged object patch, asked without adding the Object Patch
+    settings to an object that has none (the adapter's ``props_io.is_tagged``): the one test
+    for the overlay, the buttons and the planner."""
+    return props_io.is_tagged(ob)

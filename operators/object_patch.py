@@ -75,7 +75,7 @@ class MOTION_PATCHES_OT_untag_object_patch(bpy.types.Operator):
     @classmethod
     def poll(cls, context):
         ob = _active_mesh(context)
-        return ob is not None and ob.motion_patch.enabled
+        return ob is not None and api.is_tagged(ob)
 
     def execute(self, context):
         context.active_object.motion_patch.enabled = False

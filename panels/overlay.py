@@ -110,7 +110,7 @@ def _fan_quads(outline, z):
 
 
 def _tagged(scene):
-    return (ob for ob in scene.objects if ob.type == "MESH" and ob.motion_patch.enabled)
+    return (ob for ob in scene.objects if api.is_tagged(ob))
 
 
 def _lattice_of(scene):

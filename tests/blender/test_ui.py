@@ -339,7 +339,7 @@ def test_plan_crowd_sends_each_selected_character_to_its_goal(scene, addon_modul
     plan_crowd = api.plan_crowd
 
     def recording(scene, pairs, **kw):
-        calls.append({"pairs": [(c.name, g.name) for c, g in pairs], "progress": []})
+        calls.append({"pairs": [(c.name, g.name) for c, g, _ in pairs], "progress": []})
         report = kw["progress"]
         kw["progress"] = lambda f: (calls[-1]["progress"].append(f), report(f))
         return plan_crowd(scene, pairs, **kw)
