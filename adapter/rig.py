@@ -67,11 +67,16 @@ def skeleton_in_metres(obj):
 
 
 def bone_map(obj):
-    """{patch bone: rig bone ('' = left out)} stored on the armature ``obj``."""
-    rig = getattr(obj.data, "motion_patches_rig", None)
-    if rig is None:
+    """{patch bone: rig bone ('' = left out)} stored on the armature ``obj``. Asked first
+    whether there is one: reading the settings of an armature that has none stores an empty
+    set on its data (a plan or a layout check would change every rig it looked at)."""
+    try:
+        if not obj.data.is_property_set("motion_patches_rig"):
+            return {}
+    except TypeError:  # the settings are not registered
         return {}
-    return {row.patch_bone: row.rig_bone for row in rig.bone_map if row.patch_bone}
+    rows = obj.data.motion_patches_rig.bone_map
+    return {row.patch_bone: row.rig_bone for row in rows if row.patch_bone}
 
 
 def set_bone_map(obj, mapping):

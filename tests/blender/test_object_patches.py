@@ -402,16 +402,18 @@ def test_overlay_buffers_and_handler_lifecycle(chairs_blend, addon_module):
 
 def test_a_plan_and_the_overlay_leave_untagged_props_as_they_were(walk_blend, mp):
     """Planning round an untagged box, a crowd of one, and the overlay's drawing ask whether
-    each mesh is an object patch without adding the Object Patch settings to it (reading
-    them used to store an empty set on every mesh looked at: on Blender 4.5 among its custom
-    properties, which the FBX and glTF exporters write out)."""
+    each mesh is an object patch, and whether the rig has a bone map, without adding those
+    settings to it (reading them used to store an empty set on every mesh and rig looked at:
+    on Blender 4.5 among its custom properties, which the FBX and glTF exporters write
+    out)."""
     bpy.ops.wm.open_mainfile(filepath=str(walk_blend))
     scene = bpy.context.scene
     src = scene.motion_patches.source_armature
     walker = walker_from(src, "Walker", (0.0, 0.0, 0.0))
     box = prop_box("Box", 3.0, 0.0, (1.0, 1.0, 1.0))
     goal = empty("Goal", 6.0, 0.0, 0.0)
-    keys = list(box.keys())
+    keys, rig_keys = list(box.keys()), list(walker.data.keys())
+    had_map = walker.data.is_property_set("motion_patches_rig")
     walker.motion_patches_character.goal = goal
     mp.api.plan_path(scene, walker, None, frame_start=1)
     mp.api.plan_crowd(scene, mp.api.crowd_members(scene, [walker]))
@@ -421,3 +423,6 @@ def test_a_plan_and_the_overlay_leave_untagged_props_as_they_were(walk_blend, mp
     overlay._markers_key(scene)
     assert not box.is_property_set("motion_patch")
     assert list(box.keys()) == keys
+    # nor a bone map on the walker's rig, which plays the patch as it is
+    assert walker.data.is_property_set("motion_patches_rig") == had_map
+    assert list(walker.data.keys()) == rig_keys
