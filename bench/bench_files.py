@@ -18,7 +18,9 @@ its rotation in the world), the hips' largest offset (mm), the planted foot join
 offset (mm) and the feet's skate while planted (cm/s; both on the plan's contact labels)
 and ``scene.frame_set`` milliseconds per armature. Cases: patch baked at 30 and 120 fps,
 scenes at 24, 30 and 60 fps. The table also says how far each storage is from
-``TARGET_KB`` per character-second.
+``TARGET_KB`` per character-second. On Blender 4.x (whose files this reads as saved,
+uncompressed: ``blend_blocks.py``) a second table splits the cubic keys' growth by what
+its bytes hold: sampled frames, keys, F-curves, strings and records, the rest.
 
     .venv/blender-4.5/bin/python bench/bench_files.py [--json out.json] [--cases 30/30,120/24]
 """
@@ -34,6 +36,9 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+import blend_blocks  # noqa: E402
+
 REPO = HERE.parent
 STORAGES = ("every", "linear", "cubic")
 CASES = ("30/30", "30/24", "30/60", "120/30", "120/24")  # patch fps / scene fps
@@ -190,9 +195,8 @@ def measure_case(bpy, addon, baked, scene_fps, n, tmp, angles=()):
     metrics = addon.motion_patches.quality.metrics
     rows, ref = {}, None
     for how in STORAGES + tuple(f"cubic {a:g}" for a in angles):
-        scene, chars, kb, secs = plan_crowd(
-            bpy, api, baked, scene_fps, n, how, addon, Path(tmp) / f"{how}.blend"
-        )
+        out = Path(tmp) / f"{how}.blend"
+        scene, chars, kb, secs = plan_crowd(bpy, api, baked, scene_fps, n, how, addon, out)
         mats, names, frames, ms = evaluate(bpy, scene, chars)
         row = {
             "kb_per_char_s": kb,
@@ -200,6 +204,11 @@ def measure_case(bpy, addon, baked, scene_fps, n, tmp, angles=()):
             "frame_set_ms": ms,
             "skate_cm_s": skate(api, metrics, scene, chars, mats, names, frames),
         }
+        try:  # what the growth is made of (Blender 4.x saves a format this reads)
+            grown = blend_blocks.growth(out.with_suffix(".base.blend"), out)
+            row["kb_per_char_s_by_kind"] = {k: b / 1024.0 / secs for k, b in grown}
+        except ValueError:
+            pass
         if ref is None:
             ref = mats
         row["local_deg"], row["world_deg"], row["hips_mm"] = errors(ref, mats, chars)
@@ -258,6 +267,22 @@ def main(argv=None):
                 f"{r['world_deg']:.3f} | {r['hips_mm']:.2f} | {r['planted_mm']:.2f} | "
                 f"{r['skate_cm_s']:.2f} | {r['frame_set_ms']:.3f} |"
             )
+    kinds = {k for rows in results.values() for k in rows["cubic"].get("kb_per_char_s_by_kind", {})}
+    if kinds:  # where the cubic keys' growth goes, case by case (Blender 4.x files)
+        kinds = sorted(
+            kinds,
+            key=lambda k: (
+                -results[next(iter(results))]["cubic"].get("kb_per_char_s_by_kind", {}).get(k, 0.0)
+            ),
+        )
+        print("\n| cubic, KB per char-s | " + " | ".join(results) + " |")
+        print("|" + "---|" * (len(results) + 1))
+        for k in kinds:
+            cells = [
+                f"{rows['cubic'].get('kb_per_char_s_by_kind', {}).get(k, 0.0):.1f}"
+                for rows in results.values()
+            ]
+            print(f"| {k} | " + " | ".join(cells) + " |")
     if args.json:
         Path(args.json).write_text(json.dumps(results, indent=1))
 
