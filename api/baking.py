@@ -18,6 +18,7 @@ from ..motion_patches.kinematics.clip import straightest
 from ..motion_patches.patch import layers, serialize
 from ..motion_patches.patch.gait import MIN_TURN, build_gait
 from ..motion_patches.patch.locomotion_patch import bake
+from ..motion_patches.patch.timing import timing_warnings
 from .common import _some_names, scene_fps
 from .errors import Cancelled, MotionPatchesError, check_cancelled
 from .results import BakeResult
@@ -110,7 +111,9 @@ def bake_locomotion_patch(
     frame rate first (the patch is baked at the scene rate). Everything is checked before
     the first change; when the bake fails anyway, the objects, armatures and actions it
     made and the frame rate are put back, and so they are when ``cancelled()`` (asked at
-    each progress report) answers True: :class:`~.errors.Cancelled`."""
+    each progress report) answers True: :class:`~.errors.Cancelled`. What looks wrong but is
+    baked anyway (clips whose timing is not a person's:
+    :func:`motion_patches.patch.timing.timing_warnings`) is in the result's ``warnings``."""
     if fps is not None and not (isinstance(fps, (int, float)) and 1 <= fps <= 1000):
         raise MotionPatchesError(f"the frame rate must be between 1 and 1000, not {fps}")
     if not str(layer).strip():
@@ -253,6 +256,7 @@ def _bake(
                     f"{np.degrees(MIN_TURN):.0f} degrees or more; give a clip that turns, or "
                     f"bake without it (the straight stride is bent to turns)"
                 )
+        warnings = timing_warnings(clips[0], clips[1:])
         if effort_rate is None:
             effort_rate = layers.effort_rate(gait)
         patch = bake(gait, cells=cells, nodes=nodes, effort_rate=effort_rate, progress=step)
@@ -262,7 +266,9 @@ def _bake(
         raise MotionPatchesError(str(exc)) from None
     name = name or layer
     storage.store_patch(scene, patch, name)
-    return BakeResult(name, layer, patch.stats, time.perf_counter() - t0, list(gait.notes))
+    return BakeResult(
+        name, layer, patch.stats, time.perf_counter() - t0, list(gait.notes), warnings=warnings
+    )
 
 
 def _animated_bones(action):

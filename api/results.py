@@ -17,6 +17,8 @@ class BakeResult:
     straight: str = ""  # action names baked
     turns: list = field(default_factory=list)
     imported: list = field(default_factory=list)  # actions imported from BVH files
+    # what looks wrong and was baked anyway (a clip's timing: motion_patches.patch.timing)
+    warnings: list = field(default_factory=list)
 
 
 @dataclass

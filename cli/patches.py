@@ -46,6 +46,7 @@ def cmd_bake(args):
         "seconds": res.seconds,
         "stats": st,
         "notes": res.notes,
+        "warnings": res.warnings,
         "saved": saved,
     }
     text = [
@@ -53,6 +54,7 @@ def cmd_bake(args):
         f"segments kept, {st.get('culled')} culled"
     ]
     text += ["  " + n for n in res.notes]
+    text += ["warning: " + w for w in res.warnings]
     if saved:
         text.append(f"saved {saved}")
     return Result(doc, OK, text)

@@ -69,6 +69,8 @@ class MOTION_PATCHES_OT_bake_locomotion_patch(LongWork, bpy.types.Operator):
             f"Baked '{res.name}': {st['kept']} segments kept, {st['culled']} "
             f"culled ({res.seconds:.1f} s)",
         )
+        for warning in res.warnings:
+            self.report({"WARNING"}, warning)
         return {"FINISHED"}
 
 

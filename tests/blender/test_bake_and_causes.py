@@ -6,7 +6,7 @@ import bpy
 import numpy as np
 import pytest
 
-from scene_helpers import empty, prop_box, walker_from
+from scene_helpers import CMU_SCALE, empty, prop_box, walker_from
 
 
 @pytest.fixture(scope="module")
@@ -157,3 +157,41 @@ def test_a_bake_too_sparse_to_connect_is_refused_with_what_to_add(straight_blend
         api.bake_locomotion_patch(scene, arm, action, [], layer="sparse", nodes=2)
     assert "more nodes per edge" in str(err.value)
     assert [p.name for p in scene.motion_patches.patches] == ["walk"]
+
+
+def test_clips_imported_at_another_rate_bake_with_a_warning(straight_blend, mocap_dir, mp, capfd):
+    """16_15 (120 fps) and 16_18 (30 fps) through Blender's BVH importer at its defaults
+    (Scale FPS off) into a 24 fps scene: each recorded frame becomes a scene frame, the walk
+    five times slower. The bake goes ahead (a slow walk may be meant) and the button, the
+    API and the CLI say so, with the cause; clips imported with Import Mocap Clips (the
+    module's patch) bake without a word."""
+    assert straight_blend[1].warnings == []
+    bpy.ops.wm.read_homefile(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.fps = 24
+    for name in ("16_15", "16_18"):
+        assert bpy.ops.import_anim.bvh(
+            filepath=str(mocap_dir / "cmu" / f"{name}.bvh"),
+            global_scale=CMU_SCALE,
+            update_scene_fps=False,
+        ) == {"FINISHED"}
+    scene.motion_patches.source_armature = bpy.data.objects["16_15"]
+    capfd.readouterr()
+    assert bpy.ops.motion_patches.bake_locomotion_patch(
+        layer="walk", straight="16_15", turns="16_18"
+    ) == {"FINISHED"}
+    said = capfd.readouterr().out
+    assert "the straight clip '16_15' takes 5.8" in said and "Scale FPS" in said, said
+    assert "the turn clip '16_18' takes 1.46 s" in said, said  # 30 fps read at 24
+    res = mp.api.bake_locomotion_patch(
+        scene, bpy.data.objects["16_15"], "16_15", ["16_18"], layer="walk"
+    )
+    assert [w.split(" takes ")[0] for w in res.warnings] == [
+        "the straight clip '16_15'",
+        "the turn clip '16_18'",
+    ]
+    capfd.readouterr()
+    assert (
+        mp.cli.main(["bake", "--armature", "16_15", "--straight", "16_15", "--turn", "16_18"]) == 0
+    )
+    assert "warning: the straight clip '16_15' takes 5.8" in capfd.readouterr().out
