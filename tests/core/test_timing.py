@@ -6,9 +6,10 @@ Blender's BVH importer does without Scale FPS, they are named with the likely ca
 import dataclasses
 
 import pytest
-from conftest import cmu
 
 from motion_patches.patch.timing import timing_warnings
+
+from conftest import cmu
 
 
 @pytest.mark.parametrize(
