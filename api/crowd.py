@@ -445,18 +445,24 @@ def _place_ends(c):
     planner per world, and the priority order: the given priority, then the longer way
     first."""
     skel = c.patch.gait.skeleton
-    c.ends = [
-        _endpoints(
-            ch,
-            g,
-            opt.get("start_prop"),
-            _world_of(c, sz).by_name,
-            r.target if r else skel,
-            c.settings.goal_facing,
-            sz,
-        )
-        for (ch, g), opt, r, sz in zip(c.pairs, c.options, c.rigs, c.sizes)
-    ]
+    c.ends = []
+    for (ch, g), opt, r, sz in zip(c.pairs, c.options, c.rigs, c.sizes):
+        try:
+            c.ends.append(
+                _endpoints(
+                    ch,
+                    g,
+                    opt.get("start_prop"),
+                    _world_of(c, sz).by_name,
+                    r.target if r else skel,
+                    c.settings.goal_facing,
+                    sz,
+                )
+            )
+        except MotionPatchesError as exc:  # in a crowd, say whose start or goal it is
+            if f"'{ch.name}'" in str(exc) or type(exc) is not MotionPatchesError:
+                raise
+            raise MotionPatchesError(f"'{ch.name}': {exc}") from None
     c.own = [
         [
             o.name

@@ -426,3 +426,16 @@ def test_a_plan_and_the_overlay_leave_untagged_props_as_they_were(walk_blend, mp
     # nor a bone map on the walker's rig, which plays the patch as it is
     assert walker.data.is_property_set("motion_patches_rig") == had_map
     assert list(walker.data.keys()) == rig_keys
+
+
+def test_a_crowd_member_whose_start_prop_cannot_seat_it_is_named(chairs_blend, mp):
+    """A crowd where one walker's Start Prop has no stand-up clip: refused before anything
+    is written, naming the walker and the prop (a crowd has many Start Props)."""
+    api = mp.api
+    a, b, walker = two_chairs(chairs_blend, api)
+    walker.motion_patches_character.start_prop = b  # chair B only sits down
+    walker.motion_patches_character.goal = empty("Goal W", 5.0, 2.0, 0.0)
+    with pytest.raises(api.MotionPatchesError) as err:
+        api.plan_crowd(bpy.context.scene, api.crowd_members(bpy.context.scene, [walker]))
+    assert str(err.value) == "'Walker': 'Chair B' has no stand-up interaction clip"
+    assert walker.animation_data is None
