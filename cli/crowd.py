@@ -49,7 +49,7 @@ def cmd_crowd(args):
             )
     finally:
         progress.close()
-    bodies = api.add_bodies([c for c, _ in pairs]) if args.bodies else None
+    bodies = api.add_bodies([entry[0] for entry in pairs]) if args.bodies else None
     fps = api.scene_fps(scene)
     moving = list(getattr(res, "moving_conflicts", []))
     ok = not res.failed and not res.conflicts and not moving
