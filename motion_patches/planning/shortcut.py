@@ -230,8 +230,11 @@ def _chain(planner, corners, first, goal_heading, budget=60):
     """Dubins parts from state ``first`` through ``corners[1:]`` (the last is the goal, met
     facing ``goal_heading``), each corner passed along the bisector of its legs, or along
     either leg where that does not fit (a depth-first search over those choices, at most
-    ``budget`` parts tried); None when no choice fits."""
+    ``budget`` parts tried); None when no choice fits. The rest of a chain depends only on
+    the corner and the heading it is passed at: one found not to fit is not tried again
+    from the other ways into that corner."""
     tries = [0]
+    dead = set()  # (corner, heading) from which no choice fits the rest
 
     def options(j):
         if j == len(corners) - 1:
@@ -244,7 +247,7 @@ def _chain(planner, corners, first, goal_heading, budget=60):
     def solve(j, pa, ha):
         if j == len(corners):
             return []
-        heads = options(j)[: max(budget - tries[0], 0)]
+        heads = [h for h in options(j) if (j + 1, h) not in dead][: max(budget - tries[0], 0)]
         if not heads:
             return None
         # The options of a corner are sampled and tested together, tried in order.
@@ -266,6 +269,7 @@ def _chain(planner, corners, first, goal_heading, budget=60):
                 return [got[2]()] + rest
             if tries[0] >= budget:
                 return None
+            dead.add((j + 1, hb))  # searched to the end (not cut short by the budget)
         return None
 
     return solve(1, first[0], first[1])
