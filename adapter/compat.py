@@ -12,6 +12,21 @@ import bpy
 OWNER_KEY = "motion_patches_owner"  # custom property marking data this add-on created
 
 
+def stored_settings(owner, name):
+    """The add-on's settings group ``name`` (a ``bpy.props`` PointerProperty) of ``owner``,
+    or None where it was never set, asked without creating it: reading it creates an empty
+    one (on 4.5 among the owner's custom properties, which exporters write out; from 5.0
+    with the system properties, which ``keys()`` does not list), so a plan, a check or the
+    overlay looking at a mesh or rig would change it. None too for no owner or a group
+    not registered."""
+    try:
+        if not owner.is_property_set(name):
+            return None
+    except (AttributeError, TypeError):
+        return None
+    return getattr(owner, name)
+
+
 def new_action(name, id_type="OBJECT"):
     """A new layered action with one slot, one layer and one keyframe strip."""
     act = bpy.data.actions.new(name)

@@ -12,6 +12,7 @@ import numpy as np
 from ..motion_patches.props import footprint as fp
 from ..motion_patches.props import object_patch as op
 from . import actions as act_io
+from . import compat
 from . import scene as scene_io
 
 KINDS = {"TRAVERSAL": op.TRAVERSAL, "INTERACTION": op.INTERACTION}
@@ -89,10 +90,9 @@ def object_patch(obj, depsgraph, skeleton, fps, gait_floor=None, scale=1.0):
 
 def is_tagged(ob):
     """Whether ``ob`` is a tagged object patch (a mesh with its Object Patch enabled), asked
-    without changing it: reading ``ob.motion_patch`` of an object that never had it stores
-    an empty set of those settings on it, so every mesh a plan or the overlay looked at
-    would carry one (on Blender 4.5 among its custom properties, which exporters write)."""
-    return ob.type == "MESH" and ob.is_property_set("motion_patch") and ob.motion_patch.enabled
+    without adding the settings to a mesh that has none (:func:`compat.stored_settings`)."""
+    settings = compat.stored_settings(ob, "motion_patch") if ob.type == "MESH" else None
+    return settings is not None and settings.enabled
 
 
 def tagged(scene):

@@ -16,6 +16,7 @@ import numpy as np
 from ..motion_patches.kinematics.retarget import rig_map, same_skeleton
 from ..motion_patches.kinematics.skeleton import Skeleton
 from . import actions as act_io
+from . import compat
 
 
 def world_scale(obj):
@@ -67,16 +68,12 @@ def skeleton_in_metres(obj):
 
 
 def bone_map(obj):
-    """{patch bone: rig bone ('' = left out)} stored on the armature ``obj``. Asked first
-    whether there is one: reading the settings of an armature that has none stores an empty
-    set on its data (a plan or a layout check would change every rig it looked at)."""
-    try:
-        if not obj.data.is_property_set("motion_patches_rig"):
-            return {}
-    except TypeError:  # the settings are not registered
+    """{patch bone: rig bone ('' = left out)} stored on the armature ``obj``, read without
+    adding empty settings to a rig that has none (:func:`compat.stored_settings`)."""
+    rig = compat.stored_settings(obj.data, "motion_patches_rig")
+    if rig is None:
         return {}
-    rows = obj.data.motion_patches_rig.bone_map
-    return {row.patch_bone: row.rig_bone for row in rows if row.patch_bone}
+    return {row.patch_bone: row.rig_bone for row in rig.bone_map if row.patch_bone}
 
 
 def set_bone_map(obj, mapping):

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..adapter import nla, props_io, storage
+from ..adapter import compat, nla, props_io, storage
 from .errors import MotionPatchesError
 
 if TYPE_CHECKING:
@@ -247,13 +247,8 @@ def character_start_prop(character: bpy.types.Object) -> bpy.types.Object | None
 
 def _character_setting(character, name):
     """A setting of ``character`` (``MOTION_PATCHES_PG_character``), None where never set,
-    read without changing it: on Blender 4.5 reading the settings of a character that has
-    none stores an empty set of them among its custom properties (a plan that fails must
-    leave it as it was); from 5.0 they are not among its custom properties at all
-    (``keys()`` does not list them), so whether they were set is asked of Blender."""
-    try:
-        if not character.is_property_set("motion_patches_character"):
-            return None
-    except (AttributeError, TypeError):  # no object: refused by name where it is checked
-        return None
-    return getattr(character.motion_patches_character, name)
+    read without changing it (a plan that fails must leave it as it was:
+    :func:`compat.stored_settings`); no object gives None, refused by name where it is
+    checked."""
+    settings = compat.stored_settings(character, "motion_patches_character")
+    return None if settings is None else getattr(settings, name)
