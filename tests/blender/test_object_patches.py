@@ -263,6 +263,16 @@ def two_chairs(chairs_blend, api):
     return a, b, bpy.data.objects["Walker"]
 
 
+def seated_on_a_then_b(api, walker, why=""):
+    """The walker's evaluated hips seated on chair A on its plan's first frame and on chair
+    B (:func:`two_chairs`) on its last."""
+    meta, _ = api.load_plan_record(walker)
+    for frame, (x, y) in ((meta["frame_start"], (1.0, -4.5)), (meta["frame_end"], (9.0, -4.0))):
+        bpy.context.scene.frame_set(frame)
+        hips = walker.matrix_world @ walker.pose.bones["Hips"].head
+        assert hips.z < 0.75 and np.hypot(hips.x - x, hips.y - y) < 0.3, (why, frame, hips)
+
+
 def test_stand_up_walk_and_sit_down(chairs_blend, addon_module):
     api = addon_module.api
     a, b, walker = two_chairs(chairs_blend, api)
@@ -293,12 +303,7 @@ def test_the_button_reads_the_characters_start_prop_and_own_goal(chairs_blend, a
         ob.select_set(ob == walker)
     bpy.context.view_layer.objects.active = walker
     assert bpy.ops.motion_patches.plan_path() == {"FINISHED"}
-    meta, _ = api.load_plan_record(walker)
-    scene = bpy.context.scene
-    for frame, (x, y) in ((meta["frame_start"], (1.0, -4.5)), (meta["frame_end"], (9.0, -4.0))):
-        scene.frame_set(frame)
-        hips = walker.matrix_world @ walker.pose.bones["Hips"].head
-        assert hips.z < 0.75 and np.hypot(hips.x - x, hips.y - y) < 0.3, (frame, hips)
+    seated_on_a_then_b(api, walker)
 
 
 @pytest.mark.parametrize("door", ["plan cli", "crowd button", "crowd cli", "crowd api"])
@@ -325,11 +330,7 @@ def test_every_door_starts_a_character_on_its_start_prop(chairs_blend, mp, capsy
         assert api.crowd_members(scene, [walker]) == [(walker, b, {"start_prop": a})]
         assert not api.plan_crowd(scene, api.crowd_members(scene, [walker])).failed
     capsys.readouterr()
-    meta, _ = api.load_plan_record(walker)
-    for frame, (x, y) in ((meta["frame_start"], (1.0, -4.5)), (meta["frame_end"], (9.0, -4.0))):
-        scene.frame_set(frame)
-        hips = walker.matrix_world @ walker.pose.bones["Hips"].head
-        assert hips.z < 0.75 and np.hypot(hips.x - x, hips.y - y) < 0.3, (door, frame, hips)
+    seated_on_a_then_b(api, walker, door)
 
 
 def test_a_goal_prop_without_a_sit_clip_is_refused(chairs_blend, addon_module):
