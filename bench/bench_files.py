@@ -267,22 +267,15 @@ def main(argv=None):
                 f"{r['world_deg']:.3f} | {r['hips_mm']:.2f} | {r['planted_mm']:.2f} | "
                 f"{r['skate_cm_s']:.2f} | {r['frame_set_ms']:.3f} |"
             )
-    kinds = {k for rows in results.values() for k in rows["cubic"].get("kb_per_char_s_by_kind", {})}
-    if kinds:  # where the cubic keys' growth goes, case by case (Blender 4.x files)
-        kinds = sorted(
-            kinds,
-            key=lambda k: (
-                -results[next(iter(results))]["cubic"].get("kb_per_char_s_by_kind", {}).get(k, 0.0)
-            ),
-        )
-        print("\n| cubic, KB per char-s | " + " | ".join(results) + " |")
-        print("|" + "---|" * (len(results) + 1))
+    # where the cubic keys' growth goes, case by case (Blender 4.x files), largest first
+    by_kind = {c: rows["cubic"].get("kb_per_char_s_by_kind", {}) for c, rows in results.items()}
+    first = next(iter(by_kind.values()), {})
+    kinds = sorted({k for d in by_kind.values() for k in d}, key=lambda k: -first.get(k, 0.0))
+    if kinds:
+        print("\n| cubic, KB per char-s | " + " | ".join(by_kind) + " |")
+        print("|" + "---|" * (len(by_kind) + 1))
         for k in kinds:
-            cells = [
-                f"{rows['cubic'].get('kb_per_char_s_by_kind', {}).get(k, 0.0):.1f}"
-                for rows in results.values()
-            ]
-            print(f"| {k} | " + " | ".join(cells) + " |")
+            print(f"| {k} | " + " | ".join(f"{d.get(k, 0.0):.1f}" for d in by_kind.values()) + " |")
     if args.json:
         Path(args.json).write_text(json.dumps(results, indent=1))
 
